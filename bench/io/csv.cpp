@@ -1,0 +1,219 @@
+#include "bench/io/csv.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+
+#include "bench/io/input_error.hpp"
+
+namespace calbench {
+namespace {
+constexpr std::size_t kBufSize = 1 << 20;
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+}  // namespace
+
+CsvReader::CsvReader(std::string path) : path_(std::move(path)), buf_(kBufSize) {
+  file_ = std::fopen(path_.c_str(), "rb");
+  if (!file_) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
+  std::string_view line;
+  while (read_line(line)) {
+    const auto t = trim(line);
+    if (t.empty() || t.front() == '#') continue;
+    std::size_t pos = 0;
+    while (true) {
+      const std::size_t c = t.find(',', pos);
+      header_.emplace_back(trim(t.substr(pos, c == std::string_view::npos ? t.npos : c - pos)));
+      if (c == std::string_view::npos) break;
+      pos = c + 1;
+    }
+    slot_of_field_.assign(header_.size(), -1);
+    return;
+  }
+  fail("", "empty file: no header line");
+}
+
+CsvReader::~CsvReader() {
+  if (file_) std::fclose(file_);
+}
+
+bool CsvReader::has(std::string_view name) const {
+  for (const auto& h : header_)
+    if (h == name) return true;
+  return false;
+}
+
+int CsvReader::optional(std::string_view name) {
+  for (std::size_t i = 0; i < header_.size(); ++i) {
+    if (header_[i] == name) {
+      if (slot_of_field_[i] >= 0) return slot_of_field_[i];
+      slot_of_field_[i] = static_cast<int>(slot_names_.size());
+      slot_names_.emplace_back(name);
+      values_.push_back(0.0);
+      max_field_ = std::max(max_field_, i + 1);
+      return slot_of_field_[i];
+    }
+  }
+  return -1;
+}
+
+int CsvReader::require(std::string_view name) {
+  const int s = optional(name);
+  if (s < 0) {
+    line_no_ = 0;
+    throw InputError(path_, 1, std::string(name), "missing required column");
+  }
+  return s;
+}
+
+void CsvReader::fail(const std::string& column, const std::string& msg) const {
+  throw InputError(path_, line_no_, column, msg);
+}
+
+bool CsvReader::read_line(std::string_view& out) {
+  // Lines are returned as views into buf_ or carry_ (when a line spans a buffer refill).
+  carry_.clear();
+  while (true) {
+    const char* b = buf_.data() + beg_;
+    const void* nl = std::memchr(b, '\n', end_ - beg_);
+    if (nl) {
+      const std::size_t len = static_cast<const char*>(nl) - b;
+      ++line_no_;
+      if (carry_.empty()) {
+        out = std::string_view(b, len);
+      } else {
+        carry_.append(b, len);
+        out = carry_;
+      }
+      beg_ += len + 1;
+      return true;
+    }
+    carry_.append(b, end_ - beg_);
+    beg_ = end_ = 0;
+    if (eof_) break;
+    end_ = std::fread(buf_.data(), 1, buf_.size(), file_);
+    if (end_ < buf_.size()) {
+      if (std::ferror(file_)) fail("", std::string("read error: ") + std::strerror(errno));
+      eof_ = true;
+    }
+  }
+  if (carry_.empty()) return false;
+  ++line_no_;
+  out = carry_;
+  return true;
+}
+
+bool CsvReader::next() {
+  std::string_view line;
+  while (read_line(line)) {
+    const auto t = trim(line);
+    if (t.empty() || t.front() == '#') continue;
+    std::size_t field = 0, pos = 0;
+    while (field < max_field_) {
+      std::size_t c = t.find(',', pos);
+      const bool last = c == std::string_view::npos;
+      if (last) c = t.size();
+      const int slot = slot_of_field_[field];
+      if (slot >= 0) {
+        const auto f = trim(t.substr(pos, c - pos));
+        double v = 0;
+        const char* first = f.data();
+        if (!f.empty() && *first == '+') ++first;
+        const auto r = std::from_chars(first, f.data() + f.size(), v);
+        if (f.empty()) fail(slot_names_[slot], "empty field");
+        if (r.ec != std::errc() || r.ptr != f.data() + f.size())
+          fail(slot_names_[slot], "not a number: '" + std::string(f.substr(0, 40)) + "'");
+        if (!std::isfinite(v)) fail(slot_names_[slot], "NaN or infinity is not allowed");
+        values_[slot] = v;
+      }
+      ++field;
+      if (last) break;
+      pos = c + 1;
+    }
+    if (field < max_field_) {
+      // Name the first selected column that is missing from this row.
+      for (std::size_t i = field; i < max_field_; ++i)
+        if (slot_of_field_[i] >= 0) fail(slot_names_[slot_of_field_[i]], "missing field (row has too few columns)");
+    }
+    if (time_slot_ >= 0) {
+      const double tv = values_[time_slot_];
+      if (rows_ > 0) {
+        if (tv == last_time_) fail(slot_names_[time_slot_], "duplicated time " + std::to_string(tv));
+        if (tv < last_time_) fail(slot_names_[time_slot_], "time goes backwards");
+      }
+      last_time_ = tv;
+    }
+    ++rows_;
+    return true;
+  }
+  if (rows_ == 0) {
+    ++line_no_;
+    fail("", "no data rows");
+  }
+  return false;
+}
+
+std::size_t format_double(char* buf, double v) {
+  const auto r = std::to_chars(buf, buf + 32, v, std::chars_format::general, 17);
+  return static_cast<std::size_t>(r.ptr - buf);
+}
+
+CsvWriter::CsvWriter(std::string path, const std::vector<std::string>& columns, const std::string& comment)
+    : path_(std::move(path)), ncol_(columns.size()) {
+  file_ = std::fopen(path_.c_str(), "wb");
+  if (!file_) throw std::runtime_error(path_ + ": cannot create: " + std::strerror(errno));
+  if (!comment.empty()) out_ += "# " + comment + "\n";
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    if (i) out_ += ',';
+    out_ += columns[i];
+  }
+  out_ += '\n';
+  out_.reserve(kBufSize + 4096);
+}
+
+CsvWriter::~CsvWriter() {
+  if (file_) {
+    try {
+      close();
+    } catch (...) {
+    }
+  }
+}
+
+void CsvWriter::row(const double* v, std::size_t n) {
+  char tmp[40];
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i) out_ += ',';
+    out_.append(tmp, format_double(tmp, v[i]));
+  }
+  out_ += '\n';
+  if (out_.size() >= kBufSize) flush();
+}
+
+void CsvWriter::flush() {
+  if (!file_) return;
+  if (!out_.empty()) {
+    if (std::fwrite(out_.data(), 1, out_.size(), file_) != out_.size())
+      throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
+    out_.clear();
+  }
+  if (std::fflush(file_) != 0) throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
+}
+
+void CsvWriter::close() {
+  if (!file_) return;
+  flush();
+  ::fsync(fileno(file_));
+  const int rc = std::fclose(file_);
+  file_ = nullptr;
+  if (rc != 0) throw std::runtime_error(path_ + ": close failed: " + std::strerror(errno));
+}
+
+}  // namespace calbench

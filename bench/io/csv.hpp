@@ -1,0 +1,82 @@
+// Streaming CSV for the recording interchange format: a header line naming the columns, comma
+// separated, '#' comment lines, '.' decimal point. Rows are parsed one at a time from a buffered
+// file, so a recording never sits in memory as text. Only selected columns are parsed; unknown
+// columns are ignored. Every defect is an InputError naming file, line and column.
+#pragma once
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace calbench {
+
+class CsvReader {
+ public:
+  explicit CsvReader(std::string path);
+  ~CsvReader();
+  CsvReader(const CsvReader&) = delete;
+  CsvReader& operator=(const CsvReader&) = delete;
+
+  // Select a column by name; returns a slot for value(). require() throws if it is absent.
+  int require(std::string_view name);
+  int optional(std::string_view name);  // −1 if absent
+  bool has(std::string_view name) const;
+  // Enforce strictly increasing values in this slot (time).
+  void set_time_slot(int slot) { time_slot_ = slot; }
+
+  // Parse the next data row; false at end of file. The first call fails if there is no data row.
+  bool next();
+  double value(int slot) const { return values_[static_cast<std::size_t>(slot)]; }
+  std::size_t line() const { return line_no_; }
+  const std::string& path() const { return path_; }
+  const std::vector<std::string>& header() const { return header_; }
+  std::size_t rows() const { return rows_; }
+
+ private:
+  bool read_line(std::string_view& out);
+  [[noreturn]] void fail(const std::string& column, const std::string& msg) const;
+
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  std::vector<char> buf_;
+  std::size_t beg_ = 0, end_ = 0;
+  bool eof_ = false;
+  std::string carry_;
+  std::vector<std::string> header_;
+  std::vector<int> slot_of_field_;  // field index -> slot (−1 if not selected)
+  std::vector<std::string> slot_names_;
+  std::vector<double> values_;
+  std::size_t max_field_ = 0;
+  std::size_t line_no_ = 0;
+  std::size_t rows_ = 0;
+  int time_slot_ = -1;
+  double last_time_ = 0;
+};
+
+class CsvWriter {
+ public:
+  // Creates (truncates) the file and writes the comment (if any) and the header.
+  CsvWriter(std::string path, const std::vector<std::string>& columns, const std::string& comment = {});
+  ~CsvWriter();
+  CsvWriter(const CsvWriter&) = delete;
+  CsvWriter& operator=(const CsvWriter&) = delete;
+
+  // One row; values printed with 17 significant digits (lossless for doubles).
+  void row(const double* values, std::size_t n);
+  void row(std::initializer_list<double> v) { row(v.begin(), v.size()); }
+  void flush();   // hand buffered rows to the OS (a crash after this keeps them)
+  void close();   // flush, fsync and close; throws on any write error
+  std::size_t columns() const { return ncol_; }
+
+ private:
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  std::string out_;
+  std::size_t ncol_;
+};
+
+// Format one double with 17 significant digits into buf; returns the length.
+std::size_t format_double(char* buf, double v);
+
+}  // namespace calbench

@@ -1,0 +1,127 @@
+#include "bench/io/json_util.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "bench/io/input_error.hpp"
+
+namespace calbench {
+
+nlohmann::json read_json_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), 0, "", std::string("cannot open: ") + std::strerror(errno));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(file.string(), 1, "", "empty file");
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // Translate the byte offset into a line number.
+    const std::size_t upto = std::min<std::size_t>(e.byte, text.size());
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + upto, '\n'));
+    std::string msg = e.what();
+    const auto p = msg.find("parse error");
+    throw InputError(file.string(), line, "", "invalid JSON: " + (p == std::string::npos ? msg : msg.substr(p)));
+  }
+}
+
+void write_text_atomic(const std::filesystem::path& file, const std::string& text) {
+  const auto tmp = file.string() + ".tmp." + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0) throw std::runtime_error(tmp + ": cannot create: " + std::strerror(errno));
+  std::size_t off = 0;
+  while (off < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + off, text.size() - off);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      throw std::runtime_error(tmp + ": write failed: " + std::strerror(errno));
+    }
+    off += static_cast<std::size_t>(n);
+  }
+  ::fsync(fd);
+  ::close(fd);
+  if (::rename(tmp.c_str(), file.c_str()) != 0) {
+    ::unlink(tmp.c_str());
+    throw std::runtime_error(file.string() + ": rename failed: " + std::strerror(errno));
+  }
+}
+
+const nlohmann::json& jreq(const nlohmann::json& obj, const char* name, const std::string& file, const std::string& key) {
+  if (!obj.is_object()) throw InputError(file, 0, key.empty() ? std::string(name) : key, "expected an object");
+  const auto it = obj.find(name);
+  const std::string full = key.empty() ? std::string(name) : key + "." + name;
+  if (it == obj.end()) throw InputError(file, 0, full, "missing key");
+  return *it;
+}
+
+double jnum(const nlohmann::json& v, const std::string& file, const std::string& key) {
+  if (!v.is_number()) throw InputError(file, 0, key, "expected a number, got " + std::string(v.type_name()));
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) throw InputError(file, 0, key, "NaN or infinity is not allowed");
+  return d;
+}
+
+std::string jstr(const nlohmann::json& v, const std::string& file, const std::string& key) {
+  if (!v.is_string()) throw InputError(file, 0, key, "expected a string, got " + std::string(v.type_name()));
+  return v.get<std::string>();
+}
+
+Vec3 jvec3(const nlohmann::json& v, const std::string& file, const std::string& key) {
+  if (!v.is_array() || v.size() != 3) throw InputError(file, 0, key, "expected an array of 3 numbers");
+  Vec3 out;
+  for (int i = 0; i < 3; ++i) out(i) = jnum(v[i], file, key + "[" + std::to_string(i) + "]");
+  return out;
+}
+
+Mat3 jmat3(const nlohmann::json& v, const std::string& file, const std::string& key) {
+  if (!v.is_array() || v.size() != 3) throw InputError(file, 0, key, "expected a 3×3 array of numbers");
+  Mat3 out;
+  for (int i = 0; i < 3; ++i) out.row(i) = jvec3(v[i], file, key + "[" + std::to_string(i) + "]").transpose();
+  return out;
+}
+
+Vec3 jsigma3(const nlohmann::json& v, const std::string& file, const std::string& key) {
+  if (!v.is_array() || v.size() != 3) throw InputError(file, 0, key, "expected an array of 3 numbers or nulls");
+  Vec3 out;
+  for (int i = 0; i < 3; ++i) {
+    const std::string k = key + "[" + std::to_string(i) + "]";
+    out(i) = v[i].is_null() ? kUnknownSigma : jnum(v[i], file, k);
+    if (out(i) < 0) throw InputError(file, 0, k, "a standard deviation cannot be negative");
+  }
+  return out;
+}
+
+Mat3 jsigmamat3(const nlohmann::json& v, const std::string& file, const std::string& key) {
+  if (!v.is_array() || v.size() != 3) throw InputError(file, 0, key, "expected a 3×3 array of numbers or nulls");
+  Mat3 out;
+  for (int i = 0; i < 3; ++i) out.row(i) = jsigma3(v[i], file, key + "[" + std::to_string(i) + "]").transpose();
+  return out;
+}
+
+nlohmann::json to_json(const Vec3& v) { return nlohmann::json::array({v(0), v(1), v(2)}); }
+nlohmann::json to_json(const Mat3& m) {
+  auto a = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) a.push_back(to_json(Vec3(m.row(i).transpose())));
+  return a;
+}
+nlohmann::json sigma_json(const Vec3& v) {
+  auto a = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) a.push_back(std::isfinite(v(i)) ? nlohmann::json(v(i)) : nlohmann::json(nullptr));
+  return a;
+}
+nlohmann::json sigma_json(const Mat3& m) {
+  auto a = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) a.push_back(sigma_json(Vec3(m.row(i).transpose())));
+  return a;
+}
+
+}  // namespace calbench

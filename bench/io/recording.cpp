@@ -1,0 +1,303 @@
+#include "bench/io/recording.hpp"
+
+#include <openssl/evp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+
+namespace calbench {
+
+const char* kind_name(RecordingKind k) { return k == RecordingKind::bench ? "bench" : "drive"; }
+
+RecordingMeta read_meta(const fs::path& dir) {
+  const fs::path file = dir / "meta.json";
+  const std::string f = file.string();
+  if (!fs::exists(file)) throw InputError(f, 0, "", "missing: a recording folder needs meta.json");
+  const nlohmann::json j = read_json_file(file);
+  if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
+  RecordingMeta m;
+  const std::string format = jstr(jreq(j, "format", f, ""), f, "format");
+  if (format != "calbench-recording/1")
+    throw InputError(f, 0, "format", "unsupported format '" + format + "' (expected calbench-recording/1)");
+  const std::string kind = jstr(jreq(j, "kind", f, ""), f, "kind");
+  if (kind == "bench") m.kind = RecordingKind::bench;
+  else if (kind == "drive") m.kind = RecordingKind::drive;
+  else throw InputError(f, 0, "kind", "must be \"bench\" or \"drive\", got '" + kind + "'");
+  const auto& dev = jreq(j, "device", f, "");
+  m.device.model = jstr(jreq(dev, "model", f, "device"), f, "device.model");
+  const auto& serial = jreq(dev, "serial", f, "device");
+  m.device.serial = serial.is_number_integer() ? std::to_string(serial.get<long long>()) : jstr(serial, f, "device.serial");
+  m.imu_rate_hz = jnum(jreq(j, "imu_rate_hz", f, ""), f, "imu_rate_hz");
+  if (m.imu_rate_hz <= 0) throw InputError(f, 0, "imu_rate_hz", "must be positive");
+  if (j.contains("site") || m.kind == RecordingKind::bench) {
+    const auto& s = jreq(j, "site", f, "");
+    Site site;
+    site.lat_deg = jnum(jreq(s, "lat_deg", f, "site"), f, "site.lat_deg");
+    site.lon_deg = jnum(jreq(s, "lon_deg", f, "site"), f, "site.lon_deg");
+    site.h_m = jnum(jreq(s, "h_m", f, "site"), f, "site.h_m");
+    if (std::abs(site.lat_deg) > 90) throw InputError(f, 0, "site.lat_deg", "latitude outside ±90°");
+    m.site = site;
+  }
+  if (j.contains("mounting") || m.kind == RecordingKind::drive) {
+    const auto& mo = jreq(j, "mounting", f, "");
+    Mounting mt;
+    mt.rpy_deg = jvec3(jreq(mo, "rpy_deg", f, "mounting"), f, "mounting.rpy_deg");
+    mt.lever_arm_m = jvec3(jreq(mo, "lever_arm_m", f, "mounting"), f, "mounting.lever_arm_m");
+    m.mounting = mt;
+  }
+  if (j.contains("notes") && j["notes"].is_string()) m.notes = j["notes"].get<std::string>();
+  if (j.contains("status")) m.complete = j["status"] != "incomplete";
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    static const char* known[] = {"format", "kind", "device", "site", "imu_rate_hz", "mounting", "notes", "status"};
+    if (std::find(std::begin(known), std::end(known), it.key()) == std::end(known)) m.extra[it.key()] = it.value();
+  }
+  return m;
+}
+
+void write_meta(const fs::path& dir, const RecordingMeta& m) {
+  nlohmann::json j = m.extra.is_object() ? m.extra : nlohmann::json::object();
+  j["format"] = "calbench-recording/1";
+  j["kind"] = kind_name(m.kind);
+  j["device"] = {{"model", m.device.model}, {"serial", m.device.serial}};
+  if (m.site) j["site"] = {{"lat_deg", m.site->lat_deg}, {"lon_deg", m.site->lon_deg}, {"h_m", m.site->h_m}};
+  j["imu_rate_hz"] = m.imu_rate_hz;
+  if (m.mounting) j["mounting"] = {{"rpy_deg", to_json(m.mounting->rpy_deg)}, {"lever_arm_m", to_json(m.mounting->lever_arm_m)}};
+  j["notes"] = m.notes;
+  j["status"] = m.complete ? "complete" : "incomplete";
+  write_text_atomic(dir / "meta.json", j.dump(2) + "\n");
+}
+
+// ---------------------------------------------------------------------------------------------
+ImuReader::ImuReader(const fs::path& file, double nominal_rate_hz)
+    : csv_(file.string()), nominal_dt_(1.0 / nominal_rate_hz) {
+  t_ = csv_.require("t_s");
+  csv_.set_time_slot(t_);
+  if (csv_.has("gx_rad_s") || !csv_.has("dax_rad")) {
+    form_ = ImuForm::rates;
+    const char* g[] = {"gx_rad_s", "gy_rad_s", "gz_rad_s"};
+    const char* a[] = {"ax_m_s2", "ay_m_s2", "az_m_s2"};
+    for (int i = 0; i < 3; ++i) g_[i] = csv_.require(g[i]);
+    for (int i = 0; i < 3; ++i) a_[i] = csv_.require(a[i]);
+  } else {
+    form_ = ImuForm::increments;
+    const char* g[] = {"dax_rad", "day_rad", "daz_rad"};
+    const char* a[] = {"dvx_m_s", "dvy_m_s", "dvz_m_s"};
+    for (int i = 0; i < 3; ++i) g_[i] = csv_.require(g[i]);
+    for (int i = 0; i < 3; ++i) a_[i] = csv_.require(a[i]);
+  }
+  temp_ = csv_.optional("temp_c");
+  seq_ = csv_.optional("seq");
+}
+
+bool ImuReader::next(ImuRecord& r) {
+  if (!csv_.next()) return false;
+  r.t = csv_.value(t_);
+  r.dt = first_ ? nominal_dt_ : r.t - last_t_;
+  first_ = false;
+  last_t_ = r.t;
+  for (int i = 0; i < 3; ++i) {
+    r.gyro(i) = csv_.value(g_[i]);
+    r.accel(i) = csv_.value(a_[i]);
+  }
+  r.temp_c = temp_ >= 0 ? csv_.value(temp_) : std::numeric_limits<double>::quiet_NaN();
+  r.seq = seq_ >= 0 ? csv_.value(seq_) : -1;
+  return true;
+}
+
+BenchRefReader::BenchRefReader(const fs::path& file) : csv_(file.string()) {
+  t_ = csv_.require("t_s");
+  csv_.set_time_slot(t_);
+  const char* w[] = {"wx_rad_s", "wy_rad_s", "wz_rad_s"};
+  const char* f[] = {"fx_m_s2", "fy_m_s2", "fz_m_s2"};
+  for (int i = 0; i < 3; ++i) w_[i] = csv_.require(w[i]);
+  for (int i = 0; i < 3; ++i) f_[i] = csv_.require(f[i]);
+  step_ = csv_.require("step");
+  angle_ = csv_.optional("angle_deg");
+}
+
+bool BenchRefReader::next(BenchRefRow& r) {
+  if (!csv_.next()) return false;
+  r.t = csv_.value(t_);
+  for (int i = 0; i < 3; ++i) {
+    r.w(i) = csv_.value(w_[i]);
+    r.f(i) = csv_.value(f_[i]);
+  }
+  const double s = csv_.value(step_);
+  if (s != std::floor(s) || s < -1) throw InputError(csv_.path(), csv_.line(), "step", "must be an integer ≥ −1");
+  r.step = static_cast<int>(s);
+  r.angle_deg = angle_ >= 0 ? csv_.value(angle_) : std::numeric_limits<double>::quiet_NaN();
+  return true;
+}
+
+DriveRefReader::DriveRefReader(const fs::path& file) : csv_(file.string()) {
+  t_ = csv_.require("t_s");
+  csv_.set_time_slot(t_);
+  lat_ = csv_.require("lat_deg");
+  lon_ = csv_.require("lon_deg");
+  h_ = csv_.require("h_m");
+  const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
+  const char* a[] = {"roll_deg", "pitch_deg", "yaw_deg"};
+  for (int i = 0; i < 3; ++i) v_[i] = csv_.require(v[i]);
+  for (int i = 0; i < 3; ++i) att_[i] = csv_.require(a[i]);
+  sp_ = csv_.optional("sigma_pos_m");
+  sv_ = csv_.optional("sigma_vel_m_s");
+  sa_ = csv_.optional("sigma_att_deg");
+}
+
+bool DriveRefReader::next(DriveRefRow& r) {
+  if (!csv_.next()) return false;
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  r.t = csv_.value(t_);
+  r.lat_deg = csv_.value(lat_);
+  r.lon_deg = csv_.value(lon_);
+  r.h_m = csv_.value(h_);
+  if (std::abs(r.lat_deg) > 90) throw InputError(csv_.path(), csv_.line(), "lat_deg", "latitude outside ±90°");
+  for (int i = 0; i < 3; ++i) {
+    r.v_ned(i) = csv_.value(v_[i]);
+    r.rpy_deg(i) = csv_.value(att_[i]);
+  }
+  r.sigma_pos_m = sp_ >= 0 ? csv_.value(sp_) : nan;
+  r.sigma_vel_m_s = sv_ >= 0 ? csv_.value(sv_) : nan;
+  r.sigma_att_deg = sa_ >= 0 ? csv_.value(sa_) : nan;
+  return true;
+}
+
+GnssReader::GnssReader(const fs::path& file) : csv_(file.string()) {
+  t_ = csv_.require("t_s");
+  csv_.set_time_slot(t_);
+  lat_ = csv_.require("lat_deg");
+  lon_ = csv_.require("lon_deg");
+  h_ = csv_.require("h_m");
+  const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
+  for (int i = 0; i < 3; ++i) v_[i] = csv_.optional(v[i]);
+  sh_ = csv_.optional("sigma_h_m");
+  sv_ = csv_.optional("sigma_v_m");
+  svel_ = csv_.optional("sigma_vel_m_s");
+}
+
+bool GnssReader::next(GnssRow& r) {
+  if (!csv_.next()) return false;
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  r.t = csv_.value(t_);
+  r.lat_deg = csv_.value(lat_);
+  r.lon_deg = csv_.value(lon_);
+  r.h_m = csv_.value(h_);
+  if (v_[0] >= 0 && v_[1] >= 0 && v_[2] >= 0) r.v_ned = Vec3(csv_.value(v_[0]), csv_.value(v_[1]), csv_.value(v_[2]));
+  else r.v_ned.reset();
+  r.sigma_h_m = sh_ >= 0 ? csv_.value(sh_) : nan;
+  r.sigma_v_m = sv_ >= 0 ? csv_.value(sv_) : nan;
+  r.sigma_vel_m_s = svel_ >= 0 ? csv_.value(svel_) : nan;
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+RecordingWriter::RecordingWriter(const fs::path& dir, RecordingMeta meta, ImuForm form, bool with_temperature,
+                                 bool with_seq, bool with_gnss)
+    : dir_(dir), meta_(std::move(meta)), form_(form), temp_(with_temperature), seq_(with_seq) {
+  fs::create_directories(dir_);
+  meta_.complete = false;
+  write_meta(dir_, meta_);
+  std::vector<std::string> ic = {"t_s"};
+  if (form_ == ImuForm::rates) ic.insert(ic.end(), {"gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"});
+  else ic.insert(ic.end(), {"dax_rad", "day_rad", "daz_rad", "dvx_m_s", "dvy_m_s", "dvz_m_s"});
+  if (temp_) ic.push_back("temp_c");
+  if (seq_) ic.push_back("seq");
+  imu_ = std::make_unique<CsvWriter>((dir_ / "imu.csv").string(), ic, "MEMS IMU output, IMU axes");
+  if (meta_.kind == RecordingKind::bench) {
+    ref_ = std::make_unique<CsvWriter>((dir_ / "reference.csv").string(),
+                                       std::vector<std::string>{"t_s", "wx_rad_s", "wy_rad_s", "wz_rad_s", "fx_m_s2",
+                                                                "fy_m_s2", "fz_m_s2", "step", "angle_deg"},
+                                       "what the table says the IMU experienced (nominal bench model)");
+  } else {
+    ref_ = std::make_unique<CsvWriter>((dir_ / "reference.csv").string(),
+                                       std::vector<std::string>{"t_s", "lat_deg", "lon_deg", "h_m", "vn_m_s", "ve_m_s",
+                                                                "vd_m_s", "roll_deg", "pitch_deg", "yaw_deg",
+                                                                "sigma_pos_m", "sigma_vel_m_s", "sigma_att_deg"},
+                                       "reference inertial-satellite system");
+    if (with_gnss)
+      gnss_ = std::make_unique<CsvWriter>((dir_ / "gnss.csv").string(),
+                                          std::vector<std::string>{"t_s", "lat_deg", "lon_deg", "h_m", "vn_m_s",
+                                                                   "ve_m_s", "vd_m_s", "sigma_h_m", "sigma_v_m",
+                                                                   "sigma_vel_m_s"},
+                                          "GNSS antenna fixes");
+  }
+}
+
+RecordingWriter::~RecordingWriter() {
+  // Not finished: keep what was captured, readable, and marked incomplete (meta already says so).
+  if (!finished_) {
+    try {
+      if (imu_) imu_->close();
+      if (ref_) ref_->close();
+      if (gnss_) gnss_->close();
+    } catch (...) {
+    }
+  }
+}
+
+void RecordingWriter::imu(const ImuRecord& r) {
+  double v[9] = {r.t, r.gyro(0), r.gyro(1), r.gyro(2), r.accel(0), r.accel(1), r.accel(2)};
+  std::size_t n = 7;
+  if (temp_) v[n++] = r.temp_c;
+  if (seq_) v[n++] = r.seq;
+  imu_->row(v, n);
+}
+
+void RecordingWriter::bench_ref(const BenchRefRow& r) {
+  ref_->row({r.t, r.w(0), r.w(1), r.w(2), r.f(0), r.f(1), r.f(2), static_cast<double>(r.step), r.angle_deg});
+}
+
+void RecordingWriter::drive_ref(const DriveRefRow& r) {
+  ref_->row({r.t, r.lat_deg, r.lon_deg, r.h_m, r.v_ned(0), r.v_ned(1), r.v_ned(2), r.rpy_deg(0), r.rpy_deg(1),
+             r.rpy_deg(2), r.sigma_pos_m, r.sigma_vel_m_s, r.sigma_att_deg});
+}
+
+void RecordingWriter::gnss(const GnssRow& r) {
+  if (!gnss_) throw std::logic_error("RecordingWriter: gnss.csv was not requested");
+  const Vec3 v = r.v_ned.value_or(Vec3::Zero());
+  gnss_->row({r.t, r.lat_deg, r.lon_deg, r.h_m, v(0), v(1), v(2), r.sigma_h_m, r.sigma_v_m, r.sigma_vel_m_s});
+}
+
+void RecordingWriter::flush() {
+  imu_->flush();
+  ref_->flush();
+  if (gnss_) gnss_->flush();
+}
+
+void RecordingWriter::finish() {
+  imu_->close();
+  ref_->close();
+  if (gnss_) gnss_->close();
+  meta_.complete = true;
+  write_meta(dir_, meta_);
+  finished_ = true;
+}
+
+std::string sha256_file(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), 0, "", "cannot open");
+  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
+  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    EVP_DigestUpdate(ctx, buf.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  unsigned char md[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  EVP_DigestFinal_ex(ctx, md, &len);
+  EVP_MD_CTX_free(ctx);
+  std::string hex;
+  char b[3];
+  for (unsigned i = 0; i < len; ++i) {
+    std::snprintf(b, sizeof b, "%02x", md[i]);
+    hex += b;
+  }
+  return hex;
+}
+
+}  // namespace calbench

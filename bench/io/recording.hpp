@@ -1,0 +1,159 @@
+// The recording interchange format (../shared/spec/recording-format.md): a folder with meta.json,
+// imu.csv, reference.csv and, for drives, an optional gnss.csv. Readers stream row by row;
+// writers write as they go and mark meta.json "complete" only when finished, so an interrupted
+// writer leaves a readable recording marked incomplete.
+#pragma once
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "bench/io/csv.hpp"
+#include "calibration/bench_plan.hpp"
+#include "calibration/sensor_model.hpp"
+
+namespace calbench {
+
+namespace fs = std::filesystem;
+
+enum class RecordingKind { bench, drive };
+
+struct Mounting {
+  Vec3 rpy_deg = Vec3::Zero();      // MEMS IMU frame -> reference body frame
+  Vec3 lever_arm_m = Vec3::Zero();  // MEMS IMU origin in reference body frame
+};
+
+struct RecordingMeta {
+  RecordingKind kind = RecordingKind::bench;
+  DeviceId device;
+  std::optional<Site> site;          // required for bench
+  double imu_rate_hz = 0;
+  std::optional<Mounting> mounting;  // required for drive
+  std::string notes;
+  bool complete = true;              // calbench's own key "status": "complete" | "incomplete"
+  nlohmann::json extra = nlohmann::json::object();  // keys calbench does not interpret, kept
+};
+
+RecordingMeta read_meta(const fs::path& dir);
+// Atomic: written to a temporary file and renamed into place.
+void write_meta(const fs::path& dir, const RecordingMeta& meta);
+const char* kind_name(RecordingKind k);
+
+// One IMU row. `rates` form: gyro in rad/s, accel in m/s². `increments` form: gyro = Δθ (rad),
+// accel = Δv (m/s) over the interval of length dt that ends at t.
+struct ImuRecord {
+  double t = 0;
+  double dt = 0;
+  Vec3 gyro = Vec3::Zero();
+  Vec3 accel = Vec3::Zero();
+  double temp_c = std::numeric_limits<double>::quiet_NaN();
+  double seq = -1;  // device sample counter, −1 if absent
+};
+
+enum class ImuForm { rates, increments };
+
+class ImuReader {
+ public:
+  // nominal_rate_hz gives dt of the first row.
+  ImuReader(const fs::path& file, double nominal_rate_hz);
+  bool next(ImuRecord& r);
+  ImuForm form() const { return form_; }
+  bool has_temperature() const { return temp_ >= 0; }
+  CsvReader& csv() { return csv_; }
+
+ private:
+  CsvReader csv_;
+  ImuForm form_ = ImuForm::rates;
+  int t_, g_[3], a_[3], temp_, seq_;
+  double nominal_dt_;
+  double last_t_ = 0;
+  bool first_ = true;
+};
+
+struct BenchRefRow {
+  double t = 0;
+  Vec3 w = Vec3::Zero();  // rad/s, IMU axes, w.r.t. inertial space
+  Vec3 f = Vec3::Zero();  // m/s², specific force in IMU axes
+  int step = -1;
+  double angle_deg = std::numeric_limits<double>::quiet_NaN();
+};
+
+class BenchRefReader {
+ public:
+  explicit BenchRefReader(const fs::path& file);
+  bool next(BenchRefRow& r);
+  bool has_angle() const { return angle_ >= 0; }
+
+ private:
+  CsvReader csv_;
+  int t_, w_[3], f_[3], step_, angle_;
+};
+
+struct DriveRefRow {
+  double t = 0;
+  double lat_deg = 0, lon_deg = 0, h_m = 0;
+  Vec3 v_ned = Vec3::Zero();
+  Vec3 rpy_deg = Vec3::Zero();  // roll, pitch, yaw of the reference body (forward-right-down)
+  double sigma_pos_m = std::numeric_limits<double>::quiet_NaN();
+  double sigma_vel_m_s = std::numeric_limits<double>::quiet_NaN();
+  double sigma_att_deg = std::numeric_limits<double>::quiet_NaN();
+};
+
+class DriveRefReader {
+ public:
+  explicit DriveRefReader(const fs::path& file);
+  bool next(DriveRefRow& r);
+
+ private:
+  CsvReader csv_;
+  int t_, lat_, lon_, h_, v_[3], att_[3], sp_, sv_, sa_;
+};
+
+struct GnssRow {
+  double t = 0;
+  double lat_deg = 0, lon_deg = 0, h_m = 0;
+  std::optional<Vec3> v_ned;
+  double sigma_h_m = std::numeric_limits<double>::quiet_NaN();
+  double sigma_v_m = std::numeric_limits<double>::quiet_NaN();
+  double sigma_vel_m_s = std::numeric_limits<double>::quiet_NaN();
+};
+
+class GnssReader {
+ public:
+  explicit GnssReader(const fs::path& file);
+  bool next(GnssRow& r);
+
+ private:
+  CsvReader csv_;
+  int t_, lat_, lon_, h_, v_[3], sh_, sv_, svel_;
+};
+
+// Writes a recording folder. meta.json is written first with status "incomplete" and rewritten
+// as "complete" by finish(). Rows are buffered and flushed every `flush_every` seconds of data.
+class RecordingWriter {
+ public:
+  RecordingWriter(const fs::path& dir, RecordingMeta meta, ImuForm form = ImuForm::rates,
+                  bool with_temperature = true, bool with_seq = false, bool with_gnss = false);
+  ~RecordingWriter();
+  void imu(const ImuRecord& r);
+  void bench_ref(const BenchRefRow& r);
+  void drive_ref(const DriveRefRow& r);
+  void gnss(const GnssRow& r);
+  void flush();
+  void finish();  // close files, mark complete
+  const fs::path& dir() const { return dir_; }
+
+ private:
+  fs::path dir_;
+  RecordingMeta meta_;
+  ImuForm form_;
+  bool temp_, seq_;
+  std::unique_ptr<CsvWriter> imu_, ref_, gnss_;
+  bool finished_ = false;
+};
+
+// SHA-256 of a file, hex.
+std::string sha256_file(const fs::path& file);
+
+}  // namespace calbench

@@ -1,0 +1,17 @@
+file(REMOVE_RECURSE
+  "CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o"
+  "CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o.d"
+  "CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o"
+  "CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o.d"
+  "CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o"
+  "CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o.d"
+  "CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o"
+  "CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o.d"
+  "libcalbench_bench.a"
+  "libcalbench_bench.pdb"
+)
+
+# Per-language clean rules from dependency scanning.
+foreach(lang CXX)
+  include(CMakeFiles/calbench_bench.dir/cmake_clean_${lang}.cmake OPTIONAL)
+endforeach()

@@ -1,0 +1,2 @@
+# Empty dependencies file for calbench_calibration.
+# This may be replaced when dependencies are built.

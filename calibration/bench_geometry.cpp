@@ -1,0 +1,61 @@
+#include <cmath>
+
+#include "calibration/bench_plan.hpp"
+#include "calibration/table_motion.hpp"
+
+namespace calbench {
+namespace {
+Mat3 rx(double a) { return Eigen::AngleAxisd(a, Vec3::UnitX()).toRotationMatrix(); }
+Mat3 ry(double a) { return Eigen::AngleAxisd(a, Vec3::UnitY()).toRotationMatrix(); }
+Mat3 rz(double a) { return Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix(); }
+}  // namespace
+
+Mat3 mount_rotation(int mount) {
+  constexpr double kHalfPi = 1.5707963267948966;
+  switch (mount) {
+    case 0: return ry(-kHalfPi);  // IMU x → platform z
+    case 1: return rx(kHalfPi);   // IMU y → platform z
+    default: return Mat3::Identity();
+  }
+}
+
+Mat3 imu_attitude(double outer, double inner, int mount) {
+  return rx(outer) * rz(inner) * mount_rotation(mount);
+}
+
+bool solve_table_angles(const Mat3& C_b_l, int mount, double& outer, double& inner, double tol) {
+  const Mat3 R = C_b_l * mount_rotation(mount).transpose();  // = Rx(θo)·Rz(θi)
+  if (std::abs(R(0, 2)) > tol) return false;
+  outer = std::atan2(-R(1, 2), R(2, 2));
+  const Mat3 Z = rx(outer).transpose() * R;
+  inner = std::atan2(Z(1, 0), Z(0, 0));
+  return (imu_attitude(outer, inner, mount) - C_b_l).cwiseAbs().maxCoeff() < 1e-6;
+}
+
+double plan_duration_s(const BenchPlan& plan) {
+  double t = 0, outer = 0, inner = 0, rate = 0;
+  int mount = plan.steps.empty() ? 2 : plan.steps.front().mount;
+  for (const auto& s : plan.steps) {
+    if (s.mount != mount) {
+      t += move_duration(rate, 0.0, plan.table.max_accel) + plan.table.remount_s;
+      rate = 0;
+      mount = s.mount;
+    }
+    const double tr = move_duration(rate, 0.0, plan.table.max_accel);  // stop spinning
+    const double to = slew_duration(std::remainder(s.outer - outer, 2 * M_PI), plan.table.slew_rate, plan.table.max_accel);
+    const double ti = slew_duration(std::remainder(s.inner - inner, 2 * M_PI), plan.table.slew_rate, plan.table.max_accel);
+    t += tr + std::max(to, ti);
+    if (s.kind == StepKind::rate) {
+      t += move_duration(0.0, s.rate, plan.table.max_accel);
+      rate = s.rate;
+    } else {
+      rate = 0;
+    }
+    t += plan.table.settle_s + s.dwell_s;
+    outer = s.outer;
+    inner = s.inner;
+  }
+  return t + move_duration(rate, 0.0, plan.table.max_accel);
+}
+
+}  // namespace calbench

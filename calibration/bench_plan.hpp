@@ -1,0 +1,65 @@
+// A bench calibration plan: what the two-axis table does, step by step.
+//
+// Table geometry (local level frame L = NED at the bench site):
+//   outer axis: horizontal, along north (x_L); outer angle θo rotates about it: C_O→L = Rx(θo)
+//   inner axis: the outer gimbal's z (down when θo = 0); inner angle θi: C_P→O = Rz(θi)
+//   the IMU sits on the inner platform P in a fixture ("mount"): C_B→P, one of three cube faces,
+//   chosen so that the named IMU axis lies along the inner (rate) axis.
+// So C_B→L = Rx(θo)·Rz(θi)·C_B→P. Rate steps spin the inner axis; a rate step about IMU axis k
+// needs mount k (the station asks the operator to re-mount the cube when it changes).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "calibration/sensor_model.hpp"
+
+namespace calbench {
+
+struct Site {
+  double lat_deg = 0, lon_deg = 0, h_m = 0;
+};
+
+struct TableSpec {
+  double max_rate = 0;            // rad/s, inner axis
+  double max_accel = 0;           // rad/s², both axes
+  double slew_rate = 0;           // rad/s, positioning moves
+  double settle_s = 0;            // time after a move before data counts
+  double remount_s = 0;           // time the operator needs to re-mount the cube (no data)
+  // The bench's own errors (1σ), used by the estimators as measurement noise.
+  double rate_accuracy_rel = 0;   // relative rate error (e.g. 1e-6 = 1 ppm)
+  double position_accuracy = 0;   // rad, static position error of the platform
+  double axis_wobble = 0;         // rad, tilt of the rate axis from nominal while spinning
+};
+
+enum class StepKind { static_position, rate };
+
+struct PlanStep {
+  StepKind kind = StepKind::static_position;
+  std::string label;
+  int mount = 2;           // IMU axis (0 = x, 1 = y, 2 = z) along the inner axis
+  double outer = 0;        // rad: outer angle for the step
+  double inner = 0;        // rad: inner angle (static steps; start angle of rate steps)
+  double rate = 0;         // rad/s: inner-axis rate (rate steps), right-handed about +IMU axis `mount`
+  double dwell_s = 0;      // data time at the step, after settling
+  int line = 0;            // line in the plan file, for messages
+};
+
+struct BenchPlan {
+  std::string name;
+  std::string description;
+  Site site;               // default site (a recording's meta.json overrides)
+  TableSpec table;
+  std::vector<PlanStep> steps;
+};
+
+// C_B→P of the cube fixture that puts IMU axis `mount` (0..2) along the platform's z.
+Mat3 mount_rotation(int mount);
+// C_B→L for table angles and mount.
+Mat3 imu_attitude(double outer, double inner, int mount);
+// Table angles (outer, inner) that realise C_B→L with the given mount; false if unreachable
+// (the mount axis must be perpendicular to the outer axis, i.e. to north).
+bool solve_table_angles(const Mat3& C_b_l, int mount, double& outer, double& inner, double tol = 1e-9);
+// Nominal duration of the plan (dwell + settle + moves + remounts), seconds.
+double plan_duration_s(const BenchPlan& plan);
+
+}  // namespace calbench
