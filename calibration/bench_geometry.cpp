@@ -59,3 +59,21 @@ double plan_duration_s(const BenchPlan& plan) {
 }
 
 }  // namespace calbench
+
+#include "calibration/bench_kinematics.hpp"
+
+namespace calbench {
+
+BenchKinematics bench_kinematics(const SiteEarth& earth, const AxisState& outer, const AxisState& inner, int mount) {
+  BenchKinematics k;
+  const Mat3 Co = Eigen::AngleAxisd(outer.angle, Vec3::UnitX()).toRotationMatrix();
+  const Mat3 Ci = Eigen::AngleAxisd(inner.angle, Vec3::UnitZ()).toRotationMatrix();
+  k.C_b_l = Co * Ci * mount_rotation(mount);
+  // Rate of the platform w.r.t. local level, in L: outer about x_L, inner about the outer gimbal's z.
+  const Vec3 w_lb_l = outer.rate * Vec3::UnitX() + Co * (inner.rate * Vec3::UnitZ());
+  k.w_ib_b = k.C_b_l.transpose() * (w_lb_l + earth.w_ie_ned);
+  k.f_b = k.C_b_l.transpose() * (-earth.g_ned);
+  return k;
+}
+
+}  // namespace calbench

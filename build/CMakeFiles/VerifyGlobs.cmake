@@ -48,6 +48,8 @@ endif()
 file(GLOB_RECURSE NEW_GLOB LIST_DIRECTORIES false "/work/main/calibration/*.cpp")
 set(OLD_GLOB
   "/work/main/calibration/bench_geometry.cpp"
+  "/work/main/calibration/earth.cpp"
+  "/work/main/calibration/imu_error_sim.cpp"
   "/work/main/calibration/sensor_model.cpp"
   "/work/main/calibration/table_motion.cpp"
   )

@@ -9,6 +9,8 @@ set(CMAKE_DEPENDS_LANGUAGES
 # The set of dependency files which are needed:
 set(CMAKE_DEPENDS_DEPENDENCY_FILES
   "/work/main/calibration/bench_geometry.cpp" "CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o" "gcc" "CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o.d"
+  "/work/main/calibration/earth.cpp" "CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o" "gcc" "CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o.d"
+  "/work/main/calibration/imu_error_sim.cpp" "CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o" "gcc" "CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o.d"
   "/work/main/calibration/sensor_model.cpp" "CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o" "gcc" "CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o.d"
   "/work/main/calibration/table_motion.cpp" "CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o" "gcc" "CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o.d"
   )

@@ -83,10 +83,38 @@ CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.s: cmake_forc
 	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.s"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_geometry.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.s
 
+CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o: /work/main/calibration/earth.cpp
+CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o -c /work/main/calibration/earth.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/earth.cpp > CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/earth.cpp -o CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o: /work/main/calibration/imu_error_sim.cpp
+CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o -c /work/main/calibration/imu_error_sim.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/imu_error_sim.cpp > CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/imu_error_sim.cpp -o CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.s
+
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o: /work/main/calibration/sensor_model.cpp
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o -c /work/main/calibration/sensor_model.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.i: cmake_force
@@ -100,7 +128,7 @@ CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.s: cmake_force
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o: /work/main/calibration/table_motion.cpp
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_5) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o -c /work/main/calibration/table_motion.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.i: cmake_force
@@ -114,6 +142,8 @@ CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.s: cmake_force
 # Object files for target calbench_calibration
 calbench_calibration_OBJECTS = \
 "CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"
 
@@ -121,11 +151,13 @@ calbench_calibration_OBJECTS = \
 calbench_calibration_EXTERNAL_OBJECTS =
 
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/build.make
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/link.txt
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Linking CXX static library libcalbench_calibration.a"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_6) "Linking CXX static library libcalbench_calibration.a"
 	$(CMAKE_COMMAND) -P CMakeFiles/calbench_calibration.dir/cmake_clean_target.cmake
 	$(CMAKE_COMMAND) -E cmake_link_script CMakeFiles/calbench_calibration.dir/link.txt --verbose=$(VERBOSE)
 

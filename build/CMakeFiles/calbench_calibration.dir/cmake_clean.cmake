@@ -1,6 +1,10 @@
 file(REMOVE_RECURSE
   "CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o"
   "CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o.d"
+  "CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o"
+  "CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o.d"
+  "CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o"
+  "CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o.d"
   "CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o"
   "CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o.d"
   "CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"

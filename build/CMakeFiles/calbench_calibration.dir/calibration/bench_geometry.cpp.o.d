@@ -423,4 +423,6 @@ CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o: \
  /usr/include/eigen3/Eigen/src/Eigenvalues/GeneralizedEigenSolver.h \
  /usr/include/eigen3/Eigen/src/Eigenvalues/RealQZ.h \
  /usr/include/eigen3/Eigen/src/Eigenvalues/MatrixBaseEigenvalues.h \
- /work/main/calibration/table_motion.hpp
+ /work/main/calibration/table_motion.hpp \
+ /work/main/calibration/bench_kinematics.hpp \
+ /work/main/calibration/earth.hpp
