@@ -1,0 +1,159 @@
+#include "db/approval.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bench/io/input_error.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench::db {
+namespace {
+using nlohmann::json;
+using namespace calbench::units;
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(4);
+  s << v;
+  return s.str();
+}
+const char* axis(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
+
+void check_triad(const char* name, const TriadErrors& e, const TriadLimits& L, double unit, const char* unit_name,
+                 bool allow_unknown, std::vector<std::string>& why) {
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(e.bias(i)) > L.max_abs_bias)
+      why.push_back(std::string(name) + " bias " + axis(i) + " = " + fmt(e.bias(i) / unit) + " " + unit_name +
+                    " exceeds ±" + fmt(L.max_abs_bias / unit) + " " + unit_name);
+    if (!std::isfinite(e.sigma_bias(i))) {
+      if (!allow_unknown) why.push_back(std::string(name) + " bias " + axis(i) + ": σ unknown (not estimated)");
+    } else if (e.sigma_bias(i) > L.max_sigma_bias) {
+      why.push_back(std::string(name) + " bias " + axis(i) + ": σ = " + fmt(e.sigma_bias(i) / unit) + " " + unit_name +
+                    " exceeds " + fmt(L.max_sigma_bias / unit) + " " + unit_name);
+    }
+    for (int j = 0; j < 3; ++j) {
+      const std::string el = std::string(name) + " M[" + axis(i) + axis(j) + "]";
+      const double lim = i == j ? L.max_abs_scale : L.max_abs_skew;
+      if (std::abs(e.M(i, j)) > lim)
+        why.push_back(el + " = " + fmt(e.M(i, j) / kPpm) + " ppm exceeds ±" + fmt(lim / kPpm) + " ppm (" +
+                      (i == j ? "scale" : "skew") + ")");
+      if (!std::isfinite(e.sigma_M(i, j))) {
+        if (!allow_unknown) why.push_back(el + ": σ unknown (not estimated)");
+      } else if (e.sigma_M(i, j) > L.max_sigma_M) {
+        why.push_back(el + ": σ = " + fmt(e.sigma_M(i, j) / kPpm) + " ppm exceeds " + fmt(L.max_sigma_M / kPpm) + " ppm");
+      }
+    }
+  }
+}
+
+void read_limits(const json& j, const std::string& f, const std::string& name, TriadLimits& L, double unit,
+                 const std::string& unit_key) {
+  if (!j.is_object()) throw InputError(f, 0, name, "expected an object");
+  const std::string kb = "max_abs_bias_" + unit_key, ks = "max_sigma_bias_" + unit_key;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = name + "." + it.key();
+    if (!it->is_number()) throw InputError(f, 0, key, std::string("expected a number, got ") + it->type_name());
+    const double v = it->get<double>();
+    if (!std::isfinite(v) || v < 0) throw InputError(f, 0, key, "expected a finite non-negative number");
+    if (it.key() == kb) L.max_abs_bias = v * unit;
+    else if (it.key() == ks) L.max_sigma_bias = v * unit;
+    else if (it.key() == "max_abs_scale_ppm") L.max_abs_scale = v * kPpm;
+    else if (it.key() == "max_abs_skew_ppm") L.max_abs_skew = v * kPpm;
+    else if (it.key() == "max_sigma_M_ppm") L.max_sigma_M = v * kPpm;
+    else
+      throw InputError(f, 0, key, "unknown key (expected " + kb + ", " + ks +
+                                      ", max_abs_scale_ppm, max_abs_skew_ppm, max_sigma_M_ppm)");
+  }
+}
+}  // namespace
+
+Thresholds default_thresholds() {
+  // ADIS16488A data-sheet class: turn-on gyro bias ~0.2 °/s, accelerometer bias ~16 mg, scale
+  // ~0.5 %, axis misalignment ~0.05 %: limits at about 5× those; σ limits are what a good bench
+  // run reaches with margin (bias stability 5.1 °/h, 0.1 mg).
+  Thresholds t;
+  t.gyro = {3600 * kDegPerHour, 25000 * kPpm, 5000 * kPpm, 10 * kDegPerHour, 500 * kPpm};
+  t.accel = {80 * kMilliG, 25000 * kPpm, 5000 * kPpm, 2 * kMilliG, 500 * kPpm};
+  return t;
+}
+
+Thresholds parse_thresholds(const std::string& text, const std::string& f) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::exception& e) {
+    throw InputError(f, 0, "", std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
+  Thresholds t = default_thresholds();
+  t.source = f;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& k = it.key();
+    if (k == "gyro") read_limits(*it, f, k, t.gyro, kDegPerHour, "dph");
+    else if (k == "accel") read_limits(*it, f, k, t.accel, kMilliG, "mg");
+    else if (k == "allow_unknown_sigma" || k == "require_qc") {
+      if (!it->is_boolean()) throw InputError(f, 0, k, "expected true or false");
+      (k == "require_qc" ? t.require_qc : t.allow_unknown_sigma) = it->get<bool>();
+    } else if (k == "required_qc_metrics") {
+      if (!it->is_array()) throw InputError(f, 0, k, "expected an array of metric names");
+      t.required_qc_metrics.clear();
+      for (const auto& m : *it) {
+        if (!m.is_string()) throw InputError(f, 0, k, "expected an array of metric names");
+        t.required_qc_metrics.push_back(m.get<std::string>());
+      }
+    } else if (k == "model" || k == "comment") {
+      // informative
+    } else {
+      throw InputError(f, 0, k, "unknown key (expected gyro, accel, allow_unknown_sigma, require_qc, required_qc_metrics)");
+    }
+  }
+  return t;
+}
+
+Thresholds load_thresholds(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "", "cannot open the thresholds file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_thresholds(ss.str(), path);
+}
+
+ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t) {
+  ApprovalCheck r;
+  if (set.status != SetStatus::draft)
+    r.reasons.push_back("set " + std::to_string(set.id) + " is " + to_string(set.status) + ", only draft sets can be approved");
+  check_triad("gyro", set.errors.gyro, t.gyro, kDegPerHour, "°/h", t.allow_unknown_sigma, r.reasons);
+  check_triad("accel", set.errors.accel, t.accel, kMilliG, "mg", t.allow_unknown_sigma, r.reasons);
+  if (t.require_qc && qc.empty()) r.reasons.push_back("no QC results recorded for this set's run");
+  for (const auto& q : qc)
+    if (!q.pass)
+      r.reasons.push_back("QC " + q.metric + " = " + fmt(q.value) + (q.unit.empty() ? "" : " " + q.unit) + " failed" +
+                          (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : ""));
+  for (const auto& m : t.required_qc_metrics) {
+    bool found = false;
+    for (const auto& q : qc) found = found || q.metric == m;
+    if (!found) r.reasons.push_back("required QC metric '" + m + "' missing");
+  }
+  r.ok = r.reasons.empty();
+  return r;
+}
+
+ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t) {
+  ApprovalCheck r;
+  store.connection().write_transaction([&] {
+    const CoefficientSetRecord set = store.get_set(set_id);
+    r = check_approval(set, store.qc_of_set(set), t);
+    if (r.ok) {
+      store.set_status(set_id, SetStatus::approved, "thresholds: " + t.source);
+    } else {
+      std::string why;
+      for (const auto& s : r.reasons) why += (why.empty() ? "" : "; ") + s;
+      store.audit_locked("coefficient_set", set_id, "approve-refused", why);
+    }
+  });
+  return r;
+}
+
+}  // namespace calbench::db

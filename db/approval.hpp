@@ -1,0 +1,48 @@
+// Approval of a coefficient set: configurable QC thresholds, checked before draft → approved.
+// Config file (JSON, units in the key names; every key optional, defaults for the ADIS16488A):
+//   {"gyro":  {"max_abs_bias_dph": 3600, "max_abs_scale_ppm": 25000, "max_abs_skew_ppm": 5000,
+//              "max_sigma_bias_dph": 10, "max_sigma_M_ppm": 500},
+//    "accel": {"max_abs_bias_mg": 80, "max_abs_scale_ppm": 25000, "max_abs_skew_ppm": 5000,
+//              "max_sigma_bias_mg": 2, "max_sigma_M_ppm": 500},
+//    "allow_unknown_sigma": false, "require_qc": true, "required_qc_metrics": []}
+// See docs/database.md.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "db/store.hpp"
+
+namespace calbench::db {
+
+struct TriadLimits {
+  double max_abs_bias = 0;   // SI (rad/s or m/s²)
+  double max_abs_scale = 0;  // dimensionless
+  double max_abs_skew = 0;
+  double max_sigma_bias = 0;
+  double max_sigma_M = 0;
+};
+
+struct Thresholds {
+  TriadLimits gyro, accel;
+  bool allow_unknown_sigma = false;  // a σ of null (not estimated) refuses approval unless true
+  bool require_qc = true;            // at least one QC result recorded with the set's run
+  std::vector<std::string> required_qc_metrics;  // these metrics must be present (and pass)
+  std::string source = "built-in ADIS16488A defaults";
+};
+
+Thresholds default_thresholds();
+// Parse a thresholds config (JSON text); unknown keys are errors (typos must not loosen a check).
+Thresholds parse_thresholds(const std::string& text, const std::string& file);
+Thresholds load_thresholds(const std::string& path);  // reads the file; InputError on problems
+
+struct ApprovalCheck {
+  bool ok = true;
+  std::vector<std::string> reasons;  // why not (empty when ok)
+};
+ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);
+
+// Check and, when every check passes, approve (draft → approved), in one transaction. A refusal is
+// recorded in the audit log with its reasons; the set stays draft.
+ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t);
+
+}  // namespace calbench::db

@@ -1,0 +1,274 @@
+#include "db/inmotion_import.hpp"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "bench/io/input_error.hpp"
+
+namespace calbench::db {
+namespace {
+using nlohmann::json;
+
+std::string req_string(const json& o, const char* k, const std::string& f, const std::string& prefix) {
+  const std::string key = prefix.empty() ? std::string(k) : prefix + "." + k;
+  if (!o.is_object()) throw InputError(f, 0, prefix, "expected an object");
+  auto it = o.find(k);
+  if (it == o.end()) throw InputError(f, 0, key, "missing key");
+  if (!it->is_string()) throw InputError(f, 0, key, std::string("expected a string, got ") + it->type_name());
+  return it->get<std::string>();
+}
+
+double finite(const json& v, const std::string& f, const std::string& key) {
+  if (!v.is_number()) throw InputError(f, 0, key, std::string("expected a number, got ") + v.type_name());
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) throw InputError(f, 0, key, "NaN or infinity is not allowed");
+  return d;
+}
+
+std::array<double, 3> triple(const json& v, const std::string& f, const std::string& key, bool sigma) {
+  if (!v.is_array() || v.size() != 3) throw InputError(f, 0, key, "expected an array of 3 numbers");
+  std::array<double, 3> out{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (sigma && v[i].is_null()) {
+      out[i] = kUnknownSigma;
+      continue;
+    }
+    out[i] = finite(v[i], f, key + "[" + std::to_string(i) + "]");
+    if (sigma && out[i] < 0) throw InputError(f, 0, key, "a σ cannot be negative");
+  }
+  return out;
+}
+
+// A coefficient block of RESULT.json: spec schema; "format"/"device" may be omitted (then they are
+// those of the result), and when present must agree with it.
+ParsedCoefficients coeff_block(const json& j, const DeviceInfo& dev, const std::string& f, const std::string& name) {
+  if (!j.is_object()) throw InputError(f, 0, name, "expected an object in the coefficients.json form");
+  json c = j;
+  if (!c.contains("format")) c["format"] = "calbench-coefficients/1";
+  if (!c.contains("device")) c["device"] = {{"model", dev.model}, {"serial", dev.serial}};
+  ParsedCoefficients p;
+  try {
+    p = parse_coefficients(c.dump(), f, "");
+  } catch (const InputError& e) {
+    // Re-anchor the key under the block name.
+    throw InputError(f, 0, e.field().empty() ? name : name + "." + e.field(),
+                     std::string(e.what()).substr(std::string(e.what()).rfind(": ") + 2));
+  }
+  if (p.device.serial != dev.serial)
+    throw InputError(f, 0, name + ".device.serial",
+                     "serial '" + p.device.serial + "' does not match the result's device '" + dev.serial + "'");
+  if (p.device.model != dev.model)
+    throw InputError(f, 0, name + ".device.model",
+                     "model '" + p.device.model + "' does not match the result's device '" + dev.model + "'");
+  return p;
+}
+
+QcResult metric_from_object(const std::string& name, const json& o, const std::string& f, const std::string& key) {
+  QcResult q;
+  q.metric = name;
+  q.value = finite(o["value"], f, key + ".value");
+  if (o.contains("threshold") && !o["threshold"].is_null()) q.threshold = finite(o["threshold"], f, key + ".threshold");
+  const char* pk = o.contains("pass") ? "pass" : o.contains("passed") ? "passed" : nullptr;
+  if (pk) {
+    if (!o[pk].is_boolean()) throw InputError(f, 0, key + "." + pk, "expected true or false");
+    q.pass = o[pk].get<bool>();
+  } else if (q.threshold) {
+    q.pass = std::abs(q.value) <= *q.threshold;
+  }
+  if (o.contains("unit") && o["unit"].is_string()) q.unit = o["unit"].get<std::string>();
+  return q;
+}
+
+std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
+  std::vector<QcResult> out;
+  auto from_array = [&](const json& arr, const std::string& key, const std::string& prefix) {
+    for (std::size_t i = 0; i < arr.size(); ++i) {
+      const json& e = arr[i];
+      const std::string k = key + "[" + std::to_string(i) + "]";
+      if (!e.is_object()) throw InputError(f, 0, k, "expected an object");
+      std::string name;
+      for (const char* nk : {"metric", "name"})
+        if (e.contains(nk) && e[nk].is_string()) name = e[nk].get<std::string>();
+      if (name.empty()) throw InputError(f, 0, k, "missing \"metric\" or \"name\"");
+      if (e.contains("value")) {
+        out.push_back(metric_from_object(prefix + name, e, f, k));
+      } else {  // e.g. {"name": "bench", "final_cpe_m": 12.3, "max_cpe_m": 20.1}: informative figures
+        for (auto it = e.begin(); it != e.end(); ++it)
+          if (it->is_number()) out.push_back(QcResult{prefix + name + "." + it.key(), finite(*it, f, k + "." + it.key()),
+                                                      std::nullopt, true, ""});
+      }
+    }
+  };
+  if (qc.is_array()) {
+    from_array(qc, "qc", "");
+    return out;
+  }
+  if (!qc.is_object()) throw InputError(f, 0, "qc", "expected an object or an array");
+  for (auto it = qc.begin(); it != qc.end(); ++it) {
+    const std::string key = "qc." + it.key();
+    if (it->is_number()) {
+      out.push_back(QcResult{it.key(), finite(*it, f, key), std::nullopt, true, ""});
+    } else if (it->is_boolean()) {
+      out.push_back(QcResult{it.key(), it->get<bool>() ? 1.0 : 0.0, std::nullopt, it->get<bool>(), ""});
+    } else if (it->is_object() && it->contains("value")) {
+      out.push_back(metric_from_object(it.key(), *it, f, key));
+    } else if (it->is_array() && !it->empty() && (*it)[0].is_object()) {
+      from_array(*it, key, it.key() + ".");
+    }
+  }
+  return out;
+}
+}  // namespace
+
+InMotionResult parse_inmotion_result(const std::string& text, const std::string& f) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    const std::size_t upto = std::min<std::size_t>(e.byte, text.size());
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + upto, '\n'));
+    throw InputError(f, line, "", std::string("invalid JSON (truncated or malformed): ") + e.what());
+  } catch (const json::exception& e) {
+    throw InputError(f, 0, "", std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
+  InMotionResult r;
+  // device
+  if (!j.contains("device")) throw InputError(f, 0, "device", "missing key");
+  const json& dev = j["device"];
+  if (dev.is_string()) {
+    r.device.serial = dev.get<std::string>();
+  } else if (dev.is_object()) {
+    r.device.serial = req_string(dev, "serial", f, "device");
+    if (dev.contains("model")) r.device.model = req_string(dev, "model", f, "device");
+  } else {
+    throw InputError(f, 0, "device", std::string("expected an object {model, serial}, got ") + dev.type_name());
+  }
+  if (r.device.serial.empty()) throw InputError(f, 0, "device.serial", "empty serial number");
+  // recording
+  if (!j.contains("recording")) throw InputError(f, 0, "recording", "missing key");
+  r.recording_path = req_string(j["recording"], "path", f, "recording");
+  r.recording_sha256 = req_string(j["recording"], "sha256", f, "recording");
+  if (r.recording_sha256.size() != 64 ||
+      r.recording_sha256.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
+    throw InputError(f, 0, "recording.sha256", "expected 64 hexadecimal digits");
+  for (const char* k : {"reference_system", "reference"}) {
+    if (j.contains(k) && r.reference_system.empty())
+      r.reference_system = j[k].is_string() ? j[k].get<std::string>() : j[k].dump();
+  }
+  if (r.reference_system.empty() && j["recording"].contains("reference")) {
+    const json& ref = j["recording"]["reference"];
+    r.reference_system = ref.is_string() ? ref.get<std::string>() : ref.dump();
+  }
+  // coefficients, correction
+  if (!j.contains("coefficients")) throw InputError(f, 0, "coefficients", "missing key");
+  r.coefficients = coeff_block(j["coefficients"], r.device, f, "coefficients");
+  if (j.contains("correction") && !j["correction"].is_null())
+    r.correction = coeff_block(j["correction"], r.device, f, "correction");
+  // mounting
+  r.mounting_sigma_deg = {kUnknownSigma, kUnknownSigma, kUnknownSigma};
+  if (j.contains("mounting_rpy_deg") && !j["mounting_rpy_deg"].is_null()) {
+    const json& m = j["mounting_rpy_deg"];
+    r.has_mounting = true;
+    if (m.is_array()) {
+      r.mounting_rpy_deg = triple(m, f, "mounting_rpy_deg", false);
+    } else if (m.is_object()) {
+      const char* vk = m.contains("value") ? "value" : m.contains("rpy") ? "rpy" : "value";
+      if (!m.contains(vk)) throw InputError(f, 0, "mounting_rpy_deg.value", "missing key");
+      r.mounting_rpy_deg = triple(m[vk], f, std::string("mounting_rpy_deg.") + vk, false);
+      if (m.contains("sigma")) r.mounting_sigma_deg = triple(m["sigma"], f, "mounting_rpy_deg.sigma", true);
+    } else {
+      throw InputError(f, 0, "mounting_rpy_deg", "expected [roll, pitch, yaw] or {\"value\": [...], \"sigma\": [...]}");
+    }
+    for (const char* k : {"mounting_rpy_sigma_deg", "sigma_mounting_rpy_deg"})
+      if (j.contains(k)) r.mounting_sigma_deg = triple(j[k], f, k, true);
+  }
+  if (j.contains("consistency")) {
+    if (!j["consistency"].is_object() && !j["consistency"].is_array())
+      throw InputError(f, 0, "consistency", "expected an object");
+    r.consistency_json = j["consistency"].dump();
+  }
+  if (j.contains("qc") && !j["qc"].is_null()) {
+    r.qc = qc_metrics(j["qc"], f);
+    r.qc_json = j["qc"].dump();
+  }
+  r.result_json = j.dump();
+  return r;
+}
+
+double max_difference(const SensorErrors& a, const SensorErrors& b) {
+  double d = 0;
+  for (const auto& name : coefficient_names()) {
+    const double x = coefficient_value(a, name), y = coefficient_value(b, name);
+    d = std::max(d, std::abs(x - y) / (1.0 + std::max(std::abs(x), std::abs(y))));
+  }
+  return d;
+}
+
+ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::string& f,
+                              std::optional<std::int64_t> parent) {
+  constexpr double kTol = 1e-9;  // composition agreement (17-digit JSON, double arithmetic)
+  ImportOutcome out;
+  store.connection().write_transaction([&] {
+    out = ImportOutcome{};
+    const auto dev = store.find_device(r.device.serial);
+    if (!dev)
+      throw InputError(f, 0, "device.serial",
+                       "unknown device '" + r.device.serial + "' (not in " + store.connection().path() +
+                           "; store its bench calibration first)");
+    if (dev->model != r.device.model)
+      throw InputError(f, 0, "device.model",
+                       "device " + r.device.serial + " is a " + dev->model + ", the result says " + r.device.model);
+    // Which stored set did the fit start from?
+    if (parent) {
+      const auto p = store.find_set(*parent);
+      if (!p || p->device_id != dev->id)
+        throw InputError(f, 0, "parent", "set " + std::to_string(*parent) + " is not a set of device " + r.device.serial);
+      if (!r.correction)
+        throw InputError(f, 0, "correction", "missing: needed to combine the result with parent set " +
+                                                 std::to_string(*parent));
+      const double d = max_difference(compose(p->errors, r.correction->errors), r.coefficients.errors);
+      if (d > kTol)
+        throw InputError(f, 0, "coefficients",
+                         "not the composition of parent set " + std::to_string(*parent) +
+                             " with \"correction\" (largest difference " + std::to_string(d) + ")");
+      out.parent_id = *parent;
+    } else if (r.correction && max_difference(r.correction->errors, r.coefficients.errors) > kTol) {
+      auto sets = store.sets_of(dev->id);
+      for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
+        if (it->status == SetStatus::revoked) continue;
+        if (max_difference(compose(it->errors, r.correction->errors), r.coefficients.errors) <= kTol) {
+          out.parent_id = it->id;
+          break;
+        }
+      }
+      if (!out.parent_id)
+        out.note = "the fit started from a coefficient set that is not in the database; stored as in-motion "
+                   "without a parent";
+    }
+    out.source = out.parent_id ? SetSource::combined : SetSource::in_motion;
+
+    auto st = store.connection().prepare(
+        "INSERT INTO inmotion_runs(device_id, recording_path, recording_sha256, reference_system, mounting_roll_deg, "
+        "mounting_pitch_deg, mounting_yaw_deg, mounting_roll_sigma_deg, mounting_pitch_sigma_deg, "
+        "mounting_yaw_sigma_deg, consistency_json, qc_json, result_json, created_at) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))");
+    st.bind(1, dev->id).bind(2, r.recording_path).bind(3, r.recording_sha256).bind(4, r.reference_system);
+    for (int i = 0; i < 3; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (r.has_mounting) st.bind(5 + i, r.mounting_rpy_deg[k]);
+      else st.bind_null(5 + i);
+      st.bind(8 + i, r.mounting_sigma_deg[k]);  // +inf → NULL
+    }
+    st.bind(11, r.consistency_json).bind(12, r.qc_json).bind(13, r.result_json);
+    st.run();
+    out.run_id = store.connection().last_insert_rowid();
+    store.audit_locked("inmotion_run", out.run_id, "create", "import " + f);
+    store.insert_qc_locked(r.qc, std::nullopt, out.run_id);
+    out.set_id = store.insert_set_locked(dev->id, out.source, r.coefficients.canonical_json, r.coefficients.errors,
+                                         out.parent_id, std::nullopt, out.run_id, &out.version);
+  });
+  return out;
+}
+
+}  // namespace calbench::db

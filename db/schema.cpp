@@ -1,0 +1,140 @@
+// Schema migrations, as data. Migration i (1-based) takes the database from user_version i−1 to i.
+// Never edit a released migration: append a new one.
+#include "db/schema.hpp"
+
+namespace calbench::db {
+
+const std::vector<const char*>& migrations() {
+  static const std::vector<const char*> m = {
+      // ---- 1: initial schema ----
+      R"SQL(
+CREATE TABLE devices (
+  id         INTEGER PRIMARY KEY,
+  model      TEXT NOT NULL,
+  serial     TEXT NOT NULL UNIQUE,
+  firmware   TEXT NOT NULL DEFAULT '',
+  created_at TEXT NOT NULL
+);
+CREATE TABLE stations (
+  id          INTEGER PRIMARY KEY,
+  name        TEXT NOT NULL UNIQUE,
+  description TEXT NOT NULL DEFAULT '',
+  created_at  TEXT NOT NULL
+);
+CREATE TABLE bench_runs (
+  id               INTEGER PRIMARY KEY,
+  device_id        INTEGER NOT NULL REFERENCES devices(id),
+  station_id       INTEGER REFERENCES stations(id),
+  plan             TEXT NOT NULL DEFAULT '',
+  recording_path   TEXT NOT NULL DEFAULT '',
+  recording_sha256 TEXT NOT NULL DEFAULT '',
+  started_at       TEXT NOT NULL DEFAULT '',
+  ended_at         TEXT NOT NULL DEFAULT '',
+  outcome          TEXT NOT NULL CHECK (outcome IN ('pass', 'fail', 'aborted')),
+  created_at       TEXT NOT NULL
+);
+CREATE INDEX bench_runs_device ON bench_runs(device_id);
+CREATE TABLE inmotion_runs (
+  id                 INTEGER PRIMARY KEY,
+  device_id          INTEGER NOT NULL REFERENCES devices(id),
+  recording_path     TEXT NOT NULL DEFAULT '',
+  recording_sha256   TEXT NOT NULL DEFAULT '',
+  reference_system   TEXT NOT NULL DEFAULT '',
+  mounting_roll_deg  REAL, mounting_pitch_deg REAL, mounting_yaw_deg REAL,
+  mounting_roll_sigma_deg REAL, mounting_pitch_sigma_deg REAL, mounting_yaw_sigma_deg REAL,
+  consistency_json   TEXT NOT NULL DEFAULT '{}',
+  qc_json            TEXT NOT NULL DEFAULT '{}',
+  result_json        TEXT NOT NULL,
+  created_at         TEXT NOT NULL
+);
+CREATE INDEX inmotion_runs_device ON inmotion_runs(device_id);
+CREATE TABLE coefficient_sets (
+  id              INTEGER PRIMARY KEY,
+  device_id       INTEGER NOT NULL REFERENCES devices(id),
+  version         INTEGER NOT NULL CHECK (version >= 1),
+  source          TEXT NOT NULL CHECK (source IN ('bench', 'in-motion', 'combined')),
+  parent_id       INTEGER REFERENCES coefficient_sets(id),
+  bench_run_id    INTEGER REFERENCES bench_runs(id),
+  inmotion_run_id INTEGER REFERENCES inmotion_runs(id),
+  payload_json    TEXT NOT NULL,
+  status          TEXT NOT NULL DEFAULT 'draft'
+                  CHECK (status IN ('draft', 'approved', 'provisioned', 'revoked')),
+  created_at      TEXT NOT NULL,
+  created_by      TEXT NOT NULL,
+  UNIQUE (device_id, version)
+);
+CREATE TABLE coefficient_values (
+  set_id INTEGER NOT NULL REFERENCES coefficient_sets(id),
+  name   TEXT NOT NULL,
+  value  REAL NOT NULL,
+  sigma  REAL,                 -- NULL: unknown (not estimated)
+  PRIMARY KEY (set_id, name)
+) WITHOUT ROWID;
+CREATE TABLE qc_results (
+  id              INTEGER PRIMARY KEY,
+  bench_run_id    INTEGER REFERENCES bench_runs(id),
+  inmotion_run_id INTEGER REFERENCES inmotion_runs(id),
+  metric          TEXT NOT NULL,
+  value           REAL NOT NULL,
+  threshold       REAL,
+  pass            INTEGER NOT NULL CHECK (pass IN (0, 1)),
+  unit            TEXT NOT NULL DEFAULT '',
+  CHECK ((bench_run_id IS NULL) <> (inmotion_run_id IS NULL))
+);
+CREATE INDEX qc_results_bench ON qc_results(bench_run_id);
+CREATE INDEX qc_results_inmotion ON qc_results(inmotion_run_id);
+CREATE TABLE provisioning_events (
+  id            INTEGER PRIMARY KEY,
+  set_id        INTEGER NOT NULL REFERENCES coefficient_sets(id),
+  device_id     INTEGER NOT NULL REFERENCES devices(id),
+  kind          TEXT NOT NULL CHECK (kind IN ('device', 'export')),
+  target        TEXT NOT NULL,
+  ok            INTEGER NOT NULL CHECK (ok IN (0, 1)),
+  readback_json TEXT NOT NULL DEFAULT '{}',
+  message       TEXT NOT NULL DEFAULT '',
+  actor         TEXT NOT NULL,
+  at            TEXT NOT NULL
+);
+CREATE INDEX provisioning_device ON provisioning_events(device_id);
+CREATE TABLE audit_log (
+  id        INTEGER PRIMARY KEY,
+  at        TEXT NOT NULL,
+  user      TEXT NOT NULL,
+  station   TEXT NOT NULL,
+  entity    TEXT NOT NULL,
+  entity_id INTEGER NOT NULL,
+  device_id INTEGER REFERENCES devices(id),
+  action    TEXT NOT NULL,
+  detail    TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX audit_device ON audit_log(device_id);
+
+-- Coefficient sets are immutable: only the status may change, and only forwards.
+CREATE TRIGGER coefficient_sets_immutable BEFORE UPDATE ON coefficient_sets
+WHEN NEW.payload_json IS NOT OLD.payload_json OR NEW.device_id IS NOT OLD.device_id
+  OR NEW.version IS NOT OLD.version OR NEW.source IS NOT OLD.source
+  OR NEW.parent_id IS NOT OLD.parent_id OR NEW.bench_run_id IS NOT OLD.bench_run_id
+  OR NEW.inmotion_run_id IS NOT OLD.inmotion_run_id OR NEW.created_at IS NOT OLD.created_at
+  OR NEW.created_by IS NOT OLD.created_by
+BEGIN SELECT RAISE(ABORT, 'coefficient sets are immutable'); END;
+CREATE TRIGGER coefficient_sets_status BEFORE UPDATE OF status ON coefficient_sets
+WHEN NOT ((OLD.status = 'draft' AND NEW.status IN ('approved', 'revoked'))
+       OR (OLD.status = 'approved' AND NEW.status IN ('provisioned', 'revoked'))
+       OR (OLD.status = 'provisioned' AND NEW.status IN ('provisioned', 'revoked')))
+BEGIN SELECT RAISE(ABORT, 'status change not allowed'); END;
+CREATE TRIGGER coefficient_sets_no_delete BEFORE DELETE ON coefficient_sets
+BEGIN SELECT RAISE(ABORT, 'coefficient sets are never deleted (revoke them)'); END;
+CREATE TRIGGER coefficient_values_immutable BEFORE UPDATE ON coefficient_values
+BEGIN SELECT RAISE(ABORT, 'coefficient values are immutable'); END;
+CREATE TRIGGER coefficient_values_no_delete BEFORE DELETE ON coefficient_values
+BEGIN SELECT RAISE(ABORT, 'coefficient values are immutable'); END;
+CREATE TRIGGER audit_log_no_update BEFORE UPDATE ON audit_log
+BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
+CREATE TRIGGER audit_log_no_delete BEFORE DELETE ON audit_log
+BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
+)SQL",
+  };
+  return m;
+}
+
+}  // namespace calbench::db

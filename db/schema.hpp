@@ -1,0 +1,8 @@
+// The database schema as a list of migrations; PRAGMA user_version = number applied.
+#pragma once
+#include <vector>
+
+namespace calbench::db {
+// migrations()[i] takes the schema from user_version i to i + 1 (fixed DDL text, no data).
+const std::vector<const char*>& migrations();
+}  // namespace calbench::db

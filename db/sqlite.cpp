@@ -1,0 +1,213 @@
+#include "db/sqlite.hpp"
+
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <thread>
+
+namespace calbench::db {
+
+void throw_sqlite(sqlite3* db, int rc, std::string_view context) {
+  std::string msg(context);
+  msg += ": ";
+  msg += db ? sqlite3_errmsg(db) : sqlite3_errstr(rc);
+  const int primary = rc & 0xff;
+  if (primary == SQLITE_BUSY || primary == SQLITE_LOCKED) throw BusyError(rc, msg);
+  throw DbError(rc, msg);
+}
+
+namespace {
+bool is_busy(int rc) { return (rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED; }
+
+// Retry `fn` on BusyError with jittered exponential back-off until `budget` is spent.
+template <class F>
+void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, F&& fn) {
+  const auto start = std::chrono::steady_clock::now();
+  std::minstd_rand rng(static_cast<unsigned>(::getpid()) ^
+                       static_cast<unsigned>(start.time_since_epoch().count()));
+  int delay_ms = 2;
+  for (;;) {
+    try {
+      fn();
+      return;
+    } catch (const BusyError& e) {
+      if (std::chrono::steady_clock::now() - start > budget)
+        throw BusyError(e.code(), path + ": another process kept the database busy for more than " +
+                                      std::to_string(budget.count() / 1000) + " s; nothing was written");
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms / 2 + static_cast<int>(rng() % (delay_ms + 1))));
+      delay_ms = std::min(delay_ms * 2, 200);
+    }
+  }
+}
+}  // namespace
+
+Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(path), opt_(opt) {
+  if (!opt.create && !std::filesystem::exists(path))
+    throw DbError(SQLITE_CANTOPEN, path + ": no database here (create it with `calbench db init`)");
+  int flags = opt.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
+  if (opt.create && !opt.read_only) flags |= SQLITE_OPEN_CREATE;
+  flags |= SQLITE_OPEN_NOMUTEX;
+  const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
+  if (rc != SQLITE_OK) {
+    std::string msg = path + ": cannot open database: " + (db_ ? sqlite3_errmsg(db_) : sqlite3_errstr(rc));
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw DbError(rc, msg);
+  }
+  sqlite3_extended_result_codes(db_, 1);
+  sqlite3_busy_timeout(db_, static_cast<int>(opt.busy_timeout.count()));
+  try {
+    with_busy_retry(opt_.retry_budget, path_, [&] {
+      exec("PRAGMA foreign_keys = ON");
+      if (!opt_.read_only) {
+        // WAL: readers never block the writer; the setting persists in the file.
+        Statement wal(db_, "PRAGMA journal_mode = WAL");
+        if (wal.step() && wal.text(0) != "wal")
+          throw DbError(SQLITE_ERROR, path_ + ": cannot switch the database to WAL mode");
+        // FULL: a committed transaction survives a power cut, not only a process crash.
+        exec("PRAGMA synchronous = FULL");
+      }
+    });
+  } catch (...) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
+}
+
+Connection::~Connection() {
+  if (db_) sqlite3_close_v2(db_);
+}
+
+Statement Connection::prepare(std::string_view sql) { return Statement(db_, sql); }
+
+void Connection::exec(const char* sql) {
+  char* err = nullptr;
+  const int rc = sqlite3_exec(db_, sql, nullptr, nullptr, &err);
+  if (rc != SQLITE_OK) {
+    std::string msg = path_ + ": " + (err ? err : sqlite3_errstr(rc));
+    sqlite3_free(err);
+    if (is_busy(rc)) throw BusyError(rc, msg);
+    throw DbError(rc, msg);
+  }
+}
+
+std::int64_t Connection::last_insert_rowid() const { return sqlite3_last_insert_rowid(db_); }
+int Connection::changes() const { return sqlite3_changes(db_); }
+
+void Connection::begin(const char* sql) { exec(sql); }
+
+void Connection::write_transaction(const std::function<void()>& body) {
+  if (in_tx_) {  // nested: part of the enclosing transaction
+    body();
+    return;
+  }
+  with_busy_retry(opt_.retry_budget, path_, [&] {
+    begin("BEGIN IMMEDIATE");
+    in_tx_ = true;
+    try {
+      body();
+      exec("COMMIT");
+      in_tx_ = false;
+    } catch (...) {
+      in_tx_ = false;
+      if (!sqlite3_get_autocommit(db_)) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+  });
+}
+
+void Connection::read_transaction(const std::function<void()>& body) {
+  if (in_tx_) {
+    body();
+    return;
+  }
+  with_busy_retry(opt_.retry_budget, path_, [&] {
+    begin("BEGIN DEFERRED");
+    in_tx_ = true;
+    try {
+      body();
+      exec("COMMIT");
+      in_tx_ = false;
+    } catch (...) {
+      in_tx_ = false;
+      if (!sqlite3_get_autocommit(db_)) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+  });
+}
+
+Statement::Statement(sqlite3* db, std::string_view sql) : db_(db) {
+  const int rc = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &st_, nullptr);
+  if (rc != SQLITE_OK) throw_sqlite(db, rc, "prepare");
+}
+
+Statement::~Statement() {
+  if (st_) sqlite3_finalize(st_);
+}
+
+Statement::Statement(Statement&& o) noexcept : db_(o.db_), st_(o.st_) { o.st_ = nullptr; }
+
+Statement& Statement::bind(int i, std::int64_t v) {
+  const int rc = sqlite3_bind_int64(st_, i, v);
+  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
+  return *this;
+}
+
+Statement& Statement::bind(int i, double v) {
+  if (!std::isfinite(v)) return bind_null(i);
+  const int rc = sqlite3_bind_double(st_, i, v);
+  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
+  return *this;
+}
+
+Statement& Statement::bind(int i, std::string_view v) {
+  const int rc = sqlite3_bind_text(st_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
+  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
+  return *this;
+}
+
+Statement& Statement::bind_null(int i) {
+  const int rc = sqlite3_bind_null(st_, i);
+  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
+  return *this;
+}
+
+bool Statement::step() {
+  const int rc = sqlite3_step(st_);
+  if (rc == SQLITE_ROW) return true;
+  if (rc == SQLITE_DONE) return false;
+  sqlite3_reset(st_);
+  throw_sqlite(db_, rc, "SQL");
+}
+
+void Statement::run() {
+  while (step()) {
+  }
+}
+
+void Statement::reset() {
+  sqlite3_reset(st_);
+  sqlite3_clear_bindings(st_);
+}
+
+bool Statement::is_null(int col) const { return sqlite3_column_type(st_, col) == SQLITE_NULL; }
+std::int64_t Statement::int64(int col) const { return sqlite3_column_int64(st_, col); }
+double Statement::real(int col) const { return is_null(col) ? NAN : sqlite3_column_double(st_, col); }
+std::string Statement::text(int col) const {
+  const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(st_, col));
+  return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(st_, col))) : std::string();
+}
+std::optional<std::int64_t> Statement::opt_int64(int col) const {
+  if (is_null(col)) return std::nullopt;
+  return int64(col);
+}
+std::optional<double> Statement::opt_real(int col) const {
+  if (is_null(col)) return std::nullopt;
+  return sqlite3_column_double(st_, col);
+}
+
+}  // namespace calbench::db

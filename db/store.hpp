@@ -1,0 +1,213 @@
+// The coefficient store: devices, stations, bench runs, versioned coefficient sets, in-motion runs,
+// QC results, provisioning events and an audit log, in one SQLite file (schema: db/schema.cpp,
+// user documentation: docs/database.md).
+//
+// This is the API the station, the CLI and the reports use. Coefficient payloads cross it as the
+// text of a `coefficients.json` document (spec: ../shared/spec/recording-format.md); the store
+// validates it, keeps it verbatim (extra model terms included) and indexes every coefficient and
+// σ so that fleet statistics are plain SQL. bench/io/coefficients_json.hpp converts that text
+// to and from calbench::CoefficientSet.
+//
+// Every method that changes anything runs in one BEGIN IMMEDIATE transaction (all or nothing) and
+// writes its audit-log entry in that same transaction. Bad input throws calbench::InputError
+// before anything is written.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/sensor_model.hpp"
+#include "db/sqlite.hpp"
+
+namespace calbench::db {
+
+inline constexpr int kSchemaVersion = 1;
+
+enum class SetSource { bench, in_motion, combined };
+enum class SetStatus { draft, approved, provisioned, revoked };
+std::string to_string(SetSource s);  // "bench" | "in-motion" | "combined"
+std::string to_string(SetStatus s);  // "draft" | "approved" | "provisioned" | "revoked"
+SetSource source_from_string(const std::string& s);
+SetStatus status_from_string(const std::string& s);
+
+// Who makes a change: user and station names, recorded with every audit entry.
+struct Actor {
+  std::string user;
+  std::string station;
+  // CALBENCH_USER, else USER, else "unknown"; CALBENCH_STATION, else the host name.
+  static Actor from_environment();
+};
+
+struct DeviceInfo {
+  std::string model = "ADIS16488A";
+  std::string serial;
+  std::string firmware;  // may be empty (unknown); a later non-empty value updates the record
+};
+
+struct Device {
+  std::int64_t id = 0;
+  std::string model, serial, firmware, created_at;
+};
+
+struct QcResult {
+  std::string metric;
+  double value = 0;
+  std::optional<double> threshold;  // absent: informative only
+  bool pass = true;
+  std::string unit;
+};
+
+struct BenchRunInput {
+  std::string station;          // station name; created on first use
+  std::string plan;             // plan name or path
+  std::string recording_path;   // the bench recording folder
+  std::string recording_sha256; // SHA-256 of imu.csv (or of the recording as the station defines it)
+  std::string started_at, ended_at;  // ISO 8601 UTC
+  std::string outcome = "pass";  // "pass" | "fail" | "aborted"
+  std::vector<QcResult> qc;     // bench residuals and checks
+};
+
+struct BenchRun {
+  std::int64_t id = 0, device_id = 0;
+  std::string station, plan, recording_path, recording_sha256, started_at, ended_at, outcome, created_at;
+};
+
+struct InMotionRun {
+  std::int64_t id = 0, device_id = 0;
+  std::string recording_path, recording_sha256, reference_system;
+  std::array<double, 3> mounting_rpy_deg{}, mounting_sigma_deg{};
+  std::string consistency_json, qc_json, result_json, created_at;
+};
+
+struct CoefficientSetRecord {
+  std::int64_t id = 0, device_id = 0;
+  std::string serial, model;
+  int version = 0;
+  SetSource source = SetSource::bench;
+  SetStatus status = SetStatus::draft;
+  std::optional<std::int64_t> parent_id, bench_run_id, inmotion_run_id;
+  std::string payload_json;  // coefficients.json text
+  std::string created_at, created_by;
+  SensorErrors errors;  // the indexed coefficients (σ = +inf when unknown)
+};
+
+struct ProvisioningEvent {
+  std::int64_t id = 0, set_id = 0, device_id = 0;
+  std::string kind;    // "device" | "export"
+  std::string target;  // IMU URI or file path
+  bool ok = false;
+  std::string readback_json, message, actor, at;
+};
+
+struct AuditEntry {
+  std::int64_t id = 0;
+  std::string at, user, station, entity;
+  std::int64_t entity_id = 0;
+  std::string action, detail;
+};
+
+struct StoredSet {
+  std::int64_t device_id = 0, run_id = 0, set_id = 0;
+  int version = 0;
+};
+
+// One row of the fleet view: one coefficient of the newest non-revoked set of one device.
+struct FleetValue {
+  std::string serial;
+  std::int64_t set_id = 0;
+  int version = 0;
+  std::string status;
+  std::string name;  // e.g. "gyro.bias.x", "accel.M.yz"
+  double value = 0;
+  double sigma = 0;  // +inf when unknown
+};
+
+// Names of the 24 indexed coefficients, in a fixed order: gyro.bias.{x,y,z}, gyro.M.{xx..zz},
+// accel.bias.{x,y,z}, accel.M.{xx..zz}.
+const std::vector<std::string>& coefficient_names();
+// value/σ of a named coefficient of a set of errors.
+double coefficient_value(const SensorErrors& e, const std::string& name);
+double coefficient_sigma(const SensorErrors& e, const std::string& name);
+
+// Parse and validate a coefficients.json text (spec schema; σ null = unknown). Throws InputError
+// naming `file` and the key. `expect_serial` (if not empty) must equal device.serial.
+struct ParsedCoefficients {
+  DeviceInfo device;
+  SensorErrors errors;
+  std::string canonical_json;  // re-serialised, extra keys kept
+};
+ParsedCoefficients parse_coefficients(const std::string& text, const std::string& file,
+                                      const std::string& expect_serial = "");
+// A coefficients.json text for `errors` (spec schema), with `extra_json` (a JSON object text or
+// empty) supplying extra keys.
+std::string coefficients_json_text(const DeviceInfo& device, const SensorErrors& errors,
+                                   const std::string& extra_json = "");
+
+class Store {
+ public:
+  // $CALBENCH_DB if set, else "calbench.db" in the working directory.
+  static std::string default_path();
+
+  // Opens (and with create = true creates) the database and migrates its schema to
+  // kSchemaVersion. A database of a newer schema is refused.
+  Store(const std::string& path, const OpenOptions& opt = {}, Actor actor = Actor::from_environment());
+  int schema_version();
+  Connection& connection() { return *conn_; }
+  const Actor& actor() const { return actor_; }
+
+  // ---- writes (each one transaction, audited) ----
+  // Creates the device if unknown (model/serial), updates firmware when given. Returns its id.
+  std::int64_t ensure_device(const DeviceInfo& d);
+  std::int64_t ensure_station(const std::string& name, const std::string& description = "");
+  // A bench run and the coefficient set fitted from it (source bench, status draft), atomically.
+  StoredSet store_bench(const DeviceInfo& d, const BenchRunInput& run, const std::string& coefficients_json);
+  // A coefficient set without a run (e.g. imported from a file), source as given.
+  StoredSet store_set(const DeviceInfo& d, SetSource source, const std::string& coefficients_json,
+                      std::optional<std::int64_t> parent = std::nullopt);
+  // Status changes. approve() does not check thresholds: use approve_checked() (db/approval.hpp).
+  void set_status(std::int64_t set_id, SetStatus to, const std::string& reason);
+  void record_provisioning(std::int64_t set_id, const std::string& kind, const std::string& target, bool ok,
+                           const std::string& readback_json, const std::string& message);
+  void audit(const std::string& entity, std::int64_t entity_id, const std::string& action, const std::string& detail);
+
+  // ---- reads ----
+  std::optional<Device> find_device(const std::string& serial);
+  std::vector<Device> devices();
+  std::optional<CoefficientSetRecord> find_set(std::int64_t set_id);
+  CoefficientSetRecord get_set(std::int64_t set_id);  // InputError when missing
+  std::vector<CoefficientSetRecord> sets_of(std::int64_t device_id);  // by version
+  // Newest set of the device with the given status (e.g. approved), if any.
+  std::optional<CoefficientSetRecord> latest_set(std::int64_t device_id, std::optional<SetStatus> status);
+  std::optional<BenchRun> bench_run(std::int64_t id);
+  std::optional<InMotionRun> inmotion_run(std::int64_t id);
+  std::vector<QcResult> qc_of_bench_run(std::int64_t id);
+  std::vector<QcResult> qc_of_inmotion_run(std::int64_t id);
+  // QC results that speak for a set: those of its bench run or in-motion run.
+  std::vector<QcResult> qc_of_set(const CoefficientSetRecord& s);
+  std::vector<ProvisioningEvent> provisioning_of(std::int64_t device_id);
+  std::vector<AuditEntry> audit_of_device(std::int64_t device_id);
+  std::vector<FleetValue> fleet();
+  std::int64_t count(const char* table);  // rows of a known table (for checks and tests)
+
+  // Internal helpers shared by the import code.
+  std::int64_t insert_set_locked(std::int64_t device_id, SetSource source, const std::string& canonical_json,
+                                 const SensorErrors& e, std::optional<std::int64_t> parent,
+                                 std::optional<std::int64_t> bench_run, std::optional<std::int64_t> inmotion_run,
+                                 int* version_out);
+  void insert_qc_locked(const std::vector<QcResult>& qc, std::optional<std::int64_t> bench_run,
+                        std::optional<std::int64_t> inmotion_run);
+  std::int64_t ensure_device_locked(const DeviceInfo& d);
+  void audit_locked(const std::string& entity, std::int64_t entity_id, const std::string& action,
+                    const std::string& detail);
+
+ private:
+  CoefficientSetRecord read_set_row(Statement& st);
+  void migrate();
+  std::unique_ptr<Connection> conn_;
+  Actor actor_;
+};
+
+}  // namespace calbench::db
