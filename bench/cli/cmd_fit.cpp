@@ -1,0 +1,63 @@
+// calbench fit bench DIR --out COEFFS.json [--method lsq|ekf] [--model paper|full] [--json]
+#include <iostream>
+
+#include "bench/bench_recording.hpp"
+#include "bench/cli/registry.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/io/plan_toml.hpp"
+
+namespace calbench::cli {
+namespace {
+
+struct FitBenchArgs {
+  std::string dir, out, method = "lsq", model = "full", plan;
+  double block_s = 1.0;
+  bool json = false;
+};
+
+void run_fit_bench(const FitBenchArgs& a) {
+  BenchFitOptions opt;
+  opt.method = a.method == "ekf" ? BenchMethod::ekf : BenchMethod::lsq;
+  opt.model = a.model == "paper" ? BenchModel::paper : BenchModel::full;
+  const BenchRecordingData data = load_bench_blocks(a.dir, a.block_s);
+  opt.table = a.plan.empty() ? recording_table_spec(data.meta) : load_plan(a.plan).table;
+  if (data.used_rows == 0)
+    throw InputError(a.dir + "/reference.csv", 0, "step", "no IMU sample falls inside a plan step (all steps are −1?)");
+  if (!data.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
+  const BenchFitResult r = fit_bench(data.blocks, opt);
+  const CoefficientSet c = bench_result_to_coefficients(r, opt, data.meta, a.dir);
+  if (!a.out.empty()) write_coefficients(a.out, c);
+  if (a.json) {
+    auto j = bench_result_json(r, c);
+    j["recording"] = {{"path", a.dir}, {"imu_rows", data.imu_rows}, {"reference_rows", data.ref_rows},
+                      {"rows_in_steps", data.used_rows}, {"complete", data.meta.complete}};
+    print_json(j.dump(2));
+  } else {
+    std::cout << "bench fit (" << a.method << ", model " << a.model << ") of " << a.dir << ": " << data.imu_rows
+              << " IMU rows\n"
+              << bench_result_text(r);
+    if (!a.out.empty()) std::cout << "coefficients written to " << a.out << "\n";
+  }
+}
+
+const bool registered = add_command(30, [](CLI::App& app) {
+  auto* fit = app.add_subcommand("fit", "Estimate calibration coefficients from a recording (bench; drive)");
+  fit->require_subcommand(1);
+  auto a = std::make_shared<FitBenchArgs>();
+  auto* b = fit->add_subcommand("bench", "Factory calibration from a bench recording: gyro drift, skews, scale; "
+                                         "accelerometer bias, skews, scale; each with its 1σ");
+  b->add_option("dir", a->dir, "bench recording folder")->required()->check(CLI::ExistingDirectory);
+  b->add_option("--out", a->out, "write the coefficients here (coefficients.json schema)");
+  b->add_option("--method", a->method, "lsq: generalised least squares; ekf: the paper's sequential EKF")
+      ->check(CLI::IsMember({"lsq", "ekf"}));
+  b->add_option("--model", a->model, "paper: gyro drift + 6 skews (eq 1–3); full: plus scale factors")
+      ->check(CLI::IsMember({"paper", "full"}));
+  b->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
+      ->check(CLI::ExistingFile);
+  b->add_option("--block", a->block_s, "block length for averaging, seconds")->check(CLI::Range(0.01, 100.0));
+  b->add_flag("--json", a->json, "print the result as JSON on stdout");
+  b->callback([a] { run_fit_bench(*a); });
+});
+
+}  // namespace
+}  // namespace calbench::cli

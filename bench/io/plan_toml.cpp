@@ -1,0 +1,170 @@
+#include "bench/io/plan_toml.hpp"
+
+#include <cmath>
+#include <toml++/toml.h>
+
+#include "bench/io/input_error.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench {
+namespace {
+
+struct Ctx {
+  std::string file;
+  [[noreturn]] void fail(const toml::node* n, const std::string& key, const std::string& msg) const {
+    const std::size_t line = n ? n->source().begin.line : 0;
+    throw InputError(file, line, key, msg);
+  }
+  [[noreturn]] void fail(const toml::table& t, const std::string& key, const std::string& msg) const {
+    throw InputError(file, t.source().begin.line, key, msg);
+  }
+
+  double num(const toml::table& t, const std::string& prefix, const char* key, std::optional<double> def,
+             double lo, double hi) const {
+    const toml::node* n = t.get(key);
+    const std::string k = prefix + key;
+    if (!n) {
+      if (def) return *def;
+      fail(t, k, "missing key");
+    }
+    std::optional<double> v;
+    if (auto d = n->value<double>()) v = *d;
+    if (!v) fail(n, k, "expected a number");
+    if (!std::isfinite(*v)) fail(n, k, "NaN or infinity is not allowed");
+    if (*v < lo || *v > hi) fail(n, k, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return *v;
+  }
+
+  std::string str(const toml::table& t, const std::string& prefix, const char* key, std::optional<std::string> def) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (def) return *def;
+      fail(t, prefix + key, "missing key");
+    }
+    if (auto s = n->value<std::string>()) return *s;
+    fail(n, prefix + key, "expected a string");
+  }
+
+  int axis(const toml::table& t, const std::string& prefix, const char* key, int def) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    const auto s = n->value<std::string>();
+    if (s == "x" || s == "+x") return 0;
+    if (s == "y" || s == "+y") return 1;
+    if (s == "z" || s == "+z") return 2;
+    fail(n, prefix + key, "expected an IMU axis: \"x\", \"y\" or \"z\"");
+  }
+};
+
+void check_keys(const Ctx& c, const toml::table& t, const std::string& prefix, std::initializer_list<const char*> allowed) {
+  for (const auto& [k, v] : t) {
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || k.str() == a;
+    if (!ok) c.fail(&v, prefix + std::string(k.str()), "unknown key (typo?)");
+  }
+}
+
+}  // namespace
+
+BenchPlan load_plan(const std::filesystem::path& file) {
+  using namespace units;
+  Ctx c{file.string()};
+  toml::table root;
+  try {
+    root = toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    if (!std::filesystem::exists(file)) throw InputError(c.file, 0, "", "cannot open: no such file");
+    throw InputError(c.file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
+  }
+  check_keys(c, root, "", {"plan", "site", "table", "step"});
+  BenchPlan p;
+  if (const auto* t = root["plan"].as_table()) {
+    check_keys(c, *t, "plan.", {"name", "description"});
+    p.name = c.str(*t, "plan.", "name", std::string(file.stem()));
+    p.description = c.str(*t, "plan.", "description", std::string());
+  } else {
+    p.name = file.stem().string();
+  }
+  if (const auto* t = root["site"].as_table()) {
+    check_keys(c, *t, "site.", {"lat_deg", "lon_deg", "h_m"});
+    p.site.lat_deg = c.num(*t, "site.", "lat_deg", std::nullopt, -90, 90);
+    p.site.lon_deg = c.num(*t, "site.", "lon_deg", std::nullopt, -360, 360);
+    p.site.h_m = c.num(*t, "site.", "h_m", 0.0, -500, 10000);
+  } else {
+    c.fail(root, "site", "missing table [site] (bench latitude/longitude/height)");
+  }
+  toml::table empty;
+  const toml::table* tt = root["table"].as_table();
+  const toml::table& t = tt ? *tt : empty;
+  check_keys(c, t, "table.", {"max_rate_dps", "max_accel_dps2", "slew_rate_dps", "settle_s", "remount_s",
+                              "rate_accuracy_ppm", "position_accuracy_arcsec", "axis_wobble_arcsec"});
+  p.table.max_rate = c.num(t, "table.", "max_rate_dps", 500.0, 1, 5000) * kDeg;
+  p.table.max_accel = c.num(t, "table.", "max_accel_dps2", 200.0, 1, 10000) * kDeg;
+  p.table.slew_rate = c.num(t, "table.", "slew_rate_dps", 60.0, 1, 5000) * kDeg;
+  p.table.settle_s = c.num(t, "table.", "settle_s", 2.0, 0, 600);
+  p.table.remount_s = c.num(t, "table.", "remount_s", 60.0, 0, 3600);
+  p.table.rate_accuracy_rel = c.num(t, "table.", "rate_accuracy_ppm", 1.0, 0, 1e5) * kPpm;
+  p.table.position_accuracy = c.num(t, "table.", "position_accuracy_arcsec", 2.0, 0, 36000) * kDeg / 3600.0;
+  p.table.axis_wobble = c.num(t, "table.", "axis_wobble_arcsec", 1.0, 0, 36000) * kDeg / 3600.0;
+
+  const toml::array* steps = root["step"].as_array();
+  if (!steps || steps->empty()) c.fail(root, "step", "a plan needs at least one [[step]]");
+  int mount = 2;
+  for (std::size_t i = 0; i < steps->size(); ++i) {
+    const std::string pre = "step[" + std::to_string(i + 1) + "].";
+    const toml::table* s = (*steps)[i].as_table();
+    if (!s) c.fail(&(*steps)[i], "step[" + std::to_string(i + 1) + "]", "expected a table");
+    check_keys(c, *s, pre, {"kind", "label", "mount", "axis", "outer_deg", "inner_deg", "rpy_deg", "rate_dps", "dwell_s"});
+    PlanStep st;
+    st.line = static_cast<int>(s->source().begin.line);
+    const std::string kind = c.str(*s, pre, "kind", std::nullopt);
+    st.dwell_s = c.num(*s, pre, "dwell_s", std::nullopt, 0.1, 86400);
+    if (kind == "rate") {
+      st.kind = StepKind::rate;
+      if (!s->get("axis")) c.fail(*s, pre + "axis", "missing key (IMU axis of the rotation: x, y or z)");
+      st.mount = c.axis(*s, pre, "axis", 2);
+      if (s->get("mount") && c.axis(*s, pre, "mount", st.mount) != st.mount)
+        c.fail(s->get("mount"), pre + "mount", "a rate step about an IMU axis needs that axis on the inner (rate) axis");
+      st.rate = c.num(*s, pre, "rate_dps", std::nullopt, -1e5, 1e5) * kDeg;
+      if (std::abs(st.rate) > p.table.max_rate)
+        c.fail(s->get("rate_dps"), pre + "rate_dps", "exceeds the table's max_rate_dps");
+      if (st.rate == 0) c.fail(s->get("rate_dps"), pre + "rate_dps", "a rate step needs a non-zero rate (use kind = \"static\")");
+      st.outer = c.num(*s, pre, "outer_deg", 0.0, -360, 360) * kDeg;
+      st.inner = c.num(*s, pre, "inner_deg", 0.0, -360, 360) * kDeg;
+      if (s->get("rpy_deg")) c.fail(s->get("rpy_deg"), pre + "rpy_deg", "not allowed for a rate step");
+    } else if (kind == "static") {
+      st.kind = StepKind::static_position;
+      st.mount = c.axis(*s, pre, "mount", mount);
+      if (const toml::node* r = s->get("rpy_deg")) {
+        if (s->get("outer_deg") || s->get("inner_deg"))
+          c.fail(r, pre + "rpy_deg", "give either rpy_deg or outer_deg/inner_deg, not both");
+        const toml::array* a = r->as_array();
+        if (!a || a->size() != 3) c.fail(r, pre + "rpy_deg", "expected [roll, pitch, yaw] in degrees");
+        double v[3];
+        for (int k = 0; k < 3; ++k) {
+          auto d = (*a)[static_cast<std::size_t>(k)].value<double>();
+          if (!d || !std::isfinite(*d)) c.fail(r, pre + "rpy_deg", "expected three numbers");
+          v[k] = *d * kDeg;
+        }
+        const Mat3 C = (Eigen::AngleAxisd(v[2], Vec3::UnitZ()) * Eigen::AngleAxisd(v[1], Vec3::UnitY()) *
+                        Eigen::AngleAxisd(v[0], Vec3::UnitX())).toRotationMatrix();
+        if (!solve_table_angles(C, st.mount, st.outer, st.inner, 1e-6))
+          c.fail(r, pre + "rpy_deg",
+                 "orientation not reachable with this mount: the IMU axis on the inner axis must be perpendicular to "
+                 "the outer axis (north)");
+      } else {
+        st.outer = c.num(*s, pre, "outer_deg", 0.0, -360, 360) * kDeg;
+        st.inner = c.num(*s, pre, "inner_deg", 0.0, -360, 360) * kDeg;
+      }
+      if (s->get("rate_dps")) c.fail(s->get("rate_dps"), pre + "rate_dps", "not allowed for a static step");
+    } else {
+      c.fail(s->get("kind"), pre + "kind", "must be \"static\" or \"rate\"");
+    }
+    st.label = c.str(*s, pre, "label", kind + " " + std::to_string(i + 1));
+    mount = st.mount;
+    p.steps.push_back(st);
+  }
+  return p;
+}
+
+}  // namespace calbench
