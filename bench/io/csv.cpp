@@ -189,6 +189,9 @@ CsvWriter::~CsvWriter() {
 
 void CsvWriter::row(const double* v, std::size_t n) {
   char tmp[40];
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))  // the format forbids NaN/inf: refuse rather than write an unreadable file
+      throw std::invalid_argument(path_ + ": refusing to write a non-finite value in column " + std::to_string(i + 1));
   for (std::size_t i = 0; i < n; ++i) {
     if (i) out_ += ',';
     out_.append(tmp, format_double(tmp, v[i]));
