@@ -350,6 +350,22 @@ std::vector<Device> Store::devices() {
   return out;
 }
 
+std::vector<DeviceSummary> Store::device_summaries() {
+  std::vector<DeviceSummary> out;
+  auto st = conn_->prepare(
+      "SELECT d.id, d.model, d.serial, d.firmware, d.created_at, "
+      "(SELECT COUNT(*) FROM coefficient_sets s WHERE s.device_id = d.id), s.version, s.status, s.source "
+      "FROM devices d LEFT JOIN coefficient_sets s ON s.device_id = d.id AND s.version = "
+      "(SELECT MAX(version) FROM coefficient_sets x WHERE x.device_id = d.id) ORDER BY d.serial");
+  while (st.step()) {
+    DeviceSummary s{Device{st.int64(0), st.text(1), st.text(2), st.text(3), st.text(4)},
+                    static_cast<int>(st.int64(5)), std::nullopt, st.text(7), st.text(8)};
+    if (!st.is_null(6)) s.latest_version = static_cast<int>(st.int64(6));
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
 static const char* kSetColumns =
     "SELECT s.id, s.device_id, d.serial, d.model, s.version, s.source, s.status, s.parent_id, s.bench_run_id, "
     "s.inmotion_run_id, s.payload_json, s.created_at, s.created_by FROM coefficient_sets s "

@@ -109,6 +109,13 @@ struct AuditEntry {
   std::string action, detail;
 };
 
+struct DeviceSummary {
+  Device device;
+  int sets = 0;
+  std::optional<int> latest_version;
+  std::string latest_status, latest_source;
+};
+
 struct StoredSet {
   std::int64_t device_id = 0, run_id = 0, set_id = 0;
   int version = 0;
@@ -176,6 +183,7 @@ class Store {
   // ---- reads ----
   std::optional<Device> find_device(const std::string& serial);
   std::vector<Device> devices();
+  std::vector<DeviceSummary> device_summaries();
   std::optional<CoefficientSetRecord> find_set(std::int64_t set_id);
   CoefficientSetRecord get_set(std::int64_t set_id);  // InputError when missing
   std::vector<CoefficientSetRecord> sets_of(std::int64_t device_id);  // by version

@@ -1,0 +1,391 @@
+// calbench db …: the coefficient database (docs/database.md).
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bench/cli/registry.hpp"
+#include "bench/io/coefficients_json.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+#include "bench/io/recording.hpp"
+#include "db/approval.hpp"
+#include "db/fleet.hpp"
+#include "db/inmotion_import.hpp"
+#include "db/store.hpp"
+
+namespace calbench::cli {
+namespace {
+using nlohmann::json;
+using namespace calbench::db;
+
+struct DbArgs {
+  std::string db;
+  std::string serial;
+  std::int64_t set = 0;
+  std::string out, reason, thresholds, file;
+  std::int64_t parent = 0;
+  bool json = false;
+  // store-bench
+  std::string coeffs, recording, plan, station, started, ended, outcome = "pass", firmware, sha256;
+  std::vector<std::string> qc;
+};
+
+std::string db_path(const DbArgs& a) { return a.db.empty() ? Store::default_path() : a.db; }
+
+void add_db_option(CLI::App* sub, DbArgs& a) {
+  sub->add_option("--db", a.db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
+}
+
+std::unique_ptr<Store> open_store(const DbArgs& a, bool create = false) {
+  OpenOptions o;
+  o.create = create;
+  return std::make_unique<Store>(db_path(a), o);
+}
+
+std::string fmt(double v, int prec = 4) {
+  if (!std::isfinite(v)) return "unknown";
+  std::ostringstream s;
+  s << std::setprecision(prec) << v;
+  return s.str();
+}
+
+json sigma_or_null(double s) { return std::isfinite(s) ? json(s) : json(nullptr); }
+
+json set_json(const CoefficientSetRecord& s) {
+  json j = {{"id", s.id},
+            {"serial", s.serial},
+            {"model", s.model},
+            {"version", s.version},
+            {"source", to_string(s.source)},
+            {"status", to_string(s.status)},
+            {"parent", s.parent_id ? json(*s.parent_id) : json(nullptr)},
+            {"bench_run", s.bench_run_id ? json(*s.bench_run_id) : json(nullptr)},
+            {"inmotion_run", s.inmotion_run_id ? json(*s.inmotion_run_id) : json(nullptr)},
+            {"created_at", s.created_at},
+            {"created_by", s.created_by}};
+  return j;
+}
+
+json qc_json(const std::vector<QcResult>& qc) {
+  json a = json::array();
+  for (const auto& q : qc)
+    a.push_back({{"metric", q.metric}, {"value", q.value}, {"threshold", q.threshold ? json(*q.threshold) : json(nullptr)},
+                 {"pass", q.pass}, {"unit", q.unit}});
+  return a;
+}
+
+// Short human summary of a set: bias and scale per axis in display units, with σ.
+void print_set_summary(const CoefficientSetRecord& s) {
+  for (const char* triad : {"gyro", "accel"}) {
+    std::cout << "    " << std::left << std::setw(6) << triad;
+    for (const char* ax : {"x", "y", "z"}) {
+      const std::string n = std::string(triad) + ".bias." + ax;
+      std::string unit;
+      double k;
+      display_unit(n, unit, k);
+      std::cout << " b" << ax << "=" << fmt(coefficient_value(s.errors, n) * k) << "±"
+                << fmt(coefficient_sigma(s.errors, n) * k, 2) << " " << unit;
+    }
+    for (const char* ax : {"xx", "yy", "zz"}) {
+      const std::string n = std::string(triad) + ".M." + ax;
+      std::cout << " s" << ax[0] << "=" << fmt(coefficient_value(s.errors, n) * 1e6) << "±"
+                << fmt(coefficient_sigma(s.errors, n) * 1e6, 2) << " ppm";
+    }
+    std::cout << "\n";
+  }
+}
+
+void cmd_init(const DbArgs& a) {
+  auto s = open_store(a, true);
+  std::cout << "database " << db_path(a) << " ready (schema version " << s->schema_version() << ")\n";
+}
+
+void cmd_devices(const DbArgs& a) {
+  auto s = open_store(a);
+  const auto list = s->device_summaries();
+  if (a.json) {
+    json arr = json::array();
+    for (const auto& d : list)
+      arr.push_back({{"serial", d.device.serial}, {"model", d.device.model}, {"firmware", d.device.firmware},
+                     {"sets", d.sets}, {"latest_version", d.latest_version ? json(*d.latest_version) : json(nullptr)},
+                     {"latest_status", d.latest_status}, {"latest_source", d.latest_source}});
+    print_json(json{{"devices", arr}}.dump(2));
+    return;
+  }
+  std::cout << std::left << std::setw(16) << "SERIAL" << std::setw(12) << "MODEL" << std::setw(10) << "FIRMWARE"
+            << std::setw(6) << "SETS" << "LATEST\n";
+  for (const auto& d : list)
+    std::cout << std::left << std::setw(16) << d.device.serial << std::setw(12) << d.device.model << std::setw(10)
+              << (d.device.firmware.empty() ? "-" : d.device.firmware) << std::setw(6) << d.sets
+              << (d.latest_version ? "v" + std::to_string(*d.latest_version) + " " + d.latest_source + " " + d.latest_status
+                                   : std::string("-"))
+              << "\n";
+  std::cout << list.size() << " device(s)\n";
+}
+
+Device need_device(Store& s, const std::string& serial) {
+  auto d = s.find_device(serial);
+  if (!d) throw InputError("", 0, "SERIAL", "unknown device '" + serial + "' in " + s.connection().path());
+  return *d;
+}
+
+void cmd_show(const DbArgs& a) {
+  auto s = open_store(a);
+  const Device d = need_device(*s, a.serial);
+  const auto sets = s->sets_of(d.id);
+  const auto prov = s->provisioning_of(d.id);
+  if (a.json) {
+    json js = json::array();
+    for (const auto& x : sets) {
+      json j = set_json(x);
+      j["coefficients"] = json::parse(x.payload_json);
+      j["qc"] = qc_json(s->qc_of_set(x));
+      js.push_back(j);
+    }
+    json jp = json::array();
+    for (const auto& p : prov)
+      jp.push_back({{"id", p.id}, {"set", p.set_id}, {"kind", p.kind}, {"target", p.target}, {"ok", p.ok},
+                    {"readback", json::parse(p.readback_json)}, {"message", p.message}, {"actor", p.actor}, {"at", p.at}});
+    print_json(json{{"device", {{"serial", d.serial}, {"model", d.model}, {"firmware", d.firmware}, {"created_at", d.created_at}}},
+                    {"sets", js},
+                    {"provisioning", jp}}
+                   .dump(2));
+    return;
+  }
+  std::cout << d.model << " " << d.serial << (d.firmware.empty() ? "" : ", firmware " + d.firmware) << ", since "
+            << d.created_at << "\n";
+  std::cout << "coefficient sets:\n";
+  for (const auto& x : sets) {
+    std::cout << "  set " << x.id << "  v" << x.version << "  " << to_string(x.source) << "  " << to_string(x.status)
+              << (x.parent_id ? "  parent " + std::to_string(*x.parent_id) : std::string()) << "  " << x.created_at
+              << "  by " << x.created_by << "\n";
+    print_set_summary(x);
+    for (const auto& q : s->qc_of_set(x))
+      std::cout << "    QC " << q.metric << " = " << fmt(q.value) << (q.unit.empty() ? "" : " " + q.unit)
+                << (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : std::string()) << (q.pass ? " pass" : " FAIL")
+                << "\n";
+  }
+  if (sets.empty()) std::cout << "  (none)\n";
+  if (!prov.empty()) std::cout << "provisioning:\n";
+  for (const auto& p : prov)
+    std::cout << "  " << p.at << "  set " << p.set_id << "  " << p.kind << " " << p.target << "  "
+              << (p.ok ? "ok" : "FAILED") << (p.message.empty() ? "" : "  " + p.message) << "\n";
+}
+
+void cmd_history(const DbArgs& a) {
+  auto s = open_store(a);
+  const Device d = need_device(*s, a.serial);
+  const auto log = s->audit_of_device(d.id);
+  if (a.json) {
+    json arr = json::array();
+    for (const auto& e : log)
+      arr.push_back({{"id", e.id}, {"at", e.at}, {"user", e.user}, {"station", e.station}, {"entity", e.entity},
+                     {"entity_id", e.entity_id}, {"action", e.action}, {"detail", e.detail}});
+    print_json(json{{"serial", d.serial}, {"history", arr}}.dump(2));
+    return;
+  }
+  for (const auto& e : log)
+    std::cout << e.at << "  " << e.user << "@" << e.station << "  " << e.entity << " " << e.entity_id << "  "
+              << e.action << (e.detail.empty() ? "" : "  " + e.detail) << "\n";
+}
+
+void cmd_approve(const DbArgs& a) {
+  auto s = open_store(a);
+  const Thresholds t = a.thresholds.empty() ? default_thresholds() : load_thresholds(a.thresholds);
+  const ApprovalCheck r = approve_checked(*s, a.set, t);
+  if (a.json) print_json(json{{"set", a.set}, {"approved", r.ok}, {"reasons", r.reasons}, {"thresholds", t.source}}.dump(2));
+  if (r.ok) {
+    if (!a.json) std::cout << "set " << a.set << " approved (thresholds: " << t.source << ")\n";
+    return;
+  }
+  if (!a.json) {
+    std::cerr << "calbench: set " << a.set << " NOT approved (thresholds: " << t.source << "):\n";
+    for (const auto& why : r.reasons) std::cerr << "  - " << why << "\n";
+  }
+  throw Exit{1};
+}
+
+void cmd_revoke(const DbArgs& a) {
+  auto s = open_store(a);
+  s->set_status(a.set, SetStatus::revoked, a.reason);
+  std::cout << "set " << a.set << " revoked" << (a.reason.empty() ? "" : ": " + a.reason) << "\n";
+}
+
+void cmd_export(const DbArgs& a) {
+  auto s = open_store(a);
+  const auto set = s->get_set(a.set);
+  write_text_atomic(a.out, set.payload_json + "\n");
+  std::cout << "set " << set.id << " (" << set.serial << " v" << set.version << ", " << to_string(set.status)
+            << ") written to " << a.out << "\n";
+}
+
+void cmd_fleet(const DbArgs& a) {
+  auto s = open_store(a);
+  const auto values = s->fleet();
+  const auto stats = fleet_stats(values);
+  if (a.json) {
+    json arr = json::array();
+    for (const auto& c : stats) {
+      json outl = json::array();
+      for (const auto& p : c.points)
+        if (p.outlier) outl.push_back({{"serial", p.serial}, {"set", p.set_id}, {"value", p.value}, {"z", sigma_or_null(p.z)}});
+      arr.push_back({{"name", c.name}, {"n", c.n}, {"median", c.median}, {"mad", c.mad}, {"mean", c.mean},
+                     {"stddev", c.stddev}, {"min", c.min}, {"max", c.max}, {"outliers", outl}});
+    }
+    print_json(json{{"units", "SI (rad/s, m/s², dimensionless)"}, {"outlier_rule", "|0.6745 (x - median) / MAD| > 3.5"},
+                    {"coefficients", arr}}
+                   .dump(2));
+    return;
+  }
+  std::size_t devices = stats.empty() ? 0 : stats.front().n;
+  std::cout << "fleet: " << devices << " device(s), newest non-revoked set of each\n";
+  std::cout << std::left << std::setw(14) << "COEFFICIENT" << std::setw(7) << "UNIT" << std::right << std::setw(12)
+            << "MEDIAN" << std::setw(12) << "MAD" << std::setw(12) << "MIN" << std::setw(12) << "MAX" << "  OUTLIERS\n";
+  for (const auto& c : stats) {
+    std::string outl;
+    for (const auto& p : c.points)
+      if (p.outlier) outl += (outl.empty() ? "" : ", ") + p.serial;
+    std::cout << std::left << std::setw(14) << c.name << std::setw(7) << c.unit << std::right << std::setw(12)
+              << fmt(c.median * c.to_display) << std::setw(12) << fmt(c.mad * c.to_display) << std::setw(12)
+              << fmt(c.min * c.to_display) << std::setw(12) << fmt(c.max * c.to_display) << "  "
+              << (outl.empty() ? "-" : outl) << "\n";
+  }
+}
+
+void cmd_import_inmotion(const DbArgs& a) {
+  std::ifstream in(a.file, std::ios::binary);
+  if (!in) throw InputError(a.file, 0, "", "cannot open");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const InMotionResult r = parse_inmotion_result(ss.str(), a.file);  // before opening: nothing written on bad input
+  auto s = open_store(a);
+  const ImportOutcome o = import_inmotion(*s, r, a.file, a.parent ? std::optional<std::int64_t>(a.parent) : std::nullopt);
+  if (a.json) {
+    print_json(json{{"set", o.set_id}, {"version", o.version}, {"source", to_string(o.source)},
+                    {"parent", o.parent_id ? json(*o.parent_id) : json(nullptr)}, {"inmotion_run", o.run_id},
+                    {"qc_metrics", r.qc.size()}, {"note", o.note}}
+                   .dump(2));
+    return;
+  }
+  std::cout << "stored in-motion run " << o.run_id << " and set " << o.set_id << " (" << r.device.serial << " v"
+            << o.version << ", " << to_string(o.source)
+            << (o.parent_id ? ", parent set " + std::to_string(*o.parent_id) : std::string()) << ", draft), "
+            << r.qc.size() << " QC metric(s)\n";
+  if (!o.note.empty()) std::cout << "note: " << o.note << "\n";
+}
+
+// --qc NAME=VALUE[:THRESHOLD][:UNIT]  (pass = |value| ≤ threshold when a threshold is given)
+QcResult parse_qc_option(const std::string& s) {
+  const auto eq = s.find('=');
+  if (eq == std::string::npos || eq == 0) throw InputError("", 0, "--qc", "expected NAME=VALUE[:THRESHOLD[:UNIT]], got '" + s + "'");
+  QcResult q;
+  q.metric = s.substr(0, eq);
+  std::vector<std::string> parts;
+  std::stringstream rest(s.substr(eq + 1));
+  for (std::string p; std::getline(rest, p, ':');) parts.push_back(p);
+  auto num = [&](const std::string& t) {
+    std::size_t used = 0;
+    double v = NAN;
+    try {
+      v = std::stod(t, &used);
+    } catch (...) {
+    }
+    if (used != t.size() || !std::isfinite(v)) throw InputError("", 0, "--qc " + q.metric, "'" + t + "' is not a finite number");
+    return v;
+  };
+  if (parts.empty()) throw InputError("", 0, "--qc " + q.metric, "missing value");
+  q.value = num(parts[0]);
+  if (parts.size() > 1 && !parts[1].empty()) {
+    q.threshold = num(parts[1]);
+    q.pass = std::abs(q.value) <= *q.threshold;
+  }
+  if (parts.size() > 2) q.unit = parts[2];
+  return q;
+}
+
+void cmd_store_bench(const DbArgs& a) {
+  const CoefficientSet c = read_coefficients(a.coeffs);  // validates, names the file
+  DeviceInfo d{c.device.model, c.device.serial, a.firmware};
+  BenchRunInput run;
+  run.station = a.station.empty() ? Actor::from_environment().station : a.station;
+  run.plan = a.plan;
+  run.recording_path = a.recording;
+  run.recording_sha256 = a.sha256;
+  if (run.recording_sha256.empty() && !a.recording.empty()) {
+    const std::filesystem::path imu = std::filesystem::path(a.recording) / "imu.csv";
+    if (!std::filesystem::exists(imu)) throw InputError(imu.string(), 0, "", "recording has no imu.csv");
+    run.recording_sha256 = sha256_file(imu);
+  }
+  run.started_at = a.started;
+  run.ended_at = a.ended;
+  run.outcome = a.outcome;
+  for (const auto& q : a.qc) run.qc.push_back(parse_qc_option(q));
+  auto s = open_store(a, true);
+  const StoredSet st = s->store_bench(d, run, coefficients_to_json(c).dump(2));
+  if (a.json) {
+    print_json(json{{"device", st.device_id}, {"bench_run", st.run_id}, {"set", st.set_id}, {"version", st.version}}.dump(2));
+    return;
+  }
+  std::cout << "stored bench run " << st.run_id << " and set " << st.set_id << " (" << d.serial << " v" << st.version
+            << ", draft)\n";
+}
+
+template <class F>
+CLI::App* leaf(CLI::App* db, const char* name, const char* help, std::shared_ptr<DbArgs> a, F fn) {
+  auto* sub = db->add_subcommand(name, help);
+  add_db_option(sub, *a);
+  sub->callback([a, fn] { fn(*a); });
+  return sub;
+}
+
+const bool registered = add_command(70, [](CLI::App& app) {
+  auto a = std::make_shared<DbArgs>();
+  auto* db = app.add_subcommand("db", "coefficient database: devices, versioned sets, approval, history");
+  db->require_subcommand(1);
+  leaf(db, "init", "create the database (or migrate it to this version's schema)", a, cmd_init);
+  leaf(db, "devices", "list devices with their newest coefficient set", a, cmd_devices)
+      ->add_flag("--json", a->json, "machine-readable output");
+  auto* show = leaf(db, "show", "a device's coefficient sets (with σ, QC) and provisioning events", a, cmd_show);
+  show->add_option("SERIAL", a->serial, "device serial number")->required();
+  show->add_flag("--json", a->json, "machine-readable output");
+  auto* hist = leaf(db, "history", "audit log of a device: every state change, who and when", a, cmd_history);
+  hist->add_option("SERIAL", a->serial, "device serial number")->required();
+  hist->add_flag("--json", a->json, "machine-readable output");
+  auto* appr = leaf(db, "approve", "approve a draft set if it passes the QC thresholds (else list why not, exit 1)", a,
+                    cmd_approve);
+  appr->add_option("SET", a->set, "coefficient set id")->required();
+  appr->add_option("--thresholds", a->thresholds, "thresholds config (JSON; default: built-in ADIS16488A limits)");
+  appr->add_flag("--json", a->json, "machine-readable output");
+  auto* rev = leaf(db, "revoke", "revoke a set (it can no longer be provisioned)", a, cmd_revoke);
+  rev->add_option("SET", a->set, "coefficient set id")->required();
+  rev->add_option("--reason", a->reason, "why (recorded in the audit log)");
+  auto* exp = leaf(db, "export", "write a set as coefficients.json", a, cmd_export);
+  exp->add_option("SET", a->set, "coefficient set id")->required();
+  exp->add_option("--out", a->out, "output file")->required();
+  leaf(db, "fleet", "distribution of every coefficient across devices, outliers flagged (robust z > 3.5)", a, cmd_fleet)
+      ->add_flag("--json", a->json, "machine-readable output");
+  auto* imp = leaf(db, "import-inmotion", "store an in-motion fit result (RESULT.json) against its device", a,
+                   cmd_import_inmotion);
+  imp->add_option("RESULT", a->file, "RESULT.json of `calbench fit drive`")->required();
+  imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)");
+  imp->add_flag("--json", a->json, "machine-readable output");
+  auto* sb = leaf(db, "store-bench", "store a bench run and its coefficient set (draft)", a, cmd_store_bench);
+  sb->add_option("--coeffs", a->coeffs, "coefficients.json of the bench fit")->required();
+  sb->add_option("--recording", a->recording, "bench recording folder (its imu.csv is hashed)");
+  sb->add_option("--sha256", a->sha256, "SHA-256 of the recording (instead of hashing --recording)");
+  sb->add_option("--plan", a->plan, "bench plan name or path");
+  sb->add_option("--station", a->station, "station name (default: $CALBENCH_STATION, else host name)");
+  sb->add_option("--started", a->started, "start time, ISO 8601 UTC");
+  sb->add_option("--ended", a->ended, "end time, ISO 8601 UTC");
+  sb->add_option("--outcome", a->outcome, "pass | fail | aborted")->check(CLI::IsMember({"pass", "fail", "aborted"}));
+  sb->add_option("--firmware", a->firmware, "device firmware revision");
+  sb->add_option("--qc", a->qc, "QC result NAME=VALUE[:THRESHOLD[:UNIT]] (repeatable)");
+  sb->add_flag("--json", a->json, "machine-readable output");
+});
+
+}  // namespace
+}  // namespace calbench::cli

@@ -1,0 +1,77 @@
+#include "db/fleet.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "calibration/units.hpp"
+
+namespace calbench::db {
+
+void display_unit(const std::string& name, std::string& unit, double& to_display) {
+  using namespace calbench::units;
+  if (name.rfind("gyro.bias", 0) == 0) {
+    unit = "deg/h";
+    to_display = 1.0 / kDegPerHour;
+  } else if (name.rfind("accel.bias", 0) == 0) {
+    unit = "mg";
+    to_display = 1.0 / kMilliG;
+  } else {
+    unit = "ppm";
+    to_display = 1.0 / kPpm;
+  }
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  const std::size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
+  const double hi = v[m];
+  if (v.size() % 2) return hi;
+  const double lo = *std::max_element(v.begin(), v.begin() + static_cast<long>(m));
+  return 0.5 * (lo + hi);
+}
+
+std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values) {
+  std::map<std::string, CoefficientStats> by;
+  for (const auto& name : coefficient_names()) {
+    auto& s = by[name];
+    s.name = name;
+    display_unit(name, s.unit, s.to_display);
+  }
+  for (const auto& v : values) {
+    auto it = by.find(v.name);
+    if (it == by.end()) continue;
+    it->second.points.push_back({v.serial, v.set_id, v.value, v.sigma, 0, false});
+  }
+  std::vector<CoefficientStats> out;
+  for (const auto& name : coefficient_names()) {
+    CoefficientStats s = by[name];
+    s.n = s.points.size();
+    if (s.n) {
+      std::vector<double> x;
+      for (const auto& p : s.points) x.push_back(p.value);
+      s.median = median_of(x);
+      std::vector<double> dev;
+      for (double xi : x) dev.push_back(std::abs(xi - s.median));
+      s.mad = median_of(dev);
+      s.min = *std::min_element(x.begin(), x.end());
+      s.max = *std::max_element(x.begin(), x.end());
+      double sum = 0, sq = 0;
+      for (double xi : x) sum += xi;
+      s.mean = sum / static_cast<double>(s.n);
+      for (double xi : x) sq += (xi - s.mean) * (xi - s.mean);
+      s.stddev = s.n > 1 ? std::sqrt(sq / static_cast<double>(s.n - 1)) : 0;
+      for (auto& p : s.points) {
+        // MAD = 0 (more than half identical): any value off the median is an outlier.
+        const double d = p.value - s.median;
+        p.z = s.mad > 0 ? 0.6745 * d / s.mad : (d == 0 ? 0 : std::copysign(INFINITY, d));
+        p.outlier = std::abs(p.z) > kOutlierZ;
+      }
+    }
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+}  // namespace calbench::db
