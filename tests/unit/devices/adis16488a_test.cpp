@@ -1,0 +1,239 @@
+// The ADIS16488A driver against the emulator: pipelining, paging, 32-bit reads, scaling, identity,
+// PROD_ID mismatch, error flags, sample loss, self-test, DEC_RATE, provisioning.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "calibration/units.hpp"
+#include "devices/adis16488a.hpp"
+#include "devices/adis16488a_emulator.hpp"
+
+using namespace calbench;
+using namespace calbench::devices;
+
+namespace {
+
+const Vec3 kW(0.1, -0.2, 0.3);
+const Vec3 kF(0.5, -1.0, -9.7);
+
+NoiseSpec quiet() {  // no noise, no drift, only the 32-bit output quantisation
+  NoiseSpec n = adis16488a_noise();
+  n.gyro.white_density = n.accel.white_density = 0;
+  n.gyro.drift_sigma = n.accel.drift_sigma = 0;
+  return n;
+}
+
+struct Rig {
+  std::shared_ptr<VirtualClock> clock = std::make_shared<VirtualClock>();
+  Adis16488aEmulator emu;
+  Adis16488a imu;
+  explicit Rig(const SensorErrors& truth = {}, NoiseSpec noise = quiet())
+      : emu(clock, [](double) { return EmuTruth{kW, kF}; }, truth, noise), imu(emu) {}
+};
+
+TEST(Adis16488a, IdentityAndPipelinedFrames) {
+  Rig r;
+  auto id = r.imu.connect();
+  EXPECT_EQ(id.prod_id, 0x4068);
+  EXPECT_EQ(id.serial, 0x1234);
+  EXPECT_EQ(id.firmware(), "1.10 (2016-06-15)");
+  EXPECT_EQ(id.dec_rate, 0);
+  EXPECT_DOUBLE_EQ(id.output_rate_hz, 2460.0);
+  // N registers in N+1 frames, page frame only when the page changes.
+  const auto f0 = r.emu.frames();
+  auto w = r.imu.read_words(3, {0x78, 0x7A, 0x7C});
+  EXPECT_EQ(r.emu.frames() - f0, 5u);  // connect() ended on page 4: one page frame + 3 requests + 1
+  EXPECT_EQ(w, (std::vector<std::uint16_t>{0x0110, 0x0615, 0x2016}));
+}
+
+TEST(Adis16488a, PageCacheAvoidsRedundantPageFrames) {
+  Rig r;
+  r.imu.connect();
+  r.imu.select_page(3);
+  const auto f0 = r.emu.frames();
+  r.imu.read16(adis::reg("DEC_RATE"));
+  r.imu.read16(adis::reg("CONFIG"));
+  EXPECT_EQ(r.emu.frames() - f0, 4u);  // 2 × (request + dummy), no page frame
+  EXPECT_EQ(r.imu.read16(adis::reg("CONFIG")), 0x00C0);
+  r.imu.read16(adis::reg("PROD_ID"));  // page 0: one page frame more
+  EXPECT_EQ(r.imu.cached_page(), 0);
+  EXPECT_EQ(r.emu.peek(0, 0x00), 0);
+}
+
+TEST(Adis16488a, ScaledSampleMatchesTruthAndThe32BitPair) {
+  Rig r;
+  r.imu.connect();
+  auto s = r.imu.read_sample();
+  ASSERT_TRUE(s);
+  const double glsb = adis::reg("X_GYRO").scale, alsb = adis::reg("X_ACCL").scale;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(s->gyro[i], kW[i], 0.51 * glsb);
+    EXPECT_NEAR(s->accel[i], kF[i], 0.51 * alsb);
+  }
+  EXPECT_NEAR(s->temp_c, 31.5, 0.01);
+  EXPECT_FALSE(s->error());
+  // read32 gives the same raw value as the sample's OUT:LOW pair.
+  const auto raw = static_cast<std::int32_t>(r.imu.read32(adis::reg("Z_GYRO")));
+  EXPECT_NEAR(raw * glsb, kW[2], 0.51 * glsb);
+  EXPECT_EQ(r.emu.busy_violations(), 0u);
+}
+
+TEST(Adis16488a, WrongProdIdIsRefused) {
+  Rig r;
+  r.emu.faults().prod_id = 0x4060;
+  try {
+    r.imu.connect();
+    FAIL();
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("0x4060"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0x4068"), std::string::npos);
+  }
+}
+
+TEST(Adis16488a, ErrorFlagsAreFlaggedAndDecoded) {
+  Rig r;
+  r.imu.connect();
+  ASSERT_FALSE(r.imu.read_sample()->error());
+  r.emu.faults().sys_e_flag = adis::sys_e::spi_error | adis::sys_e::overrun;
+  r.imu.read_sample();  // a sample latched before the fault may come first
+  auto s = r.imu.read_sample();
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->error());
+  EXPECT_EQ(s->error_text(), "SPI communication error; processing overrun");
+  EXPECT_GE(r.imu.error_samples(), 1u);
+  // New-mag / new-baro data flags are not errors.
+  EXPECT_EQ(adis::decode_sys_e_flag(adis::sys_e::new_mag | adis::sys_e::new_baro), "");
+}
+
+TEST(Adis16488a, MissingSamplesAreCounted) {
+  Rig r;
+  r.imu.connect();
+  r.emu.faults().skip_every = 10;
+  std::uint64_t lost = 0;
+  double t_prev = -1;
+  for (int k = 0; k < 200; ++k) {
+    auto s = r.imu.read_sample();
+    ASSERT_TRUE(s);
+    lost += s->lost_before;
+    if (t_prev >= 0) { EXPECT_NEAR(s->t - t_prev, (1 + s->lost_before) / 2460.0, 1e-9); }
+    t_prev = s->t;
+  }
+  // 200 samples read while every 10th internal sample is missing: 200/9 ≈ 22 gaps.
+  EXPECT_GE(lost, 21u);
+  EXPECT_LE(lost, 23u);
+  EXPECT_EQ(lost, r.imu.samples_lost());
+  EXPECT_EQ(r.emu.samples_overwritten(), 0u);
+}
+
+TEST(Adis16488a, SlowReaderLosesSamplesAndTheDriverSeesIt) {
+  Rig r;
+  r.imu.connect();
+  r.emu.set_stall(40e-6);  // 17 frames × ~42 µs ≈ 0.7 ms > 0.41 ms sample period
+  for (int k = 0; k < 100; ++k) ASSERT_TRUE(r.imu.read_sample());
+  EXPECT_GT(r.imu.samples_lost(), 50u);
+  // Every sample the device produced was either read or counted as lost (±1 for the one in flight).
+  const double diff = double(r.emu.samples_produced()) - double(r.imu.samples_read() + r.imu.samples_lost());
+  EXPECT_LE(std::abs(diff), 2.0);
+}
+
+TEST(Adis16488a, DecRateChangesTheOutputRate) {
+  Rig r;
+  r.imu.connect();
+  r.imu.set_dec_rate(3);
+  auto a = r.imu.read_sample();
+  auto b = r.imu.read_sample();
+  ASSERT_TRUE(a && b);
+  EXPECT_NEAR(b->t - a->t, 4 / 2460.0, 1e-12);
+  EXPECT_NEAR(b->host_time - a->host_time, 4 / 2460.0, 1e-6);
+  EXPECT_THROW(r.imu.set_dec_rate(5000), std::invalid_argument);
+}
+
+TEST(Adis16488a, SelfTestPassAndFail) {
+  Rig r;
+  r.imu.connect();
+  auto ok = r.imu.self_test();
+  EXPECT_TRUE(ok.passed) << ok.message;
+  r.emu.faults().self_test_diag = 0x0001 | 0x0010;
+  auto bad = r.imu.self_test();
+  EXPECT_FALSE(bad.passed);
+  EXPECT_EQ(bad.message, "X gyro self-test failed; Y accelerometer self-test failed");
+  EXPECT_EQ(r.emu.busy_violations(), 0u);  // the driver waited the 12 ms
+}
+
+TEST(Adis16488a, UserCalQuantisationRoundTripsExactly) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> s16(-3000, 3000);
+  std::uniform_int_distribution<std::int32_t> s32(-50'000'000, 50'000'000);
+  for (int k = 0; k < 200; ++k) {
+    UserCal c;
+    for (int i = 0; i < 3; ++i) {
+      c.gyro_scale[i] = static_cast<std::int16_t>(s16(rng));
+      c.accel_scale[i] = static_cast<std::int16_t>(s16(rng));
+      c.gyro_bias[i] = s32(rng);
+      c.accel_bias[i] = s32(rng);
+    }
+    EXPECT_EQ(user_cal_from_errors(errors_from_user_cal(c)), c);
+  }
+}
+
+TEST(Adis16488a, ResidualModelPredictsTheDeviceOutput) {
+  SensorErrors e = draw_random_unit(3);  // bias, scale and skews
+  const UserCal c = user_cal_from_errors(e);
+  const SensorErrors res = residual_after_user_cal(e, c);
+  // Diagonal and bias removed down to quantisation; the skews stay for the host.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_LT(std::abs(res.gyro.M(i, i)), 2.0 / 32768);
+    EXPECT_LT(std::abs(res.gyro.bias[i]), 1e-7);
+    for (int j = 0; j < 3; ++j)
+      if (i != j) { EXPECT_NEAR(res.gyro.M(i, j), e.gyro.M(i, j), 0.02 * std::abs(e.gyro.M(i, j)) + 1e-9); }
+  }
+  Rig r(e);
+  r.imu.connect();
+  auto before = r.imu.read_sample();
+  auto p = r.imu.provision(c);
+  EXPECT_TRUE(p.ok) << p.message;
+  EXPECT_EQ(p.flash_count_after, p.flash_count_before + 1);
+  r.imu.read_sample();
+  auto after = r.imu.read_sample();
+  ASSERT_TRUE(before && after);
+  const Vec3 g_pred = res.gyro.measure(kW), a_pred = res.accel.measure(kF);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(after->gyro[i], g_pred[i], 2 * adis::reg("X_GYRO").scale);
+    EXPECT_NEAR(after->accel[i], a_pred[i], 2 * adis::reg("X_ACCL").scale);
+    EXPECT_GT(std::abs(before->gyro[i] - after->gyro[i]), 1e-4);  // the output really changed
+  }
+  EXPECT_EQ(r.emu.busy_violations(), 0u);
+}
+
+TEST(Adis16488a, ProvisioningSurvivesPowerCycleOnlyAfterFlashUpdate) {
+  Rig r;
+  r.imu.connect();
+  UserCal c;
+  c.gyro_scale = {100, -200, 300};
+  c.accel_bias = {-5, 6, -70000};
+  r.imu.write_user_cal(c);
+  EXPECT_EQ(r.imu.read_user_cal(), c);
+  r.emu.power_cycle();
+  r.imu.connect();
+  EXPECT_EQ(r.imu.read_user_cal(), UserCal{});  // not flashed: lost
+  auto p = r.imu.provision(c);
+  ASSERT_TRUE(p.ok) << p.message;
+  r.emu.power_cycle();
+  r.imu.connect();
+  EXPECT_EQ(r.imu.read_user_cal(), c);
+  // Software reset also restores from flash; factory restore clears the RAM copy.
+  r.imu.software_reset();
+  EXPECT_EQ(r.imu.read_user_cal(), c);
+}
+
+TEST(Adis16488a, FlashFailureIsReported) {
+  Rig r;
+  r.imu.connect();
+  r.emu.faults().flash_update_fails = true;
+  UserCal c;
+  c.gyro_bias = {1, 2, 3};
+  r.imu.write_user_cal(c);
+  EXPECT_THROW(r.imu.flash_update(), DeviceError);
+}
+
+}  // namespace
