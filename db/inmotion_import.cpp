@@ -51,8 +51,12 @@ ParsedCoefficients coeff_block(const json& j, const DeviceInfo& dev, const std::
     p = parse_coefficients(c.dump(), f, "");
   } catch (const InputError& e) {
     // Re-anchor the key under the block name.
-    throw InputError(f, 0, e.field().empty() ? name : name + "." + e.field(),
-                     std::string(e.what()).substr(std::string(e.what()).rfind(": ") + 2));
+    // what() = file[:line]: ['field': ]message — keep only the message.
+    const std::string w = e.what();
+    std::size_t skip = e.file().size() + (e.line() ? 1 + std::to_string(e.line()).size() : 0) + 2;
+    if (!e.field().empty()) skip += e.field().size() + 4;
+    throw InputError(f, e.line(), e.field().empty() ? name : name + "." + e.field(),
+                     skip <= w.size() ? w.substr(skip) : w);
   }
   if (p.device.serial != dev.serial)
     throw InputError(f, 0, name + ".device.serial",

@@ -211,11 +211,13 @@ std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, 
       .bind(6, inmotion_run).bind(7, canonical_json).bind(8, actor_.user + "@" + actor_.station);
   ins.run();
   const std::int64_t id = conn_->last_insert_rowid();
+  if (hook_) hook_("set-row");
   auto val = conn_->prepare("INSERT INTO coefficient_values(set_id, name, value, sigma) VALUES (?, ?, ?, ?)");
   for (const auto& name : coefficient_names()) {
     val.reset();
     val.bind(1, id).bind(2, name).bind(3, coefficient_value(e, name)).bind(4, coefficient_sigma(e, name));
     val.run();
+    if (hook_ && name == "gyro.M.zz") hook_("set-values");
   }
   audit_locked("coefficient_set", id, "create",
                "version " + std::to_string(version) + ", source " + to_string(source) +

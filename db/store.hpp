@@ -14,6 +14,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -163,6 +164,9 @@ class Store {
   Store(const std::string& path, const OpenOptions& opt = {}, Actor actor = Actor::from_environment());
   int schema_version();
   Connection& connection() { return *conn_; }
+  // Fault injection for the crash-safety tests: called with a point name ("set-row",
+  // "set-values") in the middle of writing a set. Not for production use.
+  void set_test_hook(std::function<void(const char* point)> hook) { hook_ = std::move(hook); }
   const Actor& actor() const { return actor_; }
 
   // ---- writes (each one transaction, audited) ----
@@ -216,6 +220,7 @@ class Store {
   void migrate();
   std::unique_ptr<Connection> conn_;
   Actor actor_;
+  std::function<void(const char*)> hook_;
 };
 
 }  // namespace calbench::db

@@ -1,0 +1,78 @@
+#include <gtest/gtest.h>
+
+#include "bench/io/input_error.hpp"
+#include "calibration/units.hpp"
+#include "db/approval.hpp"
+#include "db_test_util.hpp"
+
+namespace calbench::db {
+namespace {
+using namespace calbench::units;
+
+bool has_reason(const ApprovalCheck& c, const std::string& needle) {
+  for (const auto& r : c.reasons)
+    if (r.find(needle) != std::string::npos) return true;
+  return false;
+}
+
+TEST(DbApproval, GoodSetIsApprovedAndAudited) {
+  test::TempDir t;
+  Store s(t.db(), test::create_opts(), test::test_actor());
+  const auto id = s.store_bench({"ADIS16488A", "P1", ""}, test::bench_run(), test::payload("P1", test::random_errors(1))).set_id;
+  const auto r = approve_checked(s, id, default_thresholds());
+  EXPECT_TRUE(r.ok);
+  EXPECT_EQ(s.get_set(id).status, SetStatus::approved);
+  // Second approval is refused: it is no longer a draft.
+  EXPECT_FALSE(approve_checked(s, id, default_thresholds()).ok);
+}
+
+TEST(DbApproval, EachThresholdRefusesWithItsReason) {
+  test::TempDir t;
+  Store s(t.db(), test::create_opts(), test::test_actor());
+  SensorErrors e = test::random_errors(2);
+  e.gyro.bias(1) = 2.0 * kDeg;            // 7200 °/h > 3600
+  e.accel.M(2, 2) = 0.05;                 // 50000 ppm scale > 25000
+  e.gyro.M(0, 1) = 0.01;                  // skew 10000 ppm > 5000
+  e.accel.sigma_bias(0) = 5 * kMilliG;    // σ 5 mg > 2
+  e.gyro.sigma_M(2, 0) = kUnknownSigma;   // not estimated
+  const auto id = s.store_bench({"ADIS16488A", "P2", ""}, test::bench_run(false), test::payload("P2", e)).set_id;
+  const auto r = approve_checked(s, id, default_thresholds());
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(has_reason(r, "gyro bias y")) ;
+  EXPECT_TRUE(has_reason(r, "accel M[zz]"));
+  EXPECT_TRUE(has_reason(r, "gyro M[xy]"));
+  EXPECT_TRUE(has_reason(r, "accel bias x: σ"));
+  EXPECT_TRUE(has_reason(r, "gyro M[zx]: σ unknown"));
+  EXPECT_TRUE(has_reason(r, "QC gyro.residual_rms"));
+  EXPECT_EQ(r.reasons.size(), 6u);
+  EXPECT_EQ(s.get_set(id).status, SetStatus::draft);
+  bool refused = false;
+  for (const auto& a : s.audit_of_device(s.get_set(id).device_id)) refused = refused || a.action == "approve-refused";
+  EXPECT_TRUE(refused);
+}
+
+TEST(DbApproval, ConfigLoosensOrTightensAndRejectsTypos) {
+  SensorErrors e = test::random_errors(3);
+  e.gyro.sigma_M(2, 0) = kUnknownSigma;
+  CoefficientSetRecord set;
+  set.errors = e;
+  const std::vector<QcResult> qc = {QcResult{"cpe_600s", 10, 100, true, "m"}};
+  EXPECT_FALSE(check_approval(set, qc, default_thresholds()).ok);
+  Thresholds loose = parse_thresholds(R"({"allow_unknown_sigma": true})", "t.json");
+  EXPECT_TRUE(check_approval(set, qc, loose).ok);
+  Thresholds tight = parse_thresholds(R"({"allow_unknown_sigma": true, "gyro": {"max_sigma_bias_dph": 0.01},
+                                          "required_qc_metrics": ["cpe_600s", "nis_pos"]})", "t.json");
+  const auto r = check_approval(set, qc, tight);
+  EXPECT_TRUE(has_reason(r, "gyro bias x: σ"));
+  EXPECT_TRUE(has_reason(r, "'nis_pos' missing"));
+  EXPECT_FALSE(has_reason(r, "'cpe_600s' missing"));
+  EXPECT_TRUE(check_approval(set, {}, loose).reasons.size() == 1);  // require_qc
+  EXPECT_TRUE(check_approval(set, {}, parse_thresholds(R"({"allow_unknown_sigma": true, "require_qc": false})", "t")).ok);
+  EXPECT_THROW(parse_thresholds(R"({"gyro": {"max_sigma_bias_degh": 1}})", "t.json"), InputError);
+  EXPECT_THROW(parse_thresholds(R"({"gyro": {"max_sigma_bias_dph": -1}})", "t.json"), InputError);
+  EXPECT_THROW(parse_thresholds(R"({"require_qc": "yes"})", "t.json"), InputError);
+  EXPECT_THROW(parse_thresholds(R"({"gyro": )", "t.json"), InputError);
+}
+
+}  // namespace
+}  // namespace calbench::db

@@ -1,0 +1,117 @@
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/io/input_error.hpp"
+#include "db/inmotion_import.hpp"
+#include "db_test_util.hpp"
+
+namespace calbench::db {
+namespace {
+using nlohmann::json;
+
+json block(const std::string& serial, const SensorErrors& e) { return json::parse(test::payload(serial, e)); }
+
+json result(const std::string& serial, const SensorErrors& total, const SensorErrors& correction) {
+  json r;
+  r["device"] = {{"model", "ADIS16488A"}, {"serial", serial}};
+  r["recording"] = {{"path", "/drives/d1"}, {"sha256", std::string(64, 'b')}};
+  r["coefficients"] = block(serial, total);
+  json c = block(serial, correction);
+  c.erase("format");
+  c.erase("device");
+  r["correction"] = c;
+  r["mounting_rpy_deg"] = {{"value", {0.1, -0.2, 0.3}}, {"sigma", {0.01, 0.01, 0.05}}};
+  r["consistency"] = {{"pos", {{"nis_mean", 1.02}}}};
+  r["qc"] = {{"sets", json::array({{{"name", "bench"}, {"final_cpe_m", 850.0}}, {{"name", "bench+in-motion"}, {"final_cpe_m", 40.0}}})},
+             {"cpe_ratio", {{"value", 21.2}, {"threshold", 10.0}, {"pass", true}}}};
+  return r;
+}
+
+struct ImportFixture : ::testing::Test {
+  test::TempDir t;
+  Store s{t.db(), test::create_opts(), test::test_actor()};
+  SensorErrors bench = test::random_errors(21), corr = test::random_errors(22);
+  std::int64_t bench_id = 0;
+  void SetUp() override {
+    bench_id = s.store_bench({"ADIS16488A", "M1", ""}, test::bench_run(), test::payload("M1", bench)).set_id;
+  }
+  std::size_t written() { return static_cast<std::size_t>(s.count("inmotion_runs") + s.count("coefficient_sets") + s.count("qc_results")); }
+};
+
+TEST_F(ImportFixture, CombinedSetFindsItsBenchParentByComposition) {
+  const SensorErrors total = compose(bench, corr);
+  const auto r = parse_inmotion_result(result("M1", total, corr).dump(), "RESULT.json");
+  EXPECT_EQ(r.qc.size(), 3u);  // two informative CPE figures + the ratio with its threshold
+  const auto o = import_inmotion(s, r, "RESULT.json");
+  EXPECT_EQ(o.source, SetSource::combined);
+  ASSERT_TRUE(o.parent_id);
+  EXPECT_EQ(*o.parent_id, bench_id);
+  EXPECT_EQ(o.version, 2);
+  const auto set = s.get_set(o.set_id);
+  EXPECT_LT(max_difference(set.errors, total), 1e-15);
+  const auto run = s.inmotion_run(*set.inmotion_run_id);
+  EXPECT_DOUBLE_EQ(run->mounting_rpy_deg[2], 0.3);
+  EXPECT_DOUBLE_EQ(run->mounting_sigma_deg[2], 0.05);
+  EXPECT_EQ(s.qc_of_set(set).size(), 3u);
+  // An explicit parent gives the same answer.
+  const auto o2 = import_inmotion(s, r, "RESULT.json", bench_id);
+  EXPECT_EQ(*o2.parent_id, bench_id);
+}
+
+TEST_F(ImportFixture, ResultOnRawDataIsAnInMotionSetWithoutParent) {
+  const SensorErrors raw = test::random_errors(30);
+  const auto o = import_inmotion(s, parse_inmotion_result(result("M1", raw, raw).dump(), "R"), "R");
+  EXPECT_EQ(o.source, SetSource::in_motion);
+  EXPECT_FALSE(o.parent_id);
+}
+
+TEST_F(ImportFixture, WrongParentIsRefusedAndNothingWritten) {
+  const SensorErrors total = compose(bench, corr);
+  const auto other = s.store_set({"ADIS16488A", "M1", ""}, SetSource::bench, test::payload("M1", test::random_errors(40))).set_id;
+  const auto before = written();
+  EXPECT_THROW(import_inmotion(s, parse_inmotion_result(result("M1", total, corr).dump(), "R"), "R", other), InputError);
+  EXPECT_EQ(written(), before);
+}
+
+TEST_F(ImportFixture, UnknownDeviceMismatchedSerialsAndMalformedFilesAreRefused) {
+  const SensorErrors total = compose(bench, corr);
+  const auto before = written();
+  const auto expect_error = [&](const json& j, const std::string& needle) {
+    try {
+      import_inmotion(s, parse_inmotion_result(j.dump(), "RESULT.json"), "RESULT.json");
+      ADD_FAILURE() << "accepted " << needle;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("RESULT.json"), std::string::npos) << e.what();
+    }
+  };
+  expect_error(result("NOPE", total, corr), "unknown device");
+  json mism = result("M1", total, corr);
+  mism["coefficients"]["device"]["serial"] = "M2";
+  expect_error(mism, "does not match");
+  json wrong_type = result("M1", total, corr);
+  wrong_type["coefficients"]["gyro"]["bias"][0] = "0.1";
+  expect_error(wrong_type, "coefficients.gyro.bias[0]");
+  json bad_sha = result("M1", total, corr);
+  bad_sha["recording"]["sha256"] = "abc";
+  expect_error(bad_sha, "recording.sha256");
+  json no_dev = result("M1", total, corr);
+  no_dev.erase("device");
+  expect_error(no_dev, "device");
+  json bad_qc = result("M1", total, corr);
+  bad_qc["qc"]["cpe_ratio"]["value"] = "high";
+  expect_error(bad_qc, "qc.cpe_ratio.value");
+  json bad_mount = result("M1", total, corr);
+  bad_mount["mounting_rpy_deg"] = {1, 2};
+  expect_error(bad_mount, "mounting_rpy_deg");
+  const std::string text = result("M1", total, corr).dump();
+  EXPECT_THROW(parse_inmotion_result(text.substr(0, text.size() - 20), "R"), InputError);
+  std::string nan = text;
+  nan.replace(nan.find("1.02"), 4, "NaN");
+  EXPECT_THROW(parse_inmotion_result(nan, "R"), InputError);
+  EXPECT_EQ(written(), before);
+}
+
+}  // namespace
+}  // namespace calbench::db
