@@ -31,6 +31,8 @@ LocalEarth local_earth(double lat_rad, double h_m, const Vec3& v) {
   return e;
 }
 
+Vec3 earth_rate_ned_at(double lat_rad) { return earth_rate_ned(lat_rad); }
+
 Mat3 dcm_from_rpy(const Vec3& rpy) {
   return (Eigen::AngleAxisd(rpy(2), Vec3::UnitZ()) * Eigen::AngleAxisd(rpy(1), Vec3::UnitY()) *
           Eigen::AngleAxisd(rpy(0), Vec3::UnitX()))

@@ -25,6 +25,8 @@ struct LocalEarth {
   Vec3 g;     // WGS-84 normal gravity in NED (GeographicLib::NormalGravity), m/s², down positive
 };
 LocalEarth local_earth(double lat_rad, double h_m, const Vec3& v_ned);
+// Earth rotation in NED at a latitude, rad/s.
+Vec3 earth_rate_ned_at(double lat_rad);
 
 // C = Rz(yaw)·Ry(pitch)·Rx(roll): body (forward-right-down) → NED, or MEMS → reference body
 // for the mounting (spec: recording-format.md).

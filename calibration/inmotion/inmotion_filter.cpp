@@ -1,0 +1,314 @@
+#include "calibration/inmotion/inmotion_filter.hpp"
+
+#include <cmath>
+
+#include "calibration/units.hpp"
+
+namespace calbench::inmotion {
+
+using ins::skew;
+
+namespace {
+constexpr double kChi2_3_95 = 7.814727903;
+
+template <int N>
+void set_diag(StateMat& P, int off, double sigma) {
+  for (int i = 0; i < N; ++i) P(off + i, off + i) = sigma * sigma;
+}
+}  // namespace
+
+InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
+    : cfg_(cfg), lever_(lever), C_mb_(C_mb) {
+  for (int i = 0; i < 3; ++i) {
+    const DriftPrior g = cfg_.gyro_drift ? (*cfg_.gyro_drift)[i] : DriftPrior{cfg_.noise.gyro.drift_sigma, cfg_.noise.gyro.drift_tau_s};
+    const DriftPrior a = cfg_.accel_drift ? (*cfg_.accel_drift)[i] : DriftPrior{cfg_.noise.accel.drift_sigma, cfg_.noise.accel.drift_tau_s};
+    alpha_g_(i) = g.tau_s > 0 ? 1.0 / g.tau_s : 0.0;
+    alpha_a_(i) = a.tau_s > 0 ? 1.0 / a.tau_s : 0.0;
+    sig_dg_(i) = g.sigma;
+    sig_da_(i) = a.sigma;
+  }
+  // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
+  const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
+  ins::NavState s;
+  s.t = first.t;
+  s.lat = first.lat;
+  s.lon = first.lon;
+  s.h = first.h;
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nb * lever_);
+  s.v = first.v_ned;
+  s.q_nb = ins::Quat(C_nb * C_mb_);
+  nav_.reset(s);
+
+  P_.setZero();
+  const double sp = first.sigma_pos > 0 ? first.sigma_pos : cfg_.ref_sigma_pos;
+  const double sv = first.sigma_vel > 0 ? first.sigma_vel : cfg_.ref_sigma_vel;
+  const double sa = first.sigma_att > 0 ? first.sigma_att : cfg_.ref_sigma_att;
+  set_diag<3>(P_, kPos, std::hypot(sp, 0.05));
+  set_diag<3>(P_, kVel, std::hypot(sv, cfg_.sigma_vel0));
+  set_diag<3>(P_, kBg, cfg_.sigma_gyro_bias);
+  set_diag<3>(P_, kBa, cfg_.sigma_accel_bias);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double s2 = i == j ? cfg_.sigma_scale : cfg_.sigma_skew;
+      P_(kMg + 3 * i + j, kMg + 3 * i + j) = s2 * s2;
+      P_(kMa + 3 * i + j, kMa + 3 * i + j) = s2 * s2;
+    }
+  for (int i = 0; i < 3; ++i) {
+    P_(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i);
+    P_(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i);
+  }
+  // The initial MEMS attitude error is the mounting error seen in NED plus the reference's own:
+  // φ₀ = C_nb·δμ + ε_ref, so the two blocks start correlated.
+  const Mat3 Pm = Mat3::Identity() * (cfg_.sigma_mount * cfg_.sigma_mount);
+  P_.block<3, 3>(kMount, kMount) = Pm;
+  P_.block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
+  P_.block<3, 3>(kAtt, kMount) = C_nb * Pm;
+  P_.block<3, 3>(kMount, kAtt) = (C_nb * Pm).transpose();
+  refresh_correctors();
+}
+
+void InMotionFilter::refresh_correctors() {
+  Ag_ = (Mat3::Identity() + Mg_).inverse();
+  Aa_ = (Mat3::Identity() + Ma_).inverse();
+}
+
+void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
+  if (!(dt > 0) || t <= nav_.state().t) return;
+  const Vec3 dth = Ag_ * (dth_raw - (bg_ + dg_) * dt);
+  const Vec3 dv = Aa_ * (dv_raw - (ba_ + da_) * dt);
+  const Mat3 C0 = nav_.state().C_nb();
+  nav_.update(dth, dv, dt);
+  w_last_ = dth / dt;
+  acc_.add(C0, Ag_, Aa_, w_last_, dv / dt, dt);
+  nav_.state().t = t;
+  if (acc_.T >= cfg_.cov_dt) propagate();
+}
+
+void InMotionFilter::propagate() {
+  const double T = acc_.T;
+  if (!(T > 0)) return;
+  StateMat F = StateMat::Zero();
+  NavBlockInputs in;
+  in.lat = nav_.state().lat;
+  in.h = nav_.state().h;
+  in.v_ned = nav_.state().v;
+  in.f_n = acc_.f_n / T;
+  in.earth = ins::local_earth(in.lat, in.h, in.v_ned);
+  nav_block(in, F);
+  gyro_blocks(acc_, F);
+  accel_blocks(acc_, F);
+  drift_blocks(alpha_g_, alpha_a_, F);
+  const StateMat FT = F * T;
+  const StateMat Phi = StateMat::Identity() + FT + 0.5 * FT * FT;
+
+  StateMat Q = StateMat::Zero();
+  const double qg = cfg_.noise.gyro.white_density, qa = cfg_.noise.accel.white_density;
+  for (int i = 0; i < 3; ++i) {
+    Q(kAtt + i, kAtt + i) = qg * qg * T;
+    Q(kVel + i, kVel + i) = qa * qa * T;
+    Q(kPos + i, kPos + i) = qa * qa * T * T * T / 3.0;
+    Q(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i) * (1.0 - std::exp(-2.0 * alpha_g_(i) * T));
+    Q(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i) * (1.0 - std::exp(-2.0 * alpha_a_(i) * T));
+  }
+  StateMat P_next = Phi * P_ * Phi.transpose() + Q;
+  P_next = 0.5 * (P_next + P_next.transpose()).eval();
+
+  if (cfg_.store_for_smoother) {
+    if (!store_.empty()) store_.back().dx_next = pending_dx_.cast<float>();
+    Stored s;
+    s.t = nav_.state().t - T;
+    s.P_post = P_.cast<float>();
+    s.Phi = Phi.cast<float>();
+    s.P_prior_next = P_next.cast<float>();
+    s.dx_next.setZero();
+    StateVec x, sig;
+    totals(x, sig);
+    s.x_post = x;
+    store_.push_back(std::move(s));
+    pending_dx_.setZero();
+  }
+  P_ = P_next;
+  acc_.clear();
+}
+
+bool InMotionFilter::reference(const RefObs& r_in) {
+  if (r_in.t < last_obs_t_ + 1.0 / cfg_.obs_rate_hz - 1e-6) return false;
+  if (r_in.t > nav_.state().t + 1e-6) return false;  // not reached yet: caller's ordering error
+  last_obs_t_ = r_in.t;
+  propagate();
+
+  // Bring the reference epoch to the INS time (at most one IMU interval): position with its
+  // velocity, velocity with the INS's acceleration, attitude with the measured body rate.
+  RefObs r = r_in;
+  const double dt = nav_.state().t - r.t;
+  if (dt > 0) {
+    ins::geodetic_add_ned(r.lat, r.lon, r.h, r.v_ned * dt);
+    const Mat3 C_ref = ins::dcm_from_rpy(r.rpy) * ins::quat_from_rotvec(C_mb_ * w_last_ * dt).toRotationMatrix();
+    r.rpy = ins::rpy_from_dcm(C_ref);
+  }
+  if (!(r.sigma_pos > 0)) r.sigma_pos = cfg_.ref_sigma_pos;
+  if (!(r.sigma_vel > 0)) r.sigma_vel = cfg_.ref_sigma_vel;
+  if (!(r.sigma_att > 0)) r.sigma_att = cfg_.ref_sigma_att;
+
+  ObsContext c;
+  c.mems = &nav_.state();
+  c.C_mb = C_mb_;
+  c.lever = lever_;
+  const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
+  c.w_eb_b = C_mb_ * w_last_ - w_ie_b;
+
+  StateVec dx = StateVec::Zero();
+  const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};
+  for (int type = 0; type < 3; ++type) {
+    if (!use[type]) continue;
+    const Observation o = type == 0 ? position_observation(c, r) : type == 1 ? velocity_observation(c, r) : attitude_observation(c, r);
+    const Vec3 nu = o.z - o.H * dx;
+    const Eigen::Matrix<double, kStates, 3> PHt = P_ * o.H.transpose();
+    const Mat3 S = o.H * PHt + o.R;
+    const Eigen::LDLT<Mat3> Sl(S);
+    const double nis = nu.dot(Sl.solve(nu));
+    ConsistencyStats& st = stats_[type];
+    if (!(nis <= cfg_.gate_nis)) {
+      ++st.rejected;
+      continue;
+    }
+    ++st.used;
+    st.nis_sum += nis;
+    if (nis <= kChi2_3_95) ++st.within95;
+    const Eigen::Matrix<double, kStates, 3> K = Sl.solve(PHt.transpose()).transpose();
+    dx += K * nu;
+    P_ -= K * PHt.transpose();
+    P_ = 0.5 * (P_ + P_.transpose()).eval();
+  }
+  feedback(dx);
+  if (cfg_.store_for_smoother) pending_dx_ += dx;
+  return true;
+}
+
+void InMotionFilter::feedback(const StateVec& dx) {
+  ins::NavState& s = nav_.state();
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, -dx.segment<3>(kPos));
+  s.v -= dx.segment<3>(kVel);
+  s.q_nb = ins::quat_from_rotvec(dx.segment<3>(kAtt)) * s.q_nb;
+  s.q_nb.normalize();
+  bg_ -= dx.segment<3>(kBg);
+  ba_ -= dx.segment<3>(kBa);
+  dg_ -= dx.segment<3>(kDg);
+  da_ -= dx.segment<3>(kDa);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      Mg_(i, j) -= dx(kMg + 3 * i + j);
+      Ma_(i, j) -= dx(kMa + 3 * i + j);
+    }
+  C_mb_ = ins::quat_from_rotvec(dx.segment<3>(kMount)).toRotationMatrix() * C_mb_;
+  refresh_correctors();
+}
+
+SensorErrors InMotionFilter::estimate() const {
+  SensorErrors e;
+  e.gyro.bias = bg_;
+  e.accel.bias = ba_;
+  e.gyro.M = Mg_;
+  e.accel.M = Ma_;
+  for (int i = 0; i < 3; ++i) {
+    e.gyro.sigma_bias(i) = std::sqrt(P_(kBg + i, kBg + i));
+    e.accel.sigma_bias(i) = std::sqrt(P_(kBa + i, kBa + i));
+    for (int j = 0; j < 3; ++j) {
+      e.gyro.sigma_M(i, j) = std::sqrt(P_(kMg + 3 * i + j, kMg + 3 * i + j));
+      e.accel.sigma_M(i, j) = std::sqrt(P_(kMa + 3 * i + j, kMa + 3 * i + j));
+    }
+  }
+  return e;
+}
+
+Vec3 InMotionFilter::gyro_total_drift_sigma() const {
+  Vec3 s;
+  for (int i = 0; i < 3; ++i)
+    s(i) = std::sqrt(std::max(0.0, P_(kBg + i, kBg + i) + P_(kDg + i, kDg + i) + 2 * P_(kBg + i, kDg + i)));
+  return s;
+}
+
+void InMotionFilter::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
+  rpy = ins::rpy_from_dcm(C_mb_);
+  // J = ∂rpy/∂δμ for C_mb ← (I + δμ×)C_mb, by central differences.
+  Mat3 J;
+  const double h = 1e-7;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e = Vec3::Zero();
+    e(k) = h;
+    Vec3 a = ins::rpy_from_dcm(ins::quat_from_rotvec(e).toRotationMatrix() * C_mb_);
+    Vec3 b = ins::rpy_from_dcm(ins::quat_from_rotvec(-e).toRotationMatrix() * C_mb_);
+    Vec3 d = a - b;
+    for (int i = 0; i < 3; ++i) d(i) = std::remainder(d(i), 2 * units::kPi);
+    J.col(k) = d / (2 * h);
+  }
+  const Mat3 S = J * P_.block<3, 3>(kMount, kMount) * J.transpose();
+  sigma = S.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+void InMotionFilter::totals(StateVec& x, StateVec& sig) const {
+  using namespace units;
+  const ins::NavState& s = nav_.state();
+  x(kPos) = deg(s.lat);
+  x(kPos + 1) = deg(s.lon);
+  x(kPos + 2) = s.h;
+  x.segment<3>(kVel) = s.v;
+  const Vec3 rpy = ins::rpy_from_dcm(s.C_nb());
+  for (int i = 0; i < 3; ++i) x(kAtt + i) = deg(rpy(i));
+  x.segment<3>(kBg) = bg_ / kDegPerHour;
+  x.segment<3>(kBa) = ba_ / kMilliG;
+  x.segment<3>(kDg) = dg_ / kDegPerHour;
+  x.segment<3>(kDa) = da_ / kMilliG;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      x(kMg + 3 * i + j) = Mg_(i, j) / kPpm;
+      x(kMa + 3 * i + j) = Ma_(i, j) / kPpm;
+    }
+  Vec3 mr, ms;
+  mounting_rpy(mr, ms);
+  for (int i = 0; i < 3; ++i) x(kMount + i) = deg(mr(i));
+  StateVec sd = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
+  sig = sd;
+  sig.segment<3>(kAtt) = sd.segment<3>(kAtt) / kDeg;
+  sig.segment<3>(kBg) = sd.segment<3>(kBg) / kDegPerHour;
+  sig.segment<3>(kDg) = sd.segment<3>(kDg) / kDegPerHour;
+  sig.segment<3>(kBa) = sd.segment<3>(kBa) / kMilliG;
+  sig.segment<3>(kDa) = sd.segment<3>(kDa) / kMilliG;
+  sig.segment<9>(kMg) = sd.segment<9>(kMg) / kPpm;
+  sig.segment<9>(kMa) = sd.segment<9>(kMa) / kPpm;
+  sig.segment<3>(kMount) = ms / kDeg;
+}
+
+std::vector<InMotionFilter::SmoothedEpoch> InMotionFilter::smooth() {
+  std::vector<SmoothedEpoch> out;
+  if (store_.empty()) return out;
+  store_.back().dx_next = pending_dx_.cast<float>();
+  // Scale of each state between series units and SI (for the sensor blocks).
+  StateVec unit = StateVec::Ones();
+  unit.segment<3>(kBg).setConstant(1.0 / units::kDegPerHour);
+  unit.segment<3>(kDg).setConstant(1.0 / units::kDegPerHour);
+  unit.segment<3>(kBa).setConstant(1.0 / units::kMilliG);
+  unit.segment<3>(kDa).setConstant(1.0 / units::kMilliG);
+  unit.segment<9>(kMg).setConstant(1.0 / units::kPpm);
+  unit.segment<9>(kMa).setConstant(1.0 / units::kPpm);
+  StateVec s = StateVec::Zero();  // smoothed minus filtered totals (SI) at epoch k+1
+  StateMat Ps = P_;               // smoothed covariance at the final epoch
+  out.resize(store_.size());
+  for (long k = static_cast<long>(store_.size()) - 1; k >= 0; --k) {
+    const Stored& st = store_[static_cast<std::size_t>(k)];
+    const StateMat Pk = st.P_post.cast<double>(), Pn = st.P_prior_next.cast<double>(), Phi = st.Phi.cast<double>();
+    const StateMat A = Pn.ldlt().solve(Phi * Pk).transpose();
+    s = A * (s - st.dx_next.cast<double>());
+    Ps = Pk + A * (Ps - Pn) * A.transpose();
+    SmoothedEpoch e;
+    e.t = st.t;
+    e.x = st.x_post;
+    e.sigma = Ps.diagonal().cwiseMax(0.0).cwiseSqrt().cwiseProduct(unit);
+    for (int i = kBg; i < kStates; ++i)
+      if (i < kMount || i >= kDg) e.x(i) += s(i) * unit(i);
+    out[static_cast<std::size_t>(k)] = e;
+  }
+  return out;
+}
+
+}  // namespace calbench::inmotion

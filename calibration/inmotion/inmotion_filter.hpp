@@ -1,0 +1,119 @@
+// In-motion calibration of a MEMS IMU against a reference inertial-satellite system (paper
+// section IV): an error-state extended Kalman filter with feedback around a strapdown INS
+// (calibration/ins/strapdown.hpp) driven by the MEMS increments. State: state_layout.hpp.
+// Dynamics: error_model.hpp (covariance propagated every `cov_dt` seconds with the transition
+// integrated over the IMU samples in between). Observations: observation.hpp (eqs 13–15).
+// After each update the estimated errors are fed back into the INS and the sensor model and the
+// error state is reset to zero.
+#pragma once
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "calibration/inmotion/error_model.hpp"
+#include "calibration/inmotion/observation.hpp"
+#include "calibration/noise_spec.hpp"
+#include "calibration/sensor_model.hpp"
+
+namespace calbench::inmotion {
+
+// First-order shaping filter of an in-run drift (eq 22): σ and correlation time.
+struct DriftPrior {
+  double sigma = 0;
+  double tau_s = 300;
+};
+
+struct InMotionConfig {
+  NoiseSpec noise = adis16488a_noise();  // white-noise densities (process noise)
+  // In-run drift models per axis; defaults from `noise` (identified models may replace them).
+  std::optional<std::array<DriftPrior, 3>> gyro_drift, accel_drift;
+  // Prior 1σ of the constant parameters (relative to the data the filter sees).
+  double sigma_gyro_bias = 0.5 * units::kDeg;     // rad/s
+  double sigma_accel_bias = 30 * units::kMilliG;  // m/s²
+  double sigma_scale = 1e-2;
+  double sigma_skew = 2e-3;
+  double sigma_mount = 1.0 * units::kDeg;         // rad, per axis
+  double sigma_vel0 = 0.1;                        // m/s, initial velocity beyond the reference's
+  // Observations.
+  bool obs_pos = true, obs_vel = true, obs_att = true;
+  double obs_rate_hz = 10;     // at most this many reference epochs per second are used
+  double cov_dt = 0.1;         // covariance propagation interval, s
+  // Reference accuracy when reference.csv has no sigma columns.
+  double ref_sigma_pos = 0.1, ref_sigma_vel = 0.02, ref_sigma_att = 0.01 * units::kDeg;
+  double gate_nis = 50;        // innovation gate (3 dof); larger NIS is rejected and counted
+  bool store_for_smoother = false;
+};
+
+struct ConsistencyStats {
+  long used = 0, rejected = 0, within95 = 0;
+  double nis_sum = 0;
+  double mean_nis() const { return used ? nis_sum / static_cast<double>(used) : 0.0; }
+};
+
+class InMotionFilter {
+ public:
+  // Starts at the first reference epoch, transferring its state to the MEMS IMU through the
+  // nominal mounting (rotation C_mb, MEMS → reference body) and lever arm.
+  InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb_nominal, const Vec3& lever, const RefObs& first);
+
+  // One IMU interval ending at t: increments of the data as given (Δθ rad, Δv m/s).
+  void imu(double t, const Vec3& dtheta, const Vec3& dv, double dt);
+  // One reference epoch (t not after the last IMU time). Returns true if it was used.
+  bool reference(const RefObs& r);
+
+  double time() const { return nav_.state().t; }
+  const ins::NavState& nav() const { return nav_.state(); }
+  const StateMat& P() const { return P_; }
+  // Current estimates of the sensor model of the data the filter saw (constant part) with σ.
+  SensorErrors estimate() const;
+  // 1σ of the total gyro drift b + d (constant plus in-run part) now, rad/s; the two parts are
+  // separable only over many correlation times, their sum is what navigation needs.
+  Vec3 gyro_total_drift_sigma() const;
+  Vec3 gyro_drift() const { return dg_; }
+  Vec3 accel_drift() const { return da_; }
+  const Mat3& mounting() const { return C_mb_; }
+  // Mounting as roll, pitch, yaw (rad) and their 1σ (through the Jacobian of the angles).
+  void mounting_rpy(Vec3& rpy, Vec3& sigma) const;
+  const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
+  // Totals of every state (series units, see state_names()) and their 1σ.
+  void totals(StateVec& x, StateVec& sigma) const;
+
+  // Rauch–Tung–Striebel pass over the stored epochs (store_for_smoother); replaces the
+  // constant-parameter estimates with the smoothed values at the first epoch and returns the
+  // smoothed series (time, totals of the sensor states, σ) if wanted.
+  struct SmoothedEpoch {
+    double t;
+    StateVec x, sigma;
+  };
+  std::vector<SmoothedEpoch> smooth();
+
+ private:
+  void propagate();
+  void feedback(const StateVec& dx);
+  void refresh_correctors();
+
+  InMotionConfig cfg_;
+  ins::Strapdown nav_;
+  Vec3 lever_;
+  Mat3 C_mb_;
+  Vec3 bg_ = Vec3::Zero(), ba_ = Vec3::Zero(), dg_ = Vec3::Zero(), da_ = Vec3::Zero();
+  Mat3 Mg_ = Mat3::Zero(), Ma_ = Mat3::Zero(), Ag_ = Mat3::Identity(), Aa_ = Mat3::Identity();
+  Vec3 alpha_g_, alpha_a_, sig_dg_, sig_da_;
+  StateMat P_;
+  FAccumulator acc_;
+  Vec3 w_last_ = Vec3::Zero();
+  double last_obs_t_ = -1e300;
+  ConsistencyStats stats_[3];
+
+  // Smoother storage (float to halve memory): per propagation step k → k+1.
+  struct Stored {
+    double t;
+    Eigen::Matrix<float, kStates, kStates> P_post, Phi, P_prior_next;
+    Eigen::Matrix<float, kStates, 1> dx_next;  // update applied at the next epoch
+    Eigen::Matrix<double, kStates, 1> x_post;  // totals after the update at this epoch
+  };
+  std::vector<Stored> store_;
+  StateVec pending_dx_ = StateVec::Zero();
+};
+
+}  // namespace calbench::inmotion

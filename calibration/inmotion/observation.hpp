@@ -1,0 +1,42 @@
+// Observations of the in-motion filter against the reference inertial-satellite system
+// (paper eqs 13–15), one file per equation: obs_position.cpp (13), obs_velocity.cpp (14),
+// obs_attitude.cpp (15). Each forms the reference quantity predicted from the MEMS INS through
+// the mounting (C_mb, MEMS → reference body) and the lever arm r (MEMS origin in reference body
+// axes), subtracts the reference's reading, and gives the Jacobian H w.r.t. the error state:
+//   z = predicted − reference = H·δx + noise.
+#pragma once
+#include "calibration/inmotion/state_layout.hpp"
+#include "calibration/ins/strapdown.hpp"
+
+namespace calbench::inmotion {
+
+// One reference epoch (reference body origin), SI: lat/lon rad, attitude rad.
+struct RefObs {
+  double t = 0;
+  double lat = 0, lon = 0, h = 0;
+  Vec3 v_ned = Vec3::Zero();
+  Vec3 rpy = Vec3::Zero();
+  double sigma_pos = 0, sigma_vel = 0, sigma_att = 0;  // 1σ used for R
+};
+
+struct ObsContext {
+  const ins::NavState* mems = nullptr;  // nominal MEMS INS state at the epoch
+  Mat3 C_mb = Mat3::Identity();         // current mounting estimate
+  Vec3 lever = Vec3::Zero();
+  Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes
+};
+
+struct Observation {
+  Vec3 z = Vec3::Zero();
+  ObsMat H = ObsMat::Zero();
+  Mat3 R = Mat3::Identity();
+};
+
+Observation position_observation(const ObsContext& c, const RefObs& r);  // eq 13
+Observation velocity_observation(const ObsContext& c, const RefObs& r);  // eq 14
+Observation attitude_observation(const ObsContext& c, const RefObs& r);  // eq 15
+
+// Reference body attitude predicted from the MEMS INS: C_nb = C_nm·C_mbᵀ.
+inline Mat3 predicted_body_attitude(const ObsContext& c) { return c.mems->C_nb() * c.C_mb.transpose(); }
+
+}  // namespace calbench::inmotion

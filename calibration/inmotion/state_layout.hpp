@@ -1,0 +1,41 @@
+// Error-state layout of the in-motion calibration filter (paper section IV, eq 11): named offsets
+// into the state vector, as production filters (e.g. KF-GINS) keep them. Every error is
+// "estimate minus truth".
+//   δr   position error, NED metres                                   [kPos, +3)
+//   δv   velocity error, NED m/s                                      [kVel, +3)
+//   φ    attitude error, NED rad: Ĉ_nb = (I − φ×)·C_nb               [kAtt, +3)
+//   δb_g gyro drift (turn-on constant part), rad/s                    [kBg, +3)
+//   δb_a accelerometer bias (constant part), m/s²                     [kBa, +3)
+//   δM_g gyro M, row-major (scale on the diagonal, skews off it)      [kMg, +9)
+//   δM_a accelerometer M, row-major                                   [kMa, +9)
+//   δμ   mounting misalignment, reference body axes, rad:
+//        Ĉ_mb = (I − δμ×)·C_mb (C_mb: MEMS → reference body)          [kMount, +3)
+//   δd_g gyro in-run drift, first-order shaping filter (eq 22)        [kDg, +3)
+//   δd_a accelerometer in-run drift, shaping filter (eq 22)           [kDa, +3)
+#pragma once
+#include <Eigen/Dense>
+#include <array>
+#include <string>
+
+namespace calbench::inmotion {
+
+inline constexpr int kPos = 0;
+inline constexpr int kVel = 3;
+inline constexpr int kAtt = 6;
+inline constexpr int kBg = 9;
+inline constexpr int kBa = 12;
+inline constexpr int kMg = 15;
+inline constexpr int kMa = 24;
+inline constexpr int kMount = 33;
+inline constexpr int kDg = 36;
+inline constexpr int kDa = 39;
+inline constexpr int kStates = 42;
+
+using StateVec = Eigen::Matrix<double, kStates, 1>;
+using StateMat = Eigen::Matrix<double, kStates, kStates>;
+using ObsMat = Eigen::Matrix<double, 3, kStates>;
+
+// Column names of the --series file, one per state (totals, not errors), in state order.
+const std::array<std::string, kStates>& state_names();
+
+}  // namespace calbench::inmotion
