@@ -37,7 +37,9 @@ double edf_overlapping(double M, double m, double slope) {
     e = (M - 2.0) / m * ((M - 1.0) * (M - 1.0) - 3.0 * m * (M - 1.0) + 4.0 * m * m) /
         ((M - 3.0) * (M - 3.0));
   }
-  return std::max(e, 1.0);
+  // Guard: the slope of a noisy curve can pick a formula outside its range (white PM at long τ
+  // would claim ~M/2 degrees of freedom); never more than twice the number of disjoint clusters.
+  return std::clamp(e, 1.0, std::max(1.0, 2.0 * (M - 1.0) / m));
 }
 
 // χ²_p(ν) quantile by Wilson–Hilferty with z the standard normal quantile of p.

@@ -162,11 +162,9 @@ LmResult levenberg_marquardt(const Problem& pr, Vec th) {
   return res;
 }
 
-// Bartlett covariance of the normalised K̂ at the fitted lags, multiplied into J: returns Jᵀ Σ J.
-Mat bartlett_jt_sigma_j(const Problem& pr, const Mat& J, const DriftModel& m_norm, double k0_norm,
-                        double dt, std::size_t n_samples) {
-  const std::size_t L = static_cast<std::size_t>(std::lround(pr.tau.back() / dt));
-  // Two-sided model sequence k_m, m = −M … M, with the empirical (white-noise-carrying) lag 0.
+// Bartlett: C(d) = Σ_m k_m k_{m+d}, d = 0 … 2L+2, of the two-sided model sequence (normalised
+// units) with the empirical (white-noise-carrying) lag 0; cov(K̂(a), K̂(b)) = (C(|a−b|) + C(a+b))/N.
+std::vector<double> bartlett_C(const DriftModel& m_norm, double k0_norm, double dt, std::size_t L) {
   const double decay = m_norm.alpha > 0 ? 25.0 / (m_norm.alpha * dt) : 1e7;
   const std::size_t M = std::min<std::size_t>(
       std::max<std::size_t>(2 * L + 2, static_cast<std::size_t>(std::min(decay, 4e6))), 8000000);
@@ -176,7 +174,12 @@ Mat bartlett_jt_sigma_j(const Problem& pr, const Mat& J, const DriftModel& m_nor
     k[M + m] = v;
     k[M - m] = v;
   }
-  const std::vector<double> C = lagged_sums(k, 2 * L + 2);  // C(d) = Σ_m k_m k_{m+d}
+  return lagged_sums(k, 2 * L + 2);
+}
+
+// Jᵀ Σ J with Σ the Bartlett covariance of the normalised K̂ at the fitted lags.
+Mat bartlett_jt_sigma_j(const Problem& pr, const Mat& J, const std::vector<double>& C, double dt,
+                        std::size_t n_samples) {
   auto Cd = [&](std::size_t d) { return d < C.size() ? C[d] : 0.0; };
   const std::size_t n = pr.tau.size();
   const std::size_t stride = std::max<std::size_t>(1, (n + 1999) / 2000);
@@ -224,14 +227,31 @@ NlsFit finish_fit(const Problem& pr, const LmResult& lm, std::span<const double>
   pr.eval(th, r, &J);
   const Mat JtJ = J.transpose() * J;
   Eigen::FullPivLU<Mat> lu(JtJ);
-  if (!lu.isInvertible()) return f;
+  lu.setThreshold(1e-12);
+  if (!lu.isInvertible()) {  // e.g. β = 0 exactly, where the β column vanishes
+    f.se_sigma = f.se_alpha = f.se_beta = std::numeric_limits<double>::infinity();
+    f.se_sigma_iid = f.se_alpha_iid = f.se_beta_iid = std::numeric_limits<double>::infinity();
+    return f;
+  }
   const Mat inv = lu.inverse();
   // Naive covariance (independent residuals).
   const double dof = std::max(1.0, n - p);
   const Mat cov_iid = inv * (lm.cost / dof);
   // Bartlett sandwich.
   const DriftModel m_norm{f.kind, std::sqrt(s), a, b};
-  const Mat cov = inv * bartlett_jt_sigma_j(pr, J, m_norm, 1.0, dt, n_samples) * inv;
+  const std::size_t L = static_cast<std::size_t>(std::lround(pr.tau.back() / dt));
+  const std::vector<double> C = bartlett_C(m_norm, 1.0, dt, L);
+  const Mat cov = inv * bartlett_jt_sigma_j(pr, J, C, dt, n_samples) * inv;
+  // Most negative value of the fitted curve within the lags, and the Bartlett 1-σ of K̂ there.
+  for (std::size_t i = 0; i < pr.tau.size(); ++i) {
+    const double v = m_norm.correlation(pr.tau[i]);
+    if (v < f.min_model / K0) {
+      const std::size_t j = static_cast<std::size_t>(std::lround(pr.tau[i] / dt));
+      const double var = (C[0] + (2 * j < C.size() ? C[2 * j] : 0.0)) / static_cast<double>(n_samples);
+      f.min_model = v * K0;
+      f.min_model_se = std::sqrt(std::max(var, 0.0)) * K0;
+    }
+  }
   auto to_se = [&](const Mat& c, double& se_sigma, double& se_alpha, double& se_beta) {
     // σ = √(s K0): dσ = √K0 ds /(2√s);  α = e^{θ₁}: dα = α dθ₁.
     se_sigma = std::sqrt(std::max(c(0, 0), 0.0)) * std::sqrt(K0) / (2.0 * std::sqrt(s));
@@ -279,19 +299,25 @@ NlsFit fit_exponential(std::span<const double> K, double dt, std::size_t n_sampl
 }
 
 NlsFit fit_exp_cosine(std::span<const double> K, double dt, std::size_t n_samples,
-                      std::size_t first_lag, std::size_t max_lag, double beta_start_hint) {
+                      std::size_t first_lag, std::size_t max_lag, double beta_start_hint,
+                      const NlsFit* exponential_fit) {
   const Problem pr = make_problem(K, dt, first_lag, max_lag, true);
-  const double a0 = alpha_start(K, dt, max_lag);
+  double a0 = alpha_start(K, dt, max_lag);
+  double s0 = std::max(pr.y.front() * std::exp(a0 * pr.tau.front()), 1e-6);
+  if (exponential_fit && exponential_fit->converged && exponential_fit->alpha > 0) {
+    a0 = exponential_fit->alpha;
+    s0 = exponential_fit->sigma * exponential_fit->sigma / K[0];
+  }
   // Multi-start in β (the cosine makes the cost multimodal); keep the lowest converged cost.
   std::vector<double> starts;
   if (beta_start_hint > 0) starts.push_back(beta_start_hint);
-  for (double f : {0.5, 1.0, 2.0}) starts.push_back(f * a0);
+  for (double f : {0.1, 0.5, 1.0, 2.0}) starts.push_back(f * a0);
   starts.push_back(0.5 * std::numbers::pi / (pr.tau.back()));
   LmResult best;
   bool have = false;
   for (double b0 : starts) {
     Vec th(3);
-    th << std::max(pr.y.front() * std::exp(a0 * pr.tau.front()), 1e-6), std::log(a0), b0;
+    th << s0, std::log(a0), b0;
     const LmResult r = levenberg_marquardt(pr, th);
     if (!std::isfinite(r.cost)) continue;
     if (!have || (r.converged && !best.converged) ||
@@ -299,6 +325,17 @@ NlsFit fit_exp_cosine(std::span<const double> K, double dt, std::size_t n_sample
       best = r;
       have = true;
     }
+  }
+  // β = 0 nests the exponential: never report a worse fit than the exponential one.
+  if (exponential_fit && exponential_fit->converged &&
+      (!have || best.cost * K[0] * K[0] > exponential_fit->rss)) {
+    best.th = Vec(3);
+    best.th << exponential_fit->sigma * exponential_fit->sigma / K[0], std::log(exponential_fit->alpha), 0.0;
+    best.converged = true;
+    Vec r;
+    pr.eval(best.th, r, nullptr);
+    best.cost = r.squaredNorm();
+    have = true;
   }
   if (!have) {
     NlsFit f;
@@ -341,13 +378,12 @@ Identification identify(std::span<const double> x, double dt, const IdentifyOpti
         break;
       }
     std::size_t zero = 0;
-    for (std::size_t j = 1; j <= std::min(cap, 10 * T0); ++j)
+    for (std::size_t j = 1; j <= std::min(cap, 3 * T0); ++j)
       if (K[j] <= 0) {
         zero = j;
         break;
       }
-    L = std::max<std::size_t>(5 * T0, 4 * zero);
-    L = std::min<std::size_t>(L, 20 * T0);
+    L = std::max<std::size_t>(3 * T0, (5 * zero + 1) / 2);
     L = std::clamp<std::size_t>(L, std::min<std::size_t>(10, N - 1), cap);
     K.resize(L + 1);
   }
@@ -360,24 +396,28 @@ Identification identify(std::span<const double> x, double dt, const IdentifyOpti
   id.paper_cos = paper_exp_cosine(K, dt, L);
   const std::size_t first = std::min<std::size_t>(opt.first_lag, L > 4 ? L - 4 : 0);
   id.exp = fit_exponential(K, dt, N, first, L);
-  id.cos = fit_exp_cosine(K, dt, N, first, L, id.paper_cos.beta);
+  id.cos = fit_exp_cosine(K, dt, N, first, L, id.paper_cos.beta, &id.exp);
 
   std::ostringstream why;
   const double dbic = id.cos.bic - id.exp.bic;
-  const double z = id.cos.se_beta > 0 ? id.cos.beta / id.cos.se_beta : 0.0;
+  const double z = id.cos.se_beta > 0 && std::isfinite(id.cos.se_beta) ? id.cos.beta / id.cos.se_beta : 0.0;
+  const double lobe_z = id.cos.min_model_se > 0 ? -id.cos.min_model / id.cos.min_model_se : 0.0;
   why << "BIC(exp_cosine) - BIC(exponential) = " << dbic << ", beta/se_beta = " << z
+      << ", negative lobe depth/se = " << lobe_z
       << ", K changes sign: " << (id.sign_change ? "yes" : "no");
   if (!id.exp.converged && id.cos.converged) {
     id.chosen = DriftModelKind::exp_cosine;
     why << "; exponential fit did not converge";
-  } else if (id.cos.converged && id.cos.beta > 0 && dbic < -opt.bic_margin && z > opt.beta_z) {
+  } else if (id.cos.converged && id.cos.beta > 0 && dbic < -opt.bic_margin && z > opt.beta_z &&
+             lobe_z > opt.lobe_z) {
     id.chosen = DriftModelKind::exp_cosine;
-    why << "; exp_cosine: BIC lower by more than " << opt.bic_margin << " and beta significant (> "
-        << opt.beta_z << " se)";
+    why << "; exp_cosine: BIC lower by more than " << opt.bic_margin << ", beta > " << opt.beta_z
+        << " se and a negative lobe deeper than " << opt.lobe_z << " se of K";
   } else {
     id.chosen = DriftModelKind::exponential;
     why << "; exponential: exp_cosine not supported by the evidence (needs BIC lower by more than "
-        << opt.bic_margin << " and beta > " << opt.beta_z << " se)";
+        << opt.bic_margin << ", beta > " << opt.beta_z << " se and a negative lobe deeper than "
+        << opt.lobe_z << " se of K)";
   }
   id.reason = why.str();
   return id;

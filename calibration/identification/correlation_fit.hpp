@@ -27,7 +27,9 @@
 // sum of squares (n lags, p = 2 or 3 parameters). Because the lags are correlated, n overstates
 // the information and BIC alone would favour the extra parameter on noise; the exp-cosine model is
 // chosen only when (a) its BIC is lower by more than `bic_margin`, and (b) β is significant,
-// β/se_β > `beta_z` with the honest (Bartlett) se_β, and (c) the fit converged. The sign change of
+// β/se_β > `beta_z` with the honest (Bartlett) se_β, (c) the fitted curve has a negative lobe
+// deeper than `lobe_z` Bartlett standard deviations of K̂ at that lag (the sign change is
+// significant, not estimation noise), and (d) the fit converged. The sign change of
 // K̂ (the paper's criterion) is reported beside it.
 #pragma once
 #include <cstddef>
@@ -66,6 +68,8 @@ struct NlsFit {
   std::size_t lags = 0;    // number of lags fitted
   double aic = 0, bic = 0;
   double white_var = 0;    // K̂(0) − σ² (≥ 0 when white noise is present), units of K̂
+  double min_model = 0;    // most negative value of the fitted K within the lags (0 if none)
+  double min_model_se = 0; // Bartlett 1-σ of K̂ at that lag
   DriftModel model() const { return {kind, sigma, alpha, beta}; }
 };
 
@@ -73,13 +77,15 @@ struct NlsFit {
 NlsFit fit_exponential(std::span<const double> K, double dt, std::size_t n_samples,
                        std::size_t first_lag, std::size_t max_lag);
 NlsFit fit_exp_cosine(std::span<const double> K, double dt, std::size_t n_samples,
-                      std::size_t first_lag, std::size_t max_lag, double beta_start_hint = 0);
+                      std::size_t first_lag, std::size_t max_lag, double beta_start_hint = 0,
+                      const NlsFit* exponential_fit = nullptr);
 
 struct IdentifyOptions {
   double max_lag_s = 0;      // 0: automatic (see identify())
   std::size_t first_lag = 1; // 0 to include K̂(0) in the NLS fit
   double bic_margin = 10.0;
   double beta_z = 3.0;
+  double lobe_z = 3.0;
 };
 
 struct Identification {
@@ -99,8 +105,9 @@ struct Identification {
 };
 
 // Everything above for one series at a constant step dt. Automatic maximum lag: T₀ = the first
-// lag where K̂ falls below K̂(0)/e; L = max(5 T₀, 4 τ_β) (τ_β only if K̂ crosses zero before
-// 10 T₀), at most 20 T₀ and N/5, at least 10 lags. Throws std::invalid_argument if N < 20, the
+// lag where K̂ falls below K̂(1)/e; L = max(3 T₀, 2.5 τ_β) (τ_β only if K̂ crosses zero before
+// 3 T₀, i.e. where an exponential could not), at most N/5, at least 10 lags. (Far lags of K̂ are
+// mostly estimation noise; for a first-order process 2–3 T gives the smallest error of T̂.) Throws std::invalid_argument if N < 20, the
 // series is constant, or not finite.
 Identification identify(std::span<const double> x, double dt, const IdentifyOptions& opt = {});
 
