@@ -1,0 +1,34 @@
+// calbench report SERIAL --html OUT.html | calbench report fleet --html OUT.html
+#include <iostream>
+#include <memory>
+
+#include "bench/cli/registry.hpp"
+#include "bench/io/json_util.hpp"
+#include "bench/report/db_report.hpp"
+#include "db/store.hpp"
+
+namespace calbench::cli {
+namespace {
+
+struct ReportArgs {
+  std::string target, html, db;
+};
+
+const bool registered = add_command(90, [](CLI::App& app) {
+  auto a = std::make_shared<ReportArgs>();
+  auto* sub = app.add_subcommand("report", "printable HTML report of a device (or of the fleet) from the database");
+  sub->add_option("SERIAL", a->target, "device serial number, or `fleet` for the fleet report")->required();
+  sub->add_option("--html", a->html, "output HTML file (self-contained, plots embedded)")->required();
+  sub->add_option("--db", a->db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
+  sub->callback([a] {
+    db::OpenOptions o;
+    o.read_only = true;
+    db::Store s(a->db.empty() ? db::Store::default_path() : a->db, o);
+    const std::string html = a->target == "fleet" ? report::fleet_report_html(s) : report::device_report_html(s, a->target);
+    write_text_atomic(a->html, html);
+    std::cout << "report written to " << a->html << "\n";
+  });
+});
+
+}  // namespace
+}  // namespace calbench::cli

@@ -1,0 +1,374 @@
+#include "bench/report/db_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bench/io/input_error.hpp"
+#include "bench/report/gnuplot.hpp"
+#include "db/fleet.hpp"
+
+namespace calbench::report {
+namespace {
+using nlohmann::json;
+using namespace calbench::db;
+
+std::string num(double v, int prec = 4) {
+  if (!std::isfinite(v)) return "–";
+  std::ostringstream s;
+  s << std::setprecision(prec) << v;
+  return s.str();
+}
+std::string pm(double v, double sigma, double k, int prec = 4) {
+  return num(v * k, prec) + " ± " + (std::isfinite(sigma) ? num(sigma * k, 2) : std::string("?"));
+}
+std::string now_utc() {
+  std::time_t t = std::time(nullptr);
+  char b[32];
+  std::strftime(b, sizeof b, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&t));
+  return b;
+}
+const char* kAxes[] = {"x", "y", "z"};
+
+const char* kStyle = R"CSS(
+body{font-family:DejaVu Sans,Arial,sans-serif;font-size:11px;margin:16px;color:#111}
+h1{font-size:18px;margin:0 0 4px} h2{font-size:14px;border-bottom:1px solid #999;margin:14px 0 6px}
+h3{font-size:12px;margin:8px 0 4px}
+table{border-collapse:collapse;margin:4px 0 8px} td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}
+th{background:#eee} td.l,th.l{text-align:left}
+.pass{color:#070;font-weight:bold} .fail{color:#b00;font-weight:bold} .muted{color:#666}
+.verdict{font-size:16px;padding:4px 10px;border:2px solid;display:inline-block;margin:6px 0}
+img{max-width:100%;page-break-inside:avoid} pre{font-size:10px;background:#f6f6f6;padding:4px;white-space:pre-wrap}
+@media print{body{margin:0} h2{page-break-after:avoid}}
+)CSS";
+
+const char* kImageCheck = R"JS(
+<script>
+window.addEventListener('load', function () {
+  var imgs = document.images, ok = 0;
+  for (var i = 0; i < imgs.length; ++i) if (imgs[i].complete && imgs[i].naturalWidth > 0) ++ok;
+  document.body.setAttribute('data-images', ok + '/' + imgs.length);
+});
+</script>
+)JS";
+
+std::string page(const std::string& title, const std::string& body) {
+  return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + html_escape(title) +
+         "</title><style>" + kStyle + "</style>" + kImageCheck + "</head><body>\n" + body + "\n</body></html>\n";
+}
+
+std::string img(const std::string& png, const std::string& alt) {
+  return "<img alt=\"" + html_escape(alt) + "\" src=\"" + png_data_uri(png) + "\">\n";
+}
+
+std::string plot_or_note(const std::string& script, const std::map<std::string, std::string>& files, const std::string& alt) {
+  try {
+    return img(run_gnuplot(script, files), alt);
+  } catch (const std::exception& e) {
+    return "<p class=\"fail\">plot not available: " + html_escape(e.what()) + "</p>\n";
+  }
+}
+
+std::string qc_table(const std::vector<QcResult>& qc) {
+  if (qc.empty()) return "<p class=\"muted\">no QC results recorded</p>\n";
+  std::string h = "<table><tr><th class=\"l\">metric</th><th>value</th><th>threshold</th><th>unit</th><th>result</th></tr>\n";
+  for (const auto& q : qc)
+    h += "<tr><td class=\"l\">" + html_escape(q.metric) + "</td><td>" + num(q.value, 6) + "</td><td>" +
+         (q.threshold ? num(*q.threshold, 6) : std::string("–")) + "</td><td>" + html_escape(q.unit) + "</td><td class=\"" +
+         (q.pass ? "pass\">pass" : "fail\">FAIL") + "</td></tr>\n";
+  return h + "</table>\n";
+}
+
+// One coefficient set as a table: per triad bias and the rows of M, value ± σ in display units.
+std::string set_table(const SensorErrors& e) {
+  std::string h = "<table><tr><th class=\"l\">triad</th><th class=\"l\">term</th><th>x</th><th>y</th><th>z</th><th class=\"l\">unit</th></tr>\n";
+  for (const char* triad : {"gyro", "accel"}) {
+    const TriadErrors& t = std::string(triad) == "gyro" ? e.gyro : e.accel;
+    std::string unit;
+    double k;
+    display_unit(std::string(triad) + ".bias.x", unit, k);
+    h += std::string("<tr><td class=\"l\">") + triad + "</td><td class=\"l\">bias</td>";
+    for (int i = 0; i < 3; ++i) h += "<td>" + pm(t.bias(i), t.sigma_bias(i), k) + "</td>";
+    h += "<td class=\"l\">" + unit + "</td></tr>\n";
+    for (int i = 0; i < 3; ++i) {
+      h += std::string("<tr><td class=\"l\">") + triad + "</td><td class=\"l\">M row " + kAxes[i] + "</td>";
+      for (int j = 0; j < 3; ++j) h += "<td>" + pm(t.M(i, j), t.sigma_M(i, j), 1e6) + "</td>";
+      h += "<td class=\"l\">ppm</td></tr>\n";
+    }
+  }
+  return h + "</table>\n";
+}
+
+// Coefficient history: bias and scale of each axis against the set version, with σ error bars.
+std::string history_plot(const std::vector<CoefficientSetRecord>& sets) {
+  std::map<std::string, std::string> files;
+  std::ostringstream d;
+  d << std::setprecision(10);
+  for (const auto& s : sets) {
+    d << s.version;
+    for (const char* triad : {"gyro", "accel"})
+      for (const char* term : {"bias", "scale"})
+        for (int i = 0; i < 3; ++i) {
+          const std::string name = std::string(triad) + (std::string(term) == "bias" ? ".bias." + std::string(kAxes[i])
+                                                                                      : ".M." + std::string(kAxes[i]) + kAxes[i]);
+          std::string unit;
+          double k;
+          display_unit(name, unit, k);
+          const double sg = coefficient_sigma(s.errors, name);
+          d << " " << coefficient_value(s.errors, name) * k << " " << (std::isfinite(sg) ? sg * k : 0.0);
+        }
+    d << "\n";
+  }
+  files["h.dat"] = d.str();
+  std::ostringstream g;
+  g << "set terminal pngcairo size 1000,520 font 'DejaVu Sans,9'\nset output 'plot.png'\n"
+       "set multiplot layout 2,2 title 'Coefficient history (value ± 1σ per set version)'\n"
+       "set xlabel 'set version'\nset key outside right\nset grid\nset xtics 1\n"
+       "set offsets 0.3,0.3,0,0\n";
+  const char* titles[] = {"gyro bias [°/h]", "gyro scale [ppm]", "accel bias [mg]", "accel scale [ppm]"};
+  for (int p = 0; p < 4; ++p) {
+    g << "set title '" << titles[p] << "'\nplot ";
+    for (int i = 0; i < 3; ++i) {
+      const int col = 2 + (p * 3 + i) * 2;
+      g << (i ? ", " : "") << "'h.dat' using 1:" << col << ":" << col + 1 << " with yerrorlines title '" << kAxes[i] << "'";
+    }
+    g << "\n";
+  }
+  g << "unset multiplot\n";
+  return plot_or_note(g.str(), files, "coefficient history");
+}
+
+// Circular position error curves from an in-motion run's "qc" (issue 5 `qc --json` form:
+// {"sets": [{"name", "cpe_m_at": {"60": m, ...}} ...]}, or "series": {"t_s": [...], NAME: [...]}).
+std::string cpe_plot(const json& qc) {
+  std::map<std::string, std::string> files;
+  std::vector<std::pair<std::string, std::string>> curves;  // title, file
+  auto add_curve = [&](const std::string& name, const std::vector<std::pair<double, double>>& pts) {
+    if (pts.size() < 2) return;
+    std::ostringstream d;
+    d << std::setprecision(10);
+    for (const auto& [t, v] : pts) d << t << " " << v << "\n";
+    const std::string f = "c" + std::to_string(curves.size()) + ".dat";
+    files[f] = d.str();
+    curves.emplace_back(name, f);
+  };
+  if (qc.is_object() && qc.contains("sets") && qc["sets"].is_array()) {
+    for (const auto& s : qc["sets"]) {
+      if (!s.is_object() || !s.contains("cpe_m_at") || !s["cpe_m_at"].is_object()) continue;
+      std::vector<std::pair<double, double>> pts;
+      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
+        char* end = nullptr;
+        const double t = std::strtod(it.key().c_str(), &end);
+        if (end && *end == 0 && it->is_number()) pts.emplace_back(t, it->get<double>());
+      }
+      std::sort(pts.begin(), pts.end());
+      add_curve(s.value("name", std::string("set")), pts);
+    }
+  }
+  if (qc.is_object() && qc.contains("series") && qc["series"].is_object() && qc["series"].contains("t_s")) {
+    const json& ser = qc["series"];
+    for (auto it = ser.begin(); it != ser.end(); ++it) {
+      if (it.key() == "t_s" || !it->is_array() || it->size() != ser["t_s"].size()) continue;
+      std::vector<std::pair<double, double>> pts;
+      for (std::size_t i = 0; i < it->size(); ++i)
+        if ((*it)[i].is_number() && ser["t_s"][i].is_number()) pts.emplace_back(ser["t_s"][i].get<double>(), (*it)[i].get<double>());
+      add_curve(it.key(), pts);
+    }
+  }
+  if (curves.empty()) return "<p class=\"muted\">no circular-position-error series in this run's QC</p>\n";
+  std::ostringstream g;
+  g << "set terminal pngcairo size 900,380 font 'DejaVu Sans,9'\nset output 'plot.png'\n"
+       "set title 'Circular position error, inertial-only navigation (eq. 39)'\nset xlabel 'time since T0 [s]'\n"
+       "set ylabel 'ΔS [m]'\nset grid\nset key top left\nplot ";
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    std::string title = curves[i].first;
+    std::replace(title.begin(), title.end(), '\'', ' ');
+    g << (i ? ", " : "") << "'" << curves[i].second << "' using 1:2 with linespoints title '" << title << "'";
+  }
+  g << "\n";
+  return plot_or_note(g.str(), files, "circular position error");
+}
+
+bool set_passes(Store& s, const CoefficientSetRecord& set) {
+  for (const auto& q : s.qc_of_set(set))
+    if (!q.pass) return false;
+  return set.status == SetStatus::approved || set.status == SetStatus::provisioned;
+}
+}  // namespace
+
+std::string device_report_html(Store& store, const std::string& serial) {
+  const auto dev = store.find_device(serial);
+  if (!dev) throw InputError("", 0, "SERIAL", "unknown device '" + serial + "' in " + store.connection().path());
+  const auto sets = store.sets_of(dev->id);
+  std::ostringstream b;
+  // Verdict: the newest non-revoked set is approved or provisioned and its QC passes.
+  const CoefficientSetRecord* current = nullptr;
+  for (const auto& s : sets)
+    if (s.status != SetStatus::revoked) current = &s;
+  const bool pass = current && set_passes(store, *current);
+  b << "<h1>" << html_escape(dev->model) << " &nbsp;serial " << html_escape(dev->serial) << "</h1>\n";
+  b << "<div class=\"muted\">firmware " << html_escape(dev->firmware.empty() ? "unknown" : dev->firmware)
+    << " · in database since " << html_escape(dev->created_at) << " · report generated " << now_utc() << " from "
+    << html_escape(store.connection().path()) << "</div>\n";
+  b << "<div class=\"verdict " << (pass ? "pass\">PASS" : "fail\">FAIL") << "</div> ";
+  if (current)
+    b << "current set " << current->id << " (v" << current->version << ", " << to_string(current->source) << ", "
+      << to_string(current->status) << ")\n";
+  else
+    b << "no coefficient set\n";
+
+  b << "<h2>Coefficient history</h2>\n";
+  if (!sets.empty()) {
+    b << "<table><tr><th>set</th><th>version</th><th class=\"l\">source</th><th class=\"l\">status</th><th>parent</th>"
+         "<th class=\"l\">created</th><th class=\"l\">by</th></tr>\n";
+    for (const auto& s : sets)
+      b << "<tr><td>" << s.id << "</td><td>" << s.version << "</td><td class=\"l\">" << to_string(s.source)
+        << "</td><td class=\"l " << (s.status == SetStatus::revoked ? "fail" : "") << "\">" << to_string(s.status)
+        << "</td><td>" << (s.parent_id ? std::to_string(*s.parent_id) : "–") << "</td><td class=\"l\">"
+        << html_escape(s.created_at) << "</td><td class=\"l\">" << html_escape(s.created_by) << "</td></tr>\n";
+    b << "</table>\n" << history_plot(sets);
+    for (const auto& s : sets) {
+      b << "<h3>Set " << s.id << " (v" << s.version << ", " << to_string(s.source) << ", " << to_string(s.status)
+        << ") — measured = (I + M)·true + b, value ± 1σ</h3>\n"
+        << set_table(s.errors);
+    }
+  } else {
+    b << "<p class=\"muted\">none</p>\n";
+  }
+
+  b << "<h2>Bench runs and residuals</h2>\n";
+  bool any_bench = false;
+  for (const auto& s : sets) {
+    if (!s.bench_run_id) continue;
+    const auto r = store.bench_run(*s.bench_run_id);
+    if (!r) continue;
+    any_bench = true;
+    b << "<h3>Bench run " << r->id << " → set " << s.id << "</h3>\n<table>"
+      << "<tr><th class=\"l\">station</th><td class=\"l\">" << html_escape(r->station) << "</td></tr>"
+      << "<tr><th class=\"l\">plan</th><td class=\"l\">" << html_escape(r->plan) << "</td></tr>"
+      << "<tr><th class=\"l\">recording</th><td class=\"l\">" << html_escape(r->recording_path) << "<br><span class=\"muted\">SHA-256 "
+      << html_escape(r->recording_sha256) << "</span></td></tr>"
+      << "<tr><th class=\"l\">time</th><td class=\"l\">" << html_escape(r->started_at) << " – " << html_escape(r->ended_at) << "</td></tr>"
+      << "<tr><th class=\"l\">outcome</th><td class=\"l " << (r->outcome == "pass" ? "pass" : "fail") << "\">"
+      << html_escape(r->outcome) << "</td></tr></table>\n"
+      << qc_table(store.qc_of_bench_run(r->id));
+  }
+  if (!any_bench) b << "<p class=\"muted\">no bench runs</p>\n";
+
+  b << "<h2>In-motion calibration</h2>\n";
+  bool any_motion = false;
+  for (const auto& s : sets) {
+    if (!s.inmotion_run_id) continue;
+    const auto r = store.inmotion_run(*s.inmotion_run_id);
+    if (!r) continue;
+    any_motion = true;
+    b << "<h3>In-motion run " << r->id << " → set " << s.id << " (" << to_string(s.source)
+      << (s.parent_id ? ", parent set " + std::to_string(*s.parent_id) : std::string()) << ")</h3>\n<table>"
+      << "<tr><th class=\"l\">drive recording</th><td class=\"l\">" << html_escape(r->recording_path)
+      << "<br><span class=\"muted\">SHA-256 " << html_escape(r->recording_sha256) << "</span></td></tr>"
+      << "<tr><th class=\"l\">reference system</th><td class=\"l\">" << html_escape(r->reference_system.empty() ? "–" : r->reference_system)
+      << "</td></tr><tr><th class=\"l\">mounting roll / pitch / yaw [°]</th><td class=\"l\">";
+    for (int i = 0; i < 3; ++i)
+      b << (i ? " / " : "") << pm(r->mounting_rpy_deg[static_cast<std::size_t>(i)], r->mounting_sigma_deg[static_cast<std::size_t>(i)], 1.0);
+    b << "</td></tr></table>\n";
+    json qc = json::object(), cons = json::object();
+    try {
+      qc = json::parse(r->qc_json);
+      cons = json::parse(r->consistency_json);
+    } catch (...) {
+    }
+    b << cpe_plot(qc) << qc_table(store.qc_of_inmotion_run(r->id));
+    b << "<div class=\"muted\">consistency (normalised innovations)</div><pre>" << html_escape(cons.dump(1)) << "</pre>\n";
+  }
+  if (!any_motion) b << "<p class=\"muted\">no in-motion runs</p>\n";
+
+  b << "<h2>Provisioning</h2>\n";
+  const auto prov = store.provisioning_of(dev->id);
+  if (prov.empty()) b << "<p class=\"muted\">never provisioned</p>\n";
+  else {
+    b << "<table><tr><th class=\"l\">when</th><th>set</th><th class=\"l\">kind</th><th class=\"l\">target</th><th class=\"l\">result</th><th class=\"l\">by</th><th class=\"l\">message</th></tr>\n";
+    for (const auto& p : prov)
+      b << "<tr><td class=\"l\">" << html_escape(p.at) << "</td><td>" << p.set_id << "</td><td class=\"l\">" << html_escape(p.kind)
+        << "</td><td class=\"l\">" << html_escape(p.target) << "</td><td class=\"l " << (p.ok ? "pass\">ok" : "fail\">FAILED")
+        << "</td><td class=\"l\">" << html_escape(p.actor) << "</td><td class=\"l\">" << html_escape(p.message) << "</td></tr>\n";
+    b << "</table>\n";
+  }
+
+  b << "<h2>History (audit log)</h2>\n<table><tr><th class=\"l\">when</th><th class=\"l\">who</th><th class=\"l\">what</th><th class=\"l\">detail</th></tr>\n";
+  for (const auto& a : store.audit_of_device(dev->id))
+    b << "<tr><td class=\"l\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(a.user + "@" + a.station)
+      << "</td><td class=\"l\">" << html_escape(a.entity + " " + std::to_string(a.entity_id) + " " + a.action) << "</td><td class=\"l\">"
+      << html_escape(a.detail) << "</td></tr>\n";
+  b << "</table>\n";
+  return page("calbench report " + dev->serial, b.str());
+}
+
+std::string fleet_report_html(Store& store) {
+  const auto stats = fleet_stats(store.fleet());
+  std::ostringstream b;
+  const std::size_t n = stats.empty() ? 0 : stats.front().n;
+  b << "<h1>Fleet report</h1>\n<div class=\"muted\">" << n << " device(s), newest non-revoked coefficient set of each · "
+    << "outlier: robust z = 0.6745·(x − median)/MAD, |z| &gt; " << kOutlierZ << " · generated " << now_utc() << " from "
+    << html_escape(store.connection().path()) << "</div>\n";
+  // One figure per group: a histogram per coefficient, outliers as red points.
+  const std::pair<const char*, std::pair<int, int>> groups[] = {
+      {"gyro bias [°/h]", {0, 3}}, {"gyro M [ppm]", {3, 12}}, {"accel bias [mg]", {12, 15}}, {"accel M [ppm]", {15, 24}}};
+  b << "<h2>Distributions</h2>\n";
+  for (const auto& [title, range] : groups) {
+    if (n == 0) break;
+    std::map<std::string, std::string> files;
+    std::ostringstream g;
+    const int count = range.second - range.first;
+    const int rows = count == 3 ? 1 : 3;
+    g << "set terminal pngcairo size 1000," << (rows == 1 ? 260 : 700) << " font 'DejaVu Sans,8'\nset output 'plot.png'\n"
+      << "set multiplot layout " << rows << ",3 title '" << title << ": histogram over devices, outliers red'\n"
+      << "set style fill solid 0.6 border -1\nset grid\nunset key\n";
+    for (int k = range.first; k < range.second; ++k) {
+      const auto& c = stats[static_cast<std::size_t>(k)];
+      double lo = c.min * c.to_display, hi = c.max * c.to_display;
+      if (hi <= lo) {
+        lo -= 1;
+        hi += 1;
+      }
+      const int bins = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(c.n))) + 1, 5, 40);
+      const double w = (hi - lo) / bins;
+      std::vector<int> h(static_cast<std::size_t>(bins), 0);
+      std::ostringstream outl;
+      for (const auto& p : c.points) {
+        const double x = p.value * c.to_display;
+        const int i = std::clamp(static_cast<int>((x - lo) / w), 0, bins - 1);
+        ++h[static_cast<std::size_t>(i)];
+        if (p.outlier) outl << std::setprecision(10) << x << " 0\n";
+      }
+      std::ostringstream d;
+      d << std::setprecision(10);
+      for (int i = 0; i < bins; ++i) d << lo + (i + 0.5) * w << " " << h[static_cast<std::size_t>(i)] << "\n";
+      const std::string hf = "h" + std::to_string(k) + ".dat", of = "o" + std::to_string(k) + ".dat";
+      files[hf] = d.str();
+      files[of] = outl.str().empty() ? "nan nan\n" : outl.str();
+      g << "set title '" << c.name << "'\nset boxwidth " << w * 0.9 << "\nset yrange [0:*]\nplot '" << hf
+        << "' using 1:2 with boxes lc rgb '#4477aa', '" << of << "' using 1:2 with points pt 7 ps 1.2 lc rgb '#cc0000'\n";
+    }
+    g << "unset multiplot\n";
+    b << plot_or_note(g.str(), files, title);
+  }
+  b << "<h2>Statistics</h2>\n<table><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>n</th><th>median</th>"
+       "<th>MAD</th><th>mean</th><th>std</th><th>min</th><th>max</th><th class=\"l\">outliers (serial: value, z)</th></tr>\n";
+  for (const auto& c : stats) {
+    std::string outl;
+    for (const auto& p : c.points)
+      if (p.outlier) outl += (outl.empty() ? "" : "; ") + p.serial + ": " + num(p.value * c.to_display) + ", z " + num(p.z, 3);
+    b << "<tr><td class=\"l\">" << c.name << "</td><td class=\"l\">" << c.unit << "</td><td>" << c.n << "</td><td>"
+      << num(c.median * c.to_display) << "</td><td>" << num(c.mad * c.to_display) << "</td><td>" << num(c.mean * c.to_display)
+      << "</td><td>" << num(c.stddev * c.to_display) << "</td><td>" << num(c.min * c.to_display) << "</td><td>"
+      << num(c.max * c.to_display) << "</td><td class=\"l " << (outl.empty() ? "" : "fail") << "\">" << html_escape(outl.empty() ? "–" : outl)
+      << "</td></tr>\n";
+  }
+  b << "</table>\n";
+  return page("calbench fleet report", b.str());
+}
+
+}  // namespace calbench::report

@@ -1,0 +1,16 @@
+// HTML reports from the coefficient database: one printable page per device, and the fleet page
+// (docs/database.md "Reports"). Plots are PNG made with gnuplot, embedded as data URIs, so the
+// page is one self-contained file. The page marks itself `data-images="LOADED/TOTAL"` on <body>
+// once the browser has decoded its images (used by the headless-browser test).
+#pragma once
+#include <string>
+
+#include "db/store.hpp"
+
+namespace calbench::report {
+
+// Throws InputError for an unknown serial.
+std::string device_report_html(db::Store& store, const std::string& serial);
+std::string fleet_report_html(db::Store& store);
+
+}  // namespace calbench::report
