@@ -1,0 +1,65 @@
+// calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
+//                        [--smooth] [--window T0:T1] [--json]
+#include <iostream>
+
+#include "bench/cli/registry.hpp"
+#include "bench/drive/fit_drive.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench::cli {
+namespace {
+
+void print_summary(const nlohmann::json& j) {
+  using namespace units;
+  auto vec = [](const nlohmann::json& v, const nlohmann::json& s, double k, const char* unit) {
+    std::ostringstream o;
+    for (int i = 0; i < 3; ++i)
+      o << (i ? ", " : "") << v[i].get<double>() / k << " ± " << (s[i].is_null() ? 0.0 : s[i].get<double>() / k);
+    o << ' ' << unit;
+    return o.str();
+  };
+  const auto& c = j["coefficients"];
+  std::cout << "in-motion fit of " << j["recording"]["path"].get<std::string>() << " (window " << j["window_s"][0] << " – "
+            << j["window_s"][1] << " s, observations " << j["observations"].get<std::string>() << ")\n"
+            << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
+            << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
+            << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
+  for (const auto& [k, v] : j["consistency"].items())
+    std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected\n";
+  if (j["qc"].contains("sets"))
+    for (const auto& s : j["qc"]["sets"])
+      std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"] << " s over "
+                << j["qc"]["horizon_s"] << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
+                << s["final_cpe_m"].get<double>() << " m\n";
+  std::cout << std::flush;
+}
+
+const bool registered = add_command(31, [](CLI::App& app) {
+  CLI::App* fit = app.get_subcommand("fit");
+  auto a = std::make_shared<FitDriveArgs>();
+  auto json = std::make_shared<bool>(false);
+  auto* d = fit->add_subcommand("drive", "In-motion calibration against the reference INS/GNSS of a drive recording "
+                                         "(EKF, paper eqs 13-15)");
+  d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
+  d->add_option("--coeffs", a->coeffs, "bench coefficients applied to the data first (result = composition)")->check(CLI::ExistingFile);
+  d->add_option("--out", a->out, "RESULT.json to write")->required();
+  d->add_option("--obs", a->obs, "observations to use: any of pos,vel,att (eqs 13, 14, 15)");
+  d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
+  d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
+  d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
+  d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(CLI::PositiveNumber);
+  d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(CLI::PositiveNumber);
+  d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)");
+  d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)");
+  d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)");
+  d->add_option("--qc-horizon", a->qc_horizon_s, "horizon of the QC run in RESULT.json, s (default 600)");
+  d->add_flag("--json", *json, "print RESULT.json to stdout");
+  d->callback([a, json] {
+    const nlohmann::json j = fit_drive(*a);
+    if (*json) print_json(j.dump(2));
+    else print_summary(j);
+  });
+});
+
+}  // namespace
+}  // namespace calbench::cli

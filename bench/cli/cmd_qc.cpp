@@ -1,0 +1,65 @@
+// calbench qc DIR --coeffs A.json [--coeffs B.json ...|none] [--from T0] [--horizon S] [--json] [--plot OUT.png]
+#include <iostream>
+
+#include "bench/cli/registry.hpp"
+#include "bench/drive/qc_drive.hpp"
+#include "bench/io/input_error.hpp"
+
+namespace calbench::cli {
+namespace {
+
+struct QcArgs {
+  std::string dir, plot;
+  std::vector<std::string> coeffs;
+  double from = std::numeric_limits<double>::quiet_NaN();
+  double horizon = 600;
+  bool json = false;
+};
+
+void run(const QcArgs& a) {
+  std::vector<QcSet> sets;
+  for (const auto& c : a.coeffs) sets.push_back(load_qc_set(c));
+  // Out-of-sample by default: start where the latest fit window of an in-motion result ended.
+  std::optional<double> from;
+  std::string sample = "as requested with --from";
+  if (std::isfinite(a.from)) from = a.from;
+  else {
+    for (const auto& s : sets)
+      if (s.fit_window_s) from = std::max(from.value_or(0.0), s.fit_window_s->second);
+    sample = from ? "out-of-sample (from the end of the fit window of the in-motion result)"
+                  : "from the start of the recording (no fit window known: in-sample if the sets were fitted on this drive)";
+  }
+  const QcOutcome q = run_qc(a.dir, sets, from, a.horizon);
+  nlohmann::json j = qc_json(q);
+  j["sample"] = sample;
+  if (!a.plot.empty()) qc_plot(q, a.plot, "Inertial-only navigation, " + a.dir);
+  if (a.json) {
+    print_json(j.dump(2));
+    return;
+  }
+  std::cout << "QC of " << a.dir << ": inertial-only navigation from T0 = " << q.from_s << " s for " << q.horizon_s << " s, "
+            << sample << "\n";
+  for (const auto& s : j["sets"]) {
+    std::cout << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
+              << s["max_cpe_m"].get<double>() << " m";
+    for (const auto& [k, v] : s["cpe_m_at"].items()) std::cout << ", @" << k << " s " << v.get<double>() << " m";
+    std::cout << "\n";
+  }
+  std::cout << std::flush;
+}
+
+const bool registered = add_command(50, [](CLI::App& app) {
+  auto a = std::make_shared<QcArgs>();
+  auto* q = app.add_subcommand("qc", "Quality control by inertial-only navigation: circular position error (eq 39) "
+                                     "per coefficient set against the reference of a drive");
+  q->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
+  q->add_option("--coeffs", a->coeffs, "coefficients.json, in-motion RESULT.json, or 'none' (repeatable)")->required();
+  q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)");
+  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(CLI::PositiveNumber);
+  q->add_flag("--json", a->json, "machine output");
+  q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)");
+  q->callback([a] { run(*a); });
+});
+
+}  // namespace
+}  // namespace calbench::cli

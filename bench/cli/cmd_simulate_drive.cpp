@@ -1,0 +1,31 @@
+// calbench simulate drive --route ROUTE --truth TRUTH.json|random --out DIR [--seed N]
+#include <iostream>
+
+#include "bench/cli/registry.hpp"
+#include "bench/drive/simulate_drive.hpp"
+
+namespace calbench::cli {
+namespace {
+
+const bool registered = add_command(11, [](CLI::App& app) {
+  CLI::App* sim = app.get_subcommand("simulate");
+  auto a = std::make_shared<SimulateDriveArgs>();
+  auto* d = sim->add_subcommand("drive", "Simulate a land-vehicle drive: MEMS IMU (ADIS16488A errors, 2460 Hz), "
+                                         "FOG-grade reference INS/GNSS, GNSS fixes, with mounting and lever arm");
+  d->add_option("--route", a->route, "route file (TOML), e.g. bench/routes/default.toml")->required()->check(CLI::ExistingFile);
+  d->add_option("--truth", a->truth, "coefficients.json of the simulated unit (optional key \"mounting\"), or 'random'")->required();
+  d->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, gnss.csv, truth.json)")->required();
+  d->add_option("--seed", a->seed, "random seed (noise, drift, and the unit and mounting for --truth random)");
+  d->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");
+  d->add_option("--until", a->until_s, "simulate only the first SECONDS of the route");
+  d->add_flag("--force", a->force, "overwrite an existing recording in --out");
+  d->callback([a] {
+    const SimulateDriveSummary s = simulate_drive_recording(*a);
+    std::cout << "simulated " << s.imu_rows << " IMU samples (" << s.duration_s << " s), " << s.ref_rows
+              << " reference epochs, " << s.gnss_rows << " GNSS fixes into " << a->out << " (truth in " << a->out
+              << "/truth.json)" << std::endl;
+  });
+});
+
+}  // namespace
+}  // namespace calbench::cli

@@ -1,0 +1,71 @@
+#include "bench/drive/drive_stream.hpp"
+
+#include "bench/io/input_error.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench {
+
+inmotion::RefObs to_ref_obs(const DriveRefRow& r) {
+  inmotion::RefObs o;
+  o.t = r.t;
+  o.lat = r.lat_deg * units::kDeg;
+  o.lon = r.lon_deg * units::kDeg;
+  o.h = r.h_m;
+  o.v_ned = r.v_ned;
+  o.rpy = r.rpy_deg * units::kDeg;
+  o.sigma_pos = std::isfinite(r.sigma_pos_m) ? r.sigma_pos_m : 0.0;
+  o.sigma_vel = std::isfinite(r.sigma_vel_m_s) ? r.sigma_vel_m_s : 0.0;
+  o.sigma_att = std::isfinite(r.sigma_att_deg) ? r.sigma_att_deg * units::kDeg : 0.0;
+  return o;
+}
+
+DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre) : dir_(dir) {
+  meta_ = read_meta(dir);
+  if (meta_.kind != RecordingKind::drive)
+    throw InputError((dir / "meta.json").string(), 0, "kind", "expected a drive recording (kind \"drive\")");
+  if (!meta_.mounting) throw InputError((dir / "meta.json").string(), 0, "mounting", "a drive recording needs a mounting");
+  if (!(meta_.imu_rate_hz > 0)) throw InputError((dir / "meta.json").string(), 0, "imu_rate_hz", "must be > 0");
+  imu_ = std::make_unique<ImuReader>(dir / "imu.csv", meta_.imu_rate_hz);
+  ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv");
+  if (pre) {
+    cg_ = TriadCorrector(pre->gyro);
+    ca_ = TriadCorrector(pre->accel);
+  }
+  have_ref_ = ref_->next(ref_row_);
+}
+
+Mat3 DriveStream::nominal_mounting() const { return ins::dcm_from_rpy(meta_.mounting->rpy_deg * units::kDeg); }
+Vec3 DriveStream::lever_arm() const { return meta_.mounting->lever_arm_m; }
+
+bool DriveStream::next(Event& e) {
+  // A pending reference epoch that the IMU has reached goes first.
+  if (have_ref_ && (ref_row_.t <= last_imu_t_ + 1e-9 || imu_done_)) {
+    e.is_ref = true;
+    e.t = ref_row_.t;
+    e.ref = to_ref_obs(ref_row_);
+    have_ref_ = ref_->next(ref_row_);
+    return true;
+  }
+  if (imu_done_) return false;
+  ImuRecord r;
+  if (!imu_->next(r)) {
+    imu_done_ = true;
+    return next(e);
+  }
+  e.is_ref = false;
+  e.t = r.t;
+  e.dt = r.dt;
+  if (imu_->form() == ImuForm::rates) integ_(r.gyro, r.accel, r.dt, e.dtheta, e.dv);
+  else {
+    e.dtheta = r.gyro;
+    e.dv = r.accel;
+  }
+  if (cg_) {
+    e.dtheta = cg_->increment(e.dtheta, r.dt);
+    e.dv = ca_->increment(e.dv, r.dt);
+  }
+  last_imu_t_ = r.t;
+  return true;
+}
+
+}  // namespace calbench

@@ -1,0 +1,22 @@
+// `calbench fit drive`: the in-motion calibration of a drive recording (calibration/inmotion),
+// producing RESULT.json (contract in docs/in-motion.md) and optionally the estimate series.
+#pragma once
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace calbench {
+
+struct FitDriveArgs {
+  std::string dir, coeffs, out, obs = "pos,vel,att", series, window;
+  bool smooth = false;
+  double obs_rate_hz = 10, cov_dt = 0.1;
+  double sigma_pos = 0, sigma_vel = 0, sigma_att_deg = 0;  // 0: from reference.csv or defaults
+  bool qc = true;             // out-of-sample ΔS after the window, when data remain
+  double qc_horizon_s = 600;
+};
+
+// Runs the fit, writes args.out (and args.series), returns RESULT.json.
+nlohmann::json fit_drive(const FitDriveArgs& a);
+
+}  // namespace calbench

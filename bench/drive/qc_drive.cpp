@@ -1,0 +1,125 @@
+#include "bench/drive/qc_drive.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+
+#include "bench/drive/drive_stream.hpp"
+#include "bench/io/coefficients_json.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+#include "calibration/qc/inertial_qc.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench {
+
+QcSet load_qc_set(const std::string& arg) {
+  QcSet s;
+  if (arg == "none") {
+    s.name = "none";
+    return s;
+  }
+  s.name = fs::path(arg).stem().string();
+  const nlohmann::json j = read_json_file(arg);
+  if (j.is_object() && j.contains("coefficients")) {
+    s.errors = coefficients_from_json(j["coefficients"], arg).errors;
+    if (j.contains("mounting_rpy_deg")) s.mounting_rpy_deg = jvec3(jreq(j["mounting_rpy_deg"], "value", arg, "mounting_rpy_deg.value"), arg, "mounting_rpy_deg.value");
+    if (j.contains("window_s") && j["window_s"].is_array() && j["window_s"].size() == 2)
+      s.fit_window_s = std::make_pair(jnum(j["window_s"][0], arg, "window_s[0]"), jnum(j["window_s"][1], arg, "window_s[1]"));
+  } else {
+    s.errors = coefficients_from_json(j, arg).errors;
+  }
+  return s;
+}
+
+QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s, double horizon_s) {
+  DriveStream st(dir, std::nullopt);
+  const Mat3 C_nom = st.nominal_mounting();
+  const Vec3 lever = st.lever_arm();
+  QcOutcome q;
+  q.horizon_s = horizon_s;
+  std::vector<std::unique_ptr<qc::InertialRun>> runs(sets.size());
+  for (const QcSet& s : sets) q.curves.push_back(QcCurve{s.name, {}, {}});
+  bool started = false;
+  double t0 = 0;
+  DriveStream::Event e;
+  while (st.next(e)) {
+    if (e.is_ref) {
+      if (!started) {
+        if (from_s && e.t < *from_s - 1e-9) continue;
+        started = true;
+        t0 = e.t;
+        q.from_s = t0;
+        for (std::size_t i = 0; i < sets.size(); ++i) {
+          const Mat3 C = sets[i].mounting_rpy_deg ? ins::dcm_from_rpy(*sets[i].mounting_rpy_deg * units::kDeg) : C_nom;
+          runs[i] = std::make_unique<qc::InertialRun>(sets[i].errors, C, lever, e.ref);
+        }
+        continue;
+      }
+      if (e.t - t0 > horizon_s + 1e-9) break;
+      if (e.t > runs[0]->time() + 1e-6) continue;  // beyond the IMU data
+      for (std::size_t i = 0; i < sets.size(); ++i) {
+        q.curves[i].t.push_back(e.t - t0);
+        q.curves[i].cpe.push_back(runs[i]->cpe(e.ref));
+      }
+    } else if (started) {
+      for (auto& r : runs) r->imu(e.t, e.dtheta, e.dv, e.dt);
+    }
+  }
+  if (!started) throw InputError(dir.string(), 0, "--from", "no reference epoch at or after the start time");
+  if (!q.curves.empty() && !q.curves[0].t.empty()) q.horizon_s = std::min(horizon_s, q.curves[0].t.back());
+  return q;
+}
+
+nlohmann::json qc_json(const QcOutcome& q) {
+  nlohmann::json j;
+  j["from_s"] = q.from_s;
+  j["horizon_s"] = q.horizon_s;
+  j["sets"] = nlohmann::json::array();
+  for (const QcCurve& c : q.curves) {
+    nlohmann::json s;
+    s["name"] = c.name;
+    s["final_cpe_m"] = c.cpe.empty() ? 0.0 : c.cpe.back();
+    double mx = 0;
+    for (double v : c.cpe) mx = std::max(mx, v);
+    s["max_cpe_m"] = mx;
+    nlohmann::json at = nlohmann::json::object();
+    for (double mark : {10.0, 30.0, 60.0, 120.0, 300.0, 600.0, 1200.0, 1800.0, 3600.0}) {
+      if (c.t.empty() || mark > c.t.back() + 1e-6) continue;
+      // ΔS at the first epoch at or after the mark.
+      for (std::size_t k = 0; k < c.t.size(); ++k)
+        if (c.t[k] >= mark - 1e-6) {
+          char key[32];
+          std::snprintf(key, sizeof key, "%g", mark);
+          at[key] = c.cpe[k];
+          break;
+        }
+    }
+    s["cpe_m_at"] = at;
+    j["sets"].push_back(s);
+  }
+  return j;
+}
+
+void qc_plot(const QcOutcome& q, const fs::path& png, const std::string& title) {
+  const fs::path tmp = fs::temp_directory_path() / ("calbench-qc-" + std::to_string(::getpid()));
+  fs::create_directories(tmp);
+  std::ofstream gp(tmp / "plot.gp");
+  gp << "set terminal pngcairo size 1000,600\nset output '" << png.string() << "'\n"
+     << "set title \"" << title << "\"\nset xlabel 'time since T0 = " << q.from_s << " s [s]'\n"
+     << "set ylabel 'circular position error {/Symbol D}S [m] (eq 39)'\nset grid\nset key top left\nplot ";
+  for (std::size_t i = 0; i < q.curves.size(); ++i) {
+    const fs::path dat = tmp / ("set" + std::to_string(i) + ".dat");
+    std::ofstream d(dat);
+    for (std::size_t k = 0; k < q.curves[i].t.size(); ++k) d << q.curves[i].t[k] << ' ' << q.curves[i].cpe[k] << '\n';
+    gp << (i ? ", " : "") << "'" << dat.string() << "' using 1:2 with lines lw 2 title '" << q.curves[i].name << "'";
+  }
+  gp << "\n";
+  gp.close();
+  const std::string cmd = "gnuplot '" + (tmp / "plot.gp").string() + "' 2>&1";
+  const int rc = std::system(cmd.c_str());
+  fs::remove_all(tmp);
+  if (rc != 0) throw std::runtime_error("gnuplot failed (is gnuplot installed?) writing " + png.string());
+}
+
+}  // namespace calbench

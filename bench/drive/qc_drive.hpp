@@ -1,0 +1,38 @@
+// `calbench qc`: inertial-only navigation on a drive recording with several coefficient sets and
+// the circular position error ΔS(t) (eq 39) of each against the reference.
+#pragma once
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/sensor_model.hpp"
+
+namespace calbench {
+
+struct QcSet {
+  std::string name;
+  SensorErrors errors;                 // zero for "none"
+  std::optional<Vec3> mounting_rpy_deg;  // from an in-motion RESULT.json; else the nominal one
+  std::optional<std::pair<double, double>> fit_window_s;  // the data the set was fitted on, if known
+};
+// A coefficients.json, an in-motion RESULT.json (its "coefficients" and "mounting_rpy_deg"), or "none".
+QcSet load_qc_set(const std::string& arg);
+
+struct QcCurve {
+  std::string name;
+  std::vector<double> t, cpe;  // time since T0 (s), ΔS (m)
+};
+struct QcOutcome {
+  double from_s = 0, horizon_s = 0;
+  std::vector<QcCurve> curves;
+};
+QcOutcome run_qc(const std::filesystem::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s,
+                 double horizon_s);
+// The JSON: {"from_s", "horizon_s", "sets": [{"name", "final_cpe_m", "max_cpe_m", "cpe_m_at": {...}}]}.
+nlohmann::json qc_json(const QcOutcome& q);
+// gnuplot PNG with one curve per set.
+void qc_plot(const QcOutcome& q, const std::filesystem::path& png, const std::string& title);
+
+}  // namespace calbench

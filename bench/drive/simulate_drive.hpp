@@ -1,0 +1,24 @@
+// `calbench simulate drive`: run the drive simulator on a route file and write a recording
+// (kind "drive") with the truth next to it.
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace calbench {
+
+struct SimulateDriveArgs {
+  std::string route, truth, out, serial;
+  std::uint64_t seed = 1;
+  bool force = false;
+  double until_s = 0;  // 0 = whole route
+};
+
+struct SimulateDriveSummary {
+  std::size_t imu_rows = 0, ref_rows = 0, gnss_rows = 0;
+  double duration_s = 0;
+};
+
+SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a);
+
+}  // namespace calbench

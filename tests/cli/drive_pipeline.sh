@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# simulate drive -> fit drive (first part) -> qc (rest): the in-motion result beats no calibration
+# out of sample; RESULT.json follows the contract; bad input exits 2 naming the file.
+set -euo pipefail
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+"$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 3 --out "$T/rec" >/dev/null
+for f in meta.json imu.csv reference.csv gnss.csv truth.json; do test -s "$T/rec/$f" || { echo "missing $f"; exit 1; }; done
+grep -q '"kind": "drive"' "$T/rec/meta.json"
+grep -q '"mounting"' "$T/rec/truth.json"
+
+"$CALBENCH" fit drive "$T/rec" --out "$T/result.json" --window 0:150 --series "$T/series.csv" --json > "$T/fit.json"
+python3 - "$T/result.json" "$T/rec/truth.json" <<'PY'
+import json, sys, math
+r = json.load(open(sys.argv[1])); t = json.load(open(sys.argv[2]))
+for k in ("device", "recording", "coefficients", "correction", "mounting_rpy_deg", "consistency", "qc"):
+    assert k in r, k
+assert len(r["recording"]["sha256"]) == 64
+c = r["coefficients"]
+assert c["format"] == "calbench-coefficients/1"
+ok = n = 0
+for tri in ("gyro", "accel"):
+    for i in range(3):
+        n += 1; ok += abs(c[tri]["bias"][i] - t[tri]["bias"][i]) <= 3 * c[tri]["sigma_bias"][i]
+        for j in range(3):
+            n += 1; ok += abs(c[tri]["M"][i][j] - t[tri]["M"][i][j]) <= 3 * c[tri]["sigma_M"][i][j]
+assert ok >= 0.85 * n, (ok, n)
+m = r["mounting_rpy_deg"]
+for i in range(3):
+    assert abs(m["value"][i] - t["mounting"]["rpy_deg"][i]) <= 3 * m["sigma"][i] + 1e-9, (i, m, t["mounting"])
+for k, v in r["consistency"].items():
+    assert 0.2 < v["mean_nis"] < 15, (k, v)
+assert r["qc"]["sample"].startswith("out-of-sample")
+PY
+head -1 "$T/series.csv" | grep -q '^# ' || true
+grep -q 't_s,lat_deg,lon_deg,h_m' "$T/series.csv"
+
+"$CALBENCH" qc "$T/rec" --coeffs none --coeffs "$T/result.json" --horizon 60 --json --plot "$T/qc.png" > "$T/qc.json"
+test -s "$T/qc.png"
+python3 - "$T/qc.json" <<'PY'
+import json, sys
+q = json.load(open(sys.argv[1]))
+assert q["sample"].startswith("out-of-sample"), q["sample"]
+assert abs(q["from_s"] - 150) < 1, q["from_s"]
+s = {x["name"]: x for x in q["sets"]}
+assert "60" in s["result"]["cpe_m_at"]
+assert s["result"]["final_cpe_m"] * 5 < s["none"]["final_cpe_m"], s
+PY
+
+# Bad input: a route with an unknown segment type names the file and exits 2.
+printf '[start]\nlat_deg = 10.0\nlon_deg = 10.0\n[[segment]]\ntype = "fly"\n' > "$T/bad.toml"
+set +e
+"$CALBENCH" simulate drive --route "$T/bad.toml" --truth random --out "$T/bad" 2> "$T/err.txt"
+rc=$?
+set -e
+test $rc -eq 2 || { echo "expected exit 2, got $rc"; exit 1; }
+grep -q "bad.toml:5" "$T/err.txt" || { cat "$T/err.txt"; exit 1; }
+echo OK
