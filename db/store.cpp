@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "bench/io/input_error.hpp"
+#include "db/input_errors.hpp"
 #include "db/schema.hpp"
 
 namespace calbench::db {
@@ -133,10 +134,10 @@ void Store::audit(const std::string& entity, std::int64_t entity_id, const std::
 }
 
 static void check_text(const std::string& v, const char* field, bool required) {
-  if (required && v.empty()) throw InputError("", 0, field, "must not be empty");
-  if (v.size() > 4096) throw InputError("", 0, field, "longer than 4096 characters");
+  if (required && v.empty()) throw arg_error(field, "must not be empty");
+  if (v.size() > 4096) throw arg_error(field, "longer than 4096 characters");
   for (unsigned char c : v)
-    if (c < 0x20 && c != '\t') throw InputError("", 0, field, "contains control characters");
+    if (c < 0x20 && c != '\t') throw arg_error(field, "contains control characters");
 }
 
 std::int64_t Store::ensure_device_locked(const DeviceInfo& d) {
@@ -148,7 +149,7 @@ std::int64_t Store::ensure_device_locked(const DeviceInfo& d) {
   if (st.step()) {
     const std::int64_t id = st.int64(0);
     if (st.text(1) != d.model)
-      throw InputError("", 0, "device.model",
+      throw arg_error("device.model",
                        "device " + d.serial + " is a " + st.text(1) + " in the database, not a " + d.model);
     const std::string fw = st.text(2);
     if (!d.firmware.empty() && fw != d.firmware) {
@@ -196,9 +197,9 @@ std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, 
   if (parent) {
     auto p = conn_->prepare("SELECT device_id FROM coefficient_sets WHERE id = ?");
     p.bind(1, *parent);
-    if (!p.step()) throw InputError("", 0, "parent", "no coefficient set " + std::to_string(*parent));
+    if (!p.step()) throw arg_error("parent", "no coefficient set " + std::to_string(*parent));
     if (p.int64(0) != device_id)
-      throw InputError("", 0, "parent", "set " + std::to_string(*parent) + " belongs to another device");
+      throw arg_error("parent", "set " + std::to_string(*parent) + " belongs to another device");
   }
   auto v = conn_->prepare("SELECT COALESCE(MAX(version), 0) + 1 FROM coefficient_sets WHERE device_id = ?");
   v.bind(1, device_id);
@@ -232,9 +233,9 @@ void Store::insert_qc_locked(const std::vector<QcResult>& qc, std::optional<std:
                            "VALUES (?, ?, ?, ?, ?, ?, ?)");
   for (const auto& q : qc) {
     check_text(q.metric, "qc.metric", true);
-    if (!std::isfinite(q.value)) throw InputError("", 0, "qc." + q.metric, "NaN or infinity is not allowed");
+    if (!std::isfinite(q.value)) throw arg_error("qc." + q.metric, "NaN or infinity is not allowed");
     if (q.threshold && !std::isfinite(*q.threshold))
-      throw InputError("", 0, "qc." + q.metric + ".threshold", "NaN or infinity is not allowed");
+      throw arg_error("qc." + q.metric + ".threshold", "NaN or infinity is not allowed");
     st.reset();
     st.bind(1, bench_run).bind(2, inmotion_run).bind(3, q.metric).bind(4, q.value).bind(5, q.threshold)
         .bind(6, q.pass ? 1 : 0).bind(7, q.unit);
@@ -248,7 +249,7 @@ StoredSet Store::store_bench(const DeviceInfo& d, const BenchRunInput& run, cons
   if (p.device.model != d.model)
     throw InputError("coefficients", 0, "device.model", "model '" + p.device.model + "' is not '" + d.model + "'");
   if (run.outcome != "pass" && run.outcome != "fail" && run.outcome != "aborted")
-    throw InputError("", 0, "outcome", "expected pass, fail or aborted, got '" + run.outcome + "'");
+    throw arg_error("outcome", "expected pass, fail or aborted, got '" + run.outcome + "'");
   for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at})
     check_text(*f, "bench_run", false);
   StoredSet out;
@@ -288,13 +289,13 @@ void Store::set_status(std::int64_t set_id, SetStatus to, const std::string& rea
   conn_->write_transaction([&] {
     auto st = conn_->prepare("SELECT status FROM coefficient_sets WHERE id = ?");
     st.bind(1, set_id);
-    if (!st.step()) throw InputError("", 0, "set", "no coefficient set " + std::to_string(set_id));
+    if (!st.step()) throw arg_error("set", "no coefficient set " + std::to_string(set_id));
     const SetStatus from = status_from_string(st.text(0));
     const bool ok = (from == SetStatus::draft && (to == SetStatus::approved || to == SetStatus::revoked)) ||
                     (from == SetStatus::approved && (to == SetStatus::provisioned || to == SetStatus::revoked)) ||
                     (from == SetStatus::provisioned && (to == SetStatus::provisioned || to == SetStatus::revoked));
     if (!ok)
-      throw InputError("", 0, "status", "set " + std::to_string(set_id) + " is " + to_string(from) +
+      throw arg_error("status", "set " + std::to_string(set_id) + " is " + to_string(from) +
                                             "; it cannot become " + to_string(to));
     auto up = conn_->prepare("UPDATE coefficient_sets SET status = ? WHERE id = ?");
     up.bind(1, to_string(to)).bind(2, set_id).run();
@@ -305,16 +306,16 @@ void Store::set_status(std::int64_t set_id, SetStatus to, const std::string& rea
 
 void Store::record_provisioning(std::int64_t set_id, const std::string& kind, const std::string& target, bool ok,
                                 const std::string& readback_json, const std::string& message) {
-  if (kind != "device" && kind != "export") throw InputError("", 0, "kind", "expected device or export");
+  if (kind != "device" && kind != "export") throw arg_error("kind", "expected device or export");
   check_text(target, "target", true);
   conn_->write_transaction([&] {
     auto st = conn_->prepare("SELECT device_id, status FROM coefficient_sets WHERE id = ?");
     st.bind(1, set_id);
-    if (!st.step()) throw InputError("", 0, "set", "no coefficient set " + std::to_string(set_id));
+    if (!st.step()) throw arg_error("set", "no coefficient set " + std::to_string(set_id));
     const std::int64_t device = st.int64(0);
     const SetStatus status = status_from_string(st.text(1));
     if (status != SetStatus::approved && status != SetStatus::provisioned)
-      throw InputError("", 0, "set", "set " + std::to_string(set_id) + " is " + to_string(status) +
+      throw arg_error("set", "set " + std::to_string(set_id) + " is " + to_string(status) +
                                          "; only approved sets are provisioned");
     auto ins = conn_->prepare(std::string(
         "INSERT INTO provisioning_events(set_id, device_id, kind, target, ok, readback_json, message, actor, at) "
@@ -424,7 +425,7 @@ std::optional<CoefficientSetRecord> Store::find_set(std::int64_t set_id) {
 
 CoefficientSetRecord Store::get_set(std::int64_t set_id) {
   auto r = find_set(set_id);
-  if (!r) throw InputError("", 0, "set", "no coefficient set " + std::to_string(set_id) + " in " + conn_->path());
+  if (!r) throw arg_error("set", "no coefficient set " + std::to_string(set_id) + " in " + conn_->path());
   return *r;
 }
 

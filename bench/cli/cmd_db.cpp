@@ -10,6 +10,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/input_error.hpp"
+#include "db/input_errors.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
 #include "db/approval.hpp"
@@ -129,7 +130,7 @@ void cmd_devices(const DbArgs& a) {
 
 Device need_device(Store& s, const std::string& serial) {
   auto d = s.find_device(serial);
-  if (!d) throw InputError("", 0, "SERIAL", "unknown device '" + serial + "' in " + s.connection().path());
+  if (!d) throw arg_error("SERIAL", "unknown device '" + serial + "' in " + s.connection().path());
   return *d;
 }
 
@@ -281,7 +282,7 @@ void cmd_import_inmotion(const DbArgs& a) {
 // --qc NAME=VALUE[:THRESHOLD][:UNIT]  (pass = |value| ≤ threshold when a threshold is given)
 QcResult parse_qc_option(const std::string& s) {
   const auto eq = s.find('=');
-  if (eq == std::string::npos || eq == 0) throw InputError("", 0, "--qc", "expected NAME=VALUE[:THRESHOLD[:UNIT]], got '" + s + "'");
+  if (eq == std::string::npos || eq == 0) throw arg_error("--qc", "expected NAME=VALUE[:THRESHOLD[:UNIT]], got '" + s + "'");
   QcResult q;
   q.metric = s.substr(0, eq);
   std::vector<std::string> parts;
@@ -294,10 +295,10 @@ QcResult parse_qc_option(const std::string& s) {
       v = std::stod(t, &used);
     } catch (...) {
     }
-    if (used != t.size() || !std::isfinite(v)) throw InputError("", 0, "--qc " + q.metric, "'" + t + "' is not a finite number");
+    if (used != t.size() || !std::isfinite(v)) throw arg_error("--qc " + q.metric, "'" + t + "' is not a finite number");
     return v;
   };
-  if (parts.empty()) throw InputError("", 0, "--qc " + q.metric, "missing value");
+  if (parts.empty()) throw arg_error("--qc " + q.metric, "missing value");
   q.value = num(parts[0]);
   if (parts.size() > 1 && !parts[1].empty()) {
     q.threshold = num(parts[1]);

@@ -8,6 +8,7 @@
 
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
+#include "db/input_errors.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/noise_spec.hpp"
 #include "db/store.hpp"
@@ -46,14 +47,14 @@ long parse_int(const std::string& s, const std::string& what) {
   } catch (...) {
     used = 0;
   }
-  if (used != s.size() || s.empty()) throw InputError("", 0, "--to-device", what + ": '" + s + "' is not an integer");
+  if (used != s.size() || s.empty()) throw arg_error("--to-device", what + ": '" + s + "' is not an integer");
   return v;
 }
 
 OpenedImu open_imu(const std::string& uri) {
   const auto sep = uri.find("://");
   if (sep == std::string::npos)
-    throw InputError("", 0, "--to-device", "expected emu://SERIAL, mcp2210://[USB-SERIAL] or ft232h://[USB-SERIAL], got '" + uri + "'");
+    throw arg_error("--to-device", "expected emu://SERIAL, mcp2210://[USB-SERIAL] or ft232h://[USB-SERIAL], got '" + uri + "'");
   const std::string scheme = uri.substr(0, sep);
   std::string rest = uri.substr(sep + 3), query;
   if (const auto q = rest.find('?'); q != std::string::npos) {
@@ -64,7 +65,7 @@ OpenedImu open_imu(const std::string& uri) {
   if (scheme == "emu") {
     Adis16488aEmulatorConfig cfg;
     const long serial = parse_int(rest, "emulated SERIAL_NUM");
-    if (serial < 0 || serial > 0xFFFF) throw InputError("", 0, "--to-device", "SERIAL_NUM is 16-bit (0..65535)");
+    if (serial < 0 || serial > 0xFFFF) throw arg_error("--to-device", "SERIAL_NUM is 16-bit (0..65535)");
     cfg.serial = static_cast<std::uint16_t>(serial);
     EmuFaults faults;
     std::stringstream qs(query);
@@ -73,7 +74,7 @@ OpenedImu open_imu(const std::string& uri) {
       const std::string k = kv.substr(0, eq), v = eq == std::string::npos ? "" : kv.substr(eq + 1);
       if (k == "prod_id") faults.prod_id = static_cast<std::uint16_t>(parse_int(v, "prod_id"));
       else if (k == "flash_fails") faults.flash_update_fails = v == "1" || v == "true";
-      else if (!k.empty()) throw InputError("", 0, "--to-device", "unknown emulator option '" + k + "'");
+      else if (!k.empty()) throw arg_error("--to-device", "unknown emulator option '" + k + "'");
     }
     auto clock = std::make_shared<VirtualClock>();
     const EmuPhysics still = [](double) {
@@ -89,7 +90,7 @@ OpenedImu open_imu(const std::string& uri) {
   } else if (scheme == "ft232h") {
     o.bus = std::make_unique<Ft232hBus>(open_libftdi(0x0403, 0x6014, rest));
   } else {
-    throw InputError("", 0, "--to-device", "unknown IMU URI scheme '" + scheme + "' (emu, mcp2210, ft232h)");
+    throw arg_error("--to-device", "unknown IMU URI scheme '" + scheme + "' (emu, mcp2210, ft232h)");
   }
   return o;
 }
@@ -121,21 +122,21 @@ json regs_json(const UserCal& c) {
 CoefficientSetRecord choose_set(Store& s, const Device& d, std::int64_t set_id) {
   if (set_id) {
     CoefficientSetRecord r = s.get_set(set_id);
-    if (r.device_id != d.id) throw InputError("", 0, "--set", "set " + std::to_string(set_id) + " belongs to device " + r.serial);
+    if (r.device_id != d.id) throw arg_error("--set", "set " + std::to_string(set_id) + " belongs to device " + r.serial);
     if (r.status != SetStatus::approved && r.status != SetStatus::provisioned)
-      throw InputError("", 0, "--set", "set " + std::to_string(set_id) + " is " + to_string(r.status) +
+      throw arg_error("--set", "set " + std::to_string(set_id) + " is " + to_string(r.status) +
                                            "; only approved sets are provisioned (calbench db approve)");
     return r;
   }
   auto r = s.latest_set(d.id, SetStatus::approved);
-  if (!r) throw InputError("", 0, "SERIAL", "device " + d.serial + " has no approved coefficient set (calbench db approve)");
+  if (!r) throw arg_error("SERIAL", "device " + d.serial + " has no approved coefficient set (calbench db approve)");
   return *r;
 }
 
 void run(const ProvisionArgs& a) {
   Store s(a.db.empty() ? Store::default_path() : a.db);
   const auto dev = s.find_device(a.serial);
-  if (!dev) throw InputError("", 0, "SERIAL", "unknown device '" + a.serial + "' in " + s.connection().path());
+  if (!dev) throw arg_error("SERIAL", "unknown device '" + a.serial + "' in " + s.connection().path());
   const CoefficientSetRecord set = choose_set(s, *dev, a.set);
 
   if (!a.out.empty()) {
@@ -212,7 +213,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   sub->add_option("--db", a->db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
   sub->add_flag("--json", a->json, "machine-readable output");
   sub->callback([a] {
-    if (a->uri.empty() && a->out.empty()) throw InputError("", 0, "provision", "give --to-device IMU-URI or --export FILE");
+    if (a->uri.empty() && a->out.empty()) throw arg_error("provision", "give --to-device IMU-URI or --export FILE");
     run(*a);
   });
 });

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "bench/io/input_error.hpp"
+#include "db/input_errors.hpp"
 #include "bench/report/gnuplot.hpp"
 #include "db/fleet.hpp"
 
@@ -151,7 +152,7 @@ std::string cpe_plot(const json& qc) {
     std::ostringstream d;
     d << std::setprecision(10);
     for (const auto& [t, v] : pts) d << t << " " << v << "\n";
-    const std::string f = "c" + std::to_string(curves.size()) + ".dat";
+    const std::string f = std::string("c").append(std::to_string(curves.size())).append(".dat");
     files[f] = d.str();
     curves.emplace_back(name, f);
   };
@@ -201,7 +202,7 @@ bool set_passes(Store& s, const CoefficientSetRecord& set) {
 
 std::string device_report_html(Store& store, const std::string& serial) {
   const auto dev = store.find_device(serial);
-  if (!dev) throw InputError("", 0, "SERIAL", "unknown device '" + serial + "' in " + store.connection().path());
+  if (!dev) throw arg_error("SERIAL", "unknown device '" + serial + "' in " + store.connection().path());
   const auto sets = store.sets_of(dev->id);
   std::ostringstream b;
   // Verdict: the newest non-revoked set is approved or provisioned and its QC passes.
@@ -346,7 +347,8 @@ std::string fleet_report_html(Store& store) {
       std::ostringstream d;
       d << std::setprecision(10);
       for (int i = 0; i < bins; ++i) d << lo + (i + 0.5) * w << " " << h[static_cast<std::size_t>(i)] << "\n";
-      const std::string hf = "h" + std::to_string(k) + ".dat", of = "o" + std::to_string(k) + ".dat";
+      const std::string hf = std::string("h").append(std::to_string(k)).append(".dat");
+      const std::string of = std::string("o").append(std::to_string(k)).append(".dat");
       files[hf] = d.str();
       files[of] = outl.str().empty() ? "nan nan\n" : outl.str();
       g << "set title '" << c.name << "'\nset boxwidth " << w * 0.9 << "\nset yrange [0:*]\nplot '" << hf

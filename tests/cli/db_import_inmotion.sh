@@ -40,7 +40,7 @@ res = {"device": {"model": "ADIS16488A", "serial": "IM1"},
               "sets": [{"name": "bench", "final_cpe_m": 900.0, "cpe_m_at": {"60": 20.0, "300": 300.0, "600": 900.0}},
                        {"name": "bench+in-motion", "final_cpe_m": 40.0, "cpe_m_at": {"60": 2.0, "300": 12.0, "600": 40.0}}]}}
 json.dump(res, open("result.json", "w"), indent=1)
-bad = json.loads(json.dumps(res)); bad["device"]["serial"] = "NOPE"; json.dump(bad, open("unknown.json", "w"))
+bad = json.loads(json.dumps(res)); bad["device"]["serial"] = bad["coefficients"]["device"]["serial"] = "NOPE"; json.dump(bad, open("unknown.json", "w"))
 bad = json.loads(json.dumps(res)); bad["coefficients"]["device"]["serial"] = "IM2"; json.dump(bad, open("mismatch.json", "w"))
 bad = json.loads(json.dumps(res)); bad["mounting_rpy_deg"]["value"][0] = "0.1"; json.dump(bad, open("types.json", "w"))
 bad = json.loads(json.dumps(res)); bad["coefficients"]["gyro"]["M"][0][0] += 1e-4; json.dump(bad, open("notcomposed.json", "w"))
