@@ -47,6 +47,19 @@ assert "60" in s["result"]["cpe_m_at"]
 assert s["result"]["final_cpe_m"] * 5 < s["none"]["final_cpe_m"], s
 PY
 
+# RTS smoother: the constant parameters at the first epoch equal the final estimate.
+"$CALBENCH" fit drive "$T/rec" --out "$T/rs.json" --window 0:150 --smooth --series "$T/smooth.csv" >/dev/null
+python3 - "$T/rs.json" "$T/smooth.csv" <<'PY'
+import json, sys, csv
+r = json.load(open(sys.argv[1]))
+rows = [l for l in open(sys.argv[2]) if not l.startswith('#')]
+hdr = rows[0].strip().split(','); first = dict(zip(hdr, map(float, rows[1].split(','))))
+b = r["correction"]["gyro"]["bias"][2] / (3.141592653589793 / 180 / 3600)
+s = r["correction"]["gyro"]["sigma_bias"][2] / (3.141592653589793 / 180 / 3600)
+assert abs(first["gyro_bias_z_dph"] - b) < 0.1 * s, (first["gyro_bias_z_dph"], b, s)
+assert r["smoothed"] is True
+PY
+
 # Bad input: a route with an unknown segment type names the file and exits 2.
 printf '[start]\nlat_deg = 10.0\nlon_deg = 10.0\n[[segment]]\ntype = "fly"\n' > "$T/bad.toml"
 set +e
