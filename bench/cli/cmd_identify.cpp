@@ -234,6 +234,7 @@ json allan_json(const std::vector<id::AllanPoint>& pts, const id::AllanFit& f, Q
       {"rate_ramp", term_json(f.R, u.R, "R: AVAR = R^2 tau^2/2")}};
   j["chi2"] = f.chi2;
   j["points_fitted"] = f.points;
+  j["preferred"] = f.gm_present && f.gm_chi2 < f.chi2 ? "gauss_markov" : "power_law";
   j["adev_min"] = {{"si", f.adev_min}, {"tau_s", f.tau_min},
                    {"bias_instability_from_min_si", f.B_from_min},
                    {"bias_instability_from_min", f.B_from_min * u.B.per_si}, {"unit", u.B.unit}};
@@ -376,11 +377,16 @@ void write_plots(const std::vector<Result>& res, const std::string& out_png) {
         const double model = id::avar_quantisation(F.Q.value, p.tau) + id::avar_white(F.N.value, p.tau) +
                              id::avar_bias_instability(F.B.value) + id::avar_rate_random_walk(F.K.value, p.tau) +
                              id::avar_rate_ramp(F.R.value, p.tau);
-        f << p.tau << ' ' << p.adev << ' ' << p.lo << ' ' << p.hi << ' ' << std::sqrt(model) << '\n';
+        const double gm = id::avar_quantisation(F.Q.value, p.tau) + id::avar_white(F.gm_N.value, p.tau) +
+                          id::avar_gauss_markov(F.gm_sigma, F.gm_T, p.tau) +
+                          id::avar_rate_random_walk(F.gm_K.value, p.tau);
+        f << p.tau << ' ' << p.adev << ' ' << p.lo << ' ' << p.hi << ' ' << std::sqrt(model) << ' '
+          << std::sqrt(gm) << '\n';
       }
       gp << "set title " << quote(r.s->name + " (" + units_for(r.s->q).signal + ")") << " noenhanced\n";
       gp << "plot " << quote(data.string()) << " u 1:2:3:4 w yerrorbars pt 7 ps 0.6 lc rgb '#1f77b4' t 'overlapping ADEV, 68% CI', "
-         << "'' u 1:5 w l lw 2 lc rgb '#d62728' t 'fit Q+N+B+K+R'\n";
+         << "'' u 1:5 w l lw 2 lc rgb '#d62728' t 'fit Q+N+B+K+R', "
+         << "'' u 1:6 w l lw 2 dt 2 lc rgb '#2ca02c' t 'fit with Gauss-Markov (T = " << F.gm_T << " s)'\n";
     }
     gp << "unset multiplot\n";
   }
@@ -511,9 +517,9 @@ void run_identify(const IdentifyArgs& a) {
                 c["T_s"].is_null() ? NAN : c["T_s"].get<double>(),
                 c["se"]["T_s"].is_null() ? NAN : c["se"]["T_s"].get<double>());
     if (c["model"] == "exp_cosine") std::printf("  beta %.4g rad/s", c["beta"].get<double>());
-    std::printf("   [paper: sigma %.4g T %.4g s]  %s\n", c["paper"]["exponential"]["sigma"].get<double>(),
-                c["paper"]["exponential"]["T_s"].is_null() ? NAN : c["paper"]["exponential"]["T_s"].get<double>(),
-                c["unit"].get<std::string>().c_str());
+    const auto& pp = c["paper"][c["model"].get<std::string>()];
+    std::printf("   [paper: sigma %.4g T %.4g s]  %s\n", pp["sigma"].get<double>(),
+                pp["T_s"].is_null() ? NAN : pp["T_s"].get<double>(), c["unit"].get<std::string>().c_str());
     if (c.contains("allan")) {
       const auto& t = c["allan"]["terms"];
       std::printf("%-12s Allan: N %.4g %s  B %.4g %s  K %.4g %s\n", "", t["random_walk"]["value"].is_null() ? NAN : t["random_walk"]["value"].get<double>(),

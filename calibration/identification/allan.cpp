@@ -109,53 +109,44 @@ struct NnlsResult {
   bool ok = false;
 };
 
-// Weighted NNLS of avar ≈ Σ_j c_j f_j(τ) with weights edf/(2·model²), iterated; exact NNLS by
-// enumerating the supports (at most 2^5 of them).
+// Weighted NNLS of avar ≈ Σ_j c_j f_j(τ) minimising χ² = Σ edf/2 · ((model − avar)/avar)²
+// (relative residuals, weights from the measured AVAR: iterating with model-based weights can lock
+// into a fit that overshoots where it gives itself little weight). Exact NNLS by enumerating the
+// supports (at most 2^5 of them).
 NnlsResult weighted_nnls(const Eigen::MatrixXd& F, const Eigen::VectorXd& avar, const Eigen::VectorXd& edf) {
   const int n = static_cast<int>(F.rows()), p = static_cast<int>(F.cols());
-  Eigen::VectorXd model = avar;
   NnlsResult best;
-  for (int iter = 0; iter < 6; ++iter) {
-    Eigen::VectorXd w(n);
-    for (int i = 0; i < n; ++i) w(i) = std::sqrt(edf(i) / 2.0) / std::max(model(i), 1e-300);
-    const Eigen::MatrixXd A = w.asDiagonal() * F;
-    const Eigen::VectorXd b = w.asDiagonal() * avar;
-    // Column scaling for conditioning.
-    Eigen::VectorXd scale(p);
-    for (int j = 0; j < p; ++j) scale(j) = std::max(A.col(j).norm(), 1e-300);
-    const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
-    NnlsResult it;
-    double best_cost = std::numeric_limits<double>::infinity();
-    for (int mask = 1; mask < (1 << p); ++mask) {
-      std::vector<int> cols;
-      for (int j = 0; j < p; ++j)
-        if (mask & (1 << j)) cols.push_back(j);
-      if (static_cast<int>(cols.size()) > n) continue;
-      Eigen::MatrixXd S(n, static_cast<int>(cols.size()));
-      for (std::size_t k = 0; k < cols.size(); ++k) S.col(static_cast<int>(k)) = As.col(cols[k]);
-      const Eigen::VectorXd x = S.colPivHouseholderQr().solve(b);
-      if (!x.allFinite() || (x.array() < 0).any()) continue;
-      const double cost = (S * x - b).squaredNorm();
-      if (cost < best_cost) {
-        best_cost = cost;
-        it.c = Eigen::VectorXd::Zero(p);
-        it.cov = Eigen::MatrixXd::Zero(p, p);
-        for (std::size_t k = 0; k < cols.size(); ++k) it.c(cols[k]) = x(static_cast<int>(k)) / scale(cols[k]);
-        const Eigen::MatrixXd StS = S.transpose() * S;
-        const Eigen::MatrixXd inv = StS.inverse();
-        for (std::size_t k = 0; k < cols.size(); ++k)
-          for (std::size_t l = 0; l < cols.size(); ++l)
-            it.cov(cols[k], cols[l]) = inv(static_cast<int>(k), static_cast<int>(l)) /
+  Eigen::VectorXd w(n);
+  for (int i = 0; i < n; ++i) w(i) = std::sqrt(edf(i) / 2.0) / avar(i);
+  const Eigen::MatrixXd A = w.asDiagonal() * F;
+  const Eigen::VectorXd b = w.asDiagonal() * avar;
+  Eigen::VectorXd scale(p);
+  for (int j = 0; j < p; ++j) scale(j) = std::max(A.col(j).norm(), 1e-300);
+  const Eigen::MatrixXd As = A * scale.cwiseInverse().asDiagonal();
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (int mask = 1; mask < (1 << p); ++mask) {
+    std::vector<int> cols;
+    for (int j = 0; j < p; ++j)
+      if (mask & (1 << j)) cols.push_back(j);
+    if (static_cast<int>(cols.size()) > n) continue;
+    Eigen::MatrixXd S(n, static_cast<int>(cols.size()));
+    for (std::size_t k = 0; k < cols.size(); ++k) S.col(static_cast<int>(k)) = As.col(cols[k]);
+    const Eigen::VectorXd x = S.colPivHouseholderQr().solve(b);
+    if (!x.allFinite() || (x.array() < 0).any()) continue;
+    const double cost = (S * x - b).squaredNorm();
+    if (cost < best_cost) {
+      best_cost = cost;
+      best.c = Eigen::VectorXd::Zero(p);
+      best.cov = Eigen::MatrixXd::Zero(p, p);
+      for (std::size_t k = 0; k < cols.size(); ++k) best.c(cols[k]) = x(static_cast<int>(k)) / scale(cols[k]);
+      const Eigen::MatrixXd inv = (S.transpose() * S).inverse();
+      for (std::size_t k = 0; k < cols.size(); ++k)
+        for (std::size_t l = 0; l < cols.size(); ++l)
+          best.cov(cols[k], cols[l]) = inv(static_cast<int>(k), static_cast<int>(l)) /
                                        (scale(cols[k]) * scale(cols[l]));
-        it.ok = true;
-      }
+      best.chi2 = cost;
+      best.ok = true;
     }
-    if (!it.ok) return best;
-    model = F * it.c;
-    for (int i = 0; i < n; ++i) model(i) = std::max(model(i), 1e-300);
-    it.chi2 = 0;
-    for (int i = 0; i < n; ++i) it.chi2 += edf(i) / 2.0 * std::pow(model(i) / avar(i) - 1.0, 2);
-    best = it;
   }
   return best;
 }

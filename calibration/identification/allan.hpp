@@ -3,11 +3,13 @@
 // fit of the IEEE Std 952 / 1293 noise terms. Definitions (y = rate samples, θ = Σ y dt):
 //   AVAR(τ) = 1/(2τ²(M − 2m)) Σ_{k=0}^{M−2m−1} (θ_{k+2m} − 2θ_{k+m} + θ_k)²,  M = N + 1 angle points.
 // Noise terms, each with the AVAR it produces (two-sided rate PSD S(f) in brackets):
-//   Q  quantisation            σ² = 3Q²/τ²        Q in signal·s (rad, m/s)
-//   N  angle/velocity random walk (white rate noise)  σ² = N²/τ   N in signal/√s = √S (white level)
-//   B  bias instability (flicker rate)  σ² = (2 ln 2/π) B²  B in signal      [S = B²/(2π f)]
-//   K  rate random walk         σ² = K²τ/3         K in signal/√s·s⁻¹ = signal/s^{3/2} [S = K²/(2πf)²]
-//   R  rate ramp (drift)        σ² = R²τ²/2        R in signal/s
+// (units for a rate signal y; for a gyro y is rad/s, for an accelerometer m/s²)
+//   Q  quantisation            σ² = 3Q²/τ²        Q in y·s (rad, m/s)
+//   N  angle/velocity random walk (white rate noise)  σ² = N²/τ   N in y·√s (rad/√s, m/s/√s);
+//      N² is the two-sided white PSD S of y; the one-sided density is √2·N
+//   B  bias instability (flicker rate)  σ² = (2 ln 2/π) B²  B in y   [S(f) = B²/(2π f)]
+//   K  rate random walk         σ² = K²τ/3         K in y/√s (rad/s/√s)  [S(f) = K²/(2πf)²]
+//   R  rate ramp (drift)        σ² = R²τ²/2        R in y/s
 //   GM first-order Gauss–Markov of variance σ_gm², correlation time T:
 //      σ² = (σ_gm² T²/τ²)(2τ/T − 3 + 4e^{−τ/T} − e^{−2τ/T})  (RRW-like for τ ≪ T, white for τ ≫ T).
 // Confidence intervals: χ² with equivalent degrees of freedom of the overlapping estimator for the
@@ -51,7 +53,7 @@ struct AllanFit {
   double N_at_1s = 0;       // σ(τ) at τ = 1 s of the fitted N line (= N)
 };
 
-// Weighted non-negative least squares on AVAR with weights edf/(2·model²) (iterated), over every
+// Weighted non-negative least squares on AVAR, χ² = Σ edf/2 · (model/avar − 1)², over every
 // point with edf ≥ 1.
 AllanFit fit_allan(const std::vector<AllanPoint>& pts);
 
