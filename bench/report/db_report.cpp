@@ -326,7 +326,7 @@ std::string fleet_report_html(Store& store) {
     const int rows = count == 3 ? 1 : 3;
     g << "set terminal pngcairo size 1000," << (rows == 1 ? 260 : 700) << " font 'DejaVu Sans,8'\nset output 'plot.png'\n"
       << "set multiplot layout " << rows << ",3 title '" << title << ": histogram over devices, outliers red'\n"
-      << "set style fill solid 0.6 border -1\nset grid\nunset key\n";
+      << "set style fill solid 0.6 border -1\nset grid\nunset key\nset xtics rotate by -30 font ',7'\n";
     for (int k = range.first; k < range.second; ++k) {
       const auto& c = stats[static_cast<std::size_t>(k)];
       double lo = c.min * c.to_display, hi = c.max * c.to_display;
