@@ -177,9 +177,16 @@ void TableEmulator::read_commands_locked() {
     } else if (!want) {
       a.enabled = false;
     }
-    a.mode = static_cast<std::int16_t>(*at("MODE_OF_OPERATION"));
-    a.cmd_rate = table::get_f32(at("CMD_RATE"), cfg_.order) * kDeg;
-    a.cmd_pos = table::get_f32(at("CMD_POSITION"), cfg_.order) * kDeg;
+    const auto mode = static_cast<std::int16_t>(*at("MODE_OF_OPERATION"));
+    const double cmd_rate = table::get_f32(at("CMD_RATE"), cfg_.order) * kDeg;
+    const double cmd_pos = table::get_f32(at("CMD_POSITION"), cfg_.order) * kDeg;
+    if (mode != a.mode || cmd_rate != a.cmd_rate || cmd_pos != a.cmd_pos) {  // new set-point: not reached yet
+      a.reached = false;
+      a.settled_since = -1;
+    }
+    a.mode = mode;
+    a.cmd_rate = cmd_rate;
+    a.cmd_pos = cmd_pos;
     const double acc = table::get_f32(at("ACCEL_LIMIT"), cfg_.order) * kDeg;
     const double rl = table::get_f32(at("RATE_LIMIT"), cfg_.order) * kDeg;
     a.acc_lim = std::isfinite(acc) && acc > 0 ? acc : cfg_.default_accel;

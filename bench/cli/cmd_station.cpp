@@ -1,0 +1,91 @@
+// calbench station run --plan PLAN [--table URI] [--imu URI] [--emulated] [--db PATH] [--out DIR] [--json]
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <iostream>
+
+#include "bench/cli/registry.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/station/station.hpp"
+
+namespace calbench::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop = true; }
+
+struct StationArgs {
+  station::Options o;
+  std::string plan, out = "station-out";
+  std::vector<std::string> inject;
+  bool json = false;
+};
+
+std::uint16_t parse_u16(const std::string& v, const std::string& key) {
+  try {
+    std::size_t n = 0;
+    const unsigned long x = std::stoul(v, &n, 0);
+    if (n != v.size() || x > 0xFFFF) throw 0;
+    return static_cast<std::uint16_t>(x);
+  } catch (...) {
+    throw InputError("--inject", 0, key, "'" + v + "' is not a 16-bit number");
+  }
+}
+
+void apply_inject(const std::string& kv, station::Injections& in) {
+  const auto eq = kv.find('=');
+  if (eq == std::string::npos) throw InputError("--inject", 0, kv, "expected KEY=VALUE");
+  const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
+  try {
+    if (k == "table-kill-at") in.table_kill_at_s = std::stod(v);
+    else if (k == "imu-prod-id") in.imu_prod_id = parse_u16(v, k);
+    else if (k == "imu-flags") in.imu_sys_e_flag = parse_u16(v, k);
+    else if (k == "imu-skip-every") in.imu_skip_every = std::stoi(v);
+    else if (k == "imu-self-test") in.imu_self_test_diag = parse_u16(v, k);
+    else throw InputError("--inject", 0, k, "unknown; one of table-kill-at, imu-prod-id, imu-flags, imu-skip-every, imu-self-test");
+  } catch (const InputError&) {
+    throw;
+  } catch (...) {
+    throw InputError("--inject", 0, k, "bad value '" + v + "'");
+  }
+}
+
+void run_station(StationArgs& a) {
+  a.o.plan_file = a.plan;
+  a.o.out_dir = a.out;
+  for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
+  if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
+  a.o.progress_tty = ::isatty(STDERR_FILENO) && !a.json;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  const station::Result r = station::run(a.o, std::cerr, g_stop);
+  if (a.json) print_json(r.summary.dump(2));
+  std::cerr << (r.exit_code == 0 ? "" : "calbench: ") << r.message << std::endl;
+  if (r.exit_code != 0) throw Exit{r.exit_code};
+}
+
+const bool registered = add_command(20, [](CLI::App& app) {
+  auto* st = app.add_subcommand("station", "Run the calibration station: rate table + ADIS16488A, plan to coefficients");
+  st->require_subcommand(1);
+  auto a = std::make_shared<StationArgs>();
+  auto* run = st->add_subcommand("run", "Run a plan: identify, self-test, command/settle/record/check each step, fit, store");
+  run->add_option("--plan", a->plan, "bench plan (TOML), e.g. bench/plans/factory.toml")->required()->check(CLI::ExistingFile);
+  run->add_option("--table", a->o.table_uri, "modbus-tcp://HOST:PORT[?order=abcd|cdab] or modbus-rtu:/dev/ttyX?baud=...");
+  run->add_option("--imu", a->o.imu_uri, "ft232h[:SERIAL] or mcp2210[:SERIAL]");
+  run->add_flag("--emulated", a->o.emulated,
+                "in-process table emulator (real Modbus TCP on an ephemeral loopback port) and IMU emulator, "
+                "emulated clock faster than real time");
+  run->add_option("--db", a->o.db, "coefficient database (not yet wired: COEFFS.json is written into --out)");
+  run->add_option("--out", a->out, "output folder: recording/, COEFFS.json")->capture_default_str();
+  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")->capture_default_str();
+  run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")->capture_default_str();
+  run->add_option("--inject", a->inject,
+                  "emulated faults KEY=VALUE: table-kill-at=S (emulated s), imu-prod-id=0x4060, imu-flags=0x0008, "
+                  "imu-skip-every=N, imu-self-test=0x0001");
+  run->add_flag("--json", a->json, "print a JSON summary on stdout");
+  run->callback([a] { run_station(*a); });
+});
+
+}  // namespace
+}  // namespace calbench::cli

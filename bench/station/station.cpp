@@ -1,0 +1,413 @@
+#include "bench/station/station.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ostream>
+#include <vector>
+
+#include "bench/bench_recording.hpp"
+#include "bench/io/coefficients_json.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+#include "bench/io/plan_toml.hpp"
+#include "bench/io/recording.hpp"
+#include "calibration/bench_fit.hpp"
+#include "calibration/bench_kinematics.hpp"
+#include "calibration/earth.hpp"
+#include "calibration/imu_error_sim.hpp"
+#include "calibration/units.hpp"
+#include "devices/adis16488a.hpp"
+#include "devices/adis16488a_emulator.hpp"
+#include "devices/ft232h.hpp"
+#include "devices/mcp2210.hpp"
+#include "devices/table_client.hpp"
+#include "devices/table_emulator.hpp"
+
+namespace calbench::station {
+namespace {
+using namespace devices;
+constexpr int kOuter = 0, kInner = 1;
+
+struct Aborted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::unique_ptr<SpiBus> open_imu(const std::string& uri) {
+  const auto colon = uri.find(':');
+  const std::string kind = uri.substr(0, colon);
+  const std::string serial = colon == std::string::npos ? "" : uri.substr(colon + 1);
+  if (kind == "ft232h") {
+    auto bus = std::make_unique<Ft232hBus>(open_libftdi(mpsse::kVid, mpsse::kPid, serial));
+    bus->configure();
+    return bus;
+  }
+  if (kind == "mcp2210") {
+    auto bus = std::make_unique<Mcp2210Bus>(open_hidapi(mcp2210::kVid, mcp2210::kPid, serial));
+    bus->configure();
+    return bus;
+  }
+  throw std::invalid_argument("--imu must be ft232h[:SERIAL] or mcp2210[:SERIAL], not '" + uri + "'");
+}
+
+const char* axis_name(int m) { return m == 0 ? "x" : m == 1 ? "y" : "z"; }
+
+nlohmann::json errors_json(const SensorErrors& e) {
+  auto triad = [](const TriadErrors& t) {
+    nlohmann::json M = nlohmann::json::array();
+    for (int i = 0; i < 3; ++i) M.push_back({t.M(i, 0), t.M(i, 1), t.M(i, 2)});
+    return nlohmann::json{{"bias", {t.bias[0], t.bias[1], t.bias[2]}}, {"M", M}};
+  };
+  return {{"gyro", triad(e.gyro)}, {"accel", triad(e.accel)}};
+}
+
+class Station {
+ public:
+  Station(const Options& o, std::ostream& log, const std::atomic<bool>& stop) : o_(o), log_(log), stop_(stop) {}
+  Result run();
+
+ private:
+  void setup();
+  void poll(bool force = false);          // heartbeat + status at the heartbeat period
+  ImuSample next_sample();
+  void wait_settled(const PlanStep& s, double timeout_s);
+  void wait_for(double seconds);          // keep streaming (and polling) for this long
+  bool record_step(int k, const PlanStep& s, std::vector<ImuRecord>& imu, std::vector<BenchRefRow>& ref,
+                   std::string& why);
+  void command_step(const PlanStep& s);
+  void progress(const std::string& what, bool line = false);
+  void check_stop() {
+    if (stop_) throw Aborted("interrupted (Ctrl-C)");
+    if (o_.inject.table_kill_at_s >= 0 && table_emu_ && table_emu_->port() && clock_ &&
+        clock_->now() >= o_.inject.table_kill_at_s && !killed_) {
+      killed_ = true;
+      table_emu_->stop();  // the table controller dies
+    }
+  }
+
+  const Options& o_;
+  std::ostream& log_;
+  const std::atomic<bool>& stop_;
+  BenchPlan plan_;
+  std::unique_ptr<SiteEarth> earth_;
+  std::shared_ptr<VirtualClock> clock_;
+  std::unique_ptr<TableEmulator> table_emu_;
+  std::unique_ptr<TableClient> table_;
+  std::unique_ptr<SpiBus> bus_;
+  Adis16488aEmulator* imu_emu_ = nullptr;
+  std::unique_ptr<Adis16488a> imu_;
+  SensorErrors truth_;
+  int mount_ = 2;                         // the cube's current mount
+  double last_poll_ = -1e9;
+  AxisStatus st_[2];
+  bool killed_ = false;
+  std::size_t step_index_ = 0;
+  double plan_s_ = 0, done_s_ = 0;
+  std::uint64_t samples_ = 0, lost_ = 0, error_samples_ = 0, repeats_ = 0;
+  std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
+};
+
+void Station::setup() {
+  plan_ = load_plan(o_.plan_file);
+  if (plan_.steps.empty()) throw std::runtime_error(o_.plan_file.string() + ": the plan has no steps");
+  earth_ = std::make_unique<SiteEarth>(plan_.site);
+  plan_s_ = plan_duration_s(plan_);
+  mount_ = plan_.steps.front().mount;
+  std::string table_uri = o_.table_uri;
+  if (o_.emulated) {
+    clock_ = std::make_shared<VirtualClock>();
+    if (table_uri.empty()) {
+      TableEmulatorConfig tc;
+      tc.watchdog_s = 0.5;
+      tc.max_rate = std::max(tc.max_rate, plan_.table.max_rate * 1.2);
+      table_emu_ = std::make_unique<TableEmulator>(tc, clock_);
+      table_emu_->start();
+      table_uri = table_emu_->uri();
+    } else {
+      throw std::invalid_argument("--emulated with --table: the emulated IMU needs the in-process table emulator "
+                                  "(its physics follow the table's true axis states); drop --table");
+    }
+    truth_ = draw_random_unit(o_.seed);
+    Adis16488aEmulatorConfig ic;
+    ic.seed = o_.seed;
+    ic.serial = static_cast<std::uint16_t>(1000 + o_.seed % 60000);
+    auto emu = std::make_unique<Adis16488aEmulator>(
+        clock_,
+        [this](double t) {
+          const auto s = table_emu_->axis_states(t);
+          const auto k = bench_kinematics(*earth_, s[0], s[1], mount_);
+          return EmuTruth{k.w_ib_b, k.f_b};
+        },
+        truth_, adis16488a_noise(), ic);
+    if (o_.inject.imu_prod_id) emu->faults().prod_id = *o_.inject.imu_prod_id;
+    emu->faults().self_test_diag = o_.inject.imu_self_test_diag;
+    imu_emu_ = emu.get();
+    bus_ = std::move(emu);
+  } else {
+    if (table_uri.empty()) throw std::invalid_argument("--table is required without --emulated");
+    if (o_.imu_uri.empty()) throw std::invalid_argument("--imu is required without --emulated");
+    bus_ = open_imu(o_.imu_uri);
+  }
+  table_ = std::make_unique<TableClient>(parse_table_uri(table_uri));
+  table_->connect();
+  log_ << "table: " << table_uri << "\n";
+  imu_ = std::make_unique<Adis16488a>(*bus_);
+  const auto id = imu_->connect();  // DeviceError on a wrong PROD_ID: nothing has moved yet
+  log_ << "IMU: ADIS16488A serial " << id.serial_string() << ", firmware " << id.firmware() << ", "
+       << id.output_rate_hz << " Hz (" << bus_->describe() << ")\n";
+  const auto st = imu_->self_test();
+  if (!st.passed) throw DeviceError("IMU self-test failed: " + st.message);
+  log_ << "IMU self-test passed\n";
+  for (int a = 0; a < 2; ++a) {
+    table_->set_limits(a, plan_.table.max_accel, a == kInner ? std::max(plan_.table.max_rate, plan_.table.slew_rate)
+                                                             : plan_.table.slew_rate);
+    table_->set_mode(a, table::Mode::position);
+    table_->command_position(a, table_->status(a).position);
+    table_->enable(a);
+  }
+  table_->heartbeat();
+}
+
+void Station::poll(bool force) {
+  check_stop();
+  const double t = bus_->now();
+  if (!force && t - last_poll_ < o_.heartbeat_s) return;
+  last_poll_ = t;
+  table_->heartbeat();
+  for (int a = 0; a < 2; ++a) {
+    st_[a] = table_->status(a);
+    if (st_[a].faulted())
+      throw Aborted("table axis " + std::to_string(a) + " fault: " + table::fault_text(st_[a].fault_code) + " (" +
+                    table::status_text(st_[a].statusword) + ")");
+  }
+}
+
+ImuSample Station::next_sample() {
+  for (int tries = 0; tries < 3; ++tries) {
+    poll();
+    if (auto s = imu_->read_sample()) return *s;
+  }
+  throw DeviceError("IMU: no data-ready for 3 × 0.1 s");
+}
+
+void Station::wait_for(double seconds) {
+  const double end = bus_->now() + seconds;
+  while (bus_->now() < end) next_sample();
+}
+
+void Station::command_step(const PlanStep& s) {
+  // Outer axis: position. Inner: position for static steps; for rate steps stop at the start angle,
+  // then rate mode. Positions go the short way round from the current (unwrapped) angle.
+  poll(true);
+  auto target = [&](int a, double ang) { return st_[a].position + std::remainder(ang - st_[a].position, 2 * M_PI); };
+  if (st_[kInner].mode == table::Mode::rate) {
+    table_->command_rate(kInner, 0.0);
+    while (std::abs(st_[kInner].rate) > 1e-6) next_sample(), poll();
+    table_->set_mode(kInner, table::Mode::position);
+    poll(true);
+  }
+  table_->command_position(kOuter, target(kOuter, s.outer));
+  table_->command_position(kInner, target(kInner, s.inner));
+  if (s.kind == StepKind::rate) {
+    wait_settled(s, 600);
+    table_->command_rate(kInner, s.rate);
+    table_->set_mode(kInner, table::Mode::rate);
+  }
+}
+
+void Station::wait_settled(const PlanStep& s, double timeout_s) {
+  const double end = bus_->now() + timeout_s;
+  poll(true);
+  auto near = [](double a, double b) { return std::abs(std::remainder(a - b, 2 * M_PI)) < 0.01 * units::kDeg; };
+  auto done = [&] {
+    if (!(st_[0].settled() && st_[1].settled())) return false;
+    if (!near(st_[kOuter].position, s.outer)) return false;
+    if (st_[kInner].mode == table::Mode::rate) return std::abs(st_[kInner].rate - s.rate) < 0.01 * units::kDeg;
+    return near(st_[kInner].position, s.inner);
+  };
+  while (!done()) {
+    if (bus_->now() > end)
+      throw Aborted("table did not settle for step '" + s.label + "' within " + std::to_string(int(timeout_s)) + " s");
+    next_sample();
+    progress("moving");
+  }
+}
+
+void Station::progress(const std::string& what, bool line) {
+  const std::size_t n = plan_.steps.size();
+  const double frac = std::min(1.0, done_s_ / std::max(plan_s_, 1e-9));
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  const double eta = frac > 0.01 ? wall * (1 - frac) / frac : 0;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "[step %zu/%zu] %-22.22s %-8s outer %7.2f° inner %8.2f°/s  samples %llu  ETA %.0f s",
+                step_index_ + 1, n, plan_.steps[std::min(step_index_, n - 1)].label.c_str(), what.c_str(),
+                units::deg(st_[0].position), units::deg(st_[1].rate), static_cast<unsigned long long>(samples_), eta);
+  if (o_.progress_tty && !line) {
+    static double last = -1;
+    if (wall - last > 0.1) {
+      log_ << "\r" << buf << std::flush;
+      last = wall;
+    }
+  } else if (line) {
+    log_ << (o_.progress_tty ? "\r" : "") << buf << "\n";
+  }
+}
+
+bool Station::record_step(int k, const PlanStep& s, std::vector<ImuRecord>& imu, std::vector<BenchRefRow>& ref,
+                          std::string& why) {
+  imu.clear();
+  ref.clear();
+  poll(true);
+  // Reference: the plan's angles for static steps (the table's position accuracy is in the plan), the
+  // commanded rate and the encoder's inner angle at the start for rate steps.
+  const double outer = s.outer;
+  const double inner0 = s.kind == StepKind::rate ? st_[kInner].position : s.inner;
+  const double rate = s.kind == StepKind::rate ? s.rate : 0.0;
+  const double t_poll = bus_->now();
+  std::uint64_t lost = 0, errors = 0, saturated = 0;
+  std::string err_text;
+  double t0 = -1;
+  while (true) {
+    const ImuSample x = next_sample();
+    if (t0 < 0) t0 = x.t;
+    if (x.t - t0 >= s.dwell_s) break;
+    if (imu.size() > 0) lost += x.lost_before;
+    if (x.error()) {
+      ++errors;
+      err_text = x.error_text();
+    }
+    if (x.saturated) ++saturated;
+    ImuRecord r;
+    r.t = x.t;
+    r.dt = 1.0 / imu_->identity().output_rate_hz;
+    r.gyro = x.gyro;
+    r.accel = x.accel;
+    r.temp_c = x.temp_c;
+    r.seq = x.seq_cnt;
+    imu.push_back(r);
+    // Inner angle at this sample: from the encoder reading and the commanded rate.
+    const double th = inner0 + rate * (x.host_time - t_poll);
+    const auto kin = bench_kinematics(*earth_, AxisState{outer, 0, 0}, AxisState{th, rate, 0}, s.mount);
+    double a = std::fmod(units::deg(th), 360.0);
+    ref.push_back({x.t, kin.w_ib_b, kin.f_b, k, a < 0 ? a + 360.0 : a});
+    if (imu.size() % 256 == 0) progress("recording");
+  }
+  samples_ += imu.size();
+  lost_ += lost;
+  error_samples_ += errors;
+  if (lost) why = std::to_string(lost) + " samples lost";
+  else if (errors) why = std::to_string(errors) + " samples with error flags (" + err_text + ")";
+  else if (saturated) why = std::to_string(saturated) + " saturated samples";
+  return why.empty();
+}
+
+Result Station::run() {
+  Result res;
+  std::unique_ptr<RecordingWriter> writer;
+  const fs::path rec_dir = o_.out_dir / "recording";
+  nlohmann::json steps = nlohmann::json::array();
+  try {
+    setup();
+    fs::create_directories(o_.out_dir);
+    RecordingMeta meta;
+    meta.kind = RecordingKind::bench;
+    meta.device = DeviceId{"ADIS16488A", imu_->identity().serial_string()};
+    meta.site = plan_.site;
+    meta.imu_rate_hz = imu_->identity().output_rate_hz;
+    meta.notes = "recorded by calbench station run" + std::string(o_.emulated ? " --emulated" : "");
+    meta.extra["bench"] = {{"plan", plan_.name}, {"table", table_spec_json(plan_.table)}};
+    meta.extra["station"] = {{"firmware", imu_->identity().firmware()}, {"emulated", o_.emulated}};
+    writer = std::make_unique<RecordingWriter>(rec_dir, meta, ImuForm::rates, true, true);
+    if (o_.emulated && o_.inject.imu_skip_every) imu_emu_->faults().skip_every = o_.inject.imu_skip_every;
+    if (o_.emulated) imu_emu_->faults().sys_e_flag = o_.inject.imu_sys_e_flag;
+
+    std::vector<ImuRecord> imu;
+    std::vector<BenchRefRow> ref;
+    for (step_index_ = 0; step_index_ < plan_.steps.size(); ++step_index_) {
+      const PlanStep& s = plan_.steps[step_index_];
+      if (s.mount != mount_) {
+        // Stop, and have the cube re-mounted with IMU axis `mount` on the inner axis.
+        if (st_[kInner].mode == table::Mode::rate) table_->command_rate(kInner, 0.0);
+        log_ << (o_.progress_tty ? "\n" : "") << "re-mount the cube: IMU " << axis_name(s.mount)
+             << " axis on the inner axis (" << plan_.table.remount_s << " s)\n";
+        wait_for(plan_.table.remount_s);
+        mount_ = s.mount;  // emulated: the operator did it; real: the operator had remount_s
+      }
+      int attempt = 0;
+      for (;; ++attempt) {
+        command_step(s);
+        wait_settled(s, 600);
+        wait_for(plan_.table.settle_s);
+        std::string why;
+        if (record_step(static_cast<int>(step_index_), s, imu, ref, why)) break;
+        log_ << (o_.progress_tty ? "\n" : "") << "step " << step_index_ + 1 << " '" << s.label << "' failed its check: " << why;
+        if (attempt >= o_.max_repeats) {
+          log_ << "\n";
+          throw Aborted("step '" + s.label + "' failed " + std::to_string(attempt + 1) + " times: " + why);
+        }
+        log_ << "; repeating\n";
+        ++repeats_;
+      }
+      for (std::size_t i = 0; i < imu.size(); ++i) {
+        writer->imu(imu[i]);
+        writer->bench_ref(ref[i]);
+      }
+      writer->flush();
+      done_s_ += s.dwell_s + plan_.table.settle_s;
+      steps.push_back({{"step", step_index_}, {"label", s.label}, {"samples", imu.size()}, {"repeats", attempt}});
+      progress("done", true);
+    }
+    table_->stop_all();
+    writer->finish();
+    writer.reset();
+    // Fit (the spine's bench fit) and store.
+    BenchFitOptions fo;
+    fo.table = plan_.table;
+    const BenchRecordingData data = load_bench_blocks(rec_dir, 1.0);
+    const BenchFitResult fr = fit_bench(data.blocks, fo);
+    const CoefficientSet cs = bench_result_to_coefficients(fr, fo, data.meta, rec_dir.string());
+    write_coefficients(o_.out_dir / "COEFFS.json", cs);
+    if (o_.emulated) {
+      nlohmann::json t = errors_json(truth_);
+      t["note"] = "the emulated unit's true errors (for checking the station; never read by the fit)";
+      write_text_atomic(o_.out_dir / "EMULATED_TRUTH.json", t.dump(2) + "\n");
+    }
+    res.message = "station run complete: " + std::to_string(plan_.steps.size()) + " steps, coefficients in " +
+                  (o_.out_dir / "COEFFS.json").string();
+    res.summary["coefficients"] = (o_.out_dir / "COEFFS.json").string();
+    res.summary["fit"] = bench_result_json(fr, cs);
+  } catch (const std::exception& e) {
+    // Safety first: stop and disable the table (best effort, bounded time), keep the partial recording.
+    bool stopped = false;
+    if (table_) {
+      table_->stop_heartbeat();
+      stopped = table_->stop_all();
+    }
+    if (writer) writer->flush();  // not finished: meta.json stays "incomplete"
+    res.exit_code = (dynamic_cast<const std::invalid_argument*>(&e) || dynamic_cast<const InputError*>(&e)) ? 2 : 1;
+    res.message = std::string("station aborted: ") + e.what() + (table_ ? (stopped ? "; table stopped and disabled" : "; table stop attempted (no answer)") : "");
+    res.summary["aborted"] = true;
+    res.summary["table_stopped"] = stopped;
+  }
+  if (table_emu_) table_emu_->stop();
+  res.summary["ok"] = res.exit_code == 0;
+  res.summary["message"] = res.message;
+  res.summary["recording"] = rec_dir.string();
+  res.summary["steps"] = steps;
+  res.summary["samples"] = samples_;
+  res.summary["samples_lost"] = lost_;
+  res.summary["error_samples"] = error_samples_;
+  res.summary["repeats"] = repeats_;
+  res.summary["emulated_s"] = clock_ ? clock_->now() : 0.0;
+  res.summary["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  return res;
+}
+
+}  // namespace
+
+Result run(const Options& opt, std::ostream& log, const std::atomic<bool>& stop) {
+  Station s(opt, log, stop);
+  return s.run();
+}
+
+}  // namespace calbench::station
