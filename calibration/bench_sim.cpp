@@ -57,7 +57,36 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
                     const std::function<void(const BenchSample&)>& sink) {
   const BenchTimeline tl(plan);
   const SiteEarth earth(site);
-  ImuErrorSimulator imu(truth, opt.noise, opt.seed);
+  const EffectTerms& fx = opt.effects;
+  NoiseSpec noise = opt.noise;
+  if (fx.gyro.drift_sigma > 0) {
+    noise.gyro.drift_sigma = fx.gyro.drift_sigma;
+    if (fx.gyro.drift_tau_s > 0) noise.gyro.drift_tau_s = fx.gyro.drift_tau_s;
+  }
+  if (fx.accel.drift_sigma > 0) {
+    noise.accel.drift_sigma = fx.accel.drift_sigma;
+    if (fx.accel.drift_tau_s > 0) noise.accel.drift_tau_s = fx.accel.drift_tau_s;
+  }
+  const bool effects = fx.any();
+  const Mat3 gyro_inv = (Mat3::Identity() + truth.gyro.M).inverse();
+  const Mat3 accel_inv = (Mat3::Identity() + truth.accel.M).inverse();
+  // What the IMU really experiences at time t (effects on), in IMU axes.
+  auto true_kinematics = [&](double t, int mount, Vec3& w, Vec3& f, Mat3& C) {
+    const double te = t - fx.time_offset_s;
+    const AxisState o = tl.outer(te);
+    AxisState i = tl.inner(te);
+    if (!fx.wobble_rad.isZero(0)) {
+      const double th = i.angle;
+      i.angle += wobble_angle(fx.wobble_rad, th);
+      i.rate *= 1.0 + wobble_slope(fx.wobble_rad, th);
+    }
+    const BenchKinematics k = bench_kinematics(earth, o, i, mount);
+    w = k.w_ib_b;
+    f = k.f_b;
+    C = k.C_b_l;
+    if (!fx.table_tilt_rad.isZero(0)) f += table_tilt_force(fx.table_tilt_rad, k.C_b_l, k.f_b);
+  };
+  ImuErrorSimulator imu(truth, noise, opt.seed);
   const double dt = 1.0 / opt.noise.output_rate_hz;
   BenchSample s;
   std::size_t ph = 0;
@@ -70,7 +99,29 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
     if (!p.recording) continue;
     const AxisState o = tl.outer(t), i = tl.inner(t);
     const BenchKinematics k = bench_kinematics(earth, o, i, p.mount);
-    const auto out = imu.sample(t, k.w_ib_b, k.f_b);
+    Vec3 w_in = k.w_ib_b, f_in = k.f_b;
+    if (effects) {
+      Mat3 C;
+      true_kinematics(t, p.mount, w_in, f_in, C);
+      EffectContext c;
+      c.w = w_in;
+      c.f = f_in;
+      c.temp_c = simulated_temperature(t);
+      if (!fx.lever_arm_m.isZero(0)) {
+        constexpr double h = 2e-4;
+        Vec3 wa, wb, fa, fb;
+        Mat3 Ca, Cb;
+        true_kinematics(t - h, p.mount, wa, fa, Ca);
+        true_kinematics(t + h, p.mount, wb, fb, Cb);
+        c.dw = (wb - wa) / (2 * h);
+      }
+      Vec3 dg, da;
+      sensor_side_terms(fx, c, dg, da);
+      // (I+M)(x + (I+M)⁻¹d) + b = (I+M)x + b + d: the extra output enters before noise and quantisation.
+      w_in += gyro_inv * dg;
+      f_in += accel_inv * da;
+    }
+    const auto out = imu.sample(t, w_in, f_in);
     s.t = t;
     s.gyro = out.gyro;
     s.accel = out.accel;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "calibration/bench_kinematics.hpp"
+#include "calibration/effects/effect_terms.hpp"
 #include "calibration/imu_error_sim.hpp"
 #include "calibration/noise_spec.hpp"
 
@@ -46,6 +47,9 @@ struct BenchSample {
 struct BenchSimOptions {
   NoiseSpec noise = adis16488a_noise();
   std::uint64_t seed = 1;
+  // Physics beyond the nominal bench and sensor model (docs/diagnosis.md), injected into what the
+  // IMU sees; the reference stays nominal. All zero = the plain simulator.
+  EffectTerms effects;
 };
 
 // Simulate the whole plan; `sink` receives every sample in time order.

@@ -1,8 +1,11 @@
 // calbench simulate bench --plan PLAN --truth TRUTH.json|random --out DIR [--seed N]
+//   [--inject EFFECT:key=value,...]... [--effects EFFECTS.json]   (catalogue terms, docs/diagnosis.md)
 #include <iostream>
 
 #include "bench/bench_recording.hpp"
 #include "bench/cli/registry.hpp"
+#include "bench/diagnose/effects_json.hpp"
+#include "bench/io/json_util.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/plan_toml.hpp"
@@ -13,7 +16,8 @@ namespace calbench::cli {
 namespace {
 
 struct SimBenchArgs {
-  std::string plan, truth, out, serial;
+  std::string plan, truth, out, serial, effects;
+  std::vector<std::string> inject;
   std::uint64_t seed = 1;
   bool force = false;
 };
@@ -28,6 +32,23 @@ void run_simulate_bench(const SimBenchArgs& a) {
   } else {
     truth = read_coefficients(a.truth);
     if (!a.serial.empty()) truth.device.serial = a.serial;
+  }
+  // Physics beyond the spec's model: from the truth's own extra keys, an effects file, --inject.
+  EffectTerms effects = effects_from_json(truth.extra, a.truth);
+  if (!a.effects.empty()) {
+    const EffectTerms more = effects_from_json(read_json_file(a.effects), a.effects);
+    nlohmann::json tmp = nlohmann::json::object();
+    effects_to_json(more, EffectTerms{}, tmp);
+    if (tmp.empty()) throw InputError(a.effects, 0, "", "no catalogue key (docs/diagnosis.md) in this file");
+    effects = more;  // the file replaces terms carried by the truth
+  }
+  for (const auto& o : a.inject) apply_inject_option(o, effects);
+  if (effects.any()) {
+    for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
+                          "scale_asymmetry", "time_offset", "lever_arm", "misalignment", "table_wobble",
+                          "correlated_drift"})
+      truth.extra.erase(k);
+    effects_to_json(effects, EffectTerms{}, truth.extra);
   }
   const fs::path out(a.out);
   if (fs::exists(out / "meta.json") && !a.force)
@@ -44,6 +65,7 @@ void run_simulate_bench(const SimBenchArgs& a) {
   RecordingWriter w(out, meta, ImuForm::rates, true, false, false);
   BenchSimOptions so;
   so.seed = a.seed;
+  so.effects = effects;
   std::size_t n = 0, sat = 0;
   simulate_bench(plan, plan.site, truth.errors, so, [&](const BenchSample& s) {
     ImuRecord r;
@@ -73,6 +95,12 @@ const bool registered = add_command(10, [](CLI::App& app) {
   b->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, truth.json)")->required();
   b->add_option("--seed", a->seed, "random seed (noise, drift, and the unit for --truth random)");
   b->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");
+  b->add_option("--inject", a->inject,
+                 "inject a catalogue effect the nominal model lacks, SI units, repeatable: e.g. "
+                 "g_sensitivity:axis=x,f=y,value=1.6e-4  temperature_bias:sensor=gyro,axis=z,value=2e-6  "
+                 "time_offset:value=1e-3  lever_arm:x=0.01  table_wobble:sin=5e-5  (docs/diagnosis.md)");
+  b->add_option("--effects", a->effects, "JSON file with catalogue keys (as in IMPROVED.json) to inject")
+      ->check(CLI::ExistingFile);
   b->add_flag("--force", a->force, "overwrite an existing recording in --out");
   b->callback([a] { run_simulate_bench(*a); });
 });

@@ -1,0 +1,57 @@
+// calbench diagnose DIR [--coeffs COEFFS.json] [--json] [--report OUT.html] [--out IMPROVED.json]
+// Physics discovery (docs/diagnosis.md): locate where the recording and the model disagree, name
+// the missing effect from the catalogue, fit it and show the improvement.
+#include <iostream>
+
+#include "bench/bench_recording.hpp"
+#include "bench/cli/registry.hpp"
+#include "bench/diagnose/diagnose_run.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/io/plan_toml.hpp"
+
+namespace calbench::cli {
+namespace {
+
+struct DiagnoseArgs {
+  std::string dir, coeffs, report, out, plan;
+  bool json = false;
+};
+
+void run_diagnose(const DiagnoseArgs& a) {
+  const DiagInput in = load_diag_input(a.dir);
+  const TableSpec table = a.plan.empty() ? recording_table_spec(in.meta) : load_plan(a.plan).table;
+  if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
+  CoefficientSet given;
+  if (!a.coeffs.empty()) given = read_coefficients(a.coeffs);
+  const DiagRun run = run_diagnosis(in, a.coeffs.empty() ? nullptr : &given, table);
+  if (!a.out.empty()) write_coefficients(a.out, run.improved);
+  if (!a.report.empty()) write_diagnosis_report(a.report, in, run, a.dir);
+  if (a.json) {
+    auto j = diagnosis_json(run);
+    j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"complete", in.meta.complete}};
+    print_json(j.dump(2));
+  } else {
+    std::cout << "diagnosis of " << a.dir << "\n" << diagnosis_text(run);
+    if (!a.out.empty()) std::cout << "improved coefficients written to " << a.out << "\n";
+    if (!a.report.empty()) std::cout << "report written to " << a.report << "\n";
+  }
+}
+
+const bool registered = add_command(60, [](CLI::App& app) {
+  auto a = std::make_shared<DiagnoseArgs>();
+  auto* d = app.add_subcommand("diagnose",
+                               "Physics discovery: locate where recording and model disagree, name the missing effect, "
+                               "model it, show the fit improve (bench recordings)");
+  d->add_option("dir", a->dir, "bench recording folder")->required()->check(CLI::ExistingDirectory);
+  d->add_option("--coeffs", a->coeffs, "coefficients to test (default: fit them first with the bench fit)")
+      ->check(CLI::ExistingFile);
+  d->add_flag("--json", a->json, "print findings as JSON on stdout");
+  d->add_option("--report", a->report, "write an HTML report with before/after plots (gnuplot)");
+  d->add_option("--out", a->out, "write IMPROVED.json: coefficients refitted with the new terms as extra keys");
+  d->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
+      ->check(CLI::ExistingFile);
+  d->callback([a] { run_diagnose(*a); });
+});
+
+}  // namespace
+}  // namespace calbench::cli

@@ -1,0 +1,48 @@
+// Recording-level driver of `calbench diagnose`: reads a bench recording (or simulates one in
+// memory), gets the current coefficients (given, or by the bench fit), runs the diagnosis and
+// turns the result into JSON, text, IMPROVED.json and an HTML report with gnuplot plots.
+#pragma once
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "bench/io/coefficients_json.hpp"
+#include "bench/io/recording.hpp"
+#include "calibration/bench_fit.hpp"
+#include "calibration/bench_sim.hpp"
+#include "calibration/diagnosis/diagnose.hpp"
+
+namespace calbench {
+
+struct DiagInput {
+  RecordingMeta meta;
+  DiagData data;
+  std::vector<BenchBlock> blocks;  // 1 s blocks for the bench fit
+  std::size_t imu_rows = 0;
+};
+
+// One pass over imu.csv and reference.csv.
+DiagInput load_diag_input(const std::filesystem::path& dir);
+// In memory: the bench simulator with injected effects.
+DiagInput simulate_diag_input(const BenchPlan& plan, const SensorErrors& truth, const BenchSimOptions& opt);
+
+struct DiagRun {
+  DiagnoseResult result;
+  CoefficientSet current;   // what was tested ("before")
+  CoefficientSet improved;  // IMPROVED.json
+  bool fitted_first = false;
+};
+
+// coeffs == nullptr: fit first with the bench fit (lsq, full model).
+DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const TableSpec& table);
+
+// --json document: {"findings": [...], "unexplained": [...], "axes": {...}, ...}
+nlohmann::json diagnosis_json(const DiagRun& run);
+// Plain-language sentences, one per finding, and the per-axis table.
+std::string diagnosis_text(const DiagRun& run);
+std::string finding_sentence(const DiagFinding& f);
+// HTML report with before/after plots (gnuplot); plots are embedded as inline SVG.
+void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& in, const DiagRun& run,
+                            const std::string& title);
+
+}  // namespace calbench

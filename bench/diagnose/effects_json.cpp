@@ -1,0 +1,226 @@
+#include "bench/diagnose/effects_json.hpp"
+
+#include <map>
+#include <sstream>
+
+#include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+
+namespace calbench {
+
+namespace {
+
+nlohmann::json arr2(const Eigen::Vector2d& v) { return nlohmann::json::array({v(0), v(1)}); }
+Eigen::Vector2d jvec2(const nlohmann::json& v, const std::string& f, const std::string& key) {
+  if (!v.is_array() || v.size() != 2) throw InputError(f, 0, key, "expected an array of 2 numbers");
+  return {jnum(v[0], f, key + "[0]"), jnum(v[1], f, key + "[1]")};
+}
+Vec3 opt3(const nlohmann::json& o, const char* k, const std::string& f, const std::string& pre) {
+  return o.contains(k) ? jvec3(o[k], f, pre + "." + k) : Vec3::Zero();
+}
+Vec3 optsig3(const nlohmann::json& o, const char* k, const std::string& f, const std::string& pre) {
+  return o.contains(k) ? jsigma3(o[k], f, pre + "." + k) : Vec3::Zero();
+}
+
+}  // namespace
+
+EffectTerms effects_from_json(const nlohmann::json& j, const std::string& f, EffectTerms* sigma) {
+  EffectTerms e, s;
+  if (!j.is_object()) return e;
+  if (j.contains("temperature_bias")) {
+    const auto& o = j["temperature_bias"];
+    if (o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, "temperature_bias.t0_c");
+    e.gyro.temp_bias = opt3(o, "gyro_rad_s_per_K", f, "temperature_bias");
+    e.accel.temp_bias = opt3(o, "accel_m_s2_per_K", f, "temperature_bias");
+    s.gyro.temp_bias = optsig3(o, "gyro_sigma", f, "temperature_bias");
+    s.accel.temp_bias = optsig3(o, "accel_sigma", f, "temperature_bias");
+  }
+  if (j.contains("temperature_scale")) {
+    const auto& o = j["temperature_scale"];
+    if (o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, "temperature_scale.t0_c");
+    e.gyro.temp_scale = opt3(o, "gyro_per_K", f, "temperature_scale");
+    e.accel.temp_scale = opt3(o, "accel_per_K", f, "temperature_scale");
+    s.gyro.temp_scale = optsig3(o, "gyro_sigma", f, "temperature_scale");
+    s.accel.temp_scale = optsig3(o, "accel_sigma", f, "temperature_scale");
+  }
+  if (j.contains("g_sensitivity")) {
+    const auto& o = j["g_sensitivity"];
+    e.g_sensitivity = jmat3(jreq(o, "gyro_rad_s_per_m_s2", f, "g_sensitivity"), f, "g_sensitivity.gyro_rad_s_per_m_s2");
+    if (o.contains("sigma")) s.g_sensitivity = jsigmamat3(o["sigma"], f, "g_sensitivity.sigma");
+  }
+  if (j.contains("scale_nonlinearity")) {
+    const auto& o = j["scale_nonlinearity"];
+    e.gyro.nonlinearity = opt3(o, "gyro_per_rad_s", f, "scale_nonlinearity");
+    e.accel.nonlinearity = opt3(o, "accel_per_m_s2", f, "scale_nonlinearity");
+    s.gyro.nonlinearity = optsig3(o, "gyro_sigma", f, "scale_nonlinearity");
+    s.accel.nonlinearity = optsig3(o, "accel_sigma", f, "scale_nonlinearity");
+  }
+  if (j.contains("scale_asymmetry")) {
+    const auto& o = j["scale_asymmetry"];
+    e.gyro.asymmetry = opt3(o, "gyro", f, "scale_asymmetry");
+    e.accel.asymmetry = opt3(o, "accel", f, "scale_asymmetry");
+    s.gyro.asymmetry = optsig3(o, "gyro_sigma", f, "scale_asymmetry");
+    s.accel.asymmetry = optsig3(o, "accel_sigma", f, "scale_asymmetry");
+  }
+  if (j.contains("time_offset")) {
+    const auto& o = j["time_offset"];
+    e.time_offset_s = jnum(jreq(o, "s", f, "time_offset"), f, "time_offset.s");
+    if (o.contains("sigma") && !o["sigma"].is_null()) s.time_offset_s = jnum(o["sigma"], f, "time_offset.sigma");
+  }
+  if (j.contains("lever_arm")) {
+    const auto& o = j["lever_arm"];
+    e.lever_arm_m = jvec3(jreq(o, "m", f, "lever_arm"), f, "lever_arm.m");
+    s.lever_arm_m = optsig3(o, "sigma", f, "lever_arm");
+  }
+  if (j.contains("misalignment")) {
+    const auto& o = j["misalignment"];
+    e.table_tilt_rad = jvec2(jreq(o, "table_tilt_rad", f, "misalignment"), f, "misalignment.table_tilt_rad");
+    if (o.contains("sigma")) s.table_tilt_rad = jvec2(o["sigma"], f, "misalignment.sigma");
+  }
+  if (j.contains("table_wobble")) {
+    const auto& o = j["table_wobble"];
+    e.wobble_rad = jvec2(jreq(o, "encoder_rad", f, "table_wobble"), f, "table_wobble.encoder_rad");
+    if (o.contains("sigma")) s.wobble_rad = jvec2(o["sigma"], f, "table_wobble.sigma");
+  }
+  if (j.contains("correlated_drift")) {
+    const auto& o = j["correlated_drift"];
+    if (o.contains("gyro_sigma_rad_s")) e.gyro.drift_sigma = jnum(o["gyro_sigma_rad_s"], f, "correlated_drift.gyro_sigma_rad_s");
+    if (o.contains("gyro_tau_s")) e.gyro.drift_tau_s = jnum(o["gyro_tau_s"], f, "correlated_drift.gyro_tau_s");
+    if (o.contains("accel_sigma_m_s2"))
+      e.accel.drift_sigma = jnum(o["accel_sigma_m_s2"], f, "correlated_drift.accel_sigma_m_s2");
+    if (o.contains("accel_tau_s")) e.accel.drift_tau_s = jnum(o["accel_tau_s"], f, "correlated_drift.accel_tau_s");
+  }
+  if (sigma) *sigma = s;
+  return e;
+}
+
+void effects_to_json(const EffectTerms& e, const EffectTerms& s, nlohmann::json& j) {
+  auto nz = [](const Vec3& v) { return !v.isZero(0); };
+  if (nz(e.gyro.temp_bias) || nz(e.accel.temp_bias))
+    j["temperature_bias"] = {{"t0_c", e.t0_c},
+                             {"gyro_rad_s_per_K", to_json(e.gyro.temp_bias)},
+                             {"gyro_sigma", sigma_json(s.gyro.temp_bias)},
+                             {"accel_m_s2_per_K", to_json(e.accel.temp_bias)},
+                             {"accel_sigma", sigma_json(s.accel.temp_bias)}};
+  if (nz(e.gyro.temp_scale) || nz(e.accel.temp_scale))
+    j["temperature_scale"] = {{"t0_c", e.t0_c},
+                              {"gyro_per_K", to_json(e.gyro.temp_scale)},
+                              {"gyro_sigma", sigma_json(s.gyro.temp_scale)},
+                              {"accel_per_K", to_json(e.accel.temp_scale)},
+                              {"accel_sigma", sigma_json(s.accel.temp_scale)}};
+  if (!e.g_sensitivity.isZero(0))
+    j["g_sensitivity"] = {{"gyro_rad_s_per_m_s2", to_json(e.g_sensitivity)}, {"sigma", sigma_json(s.g_sensitivity)}};
+  if (nz(e.gyro.nonlinearity) || nz(e.accel.nonlinearity))
+    j["scale_nonlinearity"] = {{"gyro_per_rad_s", to_json(e.gyro.nonlinearity)},
+                               {"gyro_sigma", sigma_json(s.gyro.nonlinearity)},
+                               {"accel_per_m_s2", to_json(e.accel.nonlinearity)},
+                               {"accel_sigma", sigma_json(s.accel.nonlinearity)}};
+  if (nz(e.gyro.asymmetry) || nz(e.accel.asymmetry))
+    j["scale_asymmetry"] = {{"gyro", to_json(e.gyro.asymmetry)},
+                            {"gyro_sigma", sigma_json(s.gyro.asymmetry)},
+                            {"accel", to_json(e.accel.asymmetry)},
+                            {"accel_sigma", sigma_json(s.accel.asymmetry)}};
+  if (e.time_offset_s != 0) j["time_offset"] = {{"s", e.time_offset_s}, {"sigma", s.time_offset_s}};
+  if (nz(e.lever_arm_m)) j["lever_arm"] = {{"m", to_json(e.lever_arm_m)}, {"sigma", sigma_json(s.lever_arm_m)}};
+  if (!e.table_tilt_rad.isZero(0))
+    j["misalignment"] = {{"table_tilt_rad", arr2(e.table_tilt_rad)}, {"sigma", arr2(s.table_tilt_rad)}};
+  if (!e.wobble_rad.isZero(0))
+    j["table_wobble"] = {{"encoder_rad", arr2(e.wobble_rad)}, {"sigma", arr2(s.wobble_rad)}};
+  if (e.gyro.drift_sigma > 0 || e.accel.drift_sigma > 0) {
+    nlohmann::json o = nlohmann::json::object();
+    if (e.gyro.drift_sigma > 0) {
+      o["gyro_sigma_rad_s"] = e.gyro.drift_sigma;
+      o["gyro_tau_s"] = e.gyro.drift_tau_s;
+    }
+    if (e.accel.drift_sigma > 0) {
+      o["accel_sigma_m_s2"] = e.accel.drift_sigma;
+      o["accel_tau_s"] = e.accel.drift_tau_s;
+    }
+    o["note"] = "in-run drift beyond the data-sheet prior; identify it with `calbench identify`";
+    j["correlated_drift"] = o;
+  }
+}
+
+void apply_inject_option(const std::string& opt, EffectTerms& e) {
+  const std::string where = "--inject " + opt;
+  const auto colon = opt.find(':');
+  const std::string name = opt.substr(0, colon);
+  std::map<std::string, std::string> kv;
+  if (colon != std::string::npos) {
+    std::stringstream ss(opt.substr(colon + 1));
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos) throw InputError(where, 0, item, "expected key=value");
+      kv[item.substr(0, eq)] = item.substr(eq + 1);
+    }
+  }
+  std::map<std::string, bool> used;
+  auto num = [&](const std::string& k) {
+    if (!kv.count(k)) throw InputError(where, 0, k, "missing key");
+    used[k] = true;
+    try {
+      std::size_t pos = 0;
+      const double v = std::stod(kv[k], &pos);
+      if (pos != kv[k].size() || !std::isfinite(v)) throw std::invalid_argument("");
+      return v;
+    } catch (const std::exception&) {
+      throw InputError(where, 0, k, "not a number: '" + kv[k] + "'");
+    }
+  };
+  auto num_or = [&](const std::string& k, double d) { return kv.count(k) ? num(k) : d; };
+  auto axis = [&](const std::string& k) {
+    if (!kv.count(k)) throw InputError(where, 0, k, "missing key (x, y or z)");
+    used[k] = true;
+    const std::string v = kv[k];
+    if (v == "x") return 0;
+    if (v == "y") return 1;
+    if (v == "z") return 2;
+    throw InputError(where, 0, k, "expected x, y or z, got '" + v + "'");
+  };
+  auto triad = [&]() -> TriadEffectTerms& {
+    if (!kv.count("sensor")) throw InputError(where, 0, "sensor", "missing key (gyro or accel)");
+    used["sensor"] = true;
+    if (kv["sensor"] == "gyro") return e.gyro;
+    if (kv["sensor"] == "accel") return e.accel;
+    throw InputError(where, 0, "sensor", "expected gyro or accel, got '" + kv["sensor"] + "'");
+  };
+  if (name == "temperature_bias") {
+    auto& t = triad();
+    t.temp_bias(axis("axis")) += num("value");
+  } else if (name == "temperature_scale") {
+    auto& t = triad();
+    t.temp_scale(axis("axis")) += num("value");
+  } else if (name == "scale_nonlinearity") {
+    auto& t = triad();
+    t.nonlinearity(axis("axis")) += num("value");
+  } else if (name == "scale_asymmetry") {
+    auto& t = triad();
+    t.asymmetry(axis("axis")) += num("value");
+  } else if (name == "g_sensitivity") {
+    const int i = axis("axis"), k = axis("f");
+    e.g_sensitivity(i, k) += num("value");
+  } else if (name == "time_offset") {
+    e.time_offset_s += num("value");
+  } else if (name == "lever_arm") {
+    e.lever_arm_m += Vec3(num_or("x", 0), num_or("y", 0), num_or("z", 0));
+  } else if (name == "misalignment") {
+    e.table_tilt_rad += Eigen::Vector2d(num_or("north", 0), num_or("east", 0));
+  } else if (name == "table_wobble") {
+    e.wobble_rad += Eigen::Vector2d(num_or("sin", 0), num_or("cos", 0));
+  } else if (name == "correlated_drift") {
+    auto& t = triad();
+    t.drift_sigma = num("sigma");
+    t.drift_tau_s = num_or("tau", 300.0);
+    if (t.drift_sigma <= 0 || t.drift_tau_s <= 0) throw InputError(where, 0, "sigma", "sigma and tau must be positive");
+  } else {
+    throw InputError(where, 0, "effect",
+                     "unknown effect '" + name +
+                         "' (temperature_bias, temperature_scale, g_sensitivity, scale_nonlinearity, scale_asymmetry, "
+                         "time_offset, lever_arm, misalignment, table_wobble, correlated_drift)");
+  }
+  for (const auto& [k, v] : kv)
+    if (!used.count(k)) throw InputError(where, 0, k, "unknown key for " + name);
+}
+
+}  // namespace calbench

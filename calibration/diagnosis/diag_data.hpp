@@ -1,0 +1,71 @@
+// Data of a bench recording as `diagnose` needs it: short sub-blocks (default 0.05 s) that keep
+// what happens within a revolution of the table (angle, rate and specific-force derivatives), and
+// the ~1 s parent blocks they belong to (the level at which slow effects and drift are judged).
+// Only samples inside plan steps (step ≥ 0) are kept.
+#pragma once
+#include <limits>
+#include <vector>
+
+#include "calibration/sensor_model.hpp"
+
+namespace calbench {
+
+struct DiagSample {
+  double t = 0, dt = 0;
+  Vec3 gyro = Vec3::Zero(), accel = Vec3::Zero();  // measured rates (rad/s, m/s²)
+  Vec3 w = Vec3::Zero(), f = Vec3::Zero();          // reference
+  int step = -1;
+  double temp_c = std::numeric_limits<double>::quiet_NaN();
+  double angle_deg = std::numeric_limits<double>::quiet_NaN();  // inner-axis angle, if recorded
+};
+
+struct SubBlock {
+  int step = -1, parent = -1;
+  double t_mid = 0, duration = 0;
+  int n = 0;
+  Vec3 gyro = Vec3::Zero(), accel = Vec3::Zero(), w = Vec3::Zero(), f = Vec3::Zero();  // means
+  Vec3 dw = Vec3::Zero(), df = Vec3::Zero();  // reference derivatives over the sub-block (1/s)
+  double temp_c = std::numeric_limits<double>::quiet_NaN();
+  double angle = std::numeric_limits<double>::quiet_NaN();  // rad, middle of the sub-block
+  double angle_rate = 0;                                      // rad/s from the angle column
+  Vec3 gyro_ss = Vec3::Zero(), accel_ss = Vec3::Zero();       // Σ (resid − mean)² inside
+  bool rotating() const { return w.norm() > 0.0174533; }      // |ω| > 1 °/s
+};
+
+struct ParentBlock {
+  int step = -1;
+  int first = 0, count = 0;  // sub-blocks [first, first + count)
+  double t_mid = 0, duration = 0;
+  int n = 0;
+  double temp_c = std::numeric_limits<double>::quiet_NaN();
+  double dtemp = 0;          // dT/dt (K/s), from neighbouring blocks
+  Vec3 w = Vec3::Zero(), f = Vec3::Zero();
+};
+
+struct DiagData {
+  std::vector<SubBlock> subs;
+  std::vector<ParentBlock> parents;
+  double sample_rate_hz = 0;
+  bool has_temperature = false, has_angle = false;
+};
+
+class DiagDataBuilder {
+ public:
+  explicit DiagDataBuilder(double sub_s = 0.05, double parent_s = 1.0) : sub_s_(sub_s), parent_s_(parent_s) {}
+  void add(const DiagSample& s);
+  DiagData finish();
+
+ private:
+  void close_sub();
+  double sub_s_, parent_s_;
+  DiagData d_;
+  bool open_ = false;
+  SubBlock cur_;
+  double t0_ = 0, t_last_ = 0, dt_last_ = 0, a0_ = 0, a_first_ = 0, a_last_ = 0, t_first_ = 0;
+  Vec3 w_first_, f_first_, w_last_, f_last_, rg_, ra_;
+  double temp_sum_ = 0, ang_sum_ = 0, rate_sum_ = 0;
+  int temp_n_ = 0, ang_n_ = 0;
+  std::size_t samples_ = 0;
+};
+
+}  // namespace calbench

@@ -1,0 +1,837 @@
+#include "calibration/diagnosis/diagnose.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "calibration/bench_fit.hpp"
+
+namespace calbench {
+
+namespace {
+
+constexpr int kAxes = 6;  // a = sensor·3 + axis
+constexpr int kBase = 4;  // b, M_i0, M_i1, M_i2
+enum Subset { kAll = 0, kEven = 1, kOdd = 2 };
+
+bool in_subset(int step, int subset) { return subset == kAll || (step % 2 == 0) == (subset == kEven); }
+
+// Everything precomputed once: raw observations and regressor columns per sub-block.
+struct Design {
+  std::vector<Term> terms;
+  std::vector<int> term_param_offset;  // into the global parameter vector after the 24 base params
+  int n_term_params = 0;
+  // per axis: columns (base 4, then every term param that touches the axis)
+  std::vector<int> col_of[kAxes];  // col_of[a][t] = first local column of term t on axis a, −1 if none
+  int ncols[kAxes] = {};
+  std::vector<Eigen::VectorXd> z;  // per axis: raw z per sub-block (measured − ref − carried)
+  std::vector<Eigen::MatrixXd> X;  // per axis: Nsub × ncols raw columns
+  double white_var[kAxes] = {};
+};
+
+struct Dataset {
+  int axis = 0, subset = kAll;
+  std::vector<int> parents;  // parent indices
+  Eigen::MatrixXd L;         // Cholesky factor of the parent covariance
+  Eigen::VectorXd zl;        // whitened parent-level z
+  Eigen::MatrixXd Xl;        // whitened parent-level columns
+  Eigen::MatrixXd G;         // Gram (low + high)
+  Eigen::VectorXd g;
+  double zz = 0;
+  Eigen::MatrixXd Gl;
+  Eigen::VectorXd gl;
+  double zzl = 0;
+  int n_low = 0, n_high = 0;
+  double logdet = 0;
+  double drift_sigma = 0, drift_tau = 1;
+};
+
+struct Model {
+  std::vector<int> terms;  // indices into Design::terms
+};
+
+struct FitOut {
+  Eigen::VectorXd theta;  // [24 base | term params (only those in the model, in model order)]
+  Eigen::MatrixXd cov;
+  double chi2 = 0;
+  double chi2_axis[kAxes] = {};
+  std::vector<int> offset;  // per model term, start in theta
+};
+
+double sensor_ref(const SubBlock& s, int a, int c) {
+  const Vec3& ref = a < 3 ? s.w : s.f;
+  return ref(c);
+}
+
+Design build_design(const DiagData& d, const EffectTerms& carried) {
+  Design D;
+  D.terms = candidate_terms();
+  for (int a = 0; a < kAxes; ++a) {
+    D.col_of[a].assign(D.terms.size(), -1);
+    int c = kBase;
+    for (std::size_t t = 0; t < D.terms.size(); ++t)
+      if (D.terms[t].touches(a / 3, a % 3)) {
+        D.col_of[a][t] = c;
+        c += D.terms[t].nparams();
+      }
+    D.ncols[a] = c;
+  }
+  for (const auto& t : D.terms) {
+    D.term_param_offset.push_back(D.n_term_params);
+    D.n_term_params += t.nparams();
+  }
+  const int N = static_cast<int>(d.subs.size());
+  D.z.assign(kAxes, Eigen::VectorXd(N));
+  D.X.resize(kAxes);
+  for (int a = 0; a < kAxes; ++a) D.X[a] = Eigen::MatrixXd::Zero(N, D.ncols[a]);
+  const bool carry = carried.any();
+  for (int j = 0; j < N; ++j) {
+    const SubBlock& s = d.subs[j];
+    Vec3 cg = Vec3::Zero(), ca = Vec3::Zero();
+    if (carry) predict_extra(carried, s, cg, ca);
+    for (int a = 0; a < kAxes; ++a) {
+      const int i = a % 3;
+      D.z[a](j) = a < 3 ? s.gyro(i) - s.w(i) - cg(i) : s.accel(i) - s.f(i) - ca(i);
+      D.X[a](j, 0) = 1.0;
+      for (int c = 0; c < 3; ++c) D.X[a](j, 1 + c) = sensor_ref(s, a, c);
+    }
+    for (std::size_t t = 0; t < D.terms.size(); ++t) {
+      const Term& term = D.terms[t];
+      for (int p = 0; p < term.nparams(); ++p) {
+        EffectTerms unit;
+        unit.t0_c = carried.t0_c;
+        term.add_param(unit, p, 1.0);
+        Vec3 dg, da;
+        predict_extra(unit, s, dg, da);
+        for (int a = 0; a < kAxes; ++a)
+          if (D.col_of[a][t] >= 0) D.X[a](j, D.col_of[a][t] + p) = a < 3 ? dg(a) : da(a - 3);
+      }
+    }
+  }
+  // White noise per sample: pooled scatter inside static sub-blocks (all if none is static).
+  for (int a = 0; a < kAxes; ++a) {
+    double ss = 0, dof = 0, ss_all = 0, dof_all = 0;
+    for (const auto& s : d.subs) {
+      const double v = a < 3 ? s.gyro_ss(a) : s.accel_ss(a - 3);
+      ss_all += v;
+      dof_all += s.n - 1;
+      if (!s.rotating()) {
+        ss += v;
+        dof += s.n - 1;
+      }
+    }
+    D.white_var[a] = std::max(dof > 100 ? ss / dof : ss_all / std::max(dof_all, 1.0), 1e-30);
+  }
+  return D;
+}
+
+double bench_sigma(const ParentBlock& p, int a, const TableSpec& table) {
+  BenchBlock b;
+  b.w = p.w;
+  b.f = p.f;
+  return bench_fit_detail::bench_error_sigma(b, a < 3 ? TriadId::gyro : TriadId::accel, a % 3, table);
+}
+
+// Parent-level raw means of z and columns.
+void parent_means(const DiagData& d, const Design& D, int a, int p, double& z, Eigen::RowVectorXd& x) {
+  const ParentBlock& pb = d.parents[p];
+  z = 0;
+  x = Eigen::RowVectorXd::Zero(D.ncols[a]);
+  for (int j = pb.first; j < pb.first + pb.count; ++j) {
+    const double w = static_cast<double>(d.subs[j].n) / pb.n;
+    z += w * D.z[a](j);
+    x += w * D.X[a].row(j);
+  }
+}
+
+Eigen::MatrixXd parent_cov(const DiagData& d, const std::vector<int>& P, int a, double white_var, double ds, double tau,
+                           const TableSpec& table) {
+  const int N = static_cast<int>(P.size());
+  Eigen::MatrixXd R(N, N);
+  std::vector<double> sb(N);
+  for (int k = 0; k < N; ++k) sb[k] = bench_sigma(d.parents[P[k]], a, table);
+  for (int k = 0; k < N; ++k)
+    for (int l = 0; l <= k; ++l) {
+      const ParentBlock &pk = d.parents[P[k]], &pl = d.parents[P[l]];
+      double v = ds * ds * std::exp(-std::abs(pk.t_mid - pl.t_mid) / tau);
+      if (pk.step == pl.step) v += sb[k] * sb[l];
+      if (k == l) v += white_var / pk.n;
+      R(k, l) = R(l, k) = v;
+    }
+  return R;
+}
+
+Dataset build_dataset(const DiagData& d, const Design& D, int a, int subset, double ds, double tau,
+                      const DiagnoseOptions& opt) {
+  Dataset S;
+  S.axis = a;
+  S.subset = subset;
+  S.drift_sigma = ds;
+  S.drift_tau = tau;
+  for (int p = 0; p < static_cast<int>(d.parents.size()); ++p)
+    if (in_subset(d.parents[p].step, subset)) S.parents.push_back(p);
+  const int N = static_cast<int>(S.parents.size());
+  const int C = D.ncols[a];
+  Eigen::VectorXd zP(N);
+  Eigen::MatrixXd XP(N, C);
+  for (int k = 0; k < N; ++k) {
+    double z;
+    Eigen::RowVectorXd x;
+    parent_means(d, D, a, S.parents[k], z, x);
+    zP(k) = z;
+    XP.row(k) = x;
+  }
+  const Eigen::MatrixXd R = parent_cov(d, S.parents, a, D.white_var[a], ds, tau, opt.table);
+  Eigen::LLT<Eigen::MatrixXd> llt(R);
+  S.L = llt.matrixL();
+  S.zl = S.L.triangularView<Eigen::Lower>().solve(zP);
+  S.Xl = S.L.triangularView<Eigen::Lower>().solve(XP);
+  S.logdet = 2 * S.L.diagonal().array().log().sum();
+  S.Gl = S.Xl.transpose() * S.Xl;
+  S.gl = S.Xl.transpose() * S.zl;
+  S.zzl = S.zl.squaredNorm();
+  S.n_low = N;
+  S.G = S.Gl;
+  S.g = S.gl;
+  S.zz = S.zzl;
+  // High level: sub-block deviations from their parent's mean, white noise only.
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    if (pb.count < 2) continue;
+    double zp;
+    Eigen::RowVectorXd xp;
+    parent_means(d, D, a, S.parents[k], zp, xp);
+    for (int j = pb.first; j < pb.first + pb.count; ++j) {
+      const double nj = d.subs[j].n;
+      const double var = D.white_var[a] / nj * (1.0 - nj / pb.n);
+      if (var <= 0) continue;
+      const double w = 1.0 / std::sqrt(var);
+      const double zh = (D.z[a](j) - zp) * w;
+      const Eigen::RowVectorXd xh = (D.X[a].row(j) - xp) * w;
+      S.G.noalias() += xh.transpose() * xh;
+      S.g += xh.transpose() * zh;
+      S.zz += zh * zh;
+      ++S.n_high;
+    }
+  }
+  return S;
+}
+
+// Local (column, global parameter) pairs of a model on axis a.
+std::vector<std::pair<int, int>> column_map(const Design& D, const Model& m, int a, std::vector<int>& offset) {
+  std::vector<std::pair<int, int>> cm;
+  for (int c = 0; c < kBase; ++c) cm.push_back({c, a * kBase + c});
+  offset.clear();
+  int off = kAxes * kBase;
+  for (int t : m.terms) {
+    offset.push_back(off);
+    if (D.col_of[a][t] >= 0)
+      for (int p = 0; p < D.terms[t].nparams(); ++p) cm.push_back({D.col_of[a][t] + p, off + p});
+    off += D.terms[t].nparams();
+  }
+  return cm;
+}
+
+int model_params(const Design& D, const Model& m) {
+  int n = kAxes * kBase;
+  for (int t : m.terms) n += D.terms[t].nparams();
+  return n;
+}
+
+double axis_chi2(const Dataset& S, const std::vector<std::pair<int, int>>& cm, const Eigen::VectorXd& theta, bool low_only) {
+  const Eigen::MatrixXd& G = low_only ? S.Gl : S.G;
+  const Eigen::VectorXd& g = low_only ? S.gl : S.g;
+  double chi2 = low_only ? S.zzl : S.zz;
+  for (const auto& [c, p] : cm) {
+    chi2 -= 2 * theta(p) * g(c);
+    for (const auto& [c2, p2] : cm) chi2 += theta(p) * G(c, c2) * theta(p2);
+  }
+  return chi2;
+}
+
+FitOut fit_model(const Design& D, const Model& m, const std::vector<const Dataset*>& sets) {
+  const int P = model_params(D, m);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(P, P);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(P);
+  FitOut out;
+  for (const Dataset* S : sets) {
+    const auto cm = column_map(D, m, S->axis, out.offset);
+    for (const auto& [c, p] : cm) {
+      b(p) += S->g(c);
+      for (const auto& [c2, p2] : cm) A(p, p2) += S->G(c, c2);
+    }
+  }
+  // Jacobi scaling, tiny ridge for parameters the subset cannot see.
+  Eigen::VectorXd s(P);
+  for (int i = 0; i < P; ++i) s(i) = A(i, i) > 0 ? 1.0 / std::sqrt(A(i, i)) : 1.0;
+  Eigen::MatrixXd As = s.asDiagonal() * A * s.asDiagonal();
+  As.diagonal().array() += 1e-10;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(As);
+  out.theta = s.asDiagonal() * ldlt.solve(s.asDiagonal() * b);
+  out.cov = s.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(P, P)) * s.asDiagonal();
+  for (const Dataset* S : sets) {
+    std::vector<int> off;
+    const auto cm = column_map(D, m, S->axis, off);
+    const double c2 = axis_chi2(*S, cm, out.theta, false);
+    out.chi2_axis[S->axis] += c2;
+    out.chi2 += c2;
+  }
+  return out;
+}
+
+double heldout_chi2(const Design& D, const Model& m, const std::vector<Dataset>& even, const std::vector<Dataset>& odd) {
+  std::vector<const Dataset*> se, so;
+  for (const auto& s : even) se.push_back(&s);
+  for (const auto& s : odd) so.push_back(&s);
+  const FitOut fe = fit_model(D, m, se), fo = fit_model(D, m, so);
+  double chi2 = 0;
+  for (const auto& S : odd) {
+    std::vector<int> off;
+    chi2 += axis_chi2(S, column_map(D, m, S.axis, off), fe.theta, false);
+  }
+  for (const auto& S : even) {
+    std::vector<int> off;
+    chi2 += axis_chi2(S, column_map(D, m, S.axis, off), fo.theta, false);
+  }
+  return chi2;
+}
+
+// Residual per sub-block of axis a for parameters theta of model m.
+Eigen::VectorXd residual(const Design& D, const Model& m, int a, const Eigen::VectorXd& theta) {
+  std::vector<int> off;
+  const auto cm = column_map(D, m, a, off);
+  Eigen::VectorXd r = D.z[a];
+  for (const auto& [c, p] : cm) r -= theta(p) * D.X[a].col(c);
+  return r;
+}
+
+// Residual of the given coefficients (b, M) on axis a.
+Eigen::VectorXd residual_coeffs(const Design& D, const SensorErrors& e, int a) {
+  const TriadErrors& te = a < 3 ? e.gyro : e.accel;
+  const int i = a % 3;
+  Eigen::VectorXd r = D.z[a];
+  r.array() -= te.bias(i);
+  for (int c = 0; c < 3; ++c) r -= te.M(i, c) * D.X[a].col(1 + c);
+  return r;
+}
+
+// Statistics of a residual series on one axis (dataset gives the noise model).
+AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& r, int nparams) {
+  AxisStats st;
+  const int a = S.axis;
+  const int N = static_cast<int>(S.parents.size());
+  Eigen::VectorXd rP(N);
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    double z = 0;
+    for (int j = pb.first; j < pb.first + pb.count; ++j) z += d.subs[j].n * r(j);
+    rP(k) = z / pb.n;
+  }
+  const Eigen::VectorXd rw = S.L.triangularView<Eigen::Lower>().solve(rP);
+  st.chi2_dof = rw.squaredNorm() / std::max(1, N - nparams / kAxes);
+  std::vector<double> rv(rw.data(), rw.data() + rw.size());
+  ljung_box(rv, std::min(10, std::max(1, N / 5)), st.ljung_box_q, st.ljung_box_p);
+  // Drift as the noise model sees it (smoothed), to be removed from the systematic figure.
+  const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(rw);
+  Eigen::VectorXd drift(N);
+  for (int k = 0; k < N; ++k) {
+    double s = 0;
+    for (int l = 0; l < N; ++l)
+      s += S.drift_sigma * S.drift_sigma *
+           std::exp(-std::abs(d.parents[S.parents[k]].t_mid - d.parents[S.parents[l]].t_mid) / S.drift_tau) * v(l);
+    drift(k) = s;
+  }
+  // Per-step means (drift removed, white noise expectation subtracted).
+  std::map<int, std::array<double, 3>> steps;  // step → Σn·r, Σn, duration
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    auto& acc = steps[pb.step];
+    acc[0] += pb.n * (rP(k) - drift(k));
+    acc[1] += pb.n;
+    acc[2] += pb.duration;
+  }
+  double ms = 0, wt = 0;
+  for (const auto& [step, acc] : steps) {
+    const double m = acc[0] / acc[1];
+    ms += acc[2] * (m * m - D.white_var[a] / acc[1]);
+    wt += acc[2];
+  }
+  st.step_rms = std::sqrt(std::max(0.0, ms / std::max(wt, 1e-9)));
+  // Within steps: deviations from the parent mean, binned by table angle (12 bins per step) for
+  // rotating steps; sub-block χ² for the rest.
+  double hi_chi2 = 0;
+  int hi_n = 0;
+  std::map<int, std::array<std::array<double, 3>, 12>> bins;  // step → bin → Σn·dev, Σn, Σ expected var·n²
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    if (pb.count < 2) continue;
+    for (int j = pb.first; j < pb.first + pb.count; ++j) {
+      const SubBlock& s = d.subs[j];
+      const double dev = r(j) - rP(k);
+      const double var = D.white_var[a] / s.n * (1.0 - static_cast<double>(s.n) / pb.n);
+      if (var <= 0) continue;
+      hi_chi2 += dev * dev / var;
+      ++hi_n;
+      if (s.rotating() && std::isfinite(s.angle)) {
+        double u = std::fmod(s.angle, 2 * M_PI);
+        if (u < 0) u += 2 * M_PI;
+        const int b = std::min(11, static_cast<int>(u / (2 * M_PI) * 12));
+        auto& bb = bins[pb.step][b];
+        bb[0] += s.n * dev;
+        bb[1] += s.n;
+        bb[2] += var * s.n * s.n;
+      }
+    }
+  }
+  st.high_chi2_dof = hi_n > 0 ? hi_chi2 / hi_n : 0;
+  double wms = 0, wwt = 0;
+  for (const auto& [step, bs] : bins) {
+    double sms = 0, sn = 0;
+    for (const auto& bb : bs) {
+      if (bb[1] <= 0) continue;
+      const double m = bb[0] / bb[1];
+      sms += bb[1] * (m * m - bb[2] / (bb[1] * bb[1]));
+      sn += bb[1];
+    }
+    if (sn > 0) {
+      wms += sms;
+      wwt += sn;
+    }
+  }
+  st.within_rms = std::sqrt(std::max(0.0, wwt > 0 ? wms / wwt : 0.0));
+  st.systematic_rms = std::hypot(st.step_rms, st.within_rms);
+  st.bic = rw.squaredNorm() + S.logdet + nparams / static_cast<double>(kAxes) * std::log(std::max(N, 2));
+  return st;
+}
+
+std::vector<ConditionCorrelation> correlations(const DiagData& d, const Eigen::VectorXd& r) {
+  std::vector<ConditionCorrelation> out;
+  // Parent-level for slow conditions; sub-block deviations for the angle.
+  std::vector<double> rp(d.parents.size());
+  for (std::size_t p = 0; p < d.parents.size(); ++p) {
+    const ParentBlock& pb = d.parents[p];
+    double z = 0;
+    for (int j = pb.first; j < pb.first + pb.count; ++j) z += d.subs[j].n * r(j);
+    rp[p] = z / pb.n;
+  }
+  auto corr = [](const std::vector<double>& x, const std::vector<double>& y) {
+    const double n = static_cast<double>(x.size());
+    if (n < 3) return 0.0;
+    const double mx = std::accumulate(x.begin(), x.end(), 0.0) / n, my = std::accumulate(y.begin(), y.end(), 0.0) / n;
+    double sxy = 0, sxx = 0, syy = 0;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      sxy += (x[k] - mx) * (y[k] - my);
+      sxx += (x[k] - mx) * (x[k] - mx);
+      syy += (y[k] - my) * (y[k] - my);
+    }
+    return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) : 0.0;
+  };
+  for (const auto& name : condition_names()) {
+    if (name == "angle") continue;
+    std::vector<double> x(d.parents.size());
+    for (std::size_t p = 0; p < d.parents.size(); ++p) {
+      const ParentBlock& pb = d.parents[p];
+      x[p] = condition_value(d, d.subs[pb.first + pb.count / 2], name);
+      if (name == "dT/dt") x[p] = pb.dtemp;
+    }
+    out.push_back({name, corr(x, rp)});
+  }
+  // Angle: amplitude-correlation of within-parent deviations with cos/sin of the angle (rotating).
+  std::vector<double> dev, c, s;
+  for (const auto& sb : d.subs)
+    if (sb.rotating() && std::isfinite(sb.angle)) {
+      dev.push_back(r(&sb - &d.subs[0]) - rp[sb.parent]);
+      c.push_back(std::cos(sb.angle));
+      s.push_back(std::sin(sb.angle));
+    }
+  if (dev.size() > 10) out.push_back({"angle", std::hypot(corr(c, dev), corr(s, dev))});
+  std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return std::abs(x.r) > std::abs(y.r); });
+  return out;
+}
+
+// Amplitude of harmonics 1..4 of the table angle in the within-parent residual (rotating sub-blocks).
+void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, double& best_amp) {
+  best_k = 0;
+  best_amp = 0;
+  std::vector<double> rp(d.parents.size());
+  for (std::size_t p = 0; p < d.parents.size(); ++p) {
+    const ParentBlock& pb = d.parents[p];
+    double z = 0;
+    for (int j = pb.first; j < pb.first + pb.count; ++j) z += d.subs[j].n * r(j);
+    rp[p] = z / pb.n;
+  }
+  for (int k = 1; k <= 4; ++k) {
+    double sc = 0, ss = 0, n = 0;
+    for (const auto& sb : d.subs)
+      if (sb.rotating() && std::isfinite(sb.angle)) {
+        const double dev = r(&sb - &d.subs[0]) - rp[sb.parent];
+        sc += dev * std::cos(k * sb.angle);
+        ss += dev * std::sin(k * sb.angle);
+        ++n;
+      }
+    if (n < 10) return;
+    const double amp = 2 * std::hypot(sc, ss) / n;
+    if (amp > best_amp) {
+      best_amp = amp;
+      best_k = k;
+    }
+  }
+}
+
+const char* revealing_condition(EffectId e) {
+  switch (e) {
+    case EffectId::temperature_bias: return "temperature";
+    case EffectId::temperature_scale: return "temperature";
+    case EffectId::g_sensitivity: return "f";
+    case EffectId::scale_nonlinearity: return "rate";
+    case EffectId::scale_asymmetry: return "rate";
+    case EffectId::time_offset: return "angle";
+    case EffectId::lever_arm: return "rate";
+    case EffectId::misalignment: return "f";
+    case EffectId::table_wobble: return "angle";
+    case EffectId::correlated_drift: return "time";
+  }
+  return "time";
+}
+
+std::string unit_of(const Term& t) {
+  const bool g = t.sensor == 0;
+  switch (t.effect) {
+    case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
+    case EffectId::temperature_scale: return "1/K";
+    case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
+    case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
+    case EffectId::scale_asymmetry: return "1";
+    case EffectId::time_offset: return "s";
+    case EffectId::lever_arm: return "m";
+    case EffectId::misalignment: return "rad";
+    case EffectId::table_wobble: return "rad";
+    case EffectId::correlated_drift: return g ? "rad/s" : "m/s^2";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::vector<std::string> condition_names() {
+  return {"rate", "w_x", "w_y", "w_z", "f_x", "f_y", "f_z", "temperature", "dT/dt", "time", "angle"};
+}
+
+double condition_value(const DiagData& d, const SubBlock& s, const std::string& name) {
+  if (name == "rate") return s.w.norm();
+  if (name == "w_x") return s.w(0);
+  if (name == "w_y") return s.w(1);
+  if (name == "w_z") return s.w(2);
+  if (name == "f_x") return s.f(0);
+  if (name == "f_y") return s.f(1);
+  if (name == "f_z") return s.f(2);
+  if (name == "temperature") return std::isfinite(s.temp_c) ? s.temp_c : 0.0;
+  if (name == "dT/dt") return s.parent >= 0 ? d.parents[s.parent].dtemp : 0.0;
+  if (name == "time") return s.t_mid;
+  if (name == "angle") {
+    if (!std::isfinite(s.angle)) return 0.0;
+    double u = std::fmod(s.angle * 180.0 / M_PI, 360.0);
+    return u < 0 ? u + 360.0 : u;
+  }
+  return 0.0;
+}
+
+void ljung_box(const std::vector<double>& x, int lags, double& q, double& p) {
+  const std::size_t n = x.size();
+  q = 0;
+  p = 1;
+  if (n < 4 || lags < 1) return;
+  const double m = std::accumulate(x.begin(), x.end(), 0.0) / n;
+  double c0 = 0;
+  for (double v : x) c0 += (v - m) * (v - m);
+  if (c0 <= 0) return;
+  for (int k = 1; k <= lags && k < static_cast<int>(n); ++k) {
+    double ck = 0;
+    for (std::size_t t = k; t < n; ++t) ck += (x[t] - m) * (x[t - k] - m);
+    const double rho = ck / c0;
+    q += rho * rho / (n - k);
+  }
+  q *= n * (n + 2.0);
+  const double h = lags;
+  const double z = (std::cbrt(q / h) - (1 - 2 / (9 * h))) / std::sqrt(2 / (9 * h));
+  p = 0.5 * std::erfc(z / std::sqrt(2.0));
+}
+
+DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current, const EffectTerms& carried,
+                              const DiagnoseOptions& opt) {
+  DiagnoseResult res;
+  if (data.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks in plan steps");
+  const Design D = build_design(data, carried);
+  res.parents = static_cast<int>(data.parents.size());
+  res.subs = static_cast<int>(data.subs.size());
+  for (const auto& p : data.parents) res.data_s += p.duration;
+  for (int a = 0; a < kAxes; ++a) res.white_sigma[a] = std::sqrt(D.white_var[a]);
+  res.base_before = current;
+
+  double ds[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
+  double tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
+  std::vector<Dataset> all(kAxes), even(kAxes), odd(kAxes);
+  auto rebuild = [&](int triad) {
+    for (int a = triad * 3; a < triad * 3 + 3; ++a) {
+      all[a] = build_dataset(data, D, a, kAll, ds[triad], tau[triad], opt);
+      even[a] = build_dataset(data, D, a, kEven, ds[triad], tau[triad], opt);
+      odd[a] = build_dataset(data, D, a, kOdd, ds[triad], tau[triad], opt);
+    }
+  };
+  rebuild(0);
+  rebuild(1);
+  auto ptrs = [](const std::vector<Dataset>& v) {
+    std::vector<const Dataset*> p;
+    for (const auto& s : v) p.push_back(&s);
+    return p;
+  };
+
+  // Before: the given coefficients.
+  Eigen::VectorXd r_before[kAxes];
+  for (int a = 0; a < kAxes; ++a) {
+    r_before[a] = residual_coeffs(D, current, a);
+    res.before[a] = axis_stats(data, D, all[a], r_before[a], kAxes * kBase);
+    res.correlations_before[a] = correlations(data, r_before[a]);
+  }
+
+  Model model;
+  FitOut cur = fit_model(D, model, ptrs(all));
+  double cur_held = heldout_chi2(D, model, even, odd);
+  const double pen = opt.penalty_per_param;
+  struct Accepted {
+    int term;  // −1 − triad for correlated_drift
+    double dchi2, dbic, dheld;
+  };
+  std::vector<Accepted> accepted;
+  std::vector<bool> drift_done(2, false);
+  while (static_cast<int>(accepted.size()) < opt.max_findings) {
+    int best = -1;
+    double best_score = 0, best_d = 0, best_held = 0, best_pen = 0;
+    FitOut best_fit;
+    for (std::size_t t = 0; t < D.terms.size(); ++t) {
+      if (std::find(model.terms.begin(), model.terms.end(), static_cast<int>(t)) != model.terms.end()) continue;
+      Model m = model;
+      m.terms.push_back(static_cast<int>(t));
+      FitOut f = fit_model(D, m, ptrs(all));
+      const double dchi2 = cur.chi2 - f.chi2;
+      int rows = 0;
+      for (int a = 0; a < kAxes; ++a)
+        if (D.col_of[a][t] >= 0) rows += all[a].n_low + all[a].n_high;
+      const double penalty = D.terms[t].nparams() * (std::log(std::max(rows, 2)) + pen);
+      const double score = dchi2 - penalty;
+      if (dchi2 < opt.min_delta_chi2 || score <= best_score) continue;
+      const double held = heldout_chi2(D, m, even, odd);
+      if (held >= cur_held) continue;  // does not predict the other half of the steps better
+      best = static_cast<int>(t);
+      best_score = score;
+      best_d = dchi2;
+      best_held = cur_held - held;
+      best_pen = penalty;
+      best_fit = std::move(f);
+    }
+    if (best >= 0) {
+      model.terms.push_back(best);
+      cur = std::move(best_fit);
+      cur_held -= best_held;
+      accepted.push_back({best, best_d, best_d - best_pen, best_held});
+      continue;
+    }
+    // No linear term: is the drift larger than the data sheet says (correlated_drift)?
+    int best_triad = -1;
+    double best_gain = 0, best_s = 0, best_t = 0;
+    for (int triad = 0; triad < 2; ++triad) {
+      if (drift_done[triad]) continue;
+      auto score = [&](double s, double t) {
+        double v = 0;
+        std::vector<Dataset> tmp;
+        for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(build_dataset(data, D, a, kAll, s, t, opt));
+        std::vector<const Dataset*> p;
+        for (int a = 0; a < kAxes; ++a)
+          if (a / 3 != triad) p.push_back(&all[a]);
+        for (auto& x : tmp) p.push_back(&x);
+        const FitOut f = fit_model(D, model, p);
+        for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
+        return v;
+      };
+      const double base = score(ds[triad], tau[triad]);
+      for (double mult : {2.0, 4.0, 8.0, 16.0, 32.0})
+        for (double t : {60.0, 300.0, 1200.0}) {
+          const double gain = base - score(ds[triad] * mult, t);
+          const double penalty = 2 * (std::log(static_cast<double>(all[triad * 3].n_low)) + pen);
+          if (gain - penalty > best_gain && gain > opt.min_delta_chi2) {
+            best_gain = gain - penalty;
+            best_triad = triad;
+            best_s = ds[triad] * mult;
+            best_t = t;
+          }
+        }
+    }
+    if (best_triad < 0) break;
+    drift_done[best_triad] = true;
+    ds[best_triad] = best_s;
+    tau[best_triad] = best_t;
+    rebuild(best_triad);
+    cur = fit_model(D, model, ptrs(all));
+    cur_held = heldout_chi2(D, model, even, odd);
+    accepted.push_back({-1 - best_triad, best_gain, best_gain, 0});
+  }
+
+  // The improved model.
+  res.improved_terms = carried;
+  res.terms_sigma = EffectTerms{};
+  for (std::size_t k = 0; k < model.terms.size(); ++k) {
+    const Term& t = D.terms[model.terms[k]];
+    for (int p = 0; p < t.nparams(); ++p) {
+      const int idx = cur.offset[k] + p;
+      t.add_param(res.improved_terms, p, cur.theta(idx));
+      t.add_param(res.terms_sigma, p, std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
+    }
+  }
+  for (int a = 0; a < kAxes; ++a) {
+    TriadErrors& te = a < 3 ? res.improved.gyro : res.improved.accel;
+    const int i = a % 3;
+    te.bias(i) = cur.theta(a * kBase);
+    te.sigma_bias(i) = std::sqrt(std::max(cur.cov(a * kBase, a * kBase), 0.0));
+    for (int c = 0; c < 3; ++c) {
+      te.M(i, c) = cur.theta(a * kBase + 1 + c);
+      te.sigma_M(i, c) = std::sqrt(std::max(cur.cov(a * kBase + 1 + c, a * kBase + 1 + c), 0.0));
+    }
+  }
+  for (int triad = 0; triad < 2; ++triad) {
+    res.drift_sigma[triad] = ds[triad];
+    res.drift_tau[triad] = tau[triad];
+  }
+  Eigen::VectorXd r_after[kAxes];
+  const int np = model_params(D, model);
+  for (int a = 0; a < kAxes; ++a) {
+    r_after[a] = residual(D, model, a, cur.theta);
+    res.after[a] = axis_stats(data, D, all[a], r_after[a], np);
+    res.residual[a].before.assign(r_before[a].data(), r_before[a].data() + r_before[a].size());
+    res.residual[a].after.assign(r_after[a].data(), r_after[a].data() + r_after[a].size());
+  }
+
+  // Findings.
+  for (const auto& acc : accepted) {
+    DiagFinding f;
+    if (acc.term < 0) {
+      const int triad = -1 - acc.term;
+      f.term = Term{EffectId::correlated_drift, triad, -1};
+      f.value = {ds[triad]};
+      f.sigma = {std::numeric_limits<double>::quiet_NaN()};
+      f.noise_tau_s = tau[triad];
+      f.unit = unit_of(f.term);
+      f.report_sensor = triad;
+      f.report_axis = -1;
+      f.delta_chi2 = acc.dchi2;
+      f.delta_bic = acc.dbic;
+      f.condition = "time";
+      double rb = 0, ra = 0;
+      for (int a = triad * 3; a < triad * 3 + 3; ++a) {
+        rb += std::pow(res.before[a].systematic_rms, 2);
+        ra += std::pow(res.after[a].systematic_rms, 2);
+      }
+      f.rms_before = std::sqrt(rb / 3);
+      f.rms_after = std::sqrt(ra / 3);
+      res.findings.push_back(f);
+      res.improved_terms.gyro.drift_sigma = ds[0] > opt.noise.gyro.drift_sigma ? ds[0] : 0;
+      res.improved_terms.gyro.drift_tau_s = ds[0] > opt.noise.gyro.drift_sigma ? tau[0] : 0;
+      res.improved_terms.accel.drift_sigma = ds[1] > opt.noise.accel.drift_sigma ? ds[1] : 0;
+      res.improved_terms.accel.drift_tau_s = ds[1] > opt.noise.accel.drift_sigma ? tau[1] : 0;
+      continue;
+    }
+    const Term& t = D.terms[acc.term];
+    const std::size_t k = std::find(model.terms.begin(), model.terms.end(), acc.term) - model.terms.begin();
+    f.term = t;
+    for (int p = 0; p < t.nparams(); ++p) {
+      const int idx = cur.offset[k] + p;
+      f.value.push_back(cur.theta(idx) + t.get_param(carried, p));
+      f.sigma.push_back(std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
+    }
+    f.unit = unit_of(t);
+    f.delta_chi2 = acc.dchi2;
+    f.delta_bic = acc.dbic;
+    f.heldout_delta_chi2 = acc.dheld;
+    f.report_sensor = t.sensor;
+    f.report_axis = t.axis;
+    // Axis on which it shows: the touched axis whose residual it explains most.
+    std::vector<int> touched;
+    for (int a = 0; a < kAxes; ++a)
+      if (D.col_of[a][acc.term] >= 0) touched.push_back(a);
+    if (t.effect == EffectId::lever_arm) {
+      int imax = 0;
+      for (int i = 1; i < 3; ++i)
+        if (std::abs(f.value[i]) > std::abs(f.value[imax])) imax = i;
+      double others = 0;
+      for (int i = 0; i < 3; ++i)
+        if (i != imax) others = std::max(others, std::abs(f.value[i]));
+      f.report_axis = others < 0.3 * std::abs(f.value[imax]) ? imax : -1;
+    }
+    double rb = 0, ra = 0;
+    int n = 0;
+    for (int a : touched) {
+      if (t.sensor < 2 && f.report_axis >= 0 && t.effect != EffectId::lever_arm && a != t.sensor * 3 + t.axis) continue;
+      rb += std::pow(res.before[a].systematic_rms, 2);
+      ra += std::pow(res.after[a].systematic_rms, 2);
+      ++n;
+    }
+    if (t.effect == EffectId::lever_arm || t.sensor == 2) {
+      // Report the worst-affected touched axis (largest systematic before).
+      double worst = -1;
+      for (int a : touched)
+        if (res.before[a].systematic_rms > worst) {
+          worst = res.before[a].systematic_rms;
+          rb = worst * worst;
+          ra = std::pow(res.after[a].systematic_rms, 2);
+          n = 1;
+        }
+    }
+    f.rms_before = n ? std::sqrt(rb / n) : 0;
+    f.rms_after = n ? std::sqrt(ra / n) : 0;
+    f.condition = revealing_condition(t.effect);
+    if (t.effect == EffectId::g_sensitivity) {
+      int jmax = 0;
+      for (int j = 1; j < 3; ++j)
+        if (std::abs(f.value[j]) > std::abs(f.value[jmax])) jmax = j;
+      f.condition = std::string("f_") + "xyz"[jmax];
+    }
+    const int ra_axis = f.report_axis >= 0 && t.sensor < 2 ? t.sensor * 3 + f.report_axis : touched.front();
+    for (const auto& c : res.correlations_before[ra_axis])
+      if (c.condition == f.condition) f.condition_r = c.r;
+    res.findings.push_back(f);
+  }
+
+  // Unexplained structure: an axis still far from its noise model.
+  for (int a = 0; a < kAxes; ++a) {
+    const AxisStats& s = res.after[a];
+    const double n = std::max(1, all[a].n_low);
+    const double z_low = (s.chi2_dof - 1) * std::sqrt(n / 2.0);
+    const double z_high = (s.high_chi2_dof - 1) * std::sqrt(std::max(1, all[a].n_high) / 2.0);
+    if (z_low < 6 && z_high < 6 && s.ljung_box_p > 1e-4) continue;
+    DiagUnexplained u;
+    u.sensor = a / 3;
+    u.axis = a % 3;
+    u.chi2_dof = s.chi2_dof;
+    u.high_chi2_dof = s.high_chi2_dof;
+    u.ljung_box_p = s.ljung_box_p;
+    u.systematic_rms = s.systematic_rms;
+    u.correlations = correlations(data, r_after[a]);
+    if (u.correlations.size() > 4) u.correlations.resize(4);
+    angle_spectrum(data, r_after[a], u.angle_harmonic, u.angle_harmonic_amp);
+    // Worst steps by |mean residual| relative to its white-noise σ.
+    std::map<int, std::pair<double, double>> st;
+    for (const auto& sb : data.subs) {
+      auto& x = st[sb.step];
+      x.first += sb.n * r_after[a](&sb - &data.subs[0]);
+      x.second += sb.n;
+    }
+    std::vector<std::pair<double, int>> score;
+    for (const auto& [step, x] : st) score.push_back({std::abs(x.first / x.second) * std::sqrt(x.second), step});
+    std::sort(score.rbegin(), score.rend());
+    for (std::size_t k = 0; k < score.size() && k < 3; ++k) u.worst_steps.push_back(score[k].second);
+    res.unexplained.push_back(u);
+  }
+  return res;
+}
+
+}  // namespace calbench

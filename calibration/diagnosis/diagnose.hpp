@@ -1,0 +1,104 @@
+// Physics discovery on a bench recording (issue 7): predict the sensor output from the reference
+// through the current coefficients, locate where the residual is systematic, name the missing
+// physics from the catalogue (calibration/diagnosis/catalogue.hpp) by evidence, fit it, and show
+// the improvement.
+//
+// Statistical model per sensor axis (gyro x..accel z), z = measured − reference − carried terms:
+//   z = b + M_i·ref + Σ_terms regressor·θ + drift + bench error + white noise
+// judged on two levels that share the parameters:
+//   * ~1 s parent blocks by generalised least squares with the full covariance (white/n +
+//     first-order Gauss–Markov drift + per-step bench error), as the bench fit does;
+//   * 0.05 s sub-blocks as deviations from their parent's mean (drift and bench error cancel,
+//     only white noise remains): this is where within-revolution effects show.
+// Candidates are added greedily by Δχ² (= −2Δlog-likelihood) with a BIC-type penalty and a
+// held-out check (fit on even steps, predict odd ones and vice versa); the loop stops when no
+// candidate passes. correlated_drift is a candidate on the noise side (a larger drift σ chosen by
+// maximum likelihood).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "calibration/bench_plan.hpp"
+#include "calibration/diagnosis/catalogue.hpp"
+#include "calibration/noise_spec.hpp"
+
+namespace calbench {
+
+struct DiagnoseOptions {
+  NoiseSpec noise = adis16488a_noise();  // data-sheet drift prior
+  TableSpec table;                       // bench errors
+  double penalty_per_param = 0;          // extra Δχ² per parameter on top of ln N (0 = default)
+  double min_delta_chi2 = 40;            // smallest Δχ² that can count as a finding
+  int max_findings = 6;
+};
+
+struct AxisStats {
+  double chi2_dof = 0;       // whitened parent-level χ²/dof
+  double high_chi2_dof = 0;  // sub-block deviations χ²/dof
+  double ljung_box_q = 0, ljung_box_p = 1;
+  double systematic_rms = 0; // RMS of per-step means and within-step low-passed residual, noise removed
+  double step_rms = 0, within_rms = 0;
+  double bic = 0;
+};
+
+struct ConditionCorrelation {
+  std::string condition;
+  double r = 0;
+};
+
+struct DiagFinding {
+  Term term;
+  std::vector<double> value, sigma;  // SI
+  std::string unit;
+  int report_axis = -1;              // axis the finding is reported on (−1 = all)
+  int report_sensor = 0;             // 0 gyro, 1 accel, 2 reference
+  double delta_chi2 = 0, delta_bic = 0, heldout_delta_chi2 = 0;
+  std::string condition;             // the condition that reveals it
+  double condition_r = 0;
+  double rms_before = 0, rms_after = 0;  // systematic residual of the reported sensor axis (or all touched)
+  double noise_tau_s = 0;                // correlated_drift only
+};
+
+struct DiagUnexplained {
+  int sensor = 0, axis = 0;
+  double chi2_dof = 0, high_chi2_dof = 0, ljung_box_p = 1, systematic_rms = 0;
+  std::vector<int> worst_steps;
+  std::vector<ConditionCorrelation> correlations;  // strongest first
+  double angle_harmonic_amp = 0;
+  int angle_harmonic = 0;
+};
+
+// Per-sub-block residual of one sensor axis, for plots.
+struct ResidualSeries {
+  std::vector<double> before, after;  // rad/s or m/s²
+};
+
+struct DiagnoseResult {
+  std::vector<DiagFinding> findings;
+  std::vector<DiagUnexplained> unexplained;
+  AxisStats before[6], after[6];                 // gyro x,y,z, accel x,y,z
+  std::vector<ConditionCorrelation> correlations_before[6];
+  SensorErrors base_before;                      // coefficients used for "before"
+  SensorErrors improved;                         // refit b, M with the new terms
+  EffectTerms improved_terms;                    // carried + new terms
+  EffectTerms terms_sigma;                       // 1σ of improved_terms (same layout)
+  double drift_sigma[2] = {0, 0}, drift_tau[2] = {0, 0};  // noise model after (per triad)
+  ResidualSeries residual[6];
+  double white_sigma[6] = {0, 0, 0, 0, 0, 0};    // per-sample white noise
+  int parents = 0, subs = 0;
+  double data_s = 0;
+};
+
+// `current`: coefficients to test (b, M) and the extra terms they already carry.
+DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current, const EffectTerms& carried,
+                              const DiagnoseOptions& opt);
+
+// Value of a condition for a sub-block (used for correlations and plots). Names:
+// "rate", "w_x".."w_z", "f_x".."f_z", "temperature", "dT/dt", "time", "angle".
+std::vector<std::string> condition_names();
+double condition_value(const DiagData& d, const SubBlock& s, const std::string& name);
+
+// Ljung–Box Q over `lags` lags and its p-value (χ² with `lags` dof, Wilson–Hilferty).
+void ljung_box(const std::vector<double>& x, int lags, double& q, double& p);
+
+}  // namespace calbench

@@ -1,0 +1,159 @@
+// Proof on concealed data (issue 7): the bench simulator injects each catalogue effect while the
+// estimator's model (the spec's b, M) lacks it; `diagnose` must name the effect, sensor and axis,
+// recover the value within 20 % and cut the systematic residual by ≥ 80 %. Clean recordings must
+// give no finding; two effects at once must both be found. Short plan (bench/plans/diagnose.toml),
+// in-memory simulation; the long sweep is tests/perf/diagnose_sweep_bench.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "bench/diagnose/diagnose_run.hpp"
+#include "bench/io/plan_toml.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench {
+namespace {
+
+const BenchPlan& plan() {
+  static const BenchPlan p = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
+  return p;
+}
+
+DiagRun diagnose_sim(const EffectTerms& fx, std::uint64_t seed) {
+  BenchSimOptions so;
+  so.seed = seed;
+  so.effects = fx;
+  const DiagInput in = simulate_diag_input(plan(), draw_random_unit(500 + seed), so);
+  return run_diagnosis(in, nullptr, plan().table);
+}
+
+const DiagFinding* find(const DiagRun& r, EffectId e) {
+  for (const auto& f : r.result.findings)
+    if (f.term.effect == e) return &f;
+  return nullptr;
+}
+
+std::string summary(const DiagRun& r) {
+  std::string s;
+  for (const auto& f : r.result.findings) s += "\n  " + f.term.label() + ": " + finding_sentence(f);
+  return s.empty() ? " (no finding)" : s;
+}
+
+// One concealed effect: expects exactly that effect (sensor, axis), value within 20 %, cut ≥ 80 %.
+void expect_found(const EffectTerms& fx, EffectId e, int sensor, int axis, int param, double truth, std::uint64_t seed) {
+  const DiagRun r = diagnose_sim(fx, seed);
+  const DiagFinding* f = find(r, e);
+  ASSERT_NE(f, nullptr) << effect_name(e) << " not found; seed " << seed << summary(r);
+  EXPECT_EQ(f->report_sensor, sensor) << summary(r);
+  EXPECT_EQ(f->report_axis, axis) << summary(r);
+  EXPECT_NEAR(f->value[param], truth, 0.2 * std::abs(truth)) << summary(r);
+  EXPECT_LE(f->rms_after, 0.2 * f->rms_before) << summary(r);
+  EXPECT_EQ(r.result.findings.size(), 1u) << "seed " << seed << summary(r);
+  std::printf("%-20s truth %.4g found %.4g ± %.2g  rms %.3g → %.3g\n", effect_name(e), truth, f->value[param],
+              f->sigma[param], f->rms_before, f->rms_after);
+}
+
+using namespace units;
+
+TEST(DiagnoseEffects, GSensitivity) {
+  for (int k = 0; k < 3; ++k) {
+    EffectTerms fx;
+    const int i = k, j = (k + 1) % 3;
+    const double v = (0.004 + 0.003 * k) * kDeg / kG0;  // 0.004…0.010 °/s/g
+    fx.g_sensitivity(i, j) = v;
+    expect_found(fx, EffectId::g_sensitivity, 0, i, j, v, 11 + k);
+  }
+}
+
+TEST(DiagnoseEffects, ScaleNonlinearity) {
+  for (int k = 0; k < 2; ++k) {
+    EffectTerms fx;
+    fx.gyro.nonlinearity(k) = (k ? -1 : 1) * 2e-5;
+    expect_found(fx, EffectId::scale_nonlinearity, 0, k, 0, fx.gyro.nonlinearity(k), 21 + k);
+  }
+  EffectTerms fx;
+  fx.accel.nonlinearity(2) = 3e-5;
+  expect_found(fx, EffectId::scale_nonlinearity, 1, 2, 0, 3e-5, 23);
+}
+
+TEST(DiagnoseEffects, ScaleAsymmetry) {
+  EffectTerms fx;
+  fx.gyro.asymmetry(1) = 60e-6;
+  expect_found(fx, EffectId::scale_asymmetry, 0, 1, 0, 60e-6, 31);
+  EffectTerms fa;
+  fa.accel.asymmetry(0) = -300e-6;
+  expect_found(fa, EffectId::scale_asymmetry, 1, 0, 0, -300e-6, 32);
+}
+
+TEST(DiagnoseEffects, TemperatureBias) {
+  EffectTerms fx;
+  fx.gyro.temp_bias(2) = 30 * kDegPerHour;
+  expect_found(fx, EffectId::temperature_bias, 0, 2, 0, fx.gyro.temp_bias(2), 41);
+  EffectTerms fa;
+  fa.accel.temp_bias(0) = 0.5 * kMilliG;
+  expect_found(fa, EffectId::temperature_bias, 1, 0, 0, fa.accel.temp_bias(0), 42);
+}
+
+TEST(DiagnoseEffects, TemperatureScale) {
+  EffectTerms fx;
+  fx.gyro.temp_scale(0) = 100e-6;
+  expect_found(fx, EffectId::temperature_scale, 0, 0, 0, 100e-6, 51);
+}
+
+TEST(DiagnoseEffects, TimeOffset) {
+  for (double tau : {0.3e-3, -1e-3}) {
+    EffectTerms fx;
+    fx.time_offset_s = tau;
+    expect_found(fx, EffectId::time_offset, 2, -1, 0, tau, 61 + (tau > 0));
+  }
+}
+
+TEST(DiagnoseEffects, LeverArm) {
+  for (int k = 0; k < 2; ++k) {
+    EffectTerms fx;
+    fx.lever_arm_m(k * 2) = k ? 0.004 : -0.002;
+    expect_found(fx, EffectId::lever_arm, 1, k * 2, k * 2, fx.lever_arm_m(k * 2), 71 + k);
+  }
+}
+
+TEST(DiagnoseEffects, TableWobble) {
+  EffectTerms fx;
+  fx.wobble_rad(0) = 20.0 / 3600 * kDeg;
+  expect_found(fx, EffectId::table_wobble, 2, -1, 0, fx.wobble_rad(0), 81);
+}
+
+TEST(DiagnoseEffects, Misalignment) {
+  EffectTerms fx;
+  fx.table_tilt_rad(1) = 60.0 / 3600 * kDeg;
+  expect_found(fx, EffectId::misalignment, 2, -1, 1, fx.table_tilt_rad(1), 91);
+}
+
+TEST(DiagnoseEffects, CleanRecordingsHaveNoFinding) {
+  int with_finding = 0;
+  const int n = 6;
+  for (int s = 0; s < n; ++s) {
+    const DiagRun r = diagnose_sim(EffectTerms{}, 100 + s);
+    if (!r.result.findings.empty()) {
+      ++with_finding;
+      std::printf("clean seed %d:%s\n", 100 + s, summary(r).c_str());
+    }
+  }
+  EXPECT_LE(with_finding, 0) << with_finding << " of " << n << " clean recordings gave a finding";
+}
+
+TEST(DiagnoseEffects, TwoEffectsAtOnce) {
+  EffectTerms fx;
+  fx.g_sensitivity(0, 2) = 0.008 * kDeg / kG0;
+  fx.lever_arm_m(1) = 0.003;
+  const DiagRun r = diagnose_sim(fx, 201);
+  const DiagFinding* g = find(r, EffectId::g_sensitivity);
+  const DiagFinding* l = find(r, EffectId::lever_arm);
+  ASSERT_NE(g, nullptr) << summary(r);
+  ASSERT_NE(l, nullptr) << summary(r);
+  EXPECT_NEAR(g->value[2], fx.g_sensitivity(0, 2), 0.2 * fx.g_sensitivity(0, 2));
+  EXPECT_NEAR(l->value[1], 0.003, 0.2 * 0.003);
+  EXPECT_EQ(r.result.findings.size(), 2u) << summary(r);
+}
+
+}  // namespace
+}  // namespace calbench
