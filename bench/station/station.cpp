@@ -91,6 +91,7 @@ class Station {
   BenchPlan plan_;
   std::unique_ptr<SiteEarth> earth_;
   std::shared_ptr<VirtualClock> clock_;
+  std::shared_ptr<WallClock> wall_clock_;
   std::unique_ptr<TableEmulator> table_emu_;
   std::unique_ptr<TableClient> table_;
   std::unique_ptr<SpiBus> bus_;
@@ -124,17 +125,24 @@ void Station::setup() {
       table_emu_->start();
       table_uri = table_emu_->uri();
     } else {
-      throw std::invalid_argument("--emulated with --table: the emulated IMU needs the in-process table emulator "
-                                  "(its physics follow the table's true axis states); drop --table");
+      // External table (e.g. `calbench emulate table`): real time, and the emulated IMU's physics follow
+      // the table's reported encoder states (last poll, extrapolated with the reported rate).
+      wall_clock_ = std::make_shared<WallClock>(1.0);
     }
     truth_ = draw_random_unit(o_.seed);
     Adis16488aEmulatorConfig ic;
     ic.seed = o_.seed;
     ic.serial = static_cast<std::uint16_t>(1000 + o_.seed % 60000);
+    std::shared_ptr<EmuClock> imu_clock = wall_clock_ ? std::shared_ptr<EmuClock>(wall_clock_) : clock_;
     auto emu = std::make_unique<Adis16488aEmulator>(
-        clock_,
+        imu_clock,
         [this](double t) {
-          const auto s = table_emu_->axis_states(t);
+          std::array<AxisState, 2> s;
+          if (table_emu_) {
+            s = table_emu_->axis_states(t);
+          } else {
+            for (int a = 0; a < 2; ++a) s[a] = AxisState{st_[a].position + st_[a].rate * (t - last_poll_), st_[a].rate, 0};
+          }
           const auto k = bench_kinematics(*earth_, s[0], s[1], mount_);
           return EmuTruth{k.w_ib_b, k.f_b};
         },
@@ -398,7 +406,7 @@ Result Station::run() {
   res.summary["samples_lost"] = lost_;
   res.summary["error_samples"] = error_samples_;
   res.summary["repeats"] = repeats_;
-  res.summary["emulated_s"] = clock_ ? clock_->now() : 0.0;
+  res.summary["emulated_s"] = bus_ ? bus_->now() : 0.0;
   res.summary["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
   return res;
 }
