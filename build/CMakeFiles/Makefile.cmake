@@ -13,6 +13,10 @@ set(CMAKE_MAKEFILE_DEPENDS
   "/usr/lib/x86_64-linux-gnu/cmake/GTest/GTestConfigVersion.cmake"
   "/usr/lib/x86_64-linux-gnu/cmake/GTest/GTestTargets-none.cmake"
   "/usr/lib/x86_64-linux-gnu/cmake/GTest/GTestTargets.cmake"
+  "/usr/lib/x86_64-linux-gnu/cmake/benchmark/benchmarkConfig.cmake"
+  "/usr/lib/x86_64-linux-gnu/cmake/benchmark/benchmarkConfigVersion.cmake"
+  "/usr/lib/x86_64-linux-gnu/cmake/benchmark/benchmarkTargets-none.cmake"
+  "/usr/lib/x86_64-linux-gnu/cmake/benchmark/benchmarkTargets.cmake"
   "/usr/lib/x86_64-linux-gnu/cmake/tomlplusplus/tomlplusplusConfig.cmake"
   "/usr/lib/x86_64-linux-gnu/cmake/tomlplusplus/tomlplusplusConfigVersion.cmake"
   "/usr/share/cmake-3.25/Modules/CMakeCXXInformation.cmake"
@@ -74,5 +78,12 @@ set(CMAKE_MAKEFILE_PRODUCTS
 set(CMAKE_DEPEND_INFO_FILES
   "CMakeFiles/calbench_calibration.dir/DependInfo.cmake"
   "CMakeFiles/calbench_bench.dir/DependInfo.cmake"
+  "CMakeFiles/calbench_devices.dir/DependInfo.cmake"
+  "CMakeFiles/calbench_db.dir/DependInfo.cmake"
   "CMakeFiles/calbench.dir/DependInfo.cmake"
+  "tests/CMakeFiles/test_bench.dir/DependInfo.cmake"
+  "tests/CMakeFiles/test_calibration.dir/DependInfo.cmake"
+  "tests/CMakeFiles/test_db.dir/DependInfo.cmake"
+  "tests/CMakeFiles/test_devices.dir/DependInfo.cmake"
+  "tests/CMakeFiles/calbench_perf.dir/DependInfo.cmake"
   )

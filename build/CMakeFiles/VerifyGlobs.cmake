@@ -5,6 +5,15 @@ cmake_policy(SET CMP0009 NEW)
 # CLI_SOURCES at CMakeLists.txt:70 (file)
 file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/bench/cli/*.cpp")
 set(OLD_GLOB
+  "/work/main/bench/cli/cmd_db.cpp"
+  "/work/main/bench/cli/cmd_diagnose.cpp"
+  "/work/main/bench/cli/cmd_emulate.cpp"
+  "/work/main/bench/cli/cmd_fit.cpp"
+  "/work/main/bench/cli/cmd_identify.cpp"
+  "/work/main/bench/cli/cmd_provision.cpp"
+  "/work/main/bench/cli/cmd_report.cpp"
+  "/work/main/bench/cli/cmd_simulate.cpp"
+  "/work/main/bench/cli/cmd_simulate_drive.cpp"
   "/work/main/bench/cli/main.cpp"
   )
 if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
@@ -15,6 +24,15 @@ endif()
 # CLI_TESTS at tests/CMakeLists.txt:30 (file)
 file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/tests/cli/*.sh")
 set(OLD_GLOB
+  "/work/main/tests/cli/bench_bad_input.sh"
+  "/work/main/tests/cli/bench_foreign_recording.sh"
+  "/work/main/tests/cli/bench_simulate_fit.sh"
+  "/work/main/tests/cli/db_concurrency.sh"
+  "/work/main/tests/cli/db_import_inmotion.sh"
+  "/work/main/tests/cli/db_provision.sh"
+  "/work/main/tests/cli/db_report_browser.sh"
+  "/work/main/tests/cli/db_workflow.sh"
+  "/work/main/tests/cli/devices_emulate.sh"
   )
 if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
   message("-- GLOB mismatch!")
@@ -24,6 +42,66 @@ endif()
 # PERF_SOURCES at tests/CMakeLists.txt:39 (file)
 file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/tests/perf/*.cpp")
 set(OLD_GLOB
+  "/work/main/tests/perf/db_bench.cpp"
+  "/work/main/tests/perf/devices_bench.cpp"
+  "/work/main/tests/perf/main.cpp"
+  "/work/main/tests/perf/spine_bench.cpp"
+  )
+if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
+  message("-- GLOB mismatch!")
+  file(TOUCH_NOCREATE "/work/main/build/CMakeFiles/cmake.verify_globs")
+endif()
+
+# srcs at tests/CMakeLists.txt:9 (file)
+file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/tests/unit/bench/*.cpp")
+set(OLD_GLOB
+  "/work/main/tests/unit/bench/bench_fit_accuracy_test.cpp"
+  "/work/main/tests/unit/bench/bench_fit_observability_test.cpp"
+  "/work/main/tests/unit/bench/recording_io_test.cpp"
+  "/work/main/tests/unit/bench/report_gnuplot_test.cpp"
+  )
+if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
+  message("-- GLOB mismatch!")
+  file(TOUCH_NOCREATE "/work/main/build/CMakeFiles/cmake.verify_globs")
+endif()
+
+# srcs at tests/CMakeLists.txt:9 (file)
+file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/tests/unit/calibration/*.cpp")
+set(OLD_GLOB
+  "/work/main/tests/unit/calibration/drivesim_route_test.cpp"
+  "/work/main/tests/unit/calibration/identify_allan_test.cpp"
+  "/work/main/tests/unit/calibration/identify_correlation_test.cpp"
+  "/work/main/tests/unit/calibration/identify_fit_test.cpp"
+  "/work/main/tests/unit/calibration/identify_shaping_filter_test.cpp"
+  "/work/main/tests/unit/calibration/inmotion_filter_test.cpp"
+  "/work/main/tests/unit/calibration/ins_strapdown_test.cpp"
+  )
+if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
+  message("-- GLOB mismatch!")
+  file(TOUCH_NOCREATE "/work/main/build/CMakeFiles/cmake.verify_globs")
+endif()
+
+# srcs at tests/CMakeLists.txt:9 (file)
+file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/tests/unit/db/*.cpp")
+set(OLD_GLOB
+  "/work/main/tests/unit/db/approval_test.cpp"
+  "/work/main/tests/unit/db/compose_test.cpp"
+  "/work/main/tests/unit/db/crash_concurrency_test.cpp"
+  "/work/main/tests/unit/db/fleet_test.cpp"
+  "/work/main/tests/unit/db/inmotion_import_test.cpp"
+  "/work/main/tests/unit/db/store_test.cpp"
+  )
+if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
+  message("-- GLOB mismatch!")
+  file(TOUCH_NOCREATE "/work/main/build/CMakeFiles/cmake.verify_globs")
+endif()
+
+# srcs at tests/CMakeLists.txt:9 (file)
+file(GLOB NEW_GLOB LIST_DIRECTORIES true "/work/main/tests/unit/devices/*.cpp")
+set(OLD_GLOB
+  "/work/main/tests/unit/devices/adis16488a_test.cpp"
+  "/work/main/tests/unit/devices/bridges_test.cpp"
+  "/work/main/tests/unit/devices/table_test.cpp"
   )
 if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
   message("-- GLOB mismatch!")
@@ -33,11 +111,28 @@ endif()
 # srcs at CMakeLists.txt:31 (file)
 file(GLOB_RECURSE NEW_GLOB LIST_DIRECTORIES false "/work/main/bench/*.cpp")
 set(OLD_GLOB
+  "/work/main/bench/bench_recording.cpp"
+  "/work/main/bench/cli/cmd_db.cpp"
+  "/work/main/bench/cli/cmd_diagnose.cpp"
+  "/work/main/bench/cli/cmd_emulate.cpp"
+  "/work/main/bench/cli/cmd_fit.cpp"
+  "/work/main/bench/cli/cmd_identify.cpp"
+  "/work/main/bench/cli/cmd_provision.cpp"
+  "/work/main/bench/cli/cmd_report.cpp"
+  "/work/main/bench/cli/cmd_simulate.cpp"
+  "/work/main/bench/cli/cmd_simulate_drive.cpp"
   "/work/main/bench/cli/main.cpp"
+  "/work/main/bench/diagnose/diagnose_run.cpp"
+  "/work/main/bench/diagnose/effects_json.cpp"
+  "/work/main/bench/drive/route_toml.cpp"
+  "/work/main/bench/drive/simulate_drive.cpp"
   "/work/main/bench/io/coefficients_json.cpp"
   "/work/main/bench/io/csv.cpp"
   "/work/main/bench/io/json_util.cpp"
+  "/work/main/bench/io/plan_toml.cpp"
   "/work/main/bench/io/recording.cpp"
+  "/work/main/bench/report/db_report.cpp"
+  "/work/main/bench/report/gnuplot.cpp"
   )
 if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
   message("-- GLOB mismatch!")
@@ -47,9 +142,33 @@ endif()
 # srcs at CMakeLists.txt:31 (file)
 file(GLOB_RECURSE NEW_GLOB LIST_DIRECTORIES false "/work/main/calibration/*.cpp")
 set(OLD_GLOB
+  "/work/main/calibration/bench_blocks.cpp"
+  "/work/main/calibration/bench_fit_common.cpp"
+  "/work/main/calibration/bench_fit_ekf.cpp"
+  "/work/main/calibration/bench_fit_lsq.cpp"
   "/work/main/calibration/bench_geometry.cpp"
+  "/work/main/calibration/bench_sim.cpp"
+  "/work/main/calibration/diagnosis/catalogue.cpp"
+  "/work/main/calibration/diagnosis/diag_data.cpp"
+  "/work/main/calibration/diagnosis/diagnose.cpp"
+  "/work/main/calibration/drive_sim/drive_simulator.cpp"
+  "/work/main/calibration/drive_sim/route.cpp"
   "/work/main/calibration/earth.cpp"
+  "/work/main/calibration/effects/effect_terms.cpp"
+  "/work/main/calibration/identification/allan.cpp"
+  "/work/main/calibration/identification/correlation.cpp"
+  "/work/main/calibration/identification/correlation_fit.cpp"
+  "/work/main/calibration/identification/noise_processes.cpp"
+  "/work/main/calibration/identification/shaping_filter.cpp"
   "/work/main/calibration/imu_error_sim.cpp"
+  "/work/main/calibration/inmotion/error_model.cpp"
+  "/work/main/calibration/inmotion/inmotion_filter.cpp"
+  "/work/main/calibration/inmotion/obs_attitude.cpp"
+  "/work/main/calibration/inmotion/obs_position.cpp"
+  "/work/main/calibration/inmotion/obs_velocity.cpp"
+  "/work/main/calibration/inmotion/state_layout.cpp"
+  "/work/main/calibration/ins/nav_math.cpp"
+  "/work/main/calibration/ins/strapdown.cpp"
   "/work/main/calibration/sensor_model.cpp"
   "/work/main/calibration/table_motion.cpp"
   )
@@ -61,6 +180,13 @@ endif()
 # srcs at CMakeLists.txt:31 (file)
 file(GLOB_RECURSE NEW_GLOB LIST_DIRECTORIES false "/work/main/db/*.cpp")
 set(OLD_GLOB
+  "/work/main/db/approval.cpp"
+  "/work/main/db/coefficients_payload.cpp"
+  "/work/main/db/fleet.cpp"
+  "/work/main/db/inmotion_import.cpp"
+  "/work/main/db/schema.cpp"
+  "/work/main/db/sqlite.cpp"
+  "/work/main/db/store.cpp"
   )
 if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
   message("-- GLOB mismatch!")
@@ -70,6 +196,15 @@ endif()
 # srcs at CMakeLists.txt:31 (file)
 file(GLOB_RECURSE NEW_GLOB LIST_DIRECTORIES false "/work/main/devices/*.cpp")
 set(OLD_GLOB
+  "/work/main/devices/adis16488a.cpp"
+  "/work/main/devices/adis16488a_emulator.cpp"
+  "/work/main/devices/adis16488a_regs.cpp"
+  "/work/main/devices/ft232h.cpp"
+  "/work/main/devices/mcp2210.cpp"
+  "/work/main/devices/table_client.cpp"
+  "/work/main/devices/table_emulator.cpp"
+  "/work/main/devices/table_map.cpp"
+  "/work/main/devices/usb_transport.cpp"
   )
 if(NOT "${NEW_GLOB}" STREQUAL "${OLD_GLOB}")
   message("-- GLOB mismatch!")

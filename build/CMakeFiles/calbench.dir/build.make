@@ -69,10 +69,136 @@ include CMakeFiles/calbench.dir/progress.make
 # Include the compile flags for this target's objects.
 include CMakeFiles/calbench.dir/flags.make
 
+CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o: /work/main/bench/cli/cmd_db.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_1) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o -c /work/main/bench/cli/cmd_db.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_db.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_db.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o: /work/main/bench/cli/cmd_diagnose.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o -c /work/main/bench/cli/cmd_diagnose.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_diagnose.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_diagnose.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o: /work/main/bench/cli/cmd_emulate.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o -c /work/main/bench/cli/cmd_emulate.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_emulate.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_emulate.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o: /work/main/bench/cli/cmd_fit.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o -c /work/main/bench/cli/cmd_fit.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_fit.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_fit.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o: /work/main/bench/cli/cmd_identify.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_5) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o -c /work/main/bench/cli/cmd_identify.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_identify.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_identify.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o: /work/main/bench/cli/cmd_provision.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_6) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o -c /work/main/bench/cli/cmd_provision.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_provision.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_provision.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o: /work/main/bench/cli/cmd_report.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_7) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o -c /work/main/bench/cli/cmd_report.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_report.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_report.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o: /work/main/bench/cli/cmd_simulate.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_8) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o -c /work/main/bench/cli/cmd_simulate.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_simulate.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_simulate.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.s
+
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o: CMakeFiles/calbench.dir/flags.make
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o: /work/main/bench/cli/cmd_simulate_drive.cpp
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_9) "Building CXX object CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o -c /work/main/bench/cli/cmd_simulate_drive.cpp
+
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/cli/cmd_simulate_drive.cpp > CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.i
+
+CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/cli/cmd_simulate_drive.cpp -o CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.s
+
 CMakeFiles/calbench.dir/bench/cli/main.cpp.o: CMakeFiles/calbench.dir/flags.make
 CMakeFiles/calbench.dir/bench/cli/main.cpp.o: /work/main/bench/cli/main.cpp
 CMakeFiles/calbench.dir/bench/cli/main.cpp.o: CMakeFiles/calbench.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_1) "Building CXX object CMakeFiles/calbench.dir/bench/cli/main.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_10) "Building CXX object CMakeFiles/calbench.dir/bench/cli/main.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench.dir/bench/cli/main.cpp.o -MF CMakeFiles/calbench.dir/bench/cli/main.cpp.o.d -o CMakeFiles/calbench.dir/bench/cli/main.cpp.o -c /work/main/bench/cli/main.cpp
 
 CMakeFiles/calbench.dir/bench/cli/main.cpp.i: cmake_force
@@ -85,26 +211,46 @@ CMakeFiles/calbench.dir/bench/cli/main.cpp.s: cmake_force
 
 # Object files for target calbench
 calbench_OBJECTS = \
+"CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o" \
+"CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o" \
 "CMakeFiles/calbench.dir/bench/cli/main.cpp.o"
 
 # External object files for target calbench
 calbench_EXTERNAL_OBJECTS =
 
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_db.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_diagnose.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_emulate.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_fit.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_identify.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_provision.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_report.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_simulate.cpp.o
+calbench: CMakeFiles/calbench.dir/bench/cli/cmd_simulate_drive.cpp.o
 calbench: CMakeFiles/calbench.dir/bench/cli/main.cpp.o
 calbench: CMakeFiles/calbench.dir/build.make
 calbench: libcalbench_bench.a
 calbench: /usr/lib/x86_64-linux-gnu/libtomlplusplus.so
+calbench: libcalbench_devices.a
 calbench: /usr/lib/x86_64-linux-gnu/libmodbus.so
 calbench: /usr/lib/x86_64-linux-gnu/libhidapi-libusb.so
 calbench: /usr/lib/x86_64-linux-gnu/libftdi1.so
 calbench: /usr/lib/x86_64-linux-gnu/libusb-1.0.so
+calbench: libcalbench_db.a
 calbench: libcalbench_calibration.a
 calbench: /usr/lib/x86_64-linux-gnu/libGeographicLib.so
 calbench: /usr/lib/x86_64-linux-gnu/libfftw3.so
 calbench: /usr/lib/x86_64-linux-gnu/libsqlite3.so
 calbench: /usr/lib/x86_64-linux-gnu/libcrypto.so
 calbench: CMakeFiles/calbench.dir/link.txt
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Linking CXX executable calbench"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_11) "Linking CXX executable calbench"
 	$(CMAKE_COMMAND) -E cmake_link_script CMakeFiles/calbench.dir/link.txt --verbose=$(VERBOSE)
 
 # Rule to build all files generated by this target.

@@ -69,10 +69,80 @@ include CMakeFiles/calbench_bench.dir/progress.make
 # Include the compile flags for this target's objects.
 include CMakeFiles/calbench_bench.dir/flags.make
 
+CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o: /work/main/bench/bench_recording.cpp
+CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_1) "Building CXX object CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o -c /work/main/bench/bench_recording.cpp
+
+CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/bench_recording.cpp > CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/bench_recording.cpp -o CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.s
+
+CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o: /work/main/bench/diagnose/diagnose_run.cpp
+CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o -c /work/main/bench/diagnose/diagnose_run.cpp
+
+CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/diagnose/diagnose_run.cpp > CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/diagnose/diagnose_run.cpp -o CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.s
+
+CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o: /work/main/bench/diagnose/effects_json.cpp
+CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o -c /work/main/bench/diagnose/effects_json.cpp
+
+CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/diagnose/effects_json.cpp > CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/diagnose/effects_json.cpp -o CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.s
+
+CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o: /work/main/bench/drive/route_toml.cpp
+CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Building CXX object CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o -c /work/main/bench/drive/route_toml.cpp
+
+CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/drive/route_toml.cpp > CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/drive/route_toml.cpp -o CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.s
+
+CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o: /work/main/bench/drive/simulate_drive.cpp
+CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_5) "Building CXX object CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o -c /work/main/bench/drive/simulate_drive.cpp
+
+CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/drive/simulate_drive.cpp > CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/drive/simulate_drive.cpp -o CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.s
+
 CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
 CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o: /work/main/bench/io/coefficients_json.cpp
 CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_1) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_6) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o -c /work/main/bench/io/coefficients_json.cpp
 
 CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.i: cmake_force
@@ -86,7 +156,7 @@ CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.s: cmake_force
 CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
 CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o: /work/main/bench/io/csv.cpp
 CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_7) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o -c /work/main/bench/io/csv.cpp
 
 CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.i: cmake_force
@@ -100,7 +170,7 @@ CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.s: cmake_force
 CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
 CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o: /work/main/bench/io/json_util.cpp
 CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_8) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o -c /work/main/bench/io/json_util.cpp
 
 CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.i: cmake_force
@@ -111,10 +181,24 @@ CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.s: cmake_force
 	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.s"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/io/json_util.cpp -o CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.s
 
+CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o: /work/main/bench/io/plan_toml.cpp
+CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_9) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o -c /work/main/bench/io/plan_toml.cpp
+
+CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/io/plan_toml.cpp > CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/io/plan_toml.cpp -o CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.s
+
 CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
 CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o: /work/main/bench/io/recording.cpp
 CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_10) "Building CXX object CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o -c /work/main/bench/io/recording.cpp
 
 CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.i: cmake_force
@@ -125,23 +209,67 @@ CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.s: cmake_force
 	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.s"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/io/recording.cpp -o CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.s
 
+CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o: /work/main/bench/report/db_report.cpp
+CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_11) "Building CXX object CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o -c /work/main/bench/report/db_report.cpp
+
+CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/report/db_report.cpp > CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/report/db_report.cpp -o CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.s
+
+CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o: CMakeFiles/calbench_bench.dir/flags.make
+CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o: /work/main/bench/report/gnuplot.cpp
+CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o: CMakeFiles/calbench_bench.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_12) "Building CXX object CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o -MF CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o.d -o CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o -c /work/main/bench/report/gnuplot.cpp
+
+CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/bench/report/gnuplot.cpp > CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.i
+
+CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/bench/report/gnuplot.cpp -o CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.s
+
 # Object files for target calbench_bench
 calbench_bench_OBJECTS = \
+"CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o" \
 "CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o" \
 "CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o" \
 "CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o" \
-"CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o"
+"CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o" \
+"CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o"
 
 # External object files for target calbench_bench
 calbench_bench_EXTERNAL_OBJECTS =
 
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/bench_recording.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/diagnose/diagnose_run.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/diagnose/effects_json.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/drive/route_toml.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/drive/simulate_drive.cpp.o
 libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/io/coefficients_json.cpp.o
 libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/io/csv.cpp.o
 libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/io/json_util.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/io/plan_toml.cpp.o
 libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/io/recording.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/report/db_report.cpp.o
+libcalbench_bench.a: CMakeFiles/calbench_bench.dir/bench/report/gnuplot.cpp.o
 libcalbench_bench.a: CMakeFiles/calbench_bench.dir/build.make
 libcalbench_bench.a: CMakeFiles/calbench_bench.dir/link.txt
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_5) "Linking CXX static library libcalbench_bench.a"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_13) "Linking CXX static library libcalbench_bench.a"
 	$(CMAKE_COMMAND) -P CMakeFiles/calbench_bench.dir/cmake_clean_target.cmake
 	$(CMAKE_COMMAND) -E cmake_link_script CMakeFiles/calbench_bench.dir/link.txt --verbose=$(VERBOSE)
 

@@ -69,10 +69,66 @@ include CMakeFiles/calbench_calibration.dir/progress.make
 # Include the compile flags for this target's objects.
 include CMakeFiles/calbench_calibration.dir/flags.make
 
+CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o: /work/main/calibration/bench_blocks.cpp
+CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_1) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o -c /work/main/calibration/bench_blocks.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/bench_blocks.cpp > CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_blocks.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o: /work/main/calibration/bench_fit_common.cpp
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o -c /work/main/calibration/bench_fit_common.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/bench_fit_common.cpp > CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_fit_common.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o: /work/main/calibration/bench_fit_ekf.cpp
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o -c /work/main/calibration/bench_fit_ekf.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/bench_fit_ekf.cpp > CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_fit_ekf.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o: /work/main/calibration/bench_fit_lsq.cpp
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o -c /work/main/calibration/bench_fit_lsq.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/bench_fit_lsq.cpp > CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_fit_lsq.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.s
+
 CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o: /work/main/calibration/bench_geometry.cpp
 CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_1) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_5) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o -c /work/main/calibration/bench_geometry.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.i: cmake_force
@@ -83,10 +139,94 @@ CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.s: cmake_forc
 	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.s"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_geometry.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.s
 
+CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o: /work/main/calibration/bench_sim.cpp
+CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_6) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o -c /work/main/calibration/bench_sim.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/bench_sim.cpp > CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/bench_sim.cpp -o CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o: /work/main/calibration/diagnosis/catalogue.cpp
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_7) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o -c /work/main/calibration/diagnosis/catalogue.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/diagnosis/catalogue.cpp > CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/diagnosis/catalogue.cpp -o CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o: /work/main/calibration/diagnosis/diag_data.cpp
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_8) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o -c /work/main/calibration/diagnosis/diag_data.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/diagnosis/diag_data.cpp > CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/diagnosis/diag_data.cpp -o CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o: /work/main/calibration/diagnosis/diagnose.cpp
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_9) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o -c /work/main/calibration/diagnosis/diagnose.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/diagnosis/diagnose.cpp > CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/diagnosis/diagnose.cpp -o CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o: /work/main/calibration/drive_sim/drive_simulator.cpp
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_10) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o -c /work/main/calibration/drive_sim/drive_simulator.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/drive_sim/drive_simulator.cpp > CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/drive_sim/drive_simulator.cpp -o CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o: /work/main/calibration/drive_sim/route.cpp
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_11) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o -c /work/main/calibration/drive_sim/route.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/drive_sim/route.cpp > CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/drive_sim/route.cpp -o CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.s
+
 CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o: /work/main/calibration/earth.cpp
 CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_2) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_12) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o -c /work/main/calibration/earth.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.i: cmake_force
@@ -97,10 +237,94 @@ CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.s: cmake_force
 	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.s"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/earth.cpp -o CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.s
 
+CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o: /work/main/calibration/effects/effect_terms.cpp
+CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_13) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o -c /work/main/calibration/effects/effect_terms.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/effects/effect_terms.cpp > CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/effects/effect_terms.cpp -o CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o: /work/main/calibration/identification/allan.cpp
+CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_14) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o -c /work/main/calibration/identification/allan.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/identification/allan.cpp > CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/identification/allan.cpp -o CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o: /work/main/calibration/identification/correlation.cpp
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_15) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o -c /work/main/calibration/identification/correlation.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/identification/correlation.cpp > CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/identification/correlation.cpp -o CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o: /work/main/calibration/identification/correlation_fit.cpp
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_16) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o -c /work/main/calibration/identification/correlation_fit.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/identification/correlation_fit.cpp > CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/identification/correlation_fit.cpp -o CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o: /work/main/calibration/identification/noise_processes.cpp
+CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_17) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o -c /work/main/calibration/identification/noise_processes.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/identification/noise_processes.cpp > CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/identification/noise_processes.cpp -o CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o: /work/main/calibration/identification/shaping_filter.cpp
+CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_18) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o -c /work/main/calibration/identification/shaping_filter.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/identification/shaping_filter.cpp > CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/identification/shaping_filter.cpp -o CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.s
+
 CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o: /work/main/calibration/imu_error_sim.cpp
 CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_3) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_19) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o -c /work/main/calibration/imu_error_sim.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.i: cmake_force
@@ -111,10 +335,122 @@ CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.s: cmake_force
 	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.s"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/imu_error_sim.cpp -o CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.s
 
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o: /work/main/calibration/inmotion/error_model.cpp
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_20) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o -c /work/main/calibration/inmotion/error_model.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/inmotion/error_model.cpp > CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/inmotion/error_model.cpp -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o: /work/main/calibration/inmotion/inmotion_filter.cpp
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_21) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o -c /work/main/calibration/inmotion/inmotion_filter.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/inmotion/inmotion_filter.cpp > CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/inmotion/inmotion_filter.cpp -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o: /work/main/calibration/inmotion/obs_attitude.cpp
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_22) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o -c /work/main/calibration/inmotion/obs_attitude.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/inmotion/obs_attitude.cpp > CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/inmotion/obs_attitude.cpp -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o: /work/main/calibration/inmotion/obs_position.cpp
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_23) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o -c /work/main/calibration/inmotion/obs_position.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/inmotion/obs_position.cpp > CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/inmotion/obs_position.cpp -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o: /work/main/calibration/inmotion/obs_velocity.cpp
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_24) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o -c /work/main/calibration/inmotion/obs_velocity.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/inmotion/obs_velocity.cpp > CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/inmotion/obs_velocity.cpp -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o: /work/main/calibration/inmotion/state_layout.cpp
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_25) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o -c /work/main/calibration/inmotion/state_layout.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/inmotion/state_layout.cpp > CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/inmotion/state_layout.cpp -o CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o: /work/main/calibration/ins/nav_math.cpp
+CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_26) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o -c /work/main/calibration/ins/nav_math.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/ins/nav_math.cpp > CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/ins/nav_math.cpp -o CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.s
+
+CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
+CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o: /work/main/calibration/ins/strapdown.cpp
+CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_27) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o -c /work/main/calibration/ins/strapdown.cpp
+
+CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.i: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Preprocessing CXX source to CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.i"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -E /work/main/calibration/ins/strapdown.cpp > CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.i
+
+CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.s: cmake_force
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green "Compiling CXX source to assembly CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.s"
+	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -S /work/main/calibration/ins/strapdown.cpp -o CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.s
+
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o: /work/main/calibration/sensor_model.cpp
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_4) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_28) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o -c /work/main/calibration/sensor_model.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.i: cmake_force
@@ -128,7 +464,7 @@ CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.s: cmake_force
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o: CMakeFiles/calbench_calibration.dir/flags.make
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o: /work/main/calibration/table_motion.cpp
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o: CMakeFiles/calbench_calibration.dir/compiler_depend.ts
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_5) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_29) "Building CXX object CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"
 	/usr/bin/c++ $(CXX_DEFINES) $(CXX_INCLUDES) $(CXX_FLAGS) -MD -MT CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o -MF CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o.d -o CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o -c /work/main/calibration/table_motion.cpp
 
 CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.i: cmake_force
@@ -141,23 +477,71 @@ CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.s: cmake_force
 
 # Object files for target calbench_calibration
 calbench_calibration_OBJECTS = \
+"CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o" \
+"CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o" \
 "CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o"
 
 # External object files for target calbench_calibration
 calbench_calibration_EXTERNAL_OBJECTS =
 
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_blocks.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_fit_common.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_fit_ekf.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_fit_lsq.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_geometry.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/bench_sim.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/diagnosis/catalogue.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diag_data.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/diagnosis/diagnose.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/drive_sim/drive_simulator.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/drive_sim/route.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/earth.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/effects/effect_terms.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/identification/allan.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/identification/correlation.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/identification/correlation_fit.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/identification/noise_processes.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/identification/shaping_filter.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/imu_error_sim.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/inmotion/error_model.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/inmotion/inmotion_filter.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_attitude.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_position.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/inmotion/obs_velocity.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/inmotion/state_layout.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/ins/nav_math.cpp.o
+libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/ins/strapdown.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/sensor_model.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/calibration/table_motion.cpp.o
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/build.make
 libcalbench_calibration.a: CMakeFiles/calbench_calibration.dir/link.txt
-	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_6) "Linking CXX static library libcalbench_calibration.a"
+	@$(CMAKE_COMMAND) -E cmake_echo_color --switch=$(COLOR) --green --bold --progress-dir=/work/main/build/CMakeFiles --progress-num=$(CMAKE_PROGRESS_30) "Linking CXX static library libcalbench_calibration.a"
 	$(CMAKE_COMMAND) -P CMakeFiles/calbench_calibration.dir/cmake_clean_target.cmake
 	$(CMAKE_COMMAND) -E cmake_link_script CMakeFiles/calbench_calibration.dir/link.txt --verbose=$(VERBOSE)
 
