@@ -1,3 +1,0 @@
-file(REMOVE_RECURSE
-  "libcalbench_calibration.a"
-)
