@@ -18,7 +18,7 @@ std::vector<double> autocovariance(std::span<const double> x, std::size_t max_la
 std::vector<double> autocovariance_direct(std::span<const double> x, std::size_t max_lag);
 // Raw lagged sums S(k) = Σ_{i} x_i x_{i+k}, k = 0 … max_lag, no mean removal, no divisor (FFT).
 std::vector<double> lagged_sums(std::span<const double> x, std::size_t max_lag);
-// Smallest n' ≥ n of the form 2^a 3^b 5^c 7^d (fast FFT size).
+// A fast FFT size n' ≥ n: 2^a·3^b·5^c with a dominant power of two (within ~10 % of n).
 std::size_t fft_size(std::size_t n);
 // FFTW's planner is not thread-safe: hold this while creating or destroying plans.
 std::mutex& fftw_planner_mutex();
