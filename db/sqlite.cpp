@@ -1,5 +1,7 @@
 #include "db/sqlite.hpp"
 
+#include "bench/io/input_error.hpp"
+
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -46,7 +48,7 @@ void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, 
 
 Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(path), opt_(opt) {
   if (!opt.create && !std::filesystem::exists(path))
-    throw DbError(SQLITE_CANTOPEN, path + ": no database here (create it with `calbench db init`)");
+    throw InputError(path, 0, "", "no database here (create it with `calbench db init`, or give --db / CALBENCH_DB)");
   int flags = opt.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (opt.create && !opt.read_only) flags |= SQLITE_OPEN_CREATE;
   flags |= SQLITE_OPEN_NOMUTEX;

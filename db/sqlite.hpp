@@ -1,5 +1,6 @@
 // Small RAII layer over the SQLite C API: a connection, prepared statements, write transactions.
-// Only prepared statements with bound parameters are offered (no SQL text built from data).
+// A missing file (without OpenOptions::create) is an InputError. Only prepared statements with
+// bound parameters are offered (no SQL text built from data).
 //
 // Busy policy: every connection has a busy timeout (SQLite sleeps and retries while another
 // connection holds the write lock) and every write transaction goes through `write_transaction()`,

@@ -30,7 +30,7 @@ TEST(DbStore, CreatesSchemaWithWalForeignKeysAndVersion) {
 
 TEST(DbStore, RefusesMissingFileWithoutCreateAndNewerSchema) {
   TempDir t;
-  EXPECT_THROW(Store(t.db(), {}, test::test_actor()), DbError);
+  EXPECT_THROW(Store(t.db(), {}, test::test_actor()), InputError);
   { Store s(t.db(), test::create_opts(), test::test_actor()); s.connection().exec("PRAGMA user_version = 99"); }
   try {
     Store s(t.db(), {}, test::test_actor());
