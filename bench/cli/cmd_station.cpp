@@ -76,7 +76,7 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_flag("--emulated", a->o.emulated,
                 "in-process table emulator (real Modbus TCP on an ephemeral loopback port) and IMU emulator, "
                 "emulated clock faster than real time");
-  run->add_option("--db", a->o.db, "coefficient database (not yet wired: COEFFS.json is written into --out)");
+  run->add_option("--db", a->o.db, "also store the bench run and its coefficient set (draft) in this database");
   run->add_option("--out", a->out, "output folder: recording/, COEFFS.json")->capture_default_str();
   run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")->capture_default_str();
   run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")->capture_default_str();

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <ostream>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "calibration/earth.hpp"
 #include "calibration/imu_error_sim.hpp"
 #include "calibration/units.hpp"
+#include "db/store.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"
 #include "devices/ft232h.hpp"
@@ -48,6 +50,15 @@ std::unique_ptr<SpiBus> open_imu(const std::string& uri) {
     return bus;
   }
   throw std::invalid_argument("--imu must be ft232h[:SERIAL] or mcp2210[:SERIAL], not '" + uri + "'");
+}
+
+std::string iso_utc(std::chrono::system_clock::time_point tp) {
+  const std::time_t t = std::chrono::system_clock::to_time_t(tp);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char b[32];
+  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return b;
 }
 
 const char* axis_name(int m) { return m == 0 ? "x" : m == 1 ? "y" : "z"; }
@@ -106,6 +117,7 @@ class Station {
   double plan_s_ = 0, done_s_ = 0;
   std::uint64_t samples_ = 0, lost_ = 0, error_samples_ = 0, repeats_ = 0;
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
+  std::string started_ = iso_utc(std::chrono::system_clock::now());
 };
 
 void Station::setup() {
@@ -375,6 +387,26 @@ Result Station::run() {
     const BenchFitResult fr = fit_bench(data.blocks, fo);
     const CoefficientSet cs = bench_result_to_coefficients(fr, fo, data.meta, rec_dir.string());
     write_coefficients(o_.out_dir / "COEFFS.json", cs);
+    if (!o_.db.empty()) {  // the coefficient store: bench run + draft set, one transaction
+      db::OpenOptions dbo;
+      dbo.create = true;
+      db::Store store(o_.db, dbo);
+      db::BenchRunInput run;
+      run.station = o_.emulated ? "calbench-emulated" : db::Actor::from_environment().station;
+      run.plan = plan_.name;
+      run.recording_path = rec_dir.string();
+      run.recording_sha256 = sha256_file(rec_dir / "imu.csv");
+      run.started_at = started_;
+      run.ended_at = iso_utc(std::chrono::system_clock::now());
+      run.outcome = "pass";
+      run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples"});
+      run.qc.push_back({"step_repeats", static_cast<double>(repeats_), std::nullopt, true, ""});
+      const auto& id = imu_->identity();
+      const db::StoredSet st = store.store_bench({"ADIS16488A", id.serial_string(), id.firmware()}, run,
+                                                 coefficients_to_json(cs).dump(2));
+      res.summary["db"] = {{"path", o_.db}, {"set", st.set_id}, {"version", st.version}, {"bench_run", st.run_id}};
+      log_ << "stored in " << o_.db << ": set " << st.set_id << " (v" << st.version << ", draft)\n";
+    }
     if (o_.emulated) {
       nlohmann::json t = errors_json(truth_);
       t["note"] = "the emulated unit's true errors (for checking the station; never read by the fit)";

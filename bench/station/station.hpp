@@ -30,7 +30,7 @@ struct Options {
   std::string imu_uri;         // ft232h[:serial] | mcp2210[:serial]; empty with --emulated
   bool emulated = false;
   std::filesystem::path out_dir = "station-out";
-  std::string db;              // not yet used: COEFFS.json goes into out_dir
+  std::string db;              // also store run + draft set here (COEFFS.json is always written)
   std::uint64_t seed = 1;      // emulated unit
   int max_repeats = 2;         // per step
   double heartbeat_s = 0.1;    // bus-clock period of heartbeat + status poll

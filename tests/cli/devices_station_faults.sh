@@ -57,17 +57,19 @@ run() {  # run NAME ARGS... → sets rc, writes $tmp/NAME.{json,log}, timing in 
 }
 
 # Baseline: the small plan completes.
-run ok
+run ok --db "$tmp/ok.db"
 [ "$rc" -eq 0 ] || fail "baseline exit $rc: $(tail -3 "$tmp/ok.log")"
 [ -f "$tmp/ok/COEFFS.json" ] || fail "baseline wrote no COEFFS.json"
+"$CALBENCH" db devices --db "$tmp/ok.db" | grep -q "ADIS16488A" || fail "set not stored in the database"
 
 # Table controller dies at emulated t = 8 s (during the second step).
-run kill --inject table-kill-at=8
+run kill --inject table-kill-at=8 --db "$tmp/kill.db"
 [ "$rc" -ne 0 ] || fail "table killed: exit 0"
 grep -q "station aborted" "$tmp/kill.log" || fail "no abort message: $(cat "$tmp/kill.log")"
 grep -qi "table\|connect\|modbus" "$tmp/kill.log" || fail "message does not name the table"
 grep -q "stop attempted\|stopped" "$tmp/kill.log" || fail "no table stop reported"
 [ ! -f "$tmp/kill/COEFFS.json" ] || fail "coefficients stored after an abort"
+[ ! -f "$tmp/kill.db" ] || fail "database written after an abort"
 python3 - "$tmp/kill" <<'PY' || fail "partial recording not readable/incomplete"
 import json, sys
 d = sys.argv[1] + "/recording"
