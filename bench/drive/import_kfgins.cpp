@@ -1,0 +1,157 @@
+#include "bench/drive/import_kfgins.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <vector>
+
+#include "bench/io/input_error.hpp"
+#include "bench/io/recording.hpp"
+
+namespace calbench {
+namespace {
+
+// Reads whitespace-separated numeric rows; '#' and '%' start comments; blank lines skipped.
+class TextRows {
+ public:
+  TextRows(std::string path, std::size_t min_cols) : path_(std::move(path)), in_(path_), min_(min_cols) {
+    if (!in_) throw InputError(path_, 0, "", "cannot open file");
+  }
+  bool next(std::vector<double>& v) {
+    std::string s;
+    while (std::getline(in_, s)) {
+      ++line_;
+      const auto p = s.find_first_not_of(" \t\r");
+      if (p == std::string::npos || s[p] == '#' || s[p] == '%') continue;
+      v.clear();
+      const char* c = s.data();
+      const char* e = c + s.size();
+      while (c < e) {
+        while (c < e && (*c == ' ' || *c == '\t' || *c == '\r' || *c == ',')) ++c;
+        if (c >= e) break;
+        double x = 0;
+        const char* start = c;
+        if (*c == '+') ++c;
+        auto r = std::from_chars(c, e, x);
+        if (r.ec != std::errc() || (r.ptr < e && !(*r.ptr == ' ' || *r.ptr == '\t' || *r.ptr == '\r' || *r.ptr == ',')))
+          throw InputError(path_, line_, "column " + std::to_string(v.size() + 1),
+                           "not a number: '" + std::string(start, std::min<std::size_t>(20, static_cast<std::size_t>(e - start))) + "'");
+        if (!std::isfinite(x)) throw InputError(path_, line_, "column " + std::to_string(v.size() + 1), "NaN or infinity");
+        v.push_back(x);
+        c = r.ptr;
+      }
+      if (v.size() < min_)
+        throw InputError(path_, line_, "", "expected at least " + std::to_string(min_) + " columns, found " + std::to_string(v.size()));
+      return true;
+    }
+    return false;
+  }
+  std::size_t line() const { return line_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::size_t min_;
+  std::size_t line_ = 0;
+};
+
+void check_time(const TextRows& r, double t, double& last, bool& first) {
+  if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
+  first = false;
+  last = t;
+}
+
+}  // namespace
+
+ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
+  ImportSummary sum;
+  const fs::path out(a.out);
+  if (fs::exists(out / "meta.json") && !a.force)
+    throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  std::vector<double> v;
+  // IMU rate: given, or the median interval of the first rows.
+  double rate = a.rate_hz;
+  if (!(rate > 0)) {
+    TextRows r(a.imu, 7);
+    std::vector<double> dts;
+    double last = 0;
+    bool first = true;
+    while (dts.size() < 1000 && r.next(v)) {
+      if (!first) dts.push_back(v[0] - last);
+      check_time(r, v[0], last, first);
+    }
+    if (dts.empty()) throw InputError(a.imu, 0, "", "needs at least two IMU rows");
+    std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+    rate = 1.0 / dts[dts.size() / 2];
+  }
+  sum.rate_hz = rate;
+  RecordingMeta meta;
+  meta.kind = RecordingKind::drive;
+  meta.device = DeviceId{a.model, a.serial};
+  meta.imu_rate_hz = rate;
+  meta.mounting = Mounting{a.mounting_rpy_deg, a.lever_arm_m};
+  meta.notes = "imported from KF-GINS text files: IMU " + a.imu + ", reference " + a.truth +
+               (a.gnss.empty() ? std::string() : ", GNSS " + a.gnss);
+  fs::create_directories(out);
+  RecordingWriter w(out, meta, ImuForm::increments, false, false, !a.gnss.empty());
+  {
+    TextRows r(a.imu, 7);
+    double last = 0;
+    bool first = true;
+    while (r.next(v)) {
+      check_time(r, v[0], last, first);
+      ImuRecord rec;
+      rec.t = v[0];
+      rec.gyro = Vec3(v[1], v[2], v[3]);
+      rec.accel = Vec3(v[4], v[5], v[6]);
+      w.imu(rec);
+      ++sum.imu_rows;
+    }
+  }
+  {
+    TextRows r(a.truth, 11);
+    double last = 0;
+    bool first = true;
+    while (r.next(v)) {
+      check_time(r, v[1], last, first);
+      DriveRefRow row;
+      row.t = v[1];
+      row.lat_deg = v[2];
+      row.lon_deg = v[3];
+      row.h_m = v[4];
+      row.v_ned = Vec3(v[5], v[6], v[7]);
+      row.rpy_deg = Vec3(v[8], v[9], v[10]);
+      row.sigma_pos_m = a.ref_sigma_pos_m;
+      row.sigma_vel_m_s = a.ref_sigma_vel_m_s;
+      row.sigma_att_deg = a.ref_sigma_att_deg;
+      w.drive_ref(row);
+      ++sum.ref_rows;
+    }
+  }
+  if (!a.gnss.empty()) {
+    TextRows r(a.gnss, 7);
+    double last = 0;
+    bool first = true;
+    while (r.next(v)) {
+      check_time(r, v[0], last, first);
+      GnssRow g;
+      g.t = v[0];
+      g.lat_deg = v[1];
+      g.lon_deg = v[2];
+      g.h_m = v[3];
+      g.sigma_h_m = std::hypot(v[4], v[5]) / std::sqrt(2.0);
+      g.sigma_v_m = v[6];
+      // .pos files carry no velocity; RecordingWriter always writes the velocity columns, so it
+      // is written as 0 with sigma_vel_m_s = 1e6 (unknown).
+      g.sigma_vel_m_s = 1e6;
+      w.gnss(g);
+      ++sum.gnss_rows;
+    }
+  }
+  w.finish();
+  return sum;
+}
+
+}  // namespace calbench
