@@ -17,6 +17,7 @@
 
 #include "bench/cli/registry.hpp"
 #include "bench/io/csv.hpp"
+#include "bench/io/drift_models_json.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
@@ -258,44 +259,9 @@ json nls_json(const id::NlsFit& f) {
           {"rss", f.rss}, {"lags", f.lags}, {"aic", f.aic}, {"bic", f.bic}, {"white_var", f.white_var}};
 }
 
-json matrix_json(const Eigen::Matrix2d& M, int n) {
-  json j = json::array();
-  for (int i = 0; i < n; ++i) {
-    json row = json::array();
-    for (int k = 0; k < n; ++k) row.push_back(M(i, k));
-    j.push_back(row);
-  }
-  return j;
-}
-template <class V>
-json vector_json(const V& v, int n) {
-  json j = json::array();
-  for (int i = 0; i < n; ++i) j.push_back(v(i));
-  return j;
-}
-
 json shaping_json(const id::DriftModel& m, double dt, Quantity q, int axis) {
-  const id::ShapingFilter f = id::shaping_filter(m);
-  const id::DiscreteShapingFilter d = id::discretise(f, dt);
-  json j;
-  j["model"] = id::drift_model_name(m.kind);
-  if (q != Quantity::other) {
-    j["sensor"] = q == Quantity::gyro ? "gyro" : "accel";
-    if (axis >= 0) j["axis"] = axis;
-  }
-  j["unit"] = units_for(q).signal;
-  j["sigma"] = m.sigma;
-  j["alpha"] = m.alpha;
-  j["beta"] = m.beta;
-  j["T_s"] = 1.0 / m.alpha;
-  j["n_states"] = f.n;
-  j["equations"] = m.kind == id::DriftModelKind::exponential ? "paper eq 22" : "paper eqs 35-36 (vector-matrix form)";
-  j["A"] = matrix_json(f.A, f.n);
-  j["G"] = vector_json(f.G, f.n);
-  j["H"] = vector_json(f.H, f.n);
-  j["P_inf"] = matrix_json(f.P_inf, f.n);
-  j["discrete"] = {{"dt_s", dt}, {"Phi", matrix_json(d.Phi, d.n)}, {"Qd", matrix_json(d.Qd, d.n)}};
-  return j;
+  const std::string sensor = q == Quantity::gyro ? "gyro" : q == Quantity::accel ? "accel" : "";
+  return drift_model_json(m, dt, sensor, axis, units_for(q).signal);
 }
 
 struct Result {
