@@ -7,4 +7,4 @@
 set -euo pipefail
 BUILD=${1:-build}
 cmake --build "$BUILD" --target calbench_perf >/dev/null
-"$BUILD/tests/calbench_perf" --benchmark_filter='BM_InMotion_' --benchmark_counters_tabular=true
+INMOTION_ACCEPTANCE=1 "$BUILD/tests/calbench_perf" --benchmark_filter='BM_InMotion_' --benchmark_counters_tabular=true

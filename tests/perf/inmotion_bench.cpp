@@ -6,7 +6,7 @@
 //                               the last 10 minutes with the bench set applied first, then
 //                               inertial-only ΔS over those 10 minutes (out of sample).
 // Run: bench/drive/acceptance.sh (or calbench_perf --benchmark_filter=InMotion).
-// INMOTION_SEEDS=N overrides the number of seeds of the acceptance run.
+// It runs only with INMOTION_ACCEPTANCE=1 (minutes of CPU). INMOTION_SEEDS=N overrides the number of seeds of the acceptance run.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
@@ -219,6 +219,13 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
 
 void BM_InMotion_Acceptance(benchmark::State& state) {
   const RouteFile rf = load_route(std::string(CALBENCH_SOURCE_DIR) + "/bench/routes/default.toml");
+  // Minutes of CPU: only when asked for (bench/drive/acceptance.sh sets INMOTION_ACCEPTANCE=1).
+  if (!std::getenv("INMOTION_ACCEPTANCE")) {
+    state.SkipWithError("set INMOTION_ACCEPTANCE=1 (bench/drive/acceptance.sh) to run the 10-seed acceptance");
+    for (auto _ : state) {
+    }
+    return;
+  }
   int seeds = 10;
   if (const char* e = std::getenv("INMOTION_SEEDS")) seeds = std::max(1, std::atoi(e));
   for (auto _ : state) {
