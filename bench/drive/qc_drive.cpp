@@ -28,6 +28,9 @@ QcSet load_qc_set(const std::string& arg) {
       s.fit_window_s = std::make_pair(jnum(j["window_s"][0], arg, "window_s[0]"), jnum(j["window_s"][1], arg, "window_s[1]"));
   } else {
     s.errors = coefficients_from_json(j, arg).errors;
+    // A simulator truth.json states the true mounting (key "mounting"); use it like a result's.
+    if (j.is_object() && j.contains("mounting") && j["mounting"].is_object() && j["mounting"].contains("rpy_deg"))
+      s.mounting_rpy_deg = jvec3(j["mounting"]["rpy_deg"], arg, "mounting.rpy_deg");
   }
   return s;
 }
