@@ -251,7 +251,7 @@ json allan_json(const std::vector<id::AllanPoint>& pts, const id::AllanFit& f, Q
 }
 
 json nls_json(const id::NlsFit& f) {
-  return {{"converged", f.converged}, {"iterations", f.iterations},
+  return {{"converged", f.converged}, {"usable", f.usable}, {"iterations", f.iterations},
           {"sigma", f.sigma}, {"alpha", f.alpha}, {"beta", f.beta}, {"T_s", num(1.0 / f.alpha)},
           {"se", {{"sigma", num(f.se_sigma)}, {"alpha", num(f.se_alpha)}, {"beta", num(f.se_beta)},
                   {"T_s", num(f.se_alpha / (f.alpha * f.alpha))}}},
@@ -446,7 +446,8 @@ void run_identify(const IdentifyArgs& a) {
                         {"tau_beta_s", I.paper_cos.tau_beta}, {"lags_used", I.paper_cos.lags_used},
                         {"equations", "beta = 0.5 pi/tau_beta (eq 38), alpha from the formula after eq 38"}}}};
     if (!a.no_allan) c["allan"] = allan_json(r.allan, r.allan_fit, r.s->q);
-    if (b.converged && b.sigma > 0 && b.alpha > 0) {
+    c["usable"] = b.usable;
+    if (b.usable) {
       id::DriftModel m = b.model();
       if (I.chosen == id::DriftModelKind::exponential) m.beta = 0;
       const json sf = shaping_json(m, r.dt_corr, r.s->q, r.s->axis);
@@ -477,6 +478,9 @@ void run_identify(const IdentifyArgs& a) {
   }
   std::cout << "identify " << a.input << ": " << L.series.front().x.size() << " samples at " << L.dt << " s\n";
   for (const auto& c : cols) {
+    if (!c["usable"].get<bool>())
+      std::printf("%-12s no usable drift model (no resolvable correlation: white noise, too short, or a trend?)\n",
+                  c["column"].get<std::string>().c_str());
     std::printf("%-12s %-11s sigma %.4g ± %.2g  T %.4g ± %.2g s", c["column"].get<std::string>().c_str(),
                 c["model"].get<std::string>().c_str(), c["sigma"].get<double>(),
                 c["se"]["sigma"].is_null() ? NAN : c["se"]["sigma"].get<double>(),

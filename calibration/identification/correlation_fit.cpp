@@ -405,10 +405,21 @@ Identification identify(std::span<const double> x, double dt, const IdentifyOpti
   why << "BIC(exp_cosine) - BIC(exponential) = " << dbic << ", beta/se_beta = " << z
       << ", negative lobe depth/se = " << lobe_z
       << ", K changes sign: " << (id.sign_change ? "yes" : "no");
-  if (!id.exp.converged && id.cos.converged) {
+  // A fit is usable if it converged to a finite, resolvable correlation time with finite errors.
+  const double t_rec = static_cast<double>(N) * dt;
+  auto usable = [&](const NlsFit& f) {
+    return f.converged && f.sigma > 0 && std::isfinite(f.se_alpha) && std::isfinite(f.se_sigma) &&
+           f.alpha > 1e-3 / t_rec && f.alpha < 1e3 / dt;
+  };
+  id.exp.usable = usable(id.exp);
+  id.cos.usable = usable(id.cos) && id.cos.beta > 0 && std::isfinite(id.cos.se_beta);
+  if (!id.exp.usable && !id.cos.usable) {
+    id.chosen = DriftModelKind::exponential;
+    why << "; no usable fit (no resolvable correlation: white noise, too short, or a trend?)";
+  } else if (!id.exp.usable && id.cos.usable) {
     id.chosen = DriftModelKind::exp_cosine;
     why << "; exponential fit did not converge";
-  } else if (id.cos.converged && id.cos.beta > 0 && dbic < -opt.bic_margin && z > opt.beta_z &&
+  } else if (id.cos.usable && dbic < -opt.bic_margin && z > opt.beta_z &&
              lobe_z > opt.lobe_z) {
     id.chosen = DriftModelKind::exp_cosine;
     why << "; exp_cosine: BIC lower by more than " << opt.bic_margin << ", beta > " << opt.beta_z

@@ -60,6 +60,7 @@ PaperExpCosine paper_exp_cosine(std::span<const double> K, double dt, std::size_
 struct NlsFit {
   DriftModelKind kind = DriftModelKind::exponential;
   bool converged = false;
+  bool usable = false;     // set by identify(): converged, finite errors, 1e-3/T_record < α < 1e3/dt
   int iterations = 0;
   double sigma = 0, alpha = 0, beta = 0;
   double se_sigma = 0, se_alpha = 0, se_beta = 0;              // Bartlett sandwich (see above)
