@@ -15,7 +15,16 @@ constexpr int kAxes = 6;  // a = sensor·3 + axis
 constexpr int kBase = 4;  // b, M_i0, M_i1, M_i2
 enum Subset { kAll = 0, kEven = 1, kOdd = 2 };
 
-bool in_subset(int step, int subset) { return subset == kAll || (step % 2 == 0) == (subset == kEven); }
+// Halves for the held-out check: the first and the second half of every plan step (splitting by
+// whole steps would leave one half without the ±rate pairs or magnitudes a term needs).
+bool in_subset(const DiagData& d, int p, int subset) {
+  if (subset == kAll) return true;
+  int first = p, last = p;
+  while (first > 0 && d.parents[first - 1].step == d.parents[p].step) --first;
+  while (last + 1 < static_cast<int>(d.parents.size()) && d.parents[last + 1].step == d.parents[p].step) ++last;
+  const bool early = 2 * (p - first) < (last - first + 1);
+  return early == (subset == kEven);
+}
 
 // Everything precomputed once: raw observations and regressor columns per sub-block.
 struct Design {
@@ -170,7 +179,7 @@ Dataset build_dataset(const DiagData& d, const Design& D, int a, int subset, dou
   S.drift_sigma = ds;
   S.drift_tau = tau;
   for (int p = 0; p < static_cast<int>(d.parents.size()); ++p)
-    if (in_subset(d.parents[p].step, subset)) S.parents.push_back(p);
+    if (in_subset(d, p, subset)) S.parents.push_back(p);
   const int N = static_cast<int>(S.parents.size());
   const int C = D.ncols[a];
   Eigen::VectorXd zP(N);
@@ -622,7 +631,8 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
       const double score = dchi2 - penalty;
       if (dchi2 < opt.min_delta_chi2 || score <= best_score) continue;
       const double held = heldout_chi2(D, m, even, odd);
-      if (held >= cur_held) continue;  // does not predict the other half of the steps better
+      // Must predict the other half of the steps better, unless the in-sample evidence is overwhelming.
+      if (held >= cur_held && dchi2 < 5 * opt.min_delta_chi2) continue;
       best = static_cast<int>(t);
       best_score = score;
       best_d = dchi2;
