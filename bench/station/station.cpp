@@ -63,15 +63,6 @@ std::string iso_utc(std::chrono::system_clock::time_point tp) {
 
 const char* axis_name(int m) { return m == 0 ? "x" : m == 1 ? "y" : "z"; }
 
-nlohmann::json errors_json(const SensorErrors& e) {
-  auto triad = [](const TriadErrors& t) {
-    nlohmann::json M = nlohmann::json::array();
-    for (int i = 0; i < 3; ++i) M.push_back({t.M(i, 0), t.M(i, 1), t.M(i, 2)});
-    return nlohmann::json{{"bias", {t.bias[0], t.bias[1], t.bias[2]}}, {"M", M}};
-  };
-  return {{"gyro", triad(e.gyro)}, {"accel", triad(e.accel)}};
-}
-
 class Station {
  public:
   Station(const Options& o, std::ostream& log, const std::atomic<bool>& stop) : o_(o), log_(log), stop_(stop) {}
@@ -408,9 +399,12 @@ Result Station::run() {
       log_ << "stored in " << o_.db << ": set " << st.set_id << " (v" << st.version << ", draft)\n";
     }
     if (o_.emulated) {
-      nlohmann::json t = errors_json(truth_);
-      t["note"] = "the emulated unit's true errors (for checking the station; never read by the fit)";
-      write_text_atomic(o_.out_dir / "EMULATED_TRUTH.json", t.dump(2) + "\n");
+      // In the spec's coefficients.json schema, so every tool (compare, simulate drive) reads it.
+      CoefficientSet t;
+      t.device = {"ADIS16488A", imu_->identity().serial_string()};
+      t.errors = truth_;
+      t.extra["note"] = "the emulated unit's true errors (for checking the station; never read by the fit)";
+      write_coefficients(o_.out_dir / "EMULATED_TRUTH.json", t);
     }
     res.message = "station run complete: " + std::to_string(plan_.steps.size()) + " steps, coefficients in " +
                   (o_.out_dir / "COEFFS.json").string();

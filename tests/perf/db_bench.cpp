@@ -16,7 +16,7 @@ using namespace calbench::db;
 
 constexpr int kDevices = 10000, kVersions = 5;
 
-std::string serial_of(int i) { return "P" + std::to_string(100000 + i); }
+std::string serial_of(int i) { return std::string("P").append(std::to_string(100000 + i)); }
 
 SensorErrors errors(std::mt19937& g) {
   std::normal_distribution<double> n(0, 1);
