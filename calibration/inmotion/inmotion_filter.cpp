@@ -29,15 +29,7 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
   }
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
-  ins::NavState s;
-  s.t = first.t;
-  s.lat = first.lat;
-  s.lon = first.lon;
-  s.h = first.h;
-  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nb * lever_);
-  s.v = first.v_ned;
-  s.q_nb = ins::Quat(C_nb * C_mb_);
-  nav_.reset(s);
+  nav_.reset(mems_state_from_reference(first, C_mb_, lever_));
 
   P_.setZero();
   const double sp = first.sigma_pos > 0 ? first.sigma_pos : cfg_.ref_sigma_pos;

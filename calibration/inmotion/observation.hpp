@@ -36,6 +36,11 @@ Observation position_observation(const ObsContext& c, const RefObs& r);  // eq 1
 Observation velocity_observation(const ObsContext& c, const RefObs& r);  // eq 14
 Observation attitude_observation(const ObsContext& c, const RefObs& r);  // eq 15
 
+// The MEMS INS state at a reference epoch, transferred through the mounting C_mb and the lever
+// arm (initial alignment from the reference system, paper section III). Used to start the
+// in-motion filter and every inertial-only QC run.
+ins::NavState mems_state_from_reference(const RefObs& r, const Mat3& C_mb, const Vec3& lever);
+
 // Reference body attitude predicted from the MEMS INS: C_nb = C_nm·C_mbᵀ.
 inline Mat3 predicted_body_attitude(const ObsContext& c) { return c.mems->C_nb() * c.C_mb.transpose(); }
 

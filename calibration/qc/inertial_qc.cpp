@@ -4,16 +4,7 @@ namespace calbench::qc {
 
 InertialRun::InertialRun(const SensorErrors& e, const Mat3& C_mb, const Vec3& lever, const inmotion::RefObs& r)
     : g_(e.gyro), a_(e.accel), C_mb_(C_mb), lever_(lever) {
-  const Mat3 C_nb = ins::dcm_from_rpy(r.rpy);
-  ins::NavState s;
-  s.t = r.t;
-  s.lat = r.lat;
-  s.lon = r.lon;
-  s.h = r.h;
-  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nb * lever_);
-  s.v = r.v_ned;
-  s.q_nb = ins::Quat(C_nb * C_mb_);
-  nav_.reset(s);
+  nav_.reset(inmotion::mems_state_from_reference(r, C_mb_, lever_));
 }
 
 void InertialRun::imu(double t, const Vec3& dth, const Vec3& dv, double dt) {
