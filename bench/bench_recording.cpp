@@ -11,6 +11,16 @@
 
 namespace calbench {
 
+void write_bench_sample(RecordingWriter& w, const BenchSample& s) {
+  ImuRecord r;
+  r.t = s.t;
+  r.gyro = s.gyro;
+  r.accel = s.accel;
+  r.temp_c = s.temp_c;
+  w.imu(r);
+  w.bench_ref({s.t, s.w_ref, s.f_ref, s.step, s.angle_deg});
+}
+
 BenchRecordingData load_bench_blocks(const std::filesystem::path& dir, double block_s) {
   BenchRecordingData d;
   d.meta = read_meta(dir);

@@ -7,6 +7,7 @@
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/recording.hpp"
 #include "calibration/bench_fit.hpp"
+#include "calibration/bench_sim.hpp"
 
 namespace calbench {
 
@@ -16,6 +17,9 @@ struct BenchRecordingData {
   std::size_t imu_rows = 0, ref_rows = 0, used_rows = 0;
   ImuForm form = ImuForm::rates;
 };
+
+// One simulated bench sample as a row of imu.csv and of reference.csv.
+void write_bench_sample(RecordingWriter& w, const BenchSample& s);
 
 BenchRecordingData load_bench_blocks(const std::filesystem::path& dir, double block_s = 1.0);
 

@@ -68,13 +68,7 @@ void run_simulate_bench(const SimBenchArgs& a) {
   so.effects = effects;
   std::size_t n = 0, sat = 0;
   simulate_bench(plan, plan.site, truth.errors, so, [&](const BenchSample& s) {
-    ImuRecord r;
-    r.t = s.t;
-    r.gyro = s.gyro;
-    r.accel = s.accel;
-    r.temp_c = s.temp_c;
-    w.imu(r);
-    w.bench_ref({s.t, s.w_ref, s.f_ref, s.step, s.angle_deg});
+    write_bench_sample(w, s);
     ++n;
     sat += s.saturated;
   });

@@ -122,13 +122,7 @@ struct FactoryData {
     BenchBlockBuilder bb(1.0);
     BenchSimOptions so;
     simulate_bench(plan, plan.site, draw_random_unit(1), so, [&](const BenchSample& s) {
-      ImuRecord r;
-      r.t = s.t;
-      r.gyro = s.gyro;
-      r.accel = s.accel;
-      r.temp_c = s.temp_c;
-      w.imu(r);
-      w.bench_ref({s.t, s.w_ref, s.f_ref, s.step, s.angle_deg});
+      write_bench_sample(w, s);
       bb.add(s.t, 1.0 / 2460, s.gyro, s.accel, s.w_ref, s.f_ref, s.step);
       ++rows;
     });
