@@ -317,6 +317,9 @@ Result Station::run() {
   std::unique_ptr<RecordingWriter> writer;
   const fs::path rec_dir = o_.out_dir / "recording";
   nlohmann::json steps = nlohmann::json::array();
+  // Samples of the step being recorded; written once the step passes its data check.
+  std::vector<ImuRecord> imu;
+  std::vector<BenchRefRow> ref;
   try {
     setup();
     fs::create_directories(o_.out_dir);
@@ -332,8 +335,6 @@ Result Station::run() {
     if (o_.emulated && o_.inject.imu_skip_every) imu_emu_->faults().skip_every = o_.inject.imu_skip_every;
     if (o_.emulated) imu_emu_->faults().sys_e_flag = o_.inject.imu_sys_e_flag;
 
-    std::vector<ImuRecord> imu;
-    std::vector<BenchRefRow> ref;
     for (step_index_ = 0; step_index_ < plan_.steps.size(); ++step_index_) {
       const PlanStep& s = plan_.steps[step_index_];
       if (s.mount != mount_) {
@@ -364,6 +365,8 @@ Result Station::run() {
         writer->bench_ref(ref[i]);
       }
       writer->flush();
+      imu.clear();
+      ref.clear();
       done_s_ += s.dwell_s + plan_.table.settle_s;
       steps.push_back({{"step", step_index_}, {"label", s.label}, {"samples", imu.size()}, {"repeats", attempt}});
       progress("done", true);
@@ -417,7 +420,21 @@ Result Station::run() {
       table_->stop_heartbeat();
       stopped = table_->stop_all();
     }
-    if (writer) writer->flush();  // not finished: meta.json stays "incomplete"
+    if (writer) {
+      // Nothing captured is lost: the step in progress did not pass its check, so its samples
+      // are kept with step −1 (outside any plan step: a fit will not use them).
+      try {
+        for (std::size_t i = 0; i < imu.size() && i < ref.size(); ++i) {
+          writer->imu(imu[i]);
+          BenchRefRow r = ref[i];
+          r.step = -1;
+          writer->bench_ref(r);
+        }
+        writer->flush();  // not finished: meta.json stays "incomplete"
+      } catch (const std::exception& w) {
+        log_ << "could not keep the partial step: " << w.what() << "\n";
+      }
+    }
     res.exit_code = (dynamic_cast<const std::invalid_argument*>(&e) || dynamic_cast<const InputError*>(&e)) ? 2 : 1;
     res.message = std::string("station aborted: ") + e.what() + (table_ ? (stopped ? "; table stopped and disabled" : "; table stop attempted (no answer)") : "");
     res.summary["aborted"] = true;
