@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_parse.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench::db {
@@ -80,12 +81,7 @@ Thresholds default_thresholds() {
 }
 
 Thresholds parse_thresholds(const std::string& text, const std::string& f) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::exception& e) {
-    throw InputError(f, 0, "", std::string("invalid JSON: ") + e.what());
-  }
+  const json j = parse_json_text(text, f);
   if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
   Thresholds t = default_thresholds();
   t.source = f;

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_parse.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -83,16 +84,7 @@ void put_triad(json& j, const TriadErrors& t) {
 }  // namespace
 
 ParsedCoefficients parse_coefficients(const std::string& text, const std::string& f, const std::string& expect_serial) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    const std::size_t upto = std::min<std::size_t>(e.byte, text.size());
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + upto, '\n'));
-    throw InputError(f, line, "", std::string("invalid JSON (truncated or malformed): ") + e.what());
-  } catch (const json::exception& e) {
-    throw InputError(f, 0, "", std::string("invalid JSON: ") + e.what());
-  }
+  const json j = parse_json_text(text, f);
   if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
   const json& fmt = req(j, "format", f, "");
   if (!fmt.is_string() || fmt.get<std::string>() != "calbench-coefficients/1")

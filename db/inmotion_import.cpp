@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_parse.hpp"
 
 namespace calbench::db {
 namespace {
@@ -125,16 +126,7 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
 }  // namespace
 
 InMotionResult parse_inmotion_result(const std::string& text, const std::string& f) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    const std::size_t upto = std::min<std::size_t>(e.byte, text.size());
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + upto, '\n'));
-    throw InputError(f, line, "", std::string("invalid JSON (truncated or malformed): ") + e.what());
-  } catch (const json::exception& e) {
-    throw InputError(f, 0, "", std::string("invalid JSON: ") + e.what());
-  }
+  const json j = parse_json_text(text, f);
   if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
   InMotionResult r;
   // device

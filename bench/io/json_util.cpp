@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_parse.hpp"
 
 namespace calbench {
 
@@ -20,16 +21,7 @@ nlohmann::json read_json_file(const std::filesystem::path& file) {
   ss << in.rdbuf();
   const std::string text = ss.str();
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(file.string(), 1, "", "empty file");
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    // Translate the byte offset into a line number.
-    const std::size_t upto = std::min<std::size_t>(e.byte, text.size());
-    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + upto, '\n'));
-    std::string msg = e.what();
-    const auto p = msg.find("parse error");
-    throw InputError(file.string(), line, "", "invalid JSON: " + (p == std::string::npos ? msg : msg.substr(p)));
-  }
+  return parse_json_text(text, file.string());
 }
 
 void write_text_atomic(const std::filesystem::path& file, const std::string& text) {
