@@ -100,15 +100,13 @@ void Connection::exec(const char* sql) {
 std::int64_t Connection::last_insert_rowid() const { return sqlite3_last_insert_rowid(db_); }
 int Connection::changes() const { return sqlite3_changes(db_); }
 
-void Connection::begin(const char* sql) { exec(sql); }
-
-void Connection::write_transaction(const std::function<void()>& body) {
+void Connection::transaction(const char* begin_sql, const std::function<void()>& body) {
   if (in_tx_) {  // nested: part of the enclosing transaction
     body();
     return;
   }
   with_busy_retry(opt_.retry_budget, path_, [&] {
-    begin("BEGIN IMMEDIATE");
+    exec(begin_sql);
     in_tx_ = true;
     try {
       body();
@@ -122,25 +120,9 @@ void Connection::write_transaction(const std::function<void()>& body) {
   });
 }
 
-void Connection::read_transaction(const std::function<void()>& body) {
-  if (in_tx_) {
-    body();
-    return;
-  }
-  with_busy_retry(opt_.retry_budget, path_, [&] {
-    begin("BEGIN DEFERRED");
-    in_tx_ = true;
-    try {
-      body();
-      exec("COMMIT");
-      in_tx_ = false;
-    } catch (...) {
-      in_tx_ = false;
-      if (!sqlite3_get_autocommit(db_)) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-      throw;
-    }
-  });
-}
+void Connection::write_transaction(const std::function<void()>& body) { transaction("BEGIN IMMEDIATE", body); }
+
+void Connection::read_transaction(const std::function<void()>& body) { transaction("BEGIN DEFERRED", body); }
 
 Statement::Statement(sqlite3* db, std::string_view sql) : db_(db) {
   const int rc = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &st_, nullptr);

@@ -69,7 +69,9 @@ class Connection {
   void read_transaction(const std::function<void()>& body);
 
  private:
-  void begin(const char* sql);
+  // BEGIN <mode> … COMMIT with rollback on exception and busy retries; nested calls join the
+  // enclosing transaction.
+  void transaction(const char* begin_sql, const std::function<void()>& body);
   std::string path_;
   sqlite3* db_ = nullptr;
   OpenOptions opt_;
