@@ -1,5 +1,5 @@
 // calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
-//                        [--smooth] [--window T0:T1] [--json]
+//                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
 #include <iostream>
 
 #include "bench/cli/registry.hpp"
@@ -24,6 +24,14 @@ void print_summary(const nlohmann::json& j) {
             << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
+  if (j.contains("drift_models"))
+    for (const auto& m : j["drift_models"]["axes"]) {
+      std::cout << "  drift model " << m["sensor"].get<std::string>() << ' ' << m["axis"].get<std::string>() << ": "
+                << m["model"].get<std::string>() << " sigma " << m["sigma"].get<double>() << ' '
+                << m["sigma_unit"].get<std::string>() << ", T " << m["T_s"].get<double>() << " s";
+      if (m["beta_rad_s"].get<double>() > 0) std::cout << ", beta " << m["beta_rad_s"].get<double>() << " rad/s";
+      std::cout << "  (" << m["source"].get<std::string>() << ")\n";
+    }
   for (const auto& [k, v] : j["consistency"].items())
     std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected\n";
   if (j["qc"].contains("sets"))
@@ -52,6 +60,10 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)");
   d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)");
   d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)");
+  d->add_option("--drift-models", a->drift_models,
+                 "identified drift models (MODELS.json of `calbench identify --out`, or a coefficients.json with "
+                 "drift_models): they replace the data-sheet shaping filters per axis (exp_cosine: 2 states, eqs 35-36)")
+      ->check(CLI::ExistingFile);
   d->add_option("--qc-horizon", a->qc_horizon_s, "horizon of the QC run in RESULT.json, s (default 600)");
   d->add_flag("--json", *json, "print RESULT.json to stdout");
   d->callback([a, json] {

@@ -7,6 +7,7 @@
 #include "bench/drive/qc_drive.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/csv.hpp"
+#include "bench/io/drift_models_json.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
@@ -37,6 +38,54 @@ nlohmann::json set_json(const DeviceId& d, const SensorErrors& e) {
   return coefficients_to_json(c);
 }
 
+// Identified drift models (--drift-models) into the filter's configuration; the JSON says which
+// axes got a model and which kept the data-sheet default.
+nlohmann::json apply_drift_models(const std::string& file, inmotion::InMotionConfig& cfg) {
+  using namespace units;
+  const AxisDriftModels m = assign_drift_models(read_drift_models(file), file);
+  std::array<inmotion::DriftPrior, 3> g, acc;
+  nlohmann::json axes = nlohmann::json::array();
+  const char* ax = "xyz";
+  for (int s = 0; s < 2; ++s)
+    for (int i = 0; i < 3; ++i) {
+      const TriadNoise& n = s == 0 ? cfg.noise.gyro : cfg.noise.accel;
+      const auto& e = (s == 0 ? m.gyro : m.accel)[static_cast<std::size_t>(i)];
+      inmotion::DriftPrior p{n.drift_sigma, n.drift_tau_s};
+      const double unit = s == 0 ? kDegPerHour : kMilliG;
+      nlohmann::json j = {{"sensor", s == 0 ? "gyro" : "accel"}, {"axis", std::string(1, ax[i])}};
+      if (e) {
+        p.sigma = e->model.sigma;
+        p.tau_s = 1.0 / e->model.alpha;
+        p.exp_cosine = e->model.kind == identification::DriftModelKind::exp_cosine;
+        p.beta = p.exp_cosine ? e->model.beta : 0.0;
+        j["source"] = "drift_models." + e->key;
+        j["model"] = identification::drift_model_name(e->model.kind);
+        j["equations"] = p.exp_cosine ? "eqs 35-36 (2 states)" : "eq 22";
+      } else {
+        j["source"] = "data-sheet default (no model for this axis in the file)";
+        j["model"] = "exponential";
+        j["equations"] = "eq 22";
+      }
+      j["sigma_si"] = p.sigma;
+      j["sigma"] = p.sigma / unit;
+      j["sigma_unit"] = s == 0 ? "deg/h" : "mg";
+      j["T_s"] = p.tau_s;
+      j["beta_rad_s"] = p.beta;
+      (s == 0 ? g : acc)[static_cast<std::size_t>(i)] = p;
+      axes.push_back(j);
+    }
+  cfg.gyro_drift = g;
+  cfg.accel_drift = acc;
+  cfg.propagate_drift = true;
+  return {{"file", file},
+          {"layout", inmotion::needs_augmented_layout(cfg) ? "augmented (exp-cosine states)" : "default"},
+          {"axes", axes}};
+}
+
+template <class Filter>
+nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
+                       double t0, double t1, const nlohmann::json& models);
+
 }  // namespace
 
 nlohmann::json fit_drive(const FitDriveArgs& a) {
@@ -60,15 +109,37 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   cfg.obs_rate_hz = a.obs_rate_hz;
   cfg.cov_dt = a.cov_dt;
   cfg.store_for_smoother = a.smooth;
+  nlohmann::json models;
+  if (!a.drift_models.empty()) models = apply_drift_models(a.drift_models, cfg);
+  if (inmotion::needs_augmented_layout(cfg)) return run_fit<inmotion::InMotionFilterAug>(a, cfg, bench, t0, t1, models);
+  return run_fit<inmotion::InMotionFilter>(a, cfg, bench, t0, t1, models);
+}
 
+namespace {
+
+template <class Filter>
+nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
+                       double t0, double t1, const nlohmann::json& models) {
+  using namespace units;
+  constexpr int N = Filter::kN;
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt);
-  std::unique_ptr<inmotion::InMotionFilter> f;
+  std::unique_ptr<Filter> f;
   std::unique_ptr<CsvWriter> series;
+  // Series columns: t_s, every state (then the augmented ones), their sigma_, then the total
+  // drift per axis (constant + in-run state: what `calbench identify` identifies) and its sigma_.
+  std::vector<std::string> state_cols(inmotion::state_names().begin(), inmotion::state_names().end());
+  if constexpr (N == inmotion::kStatesAug)
+    state_cols.insert(state_cols.end(), inmotion::aux_state_names().begin(), inmotion::aux_state_names().end());
   std::vector<std::string> cols;
+  auto series_columns = [&] {
+    cols.assign(1, "t_s");
+    for (const auto& n : state_cols) cols.push_back(n);
+    for (const auto& n : state_cols) cols.push_back("sigma_" + n);
+    for (const auto& n : inmotion::total_drift_names()) cols.push_back(n);
+    for (const auto& n : inmotion::total_drift_names()) cols.push_back("sigma_" + n);
+  };
   if (!a.series.empty() && !a.smooth) {
-    cols.push_back("t_s");
-    for (const auto& n : inmotion::state_names()) cols.push_back(n);
-    for (const auto& n : inmotion::state_names()) cols.push_back("sigma_" + n);
+    series_columns();
     series = std::make_unique<CsvWriter>(a.series, cols, "in-motion filter estimates (forward pass), totals and 1-sigma");
   }
   auto override_sigma = [&](inmotion::RefObs& r) {
@@ -87,17 +158,23 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     if (e.is_ref) {
       override_sigma(e.ref);
       if (!f) {
-        f = std::make_unique<inmotion::InMotionFilter>(cfg, st.nominal_mounting(), st.lever_arm(), e.ref);
+        f = std::make_unique<Filter>(cfg, st.nominal_mounting(), st.lever_arm(), e.ref);
         t_first = e.t;
         continue;
       }
       if (f->reference(e.ref) && series) {
-        inmotion::StateVec x, s;
+        typename Filter::Vec x, s;
+        typename Filter::Vec6 tx, ts;
         f->totals(x, s);
+        f->total_drift(tx, ts);
         row[0] = e.t;
-        for (int i = 0; i < inmotion::kStates; ++i) {
+        for (int i = 0; i < N; ++i) {
           row[1 + i] = x(i);
-          row[1 + inmotion::kStates + i] = s(i);
+          row[1 + N + i] = s(i);
+        }
+        for (int i = 0; i < 6; ++i) {
+          row[1 + 2 * N + i] = tx(i);
+          row[1 + 2 * N + 6 + i] = ts(i);
         }
         series->row(row.data(), row.size());
       }
@@ -122,16 +199,18 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   if (a.smooth) {
     const auto sm = f->smooth();
     if (!a.series.empty()) {
-      cols.assign(1, "t_s");
-      for (const auto& n : inmotion::state_names()) cols.push_back(n);
-      for (const auto& n : inmotion::state_names()) cols.push_back("sigma_" + n);
+      series_columns();
       CsvWriter w(a.series, cols, "in-motion estimates after the RTS smoother (sensor states smoothed; navigation states from the forward pass)");
       row.resize(cols.size());
       for (const auto& ep : sm) {
         row[0] = ep.t;
-        for (int i = 0; i < inmotion::kStates; ++i) {
+        for (int i = 0; i < N; ++i) {
           row[1 + i] = ep.x(i);
-          row[1 + inmotion::kStates + i] = ep.sigma(i);
+          row[1 + N + i] = ep.sigma(i);
+        }
+        for (int i = 0; i < 6; ++i) {
+          row[1 + 2 * N + i] = ep.total(i);
+          row[1 + 2 * N + 6 + i] = ep.total_sigma(i);
         }
         w.row(row.data(), row.size());
       }
@@ -179,6 +258,7 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
                       {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
   }
   j["consistency"] = cons;
+  if (!models.is_null()) j["drift_models"] = models;
 
   // QC: out-of-sample inertial-only navigation after the window, with the input set and with
   // the result, when the recording continues; otherwise in-sample from the window start.
@@ -198,5 +278,7 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   write_text_atomic(a.out, j.dump(2) + "\n");
   return j;
 }
+
+}  // namespace
 
 }  // namespace calbench

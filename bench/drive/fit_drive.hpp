@@ -9,6 +9,7 @@ namespace calbench {
 
 struct FitDriveArgs {
   std::string dir, coeffs, out, obs = "pos,vel,att", series, window;
+  std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
   double obs_rate_hz = 10, cov_dt = 0.1;
   double sigma_pos = 0, sigma_vel = 0, sigma_att_deg = 0;  // 0: from reference.csv or defaults

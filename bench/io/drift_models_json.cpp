@@ -4,6 +4,7 @@
 
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
+#include "calibration/units.hpp"
 
 namespace calbench {
 
@@ -102,6 +103,77 @@ std::optional<DriftModelEntry> find_drift_model(const std::vector<DriftModelEntr
   for (const auto& e : v)
     if (e.sensor == sensor && e.axis == axis) return e;
   return std::nullopt;
+}
+
+std::optional<ColumnSensor> column_sensor(const std::string& name) {
+  ColumnSensor c;
+  const char* rec[6] = {"gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"};
+  for (int k = 0; k < 6; ++k)
+    if (name == rec[k]) {
+      c.sensor = k < 3 ? "gyro" : "accel";
+      c.axis = k % 3;
+      c.unit = k < 3 ? "rad/s" : "m/s^2";
+      return c;
+    }
+  const char* ax = "xyz";
+  for (const char* part : {"total", "bias", "drift"})
+    for (int i = 0; i < 3; ++i) {
+      if (name == std::string("gyro_") + part + "_" + ax[i] + "_dph") {
+        c.sensor = "gyro";
+        c.axis = i;
+        c.unit = "deg/h";
+        c.si_per_unit = units::kDegPerHour;
+        return c;
+      }
+      if (name == std::string("accel_") + part + "_" + ax[i] + "_mg") {
+        c.sensor = "accel";
+        c.axis = i;
+        c.unit = "mg";
+        c.si_per_unit = units::kMilliG;
+        return c;
+      }
+    }
+  return std::nullopt;
+}
+
+AxisDriftModels assign_drift_models(const std::vector<DriftModelEntry>& v, const std::string& file) {
+  AxisDriftModels out;
+  for (const DriftModelEntry& e0 : v) {
+    DriftModelEntry e = e0;
+    const std::string k = "drift_models." + e.key;
+    const std::optional<ColumnSensor> cs = column_sensor(e.key);
+    if (e.sensor.empty() && cs) e.sensor = cs->sensor;
+    if (e.axis < 0 && cs && cs->sensor == e.sensor) e.axis = cs->axis;
+    if (e.sensor.empty() || e.axis < 0)
+      throw InputError(file, 0, k,
+                       "cannot tell which sensor axis this model is for: name the key gx_rad_s … az_m_s2 or "
+                       "gyro_total_x_dph … accel_total_z_mg, or give \"sensor\" (gyro|accel) and \"axis\" (0-2)");
+    const bool gyro = e.sensor == "gyro";
+    double si = 0;
+    std::string unit = e.unit;
+    if (unit.empty() || unit == "signal") {
+      if (!cs)
+        throw InputError(file, 0, k + ".unit",
+                         "no unit (\"" + e.unit + "\") and the key does not tell it: give \"unit\" (rad/s, m/s^2, deg/h or mg)");
+      unit = cs->unit;
+    }
+    if (unit == "rad/s") si = gyro ? 1.0 : 0.0;
+    else if (unit == "deg/h") si = gyro ? units::kDegPerHour : 0.0;
+    else if (unit == "m/s^2" || unit == "m/s2") si = gyro ? 0.0 : 1.0;
+    else if (unit == "mg") si = gyro ? 0.0 : units::kMilliG;
+    else
+      throw InputError(file, 0, k + ".unit", "unknown unit \"" + unit + "\" (rad/s, deg/h for gyro; m/s^2, mg for accel)");
+    if (si == 0) throw InputError(file, 0, k + ".unit", "unit \"" + unit + "\" does not fit sensor \"" + e.sensor + "\"");
+    e.model.sigma *= si;
+    e.unit = gyro ? "rad/s" : "m/s^2";
+    auto& slot = (gyro ? out.gyro : out.accel)[static_cast<std::size_t>(e.axis)];
+    if (slot)
+      throw InputError(file, 0, k,
+                       "a second model for " + e.sensor + " axis " + std::string(1, "xyz"[e.axis]) + " (also \"" +
+                           slot->key + "\"); keep one");
+    slot = std::move(e);
+  }
+  return out;
 }
 
 }  // namespace calbench

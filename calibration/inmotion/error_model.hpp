@@ -9,6 +9,7 @@
 // covariance is propagated only every few tens of milliseconds with Φ = I + F̄T + (F̄T)²/2, where
 // F̄ is the mean of F over the interval T.
 #pragma once
+#include "calibration/identification/shaping_filter.hpp"
 #include "calibration/inmotion/state_layout.hpp"
 #include "calibration/ins/nav_math.hpp"
 
@@ -36,12 +37,25 @@ struct NavBlockInputs {
   Vec3 f_n = Vec3::Zero();  // mean specific force over the interval
   ins::LocalEarth earth;
 };
-void nav_block(const NavBlockInputs& in, StateMat& F);
+// Each takes the default (kStates) or the augmented (kStatesAug) layout's F.
+template <int N>
+void nav_block(const NavBlockInputs& in, StateMatN<N>& F);
 // Gyro: drift, in-run drift and M into the attitude rows (mean over the interval).
-void gyro_blocks(const FAccumulator& acc, StateMat& F);
+template <int N>
+void gyro_blocks(const FAccumulator& acc, StateMatN<N>& F);
 // Accelerometer: bias, in-run drift and M into the velocity rows.
-void accel_blocks(const FAccumulator& acc, StateMat& F);
+template <int N>
+void accel_blocks(const FAccumulator& acc, StateMatN<N>& F);
 // Shaping filters of the in-run drifts (eq 22): δḋ = −α·δd + σ√(2α)·ξ.
-void drift_blocks(const Vec3& alpha_g, const Vec3& alpha_a, StateMat& F);
+template <int N>
+void drift_blocks(const Vec3& alpha_g, const Vec3& alpha_a, StateMatN<N>& F);
+// Exponential-cosine shaping filter of one axis (eqs 35–36, drift_expcos.cpp): the 2×2 A of
+// `f` on the states (aux, drift) = (x[0], x[1]); the drift seen by the navigation equations is
+// x[1] (H = [0 1]), so its Jacobian into the attitude/velocity rows is the kDg/kDa column that
+// gyro_blocks/accel_blocks already fill. Only in the augmented layout.
+void expcos_drift_block(const identification::ShapingFilter& f, int aux, int drift, StateMatN<kStatesAug>& F);
+// Its discrete process noise over T (exact, shaping_filter.hpp discretise()) into Q.
+void expcos_drift_noise(const identification::ShapingFilter& f, double T, int aux, int drift,
+                        StateMatN<kStatesAug>& Q);
 
 }  // namespace calbench::inmotion

@@ -1,6 +1,7 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "calibration/units.hpp"
 
@@ -11,21 +12,49 @@ using ins::skew;
 namespace {
 constexpr double kChi2_3_95 = 7.814727903;
 
-template <int N>
-void set_diag(StateMat& P, int off, double sigma) {
-  for (int i = 0; i < N; ++i) P(off + i, off + i) = sigma * sigma;
+template <int K, class M>
+void set_diag(M& P, int off, double sigma) {
+  for (int i = 0; i < K; ++i) P(off + i, off + i) = sigma * sigma;
+}
+
+DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, const TriadNoise& n) {
+  return v ? (*v)[static_cast<std::size_t>(i)] : DriftPrior{n.drift_sigma, n.drift_tau_s};
 }
 }  // namespace
 
-InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
+bool needs_augmented_layout(const InMotionConfig& cfg) {
+  for (int i = 0; i < 3; ++i)
+    if ((cfg.gyro_drift && (*cfg.gyro_drift)[i].exp_cosine) || (cfg.accel_drift && (*cfg.accel_drift)[i].exp_cosine))
+      return true;
+  return false;
+}
+
+template <int N>
+InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
     : cfg_(cfg), lever_(lever), C_mb_(C_mb) {
   for (int i = 0; i < 3; ++i) {
-    const DriftPrior g = cfg_.gyro_drift ? (*cfg_.gyro_drift)[i] : DriftPrior{cfg_.noise.gyro.drift_sigma, cfg_.noise.gyro.drift_tau_s};
-    const DriftPrior a = cfg_.accel_drift ? (*cfg_.accel_drift)[i] : DriftPrior{cfg_.noise.accel.drift_sigma, cfg_.noise.accel.drift_tau_s};
+    const DriftPrior g = prior_of(cfg_.gyro_drift, i, cfg_.noise.gyro);
+    const DriftPrior a = prior_of(cfg_.accel_drift, i, cfg_.noise.accel);
     alpha_g_(i) = g.tau_s > 0 ? 1.0 / g.tau_s : 0.0;
     alpha_a_(i) = a.tau_s > 0 ? 1.0 / a.tau_s : 0.0;
     sig_dg_(i) = g.sigma;
     sig_da_(i) = a.sigma;
+    const DriftPrior* pr[2] = {&g, &a};
+    for (int s = 0; s < 2; ++s) {
+      if (!pr[s]->exp_cosine) continue;
+      if constexpr (N == kStatesAug) {
+        identification::DriftModel m;
+        m.kind = identification::DriftModelKind::exp_cosine;
+        m.sigma = pr[s]->sigma;
+        m.alpha = 1.0 / pr[s]->tau_s;
+        m.beta = pr[s]->beta;
+        sf_[3 * s + i] = identification::shaping_filter(m);
+        expcos_[3 * s + i] = true;
+      } else {
+        throw std::invalid_argument("InMotionFilter: an exponential-cosine drift model needs the augmented layout "
+                                    "(InMotionFilterT<kStatesAug>)");
+      }
+    }
   }
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
@@ -49,22 +78,33 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
     P_(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i);
     P_(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i);
   }
+  if constexpr (N == kStatesAug) {
+    // Exponential-cosine axes start from the stationary covariance P∞ of (x[0], x[1]).
+    for (int k = 0; k < 6; ++k) {
+      if (!expcos_[k]) continue;
+      const int idx[2] = {k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3};
+      for (int r = 0; r < 2; ++r)
+        for (int c = 0; c < 2; ++c) P_(idx[r], idx[c]) = sf_[k].P_inf(r, c);
+    }
+  }
   // The initial MEMS attitude error is the mounting error seen in NED plus the reference's own:
   // φ₀ = C_nb·δμ + ε_ref, so the two blocks start correlated.
   const Mat3 Pm = Mat3::Identity() * (cfg_.sigma_mount * cfg_.sigma_mount);
-  P_.block<3, 3>(kMount, kMount) = Pm;
-  P_.block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
-  P_.block<3, 3>(kAtt, kMount) = C_nb * Pm;
-  P_.block<3, 3>(kMount, kAtt) = (C_nb * Pm).transpose();
+  P_.template block<3, 3>(kMount, kMount) = Pm;
+  P_.template block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
+  P_.template block<3, 3>(kAtt, kMount) = C_nb * Pm;
+  P_.template block<3, 3>(kMount, kAtt) = (C_nb * Pm).transpose();
   refresh_correctors();
 }
 
-void InMotionFilter::refresh_correctors() {
+template <int N>
+void InMotionFilterT<N>::refresh_correctors() {
   Ag_ = (Mat3::Identity() + Mg_).inverse();
   Aa_ = (Mat3::Identity() + Ma_).inverse();
 }
 
-void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
+template <int N>
+void InMotionFilterT<N>::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
   if (!(dt > 0) || t <= nav_.state().t) return;
   const Vec3 dth = Ag_ * (dth_raw - (bg_ + dg_) * dt);
   const Vec3 dv = Aa_ * (dv_raw - (ba_ + da_) * dt);
@@ -76,10 +116,11 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
   if (acc_.T >= cfg_.cov_dt) propagate();
 }
 
-void InMotionFilter::propagate() {
+template <int N>
+void InMotionFilterT<N>::propagate() {
   const double T = acc_.T;
   if (!(T > 0)) return;
-  StateMat F = StateMat::Zero();
+  Mat F = Mat::Zero();
   NavBlockInputs in;
   in.lat = nav_.state().lat;
   in.h = nav_.state().h;
@@ -90,10 +131,13 @@ void InMotionFilter::propagate() {
   gyro_blocks(acc_, F);
   accel_blocks(acc_, F);
   drift_blocks(alpha_g_, alpha_a_, F);
-  const StateMat FT = F * T;
-  const StateMat Phi = StateMat::Identity() + FT + 0.5 * FT * FT;
+  if constexpr (N == kStatesAug)
+    for (int k = 0; k < 6; ++k)
+      if (expcos_[k]) expcos_drift_block(sf_[k], k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3, F);
+  const Mat FT = F * T;
+  const Mat Phi = Mat::Identity() + FT + 0.5 * FT * FT;
 
-  StateMat Q = StateMat::Zero();
+  Mat Q = Mat::Zero();
   const double qg = cfg_.noise.gyro.white_density, qa = cfg_.noise.accel.white_density;
   for (int i = 0; i < 3; ++i) {
     Q(kAtt + i, kAtt + i) = qg * qg * T;
@@ -102,28 +146,33 @@ void InMotionFilter::propagate() {
     Q(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i) * (1.0 - std::exp(-2.0 * alpha_g_(i) * T));
     Q(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i) * (1.0 - std::exp(-2.0 * alpha_a_(i) * T));
   }
-  StateMat P_next = Phi * P_ * Phi.transpose() + Q;
+  if constexpr (N == kStatesAug)
+    for (int k = 0; k < 6; ++k)
+      if (expcos_[k]) expcos_drift_noise(sf_[k], T, k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3, Q);
+  Mat P_next = Phi * P_ * Phi.transpose() + Q;
   P_next = 0.5 * (P_next + P_next.transpose()).eval();
 
   if (cfg_.store_for_smoother) {
-    if (!store_.empty()) store_.back().dx_next = pending_dx_.cast<float>();
+    if (!store_.empty()) store_.back().dx_next = pending_dx_.template cast<float>();
     Stored s;
     s.t = nav_.state().t - T;
-    s.P_post = P_.cast<float>();
-    s.Phi = Phi.cast<float>();
-    s.P_prior_next = P_next.cast<float>();
+    s.P_post = P_.template cast<float>();
+    s.Phi = Phi.template cast<float>();
+    s.P_prior_next = P_next.template cast<float>();
     s.dx_next.setZero();
-    StateVec x, sig;
+    Vec x, sig;
     totals(x, sig);
     s.x_post = x;
     store_.push_back(std::move(s));
     pending_dx_.setZero();
   }
   P_ = P_next;
+  propagate_drift_nominal(T);
   acc_.clear();
 }
 
-bool InMotionFilter::reference(const RefObs& r_in) {
+template <int N>
+bool InMotionFilterT<N>::reference(const RefObs& r_in) {
   if (r_in.t < last_obs_t_ + 1.0 / cfg_.obs_rate_hz - 1e-6) return false;
   if (r_in.t > nav_.state().t + 1e-6) return false;  // not reached yet: caller's ordering error
   last_obs_t_ = r_in.t;
@@ -149,14 +198,21 @@ bool InMotionFilter::reference(const RefObs& r_in) {
   const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
   c.w_eb_b = C_mb_ * w_last_ - w_ie_b;
 
-  StateVec dx = StateVec::Zero();
+  Vec dx = Vec::Zero();
   const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};
   for (int type = 0; type < 3; ++type) {
     if (!use[type]) continue;
     const Observation o = type == 0 ? position_observation(c, r) : type == 1 ? velocity_observation(c, r) : attitude_observation(c, r);
-    const Vec3 nu = o.z - o.H * dx;
-    const Eigen::Matrix<double, kStates, 3> PHt = P_ * o.H.transpose();
-    const Mat3 S = o.H * PHt + o.R;
+    Eigen::Matrix<double, 3, N> H;
+    if constexpr (N == kStates) {
+      H = o.H;
+    } else {
+      H.setZero();
+      H.template leftCols<kStates>() = o.H;  // the augmented states are not observed directly
+    }
+    const Vec3 nu = o.z - H * dx;
+    const Eigen::Matrix<double, N, 3> PHt = P_ * H.transpose();
+    const Mat3 S = H * PHt + o.R;
     const Eigen::LDLT<Mat3> Sl(S);
     const double nis = nu.dot(Sl.solve(nu));
     ConsistencyStats& st = stats_[type];
@@ -167,7 +223,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     ++st.used;
     st.nis_sum += nis;
     if (nis <= kChi2_3_95) ++st.within95;
-    const Eigen::Matrix<double, kStates, 3> K = Sl.solve(PHt.transpose()).transpose();
+    const Eigen::Matrix<double, N, 3> K = Sl.solve(PHt.transpose()).transpose();
     dx += K * nu;
     P_ -= K * PHt.transpose();
     P_ = 0.5 * (P_ + P_.transpose()).eval();
@@ -177,26 +233,49 @@ bool InMotionFilter::reference(const RefObs& r_in) {
   return true;
 }
 
-void InMotionFilter::feedback(const StateVec& dx) {
+template <int N>
+void InMotionFilterT<N>::feedback(const Vec& dx) {
   ins::NavState& s = nav_.state();
-  ins::geodetic_add_ned(s.lat, s.lon, s.h, -dx.segment<3>(kPos));
-  s.v -= dx.segment<3>(kVel);
-  s.q_nb = ins::quat_from_rotvec(dx.segment<3>(kAtt)) * s.q_nb;
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, -dx.template segment<3>(kPos));
+  s.v -= dx.template segment<3>(kVel);
+  s.q_nb = ins::quat_from_rotvec(dx.template segment<3>(kAtt)) * s.q_nb;
   s.q_nb.normalize();
-  bg_ -= dx.segment<3>(kBg);
-  ba_ -= dx.segment<3>(kBa);
-  dg_ -= dx.segment<3>(kDg);
-  da_ -= dx.segment<3>(kDa);
+  bg_ -= dx.template segment<3>(kBg);
+  ba_ -= dx.template segment<3>(kBa);
+  dg_ -= dx.template segment<3>(kDg);
+  da_ -= dx.template segment<3>(kDa);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       Mg_(i, j) -= dx(kMg + 3 * i + j);
       Ma_(i, j) -= dx(kMa + 3 * i + j);
     }
-  C_mb_ = ins::quat_from_rotvec(dx.segment<3>(kMount)).toRotationMatrix() * C_mb_;
+  if constexpr (N == kStatesAug) {
+    xg0_ -= dx.template segment<3>(kDgAux);
+    xa0_ -= dx.template segment<3>(kDaAux);
+  }
+  C_mb_ = ins::quat_from_rotvec(dx.template segment<3>(kMount)).toRotationMatrix() * C_mb_;
   refresh_correctors();
 }
 
-SensorErrors InMotionFilter::estimate() const {
+template <int N>
+void InMotionFilterT<N>::propagate_drift_nominal(double T) {
+  // x̂ ← Φ·x̂ (the prediction of the shaping filters). First-order axes only on request.
+  for (int k = 0; k < 6; ++k) {
+    double& d = k < 3 ? dg_(k) : da_(k - 3);
+    if (expcos_[k]) {
+      double& x0 = k < 3 ? xg0_(k) : xa0_(k - 3);
+      const identification::DiscreteShapingFilter ds = identification::discretise(sf_[k], T);
+      const Eigen::Vector2d x = ds.Phi * Eigen::Vector2d(x0, d);
+      x0 = x(0);
+      d = x(1);
+    } else if (cfg_.propagate_drift) {
+      d *= std::exp(-(k < 3 ? alpha_g_(k) : alpha_a_(k - 3)) * T);
+    }
+  }
+}
+
+template <int N>
+SensorErrors InMotionFilterT<N>::estimate() const {
   SensorErrors e;
   e.gyro.bias = bg_;
   e.accel.bias = ba_;
@@ -213,14 +292,16 @@ SensorErrors InMotionFilter::estimate() const {
   return e;
 }
 
-Vec3 InMotionFilter::gyro_total_drift_sigma() const {
+template <int N>
+Vec3 InMotionFilterT<N>::gyro_total_drift_sigma() const {
   Vec3 s;
   for (int i = 0; i < 3; ++i)
     s(i) = std::sqrt(std::max(0.0, P_(kBg + i, kBg + i) + P_(kDg + i, kDg + i) + 2 * P_(kBg + i, kDg + i)));
   return s;
 }
 
-void InMotionFilter::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
+template <int N>
+void InMotionFilterT<N>::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
   rpy = ins::rpy_from_dcm(C_mb_);
   // J = ∂rpy/∂δμ for C_mb ← (I + δμ×)C_mb, by central differences.
   Mat3 J;
@@ -234,23 +315,24 @@ void InMotionFilter::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
     for (int i = 0; i < 3; ++i) d(i) = std::remainder(d(i), 2 * units::kPi);
     J.col(k) = d / (2 * h);
   }
-  const Mat3 S = J * P_.block<3, 3>(kMount, kMount) * J.transpose();
+  const Mat3 S = J * P_.template block<3, 3>(kMount, kMount) * J.transpose();
   sigma = S.diagonal().cwiseMax(0.0).cwiseSqrt();
 }
 
-void InMotionFilter::totals(StateVec& x, StateVec& sig) const {
+template <int N>
+void InMotionFilterT<N>::totals(Vec& x, Vec& sig) const {
   using namespace units;
   const ins::NavState& s = nav_.state();
   x(kPos) = deg(s.lat);
   x(kPos + 1) = deg(s.lon);
   x(kPos + 2) = s.h;
-  x.segment<3>(kVel) = s.v;
+  x.template segment<3>(kVel) = s.v;
   const Vec3 rpy = ins::rpy_from_dcm(s.C_nb());
   for (int i = 0; i < 3; ++i) x(kAtt + i) = deg(rpy(i));
-  x.segment<3>(kBg) = bg_ / kDegPerHour;
-  x.segment<3>(kBa) = ba_ / kMilliG;
-  x.segment<3>(kDg) = dg_ / kDegPerHour;
-  x.segment<3>(kDa) = da_ / kMilliG;
+  x.template segment<3>(kBg) = bg_ / kDegPerHour;
+  x.template segment<3>(kBa) = ba_ / kMilliG;
+  x.template segment<3>(kDg) = dg_ / kDegPerHour;
+  x.template segment<3>(kDa) = da_ / kMilliG;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
       x(kMg + 3 * i + j) = Mg_(i, j) / kPpm;
@@ -259,48 +341,85 @@ void InMotionFilter::totals(StateVec& x, StateVec& sig) const {
   Vec3 mr, ms;
   mounting_rpy(mr, ms);
   for (int i = 0; i < 3; ++i) x(kMount + i) = deg(mr(i));
-  StateVec sd = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
+  if constexpr (N == kStatesAug) {
+    x.template segment<3>(kDgAux) = xg0_ / kDegPerHour;
+    x.template segment<3>(kDaAux) = xa0_ / kMilliG;
+  }
+  Vec sd = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
   sig = sd;
-  sig.segment<3>(kAtt) = sd.segment<3>(kAtt) / kDeg;
-  sig.segment<3>(kBg) = sd.segment<3>(kBg) / kDegPerHour;
-  sig.segment<3>(kDg) = sd.segment<3>(kDg) / kDegPerHour;
-  sig.segment<3>(kBa) = sd.segment<3>(kBa) / kMilliG;
-  sig.segment<3>(kDa) = sd.segment<3>(kDa) / kMilliG;
-  sig.segment<9>(kMg) = sd.segment<9>(kMg) / kPpm;
-  sig.segment<9>(kMa) = sd.segment<9>(kMa) / kPpm;
-  sig.segment<3>(kMount) = ms / kDeg;
+  sig.template segment<3>(kAtt) = sd.template segment<3>(kAtt) / kDeg;
+  sig.template segment<3>(kBg) = sd.template segment<3>(kBg) / kDegPerHour;
+  sig.template segment<3>(kDg) = sd.template segment<3>(kDg) / kDegPerHour;
+  sig.template segment<3>(kBa) = sd.template segment<3>(kBa) / kMilliG;
+  sig.template segment<3>(kDa) = sd.template segment<3>(kDa) / kMilliG;
+  sig.template segment<9>(kMg) = sd.template segment<9>(kMg) / kPpm;
+  sig.template segment<9>(kMa) = sd.template segment<9>(kMa) / kPpm;
+  sig.template segment<3>(kMount) = ms / kDeg;
+  if constexpr (N == kStatesAug) {
+    sig.template segment<3>(kDgAux) = sd.template segment<3>(kDgAux) / kDegPerHour;
+    sig.template segment<3>(kDaAux) = sd.template segment<3>(kDaAux) / kMilliG;
+  }
 }
 
-std::vector<InMotionFilter::SmoothedEpoch> InMotionFilter::smooth() {
+namespace {
+// Total drift b + d per axis in series units and its 1σ from a covariance (any layout).
+template <class M, class V>
+void total_drift_of(const V& x_series, const M& P, Eigen::Matrix<double, 6, 1>& x, Eigen::Matrix<double, 6, 1>& s) {
+  for (int k = 0; k < 6; ++k) {
+    const int b = k < 3 ? kBg + k : kBa + k - 3, d = k < 3 ? kDg + k : kDa + k - 3;
+    const double unit = k < 3 ? units::kDegPerHour : units::kMilliG;
+    x(k) = x_series(b) + x_series(d);
+    s(k) = std::sqrt(std::max(0.0, static_cast<double>(P(b, b) + P(d, d) + 2 * P(b, d)))) / unit;
+  }
+}
+}  // namespace
+
+template <int N>
+void InMotionFilterT<N>::total_drift(Vec6& x, Vec6& sigma) const {
+  Vec xs, ss;
+  totals(xs, ss);
+  total_drift_of(xs, P_, x, sigma);
+}
+
+template <int N>
+std::vector<typename InMotionFilterT<N>::SmoothedEpoch> InMotionFilterT<N>::smooth() {
   std::vector<SmoothedEpoch> out;
   if (store_.empty()) return out;
-  store_.back().dx_next = pending_dx_.cast<float>();
+  store_.back().dx_next = pending_dx_.template cast<float>();
   // Scale of each state between series units and SI (for the sensor blocks).
-  StateVec unit = StateVec::Ones();
-  unit.segment<3>(kBg).setConstant(1.0 / units::kDegPerHour);
-  unit.segment<3>(kDg).setConstant(1.0 / units::kDegPerHour);
-  unit.segment<3>(kBa).setConstant(1.0 / units::kMilliG);
-  unit.segment<3>(kDa).setConstant(1.0 / units::kMilliG);
-  unit.segment<9>(kMg).setConstant(1.0 / units::kPpm);
-  unit.segment<9>(kMa).setConstant(1.0 / units::kPpm);
-  StateVec s = StateVec::Zero();  // smoothed minus filtered totals (SI) at epoch k+1
-  StateMat Ps = P_;               // smoothed covariance at the final epoch
+  Vec unit = Vec::Ones();
+  unit.template segment<3>(kBg).setConstant(1.0 / units::kDegPerHour);
+  unit.template segment<3>(kDg).setConstant(1.0 / units::kDegPerHour);
+  unit.template segment<3>(kBa).setConstant(1.0 / units::kMilliG);
+  unit.template segment<3>(kDa).setConstant(1.0 / units::kMilliG);
+  unit.template segment<9>(kMg).setConstant(1.0 / units::kPpm);
+  unit.template segment<9>(kMa).setConstant(1.0 / units::kPpm);
+  if constexpr (N == kStatesAug) {
+    unit.template segment<3>(kDgAux).setConstant(1.0 / units::kDegPerHour);
+    unit.template segment<3>(kDaAux).setConstant(1.0 / units::kMilliG);
+  }
+  Vec s = Vec::Zero();  // smoothed minus filtered totals (SI) at epoch k+1
+  Mat Ps = P_;                // smoothed covariance at the final epoch
   out.resize(store_.size());
   for (long k = static_cast<long>(store_.size()) - 1; k >= 0; --k) {
     const Stored& st = store_[static_cast<std::size_t>(k)];
-    const StateMat Pk = st.P_post.cast<double>(), Pn = st.P_prior_next.cast<double>(), Phi = st.Phi.cast<double>();
-    const StateMat A = Pn.ldlt().solve(Phi * Pk).transpose();
-    s = A * (s - st.dx_next.cast<double>());
+    const Mat Pk = st.P_post.template cast<double>(), Pn = st.P_prior_next.template cast<double>(), Phi = st.Phi.template cast<double>();
+    const Mat A = Pn.ldlt().solve(Phi * Pk).transpose();
+    s = A * (s - st.dx_next.template cast<double>());
     Ps = Pk + A * (Ps - Pn) * A.transpose();
     SmoothedEpoch e;
     e.t = st.t;
     e.x = st.x_post;
     e.sigma = Ps.diagonal().cwiseMax(0.0).cwiseSqrt().cwiseProduct(unit);
-    for (int i = kBg; i < kStates; ++i)
+    for (int i = kBg; i < N; ++i)
       if (i < kMount || i >= kDg) e.x(i) += s(i) * unit(i);
+    total_drift_of(e.x, Ps, e.total, e.total_sigma);
     out[static_cast<std::size_t>(k)] = e;
   }
   return out;
 }
+
+template class InMotionFilterT<kStates>;
+template class InMotionFilterT<kStatesAug>;
 
 }  // namespace calbench::inmotion

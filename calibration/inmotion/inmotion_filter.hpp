@@ -17,16 +17,24 @@
 
 namespace calbench::inmotion {
 
-// First-order shaping filter of an in-run drift (eq 22): σ and correlation time.
+// In-run drift model of one axis: first-order (eq 22; σ and correlation time) or, with
+// exp_cosine, the exponential-cosine model K(τ) = σ² e^{−|τ|/τ_s} cos βτ (eq 32) carried as two
+// augmented states (eqs 35–36, drift_expcos.cpp; needs the augmented layout kStatesAug).
 struct DriftPrior {
   double sigma = 0;
   double tau_s = 300;
+  bool exp_cosine = false;
+  double beta = 0;  // rad/s (exp_cosine only)
 };
 
 struct InMotionConfig {
   NoiseSpec noise = adis16488a_noise();  // white-noise densities (process noise)
   // In-run drift models per axis; defaults from `noise` (identified models may replace them).
   std::optional<std::array<DriftPrior, 3>> gyro_drift, accel_drift;
+  // Between updates, move the drift estimates with their shaping filters (x̂ ← Φ·x̂, the filter's
+  // prediction). Always done for exponential-cosine axes (whose first state only acts through
+  // the dynamics); for first-order axes only when set, so that the default filter is unchanged.
+  bool propagate_drift = false;
   // Prior 1σ of the constant parameters (relative to the data the filter sees).
   double sigma_gyro_bias = 0.5 * units::kDeg;     // rad/s
   double sigma_accel_bias = 30 * units::kMilliG;  // m/s²
@@ -50,11 +58,23 @@ struct ConsistencyStats {
   double mean_nis() const { return used ? nis_sum / static_cast<double>(used) : 0.0; }
 };
 
-class InMotionFilter {
+// True when some axis carries an exponential-cosine model: use InMotionFilterT<kStatesAug>.
+bool needs_augmented_layout(const InMotionConfig& cfg);
+
+// N = kStates (default layout) or kStatesAug (with the exponential-cosine auxiliary states).
+template <int N>
+class InMotionFilterT {
+  static_assert(N == kStates || N == kStatesAug, "layouts: kStates or kStatesAug");
+
  public:
+  static constexpr int kN = N;
+  using Vec = StateVecN<N>;
+  using Mat = StateMatN<N>;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+
   // Starts at the first reference epoch, transferring its state to the MEMS IMU through the
   // nominal mounting (rotation C_mb, MEMS → reference body) and lever arm.
-  InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb_nominal, const Vec3& lever, const RefObs& first);
+  InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb_nominal, const Vec3& lever, const RefObs& first);
 
   // One IMU interval ending at t: increments of the data as given (Δθ rad, Δv m/s).
   void imu(double t, const Vec3& dtheta, const Vec3& dv, double dt);
@@ -63,7 +83,7 @@ class InMotionFilter {
 
   double time() const { return nav_.state().t; }
   const ins::NavState& nav() const { return nav_.state(); }
-  const StateMat& P() const { return P_; }
+  const Mat& P() const { return P_; }
   // Current estimates of the sensor model of the data the filter saw (constant part) with σ.
   SensorErrors estimate() const;
   // 1σ of the total gyro drift b + d (constant plus in-run part) now, rad/s; the two parts are
@@ -75,21 +95,26 @@ class InMotionFilter {
   // Mounting as roll, pitch, yaw (rad) and their 1σ (through the Jacobian of the angles).
   void mounting_rpy(Vec3& rpy, Vec3& sigma) const;
   const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
-  // Totals of every state (series units, see state_names()) and their 1σ.
-  void totals(StateVec& x, StateVec& sigma) const;
+  // Totals of every state (series units, see state_names(), then aux_state_names()) and their 1σ.
+  void totals(Vec& x, Vec& sigma) const;
+  // Total drift per axis, constant part + in-run shaping-filter state (b + d; series units
+  // °/h and mg, total_drift_names()), and its 1σ (with the b–d correlation).
+  void total_drift(Vec6& x, Vec6& sigma) const;
 
   // Rauch–Tung–Striebel pass over the stored epochs (store_for_smoother); replaces the
   // constant-parameter estimates with the smoothed values at the first epoch and returns the
   // smoothed series (time, totals of the sensor states, σ) if wanted.
   struct SmoothedEpoch {
     double t;
-    StateVec x, sigma;
+    Vec x, sigma;
+    Vec6 total, total_sigma;  // as total_drift()
   };
   std::vector<SmoothedEpoch> smooth();
 
  private:
   void propagate();
-  void feedback(const StateVec& dx);
+  void feedback(const Vec& dx);
+  void propagate_drift_nominal(double T);
   void refresh_correctors();
 
   InMotionConfig cfg_;
@@ -99,7 +124,12 @@ class InMotionFilter {
   Vec3 bg_ = Vec3::Zero(), ba_ = Vec3::Zero(), dg_ = Vec3::Zero(), da_ = Vec3::Zero();
   Mat3 Mg_ = Mat3::Zero(), Ma_ = Mat3::Zero(), Ag_ = Mat3::Identity(), Aa_ = Mat3::Identity();
   Vec3 alpha_g_, alpha_a_, sig_dg_, sig_da_;
-  StateMat P_;
+  // Exponential-cosine axes (0–2 gyro, 3–5 accel): their shaping filters and the nominal first
+  // states x[0] (the drift x[1] is dg_/da_).
+  bool expcos_[6] = {false, false, false, false, false, false};
+  identification::ShapingFilter sf_[6];
+  Vec3 xg0_ = Vec3::Zero(), xa0_ = Vec3::Zero();
+  Mat P_;
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
   double last_obs_t_ = -1e300;
@@ -108,12 +138,15 @@ class InMotionFilter {
   // Smoother storage (float to halve memory): per propagation step k → k+1.
   struct Stored {
     double t;
-    Eigen::Matrix<float, kStates, kStates> P_post, Phi, P_prior_next;
-    Eigen::Matrix<float, kStates, 1> dx_next;  // update applied at the next epoch
-    Eigen::Matrix<double, kStates, 1> x_post;  // totals after the update at this epoch
+    Eigen::Matrix<float, N, N> P_post, Phi, P_prior_next;
+    Eigen::Matrix<float, N, 1> dx_next;  // update applied at the next epoch
+    Eigen::Matrix<double, N, 1> x_post;  // totals after the update at this epoch
   };
   std::vector<Stored> store_;
-  StateVec pending_dx_ = StateVec::Zero();
+  Vec pending_dx_ = Vec::Zero();
 };
+
+using InMotionFilter = InMotionFilterT<kStates>;
+using InMotionFilterAug = InMotionFilterT<kStatesAug>;
 
 }  // namespace calbench::inmotion

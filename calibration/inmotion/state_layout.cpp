@@ -26,4 +26,17 @@ const std::array<std::string, kStates>& state_names() {
   return names;
 }
 
+const std::array<std::string, kStatesAug - kStates>& aux_state_names() {
+  static const std::array<std::string, kStatesAug - kStates> names = {
+      "gyro_drift_aux_x_dph_s", "gyro_drift_aux_y_dph_s", "gyro_drift_aux_z_dph_s",
+      "accel_drift_aux_x_mg_s", "accel_drift_aux_y_mg_s", "accel_drift_aux_z_mg_s"};
+  return names;
+}
+
+const std::array<std::string, 6>& total_drift_names() {
+  static const std::array<std::string, 6> names = {"gyro_total_x_dph",  "gyro_total_y_dph",  "gyro_total_z_dph",
+                                                   "accel_total_x_mg", "accel_total_y_mg", "accel_total_z_mg"};
+  return names;
+}
+
 }  // namespace calbench::inmotion

@@ -12,6 +12,11 @@
 //        Ĉ_mb = (I − δμ×)·C_mb (C_mb: MEMS → reference body)          [kMount, +3)
 //   δd_g gyro in-run drift, first-order shaping filter (eq 22)        [kDg, +3)
 //   δd_a accelerometer in-run drift, shaping filter (eq 22)           [kDa, +3)
+// Augmented layout (only when some axis carries an exponential-cosine drift model, eqs 35–36):
+//   δx0_g first state Δμ of the gyro exp-cosine shaping filter         [kDgAux, +3)
+//   δx0_a first state of the accelerometer exp-cosine shaping filter   [kDaAux, +3)
+//   The drift itself is the filter's second state, H = [0 1] (shaping_filter.hpp), and sits in
+//   kDg / kDa as in the default layout; an axis with a first-order model leaves its aux unused.
 #pragma once
 #include <Eigen/Dense>
 #include <array>
@@ -30,12 +35,24 @@ inline constexpr int kMount = 33;
 inline constexpr int kDg = 36;
 inline constexpr int kDa = 39;
 inline constexpr int kStates = 42;
+inline constexpr int kDgAux = 42;
+inline constexpr int kDaAux = 45;
+inline constexpr int kStatesAug = 48;
 
 using StateVec = Eigen::Matrix<double, kStates, 1>;
 using StateMat = Eigen::Matrix<double, kStates, kStates>;
 using ObsMat = Eigen::Matrix<double, 3, kStates>;
+template <int N>
+using StateVecN = Eigen::Matrix<double, N, 1>;
+template <int N>
+using StateMatN = Eigen::Matrix<double, N, N>;
 
 // Column names of the --series file, one per state (totals, not errors), in state order.
 const std::array<std::string, kStates>& state_names();
+// Names of the augmented states [kDgAux, kStatesAug): gyro_drift_aux_x_dph_s …, accel_drift_aux_x_mg_s ….
+const std::array<std::string, kStatesAug - kStates>& aux_state_names();
+// Names of the total drift columns (constant part + in-run shaping-filter state, per axis):
+// gyro_total_x_dph, …, accel_total_x_mg, … — the process `calbench identify` identifies.
+const std::array<std::string, 6>& total_drift_names();
 
 }  // namespace calbench::inmotion
