@@ -37,6 +37,7 @@ struct IdentifyArgs {
   std::string input, plot, out;
   std::vector<std::string> columns;
   double max_lag_s = 0;
+  double from_s = -1e300;  // CSV rows before this time are skipped
   std::size_t decimate = 1;
   bool json_out = false;
   bool no_allan = false;
@@ -47,8 +48,10 @@ enum class Quantity { gyro, accel, other };
 struct Series {
   std::string name;
   Quantity q = Quantity::other;
-  int axis = -1;  // 0,1,2 for recording columns
-  std::vector<double> x;
+  int axis = -1;  // 0,1,2 for recording columns and in-motion series drift columns
+  double si_per_unit = 1;  // column value × si_per_unit = SI (in-motion series: °/h, mg)
+  std::string column_unit;  // the column's own unit when it was converted
+  std::vector<double> x;   // SI
 };
 
 struct Loaded {
@@ -83,6 +86,21 @@ void check_step(const std::string& file, std::size_t line, double t_prev, double
   }
 }
 
+// The in-motion series of `fit drive --series` (columns gyro_bias_x_dph …): by default its total
+// drift columns gyro_total_{x,y,z}_dph and accel_total_{x,y,z}_mg (constant part + in-run state per
+// axis, the process the paper identifies, eq 25 on the estimated drift), converted to SI. A series
+// written before those columns existed has them made as gyro_bias_* + gyro_drift_*.
+const char* kAxes = "xyz";
+std::string total_part(const std::string& total, const char* part) {
+  std::string n = total;
+  n.replace(n.find("_total_"), 7, std::string("_") + part + "_");
+  return n;
+}
+bool is_inmotion_series(const std::vector<std::string>& header) {
+  auto has = [&](const std::string& n) { return std::find(header.begin(), header.end(), n) != header.end(); };
+  return has("gyro_total_x_dph") || (has("gyro_bias_x_dph") && has("gyro_drift_x_dph"));
+}
+
 Loaded load_csv(const IdentifyArgs& a) {
   Loaded L;
   L.file = a.input;
@@ -90,27 +108,56 @@ Loaded load_csv(const IdentifyArgs& a) {
   const int t = r.require("t_s");
   r.set_time_slot(t);
   std::vector<std::string> names = a.columns;
-  if (names.empty())
-    for (const auto& h : r.header())
-      if (h != "t_s") names.push_back(h);
+  const std::vector<std::string>& header = r.header();
+  auto in_header = [&](const std::string& n) { return std::find(header.begin(), header.end(), n) != header.end(); };
+  if (names.empty()) {
+    if (is_inmotion_series(header)) {
+      for (const char* s : {"gyro", "accel"})
+        for (int i = 0; i < 3; ++i)
+          names.push_back(std::string(s) + "_total_" + kAxes[i] + (s[0] == 'g' ? "_dph" : "_mg"));
+    } else {
+      for (const auto& h : header)
+        if (h != "t_s") names.push_back(h);
+    }
+  }
   if (names.empty()) throw InputError(a.input, 1, "", "no value column besides t_s");
-  std::vector<int> slots;
+  // Each series is the sum of one or two columns (a total made from its parts).
+  std::vector<std::vector<int>> slots;
   for (const auto& n : names) {
-    slots.push_back(r.require(n));
+    std::vector<int> sl;
+    if (!in_header(n) && n.find("_total_") != std::string::npos && column_sensor(n) &&
+        in_header(total_part(n, "bias")) && in_header(total_part(n, "drift"))) {
+      sl.push_back(r.require(total_part(n, "bias")));
+      sl.push_back(r.require(total_part(n, "drift")));
+    } else {
+      sl.push_back(r.require(n));
+    }
+    slots.push_back(sl);
     Series s;
     s.name = n;
     s.q = quantity_of(n);
+    if (const auto cs = column_sensor(n)) {
+      s.q = cs->sensor == "gyro" ? Quantity::gyro : Quantity::accel;
+      s.axis = cs->axis;
+      s.si_per_unit = cs->si_per_unit;
+      if (cs->si_per_unit != 1.0) s.column_unit = cs->unit;
+    }
     L.series.push_back(std::move(s));
   }
   double t0 = 0, t_prev = 0, dt_nom = 0;
   std::size_t rows = 0;
   while (r.next()) {
     const double tv = r.value(t);
+    if (tv < a.from_s) continue;
     if (rows == 0) t0 = tv;
     if (rows == 1) dt_nom = tv - t0;
     if (rows >= 2) check_step(a.input, r.line(), t_prev, tv, dt_nom, 1e-3);
     t_prev = tv;
-    for (std::size_t k = 0; k < slots.size(); ++k) L.series[k].x.push_back(r.value(slots[k]));
+    for (std::size_t k = 0; k < slots.size(); ++k) {
+      double v = 0;
+      for (int sl : slots[k]) v += r.value(sl);
+      L.series[k].x.push_back(v * L.series[k].si_per_unit);
+    }
     ++rows;
   }
   if (rows < kMinSamples)
@@ -423,6 +470,11 @@ void run_identify(const IdentifyArgs& a) {
     c["se"] = {{"sigma", num(b.se_sigma)}, {"alpha", num(b.se_alpha)}, {"beta", num(b.se_beta)},
                {"T_s", num(b.se_alpha / (b.alpha * b.alpha))}};
     c["unit"] = units_for(r.s->q).signal;
+    if (!r.s->column_unit.empty()) c["converted_from"] = r.s->column_unit;  // in-motion series: SI here
+    if (r.s->axis >= 0) {
+      c["sensor"] = r.s->q == Quantity::gyro ? "gyro" : "accel";
+      c["axis"] = r.s->axis;
+    }
     c["samples"] = r.s->x.size();
     c["dt_s"] = L.dt;
     c["dt_correlation_s"] = r.dt_corr;
@@ -450,7 +502,8 @@ void run_identify(const IdentifyArgs& a) {
     if (b.usable) {
       id::DriftModel m = b.model();
       if (I.chosen == id::DriftModelKind::exponential) m.beta = 0;
-      const json sf = shaping_json(m, r.dt_corr, r.s->q, r.s->axis);
+      json sf = shaping_json(m, r.dt_corr, r.s->q, r.s->axis);
+      if (!r.s->column_unit.empty()) sf["converted_from"] = r.s->column_unit;
       c["shaping_filter"] = sf;
       models[r.s->name] = sf;
     } else {
@@ -521,6 +574,9 @@ const bool registered = add_command(40, [](CLI::App& app) {
   sub->add_option("--decimate", a->decimate,
                   "block-average this many samples before the correlation analysis (Allan uses the raw samples)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1000000}));
+  sub->add_option("--from", a->from_s,
+                  "CSV input: skip rows before this time, s (e.g. the in-motion filter's convergence at the start "
+                  "of a fit drive --series)");
   sub->add_flag("--no-allan", a->no_allan, "skip the Allan deviation");
   sub->add_flag("--json", a->json_out, "print the result as JSON on stdout");
   sub->add_option("--plot", a->plot, "write a Fig. 3-like PNG here (and OUT-allan.png), with gnuplot");
