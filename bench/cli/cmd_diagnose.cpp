@@ -6,6 +6,7 @@
 #include "bench/bench_recording.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
+#include "bench/diagnose/drive_run.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/plan_toml.hpp"
 
@@ -17,7 +18,29 @@ struct DiagnoseArgs {
   bool json = false;
 };
 
+// Drive recordings (meta.json kind "drive"): bench/diagnose/drive_run.hpp, docs/diagnosis.md "Drives".
+void run_diagnose_drive(const DiagnoseArgs& a) {
+  std::optional<DriveCoeffs> given;
+  if (!a.coeffs.empty()) given = read_drive_coeffs(a.coeffs);
+  const DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
+  if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
+  const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr);
+  if (!a.out.empty()) write_coefficients(a.out, run.improved);
+  if (!a.report.empty()) write_drive_diagnosis_report(a.report, in, run, a.dir);
+  if (a.json) {
+    auto j = drive_diagnosis_json(in, run);
+    j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"reference_rows", in.ref_rows},
+                      {"complete", in.meta.complete}};
+    print_json(j.dump(2));
+  } else {
+    std::cout << "diagnosis of " << a.dir << "\n" << drive_diagnosis_text(in, run);
+    if (!a.out.empty()) std::cout << "improved coefficients written to " << a.out << "\n";
+    if (!a.report.empty()) std::cout << "report written to " << a.report << "\n";
+  }
+}
+
 void run_diagnose(const DiagnoseArgs& a) {
+  if (read_meta(a.dir).kind == RecordingKind::drive) return run_diagnose_drive(a);
   const DiagInput in = load_diag_input(a.dir);
   const TableSpec table = a.plan.empty() ? recording_table_spec(in.meta) : load_plan(a.plan).table;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
@@ -42,7 +65,7 @@ const bool registered = add_command(60, [](CLI::App& app) {
   auto* d = app.add_subcommand("diagnose",
                                "Physics discovery: locate where recording and model disagree, name the missing effect, "
                                "model it, show the fit improve (bench recordings)");
-  d->add_option("dir", a->dir, "bench recording folder")->required()->check(CLI::ExistingDirectory);
+  d->add_option("dir", a->dir, "recording folder (bench or drive)")->required()->check(CLI::ExistingDirectory);
   d->add_option("--coeffs", a->coeffs, "coefficients to test (default: fit them first with the bench fit)")
       ->check(CLI::ExistingFile);
   d->add_flag("--json", a->json, "print findings as JSON on stdout");

@@ -19,6 +19,11 @@ const bool registered = add_command(11, [](CLI::App& app) {
   d->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");
   d->add_option("--until", a->until_s, "simulate only the first SECONDS of the route");
   d->add_flag("--force", a->force, "overwrite an existing recording in --out");
+  d->add_option("--inject", a->inject,
+                "inject a catalogue effect into the MEMS output, SI units, repeatable (docs/diagnosis.md): e.g. "
+                "g_sensitivity:axis=x,f=y,value=1.6e-5, time_offset:value=0.002, lever_arm:x=0.05");
+  d->add_option("--effects", a->effects, "JSON file with catalogue keys (as in IMPROVED.json) to inject")
+      ->check(CLI::ExistingFile);
   d->callback([a] {
     const SimulateDriveSummary s = simulate_drive_recording(*a);
     std::cout << "simulated " << s.imu_rows << " IMU samples (" << s.duration_s << " s), " << s.ref_rows

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace calbench {
 
@@ -12,6 +13,10 @@ struct SimulateDriveArgs {
   std::uint64_t seed = 1;
   bool force = false;
   double until_s = 0;  // 0 = whole route
+  // Catalogue effects to inject (docs/diagnosis.md): --inject EFFECT:key=value,... and/or an
+  // --effects JSON file (a TRUTH.json carrying the keys is injected too).
+  std::vector<std::string> inject;
+  std::string effects;
 };
 
 struct SimulateDriveSummary {

@@ -35,6 +35,18 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
   const double T = until_s > 0 ? std::min(until_s, prof.duration()) : prof.duration();
   NoiseSpec noise = cfg.noise;
   noise.output_rate_hz = cfg.imu_rate_hz;
+  const EffectTerms& fx = cfg.effects;
+  if (fx.gyro.drift_sigma > 0) {
+    noise.gyro.drift_sigma = fx.gyro.drift_sigma;
+    if (fx.gyro.drift_tau_s > 0) noise.gyro.drift_tau_s = fx.gyro.drift_tau_s;
+  }
+  if (fx.accel.drift_sigma > 0) {
+    noise.accel.drift_sigma = fx.accel.drift_sigma;
+    if (fx.accel.drift_tau_s > 0) noise.accel.drift_tau_s = fx.accel.drift_tau_s;
+  }
+  const bool sensor_fx = fx.any_sensor_side();
+  const Mat3 gyro_inv = (Mat3::Identity() + cfg.mems.gyro.M).inverse();
+  const Mat3 accel_inv = (Mat3::Identity() + cfg.mems.accel.M).inverse();
   ImuErrorSimulator mems(cfg.mems, noise, cfg.seed);
   std::mt19937_64 rng(cfg.seed * 0x2545F4914F6CDD1DULL + 7);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -67,10 +79,27 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
       lon = plon + va(1) / ((R.RN + hm) * std::cos(0.5 * (plat + lat))) * dt;
     }
     // MEMS: lever-arm specific force, then into MEMS axes, then the device's errors.
-    const Vec3 w_a = body_at(prof, t + hfd, lat, h).w_ib, w_b = body_at(prof, std::max(0.0, t - hfd), lat, h).w_ib;
-    const Vec3 wdot = (w_a - w_b) / (t + hfd - std::max(0.0, t - hfd));
-    const Vec3 f_m = b.f + wdot.cross(r) + b.w_ib.cross(b.w_ib.cross(r));
-    const auto out = mems.sample(t, C_bm * b.w_ib, C_bm * f_m);
+    // A time offset τ: the sample stamped t saw the motion at t − τ (position change over τ is
+    // negligible for gravity and Earth rate).
+    const double ti = std::max(0.0, t - fx.time_offset_s);
+    const Body bi = fx.time_offset_s != 0 ? body_at(prof, ti, lat, h) : b;
+    const Vec3 w_a = body_at(prof, ti + hfd, lat, h).w_ib, w_b = body_at(prof, std::max(0.0, ti - hfd), lat, h).w_ib;
+    const Vec3 wdot = (w_a - w_b) / (ti + hfd - std::max(0.0, ti - hfd));
+    const Vec3 f_m = bi.f + wdot.cross(r) + bi.w_ib.cross(bi.w_ib.cross(r));
+    Vec3 w_in = C_bm * bi.w_ib, f_in = C_bm * f_m;
+    if (sensor_fx) {
+      // Extra output d enters before noise and quantisation: (I+M)(x + (I+M)⁻¹d) + b = (I+M)x + b + d.
+      EffectContext c;
+      c.w = w_in;
+      c.f = f_in;
+      c.dw = C_bm * wdot;
+      c.temp_c = fx.t0_c;  // no temperature on a drive: temperature terms stay zero
+      Vec3 dg, da;
+      sensor_side_terms(fx, c, dg, da);
+      w_in += gyro_inv * dg;
+      f_in += accel_inv * da;
+    }
+    const auto out = mems.sample(t, w_in, f_in);
     if (sinks.imu) sinks.imu(SimImu{t, out.gyro, out.accel});
     if (sinks.truth) sinks.truth(SimTruth{t, lat, lon, h, b.v_n, b.C_nb, b.w_ib, b.f});
 

@@ -14,6 +14,7 @@
 #include <random>
 
 #include "calibration/drive_sim/route.hpp"
+#include "calibration/effects/effect_terms.hpp"
 #include "calibration/imu_error_sim.hpp"
 #include "calibration/ins/nav_math.hpp"
 #include "calibration/noise_spec.hpp"
@@ -44,6 +45,12 @@ struct DriveSimConfig {
   ReferenceErrors reference;
   GnssErrors gnss;
   std::uint64_t seed = 1;
+  // Physics beyond the spec's model (docs/diagnosis.md, "Drives"), applied to the MEMS output only
+  // (the reference stays nominal): sensor-side terms at the MEMS's true input; lever_arm = an
+  // extra MEMS offset (IMU axes) beyond `lever_arm`; time_offset: the sample stamped t saw the
+  // motion at t − τ; correlated_drift replaces the drift σ, τ of `noise`. Temperature terms need a
+  // temperature and the table terms a bench: not used here.
+  EffectTerms effects;
 };
 
 struct SimImu {

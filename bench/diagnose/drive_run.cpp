@@ -1,0 +1,435 @@
+#include "bench/diagnose/drive_run.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include "bench/diagnose/effects_json.hpp"
+#include "bench/drive/qc_drive.hpp"
+#include "bench/drive/route_toml.hpp"
+#include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+#include "bench/report/gnuplot.hpp"
+#include "calibration/imu_error_sim.hpp"
+#include "calibration/ins/strapdown.hpp"
+#include "calibration/units.hpp"
+
+namespace calbench {
+
+namespace {
+const char* kSensor[] = {"gyro", "accel", "reference"};
+const char* kAxis[] = {"x", "y", "z"};
+const char* kAxisName[] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
+
+std::string fmt(double v, int prec = 3) {
+  std::ostringstream o;
+  o << std::setprecision(prec) << v;
+  return o.str();
+}
+
+// Display units: gyro °/h, accel mg.
+double disp(double v, int sensor) { return sensor == 0 ? v / units::kDegPerHour : v / units::kMilliG; }
+const char* disp_unit(int sensor) { return sensor == 0 ? "°/h" : "mg"; }
+
+std::string value_text(const DiagFinding& f) {
+  using namespace units;
+  const Term& t = f.term;
+  auto list = [&](double scale, const char* unit) {
+    std::string s;
+    if (f.value.size() == 1) return fmt(f.value[0] * scale) + " " + unit;
+    s = "(";
+    for (std::size_t i = 0; i < f.value.size(); ++i) s += (i ? ", " : "") + fmt(f.value[i] * scale);
+    return s + ") " + unit;
+  };
+  switch (t.effect) {
+    case EffectId::g_sensitivity: return list(1.0 / kDeg * kG0, "°/s/g");
+    case EffectId::scale_nonlinearity: return t.sensor == 0 ? list(1e6 * kDeg, "ppm/(°/s)") : list(1e6 * kG0, "ppm/g");
+    case EffectId::scale_asymmetry: return list(1e6, "ppm");
+    case EffectId::time_offset: return list(1e3, "ms");
+    case EffectId::lever_arm: return list(1e3, "mm (IMU axes)");
+    case EffectId::temperature_bias:
+      return t.sensor == 0 ? list(1.0 / kDegPerHour, "°/h/K") : list(1.0 / kMilliG, "mg/K");
+    case EffectId::temperature_scale: return list(1e6, "ppm/K");
+    case EffectId::correlated_drift:
+      return t.sensor == 0 ? fmt(f.value[0] / kDegPerHour) + " °/h, τ " + fmt(f.noise_tau_s) + " s"
+                           : fmt(f.value[0] / kMilliG) + " mg, τ " + fmt(f.noise_tau_s) + " s";
+    default: return list(1.0, f.unit.c_str());
+  }
+}
+
+std::string condition_text(const std::string& c) {
+  if (c.size() == 3 && c[1] == '_' && (c[0] == 'w' || c[0] == 'f'))
+    return std::string(c[0] == 'w' ? "angular rate about " : "specific force along ") + c[2];
+  if (c == "ang_accel") return "angular acceleration";
+  if (c == "turn_rate") return "turn rate";
+  if (c == "along_accel") return "longitudinal acceleration";
+  if (c == "|w|") return "rotation rate magnitude";
+  if (c == "|f|") return "specific force magnitude";
+  return c;
+}
+
+void feed_imu(DriveDiagBuilder& b, ins::RateIntegrator& integ, bool rates, double t, double dt, const Vec3& g,
+              const Vec3& a, double temp) {
+  DriveImuSample s;
+  s.t = t;
+  s.dt = dt;
+  s.temp_c = temp;
+  if (rates) {
+    integ(g, a, dt, s.dtheta, s.dv);
+    s.has_rates = true;
+    s.w_raw = g;
+    s.f_raw = a;
+  } else {
+    s.dtheta = g;
+    s.dv = a;
+  }
+  b.imu(s);
+}
+
+DriveRefEpoch to_epoch(const DriveRefRow& r) {
+  DriveRefEpoch e;
+  e.t = r.t;
+  e.lat = r.lat_deg * units::kDeg;
+  e.lon = r.lon_deg * units::kDeg;
+  e.h = r.h_m;
+  e.v_ned = r.v_ned;
+  e.rpy = r.rpy_deg * units::kDeg;
+  return e;
+}
+}  // namespace
+
+DriveCoeffs read_drive_coeffs(const std::string& file) {
+  DriveCoeffs c;
+  c.file = file;
+  const QcSet q = load_qc_set(file);
+  c.mounting_rpy_deg = q.mounting_rpy_deg;
+  const nlohmann::json j = read_json_file(file);
+  const nlohmann::json& cj = (j.is_object() && j.contains("coefficients")) ? j["coefficients"] : j;
+  c.set = coefficients_from_json(cj, file);
+  c.carried = effects_from_json(cj, file);
+  return c;
+}
+
+DriveDiagInput load_drive_diag_input(const std::filesystem::path& dir, const std::optional<Vec3>& rpy_deg) {
+  DriveDiagInput in;
+  in.meta = read_meta(dir);
+  const std::string mf = (dir / "meta.json").string();
+  if (in.meta.kind != RecordingKind::drive) throw InputError(mf, 0, "kind", "expected a drive recording");
+  if (!in.meta.mounting) throw InputError(mf, 0, "mounting", "a drive recording needs a mounting");
+  if (!(in.meta.imu_rate_hz > 0)) throw InputError(mf, 0, "imu_rate_hz", "must be > 0");
+  in.mounting_rpy_deg = rpy_deg ? *rpy_deg : in.meta.mounting->rpy_deg;
+  in.mounting_source = rpy_deg ? "coefficients file" : "meta.json (nominal)";
+  DriveDiagBuilder b(ins::dcm_from_rpy(in.mounting_rpy_deg * units::kDeg), in.meta.mounting->lever_arm_m);
+  ImuReader imu(dir / "imu.csv", in.meta.imu_rate_hz);
+  DriveRefReader ref(dir / "reference.csv");
+  DriveRefRow rr;
+  bool have_ref = ref.next(rr);
+  if (!have_ref) throw InputError((dir / "reference.csv").string(), 0, "", "no data rows");
+  ++in.ref_rows;
+  ins::RateIntegrator integ;
+  ImuRecord r;
+  while (imu.next(r)) {
+    ++in.imu_rows;
+    feed_imu(b, integ, imu.form() == ImuForm::rates, r.t, r.dt, r.gyro, r.accel, r.temp_c);
+    while (have_ref && rr.t <= r.t + 1e-9) {
+      b.reference(to_epoch(rr));
+      have_ref = ref.next(rr);
+      if (have_ref) ++in.ref_rows;
+    }
+  }
+  in.data = b.finish();
+  if (in.data.parents.size() < 20)
+    throw InputError(dir.string(), 0, "", "too little overlapping IMU and reference data for a diagnosis (< 20 s)");
+  return in;
+}
+
+DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uint64_t seed, const EffectTerms& effects,
+                                         double until_s) {
+  const RouteFile rf = load_route(route_file);
+  drivesim::DriveSimConfig cfg;
+  cfg.route = rf.route;
+  cfg.mems = draw_random_unit(seed);
+  Vec3 rpy = rf.mounting_rpy_deg;
+  std::mt19937_64 rng(seed ^ 0x6d6f756e74ULL);
+  std::normal_distribution<double> n(0.0, rf.misalignment_sigma_deg);
+  for (int i = 0; i < 3; ++i) rpy(i) += n(rng);
+  cfg.imu_rate_hz = rf.imu_rate_hz;
+  cfg.mounting_rpy = rpy * units::kDeg;
+  cfg.lever_arm = rf.lever_arm_m;
+  cfg.reference = rf.reference;
+  cfg.gnss = rf.gnss;
+  cfg.gnss.rate_hz = 0;
+  cfg.seed = seed;
+  cfg.effects = effects;
+  DriveDiagInput in;
+  in.meta.kind = RecordingKind::drive;
+  in.meta.imu_rate_hz = rf.imu_rate_hz;
+  in.meta.mounting = Mounting{rf.mounting_rpy_deg, rf.lever_arm_m};
+  in.meta.device.serial = "SIM-" + std::to_string(seed);
+  in.mounting_rpy_deg = rf.mounting_rpy_deg;
+  in.mounting_source = "route file (nominal)";
+  DriveDiagBuilder b(ins::dcm_from_rpy(rf.mounting_rpy_deg * units::kDeg), rf.lever_arm_m);
+  ins::RateIntegrator integ;
+  const double dt = 1.0 / rf.imu_rate_hz;
+  drivesim::DriveSinks sinks;
+  sinks.imu = [&](const drivesim::SimImu& m) {
+    ++in.imu_rows;
+    feed_imu(b, integ, true, m.t, dt, m.gyro, m.accel, std::numeric_limits<double>::quiet_NaN());
+  };
+  sinks.reference = [&](const drivesim::SimRef& s) {
+    ++in.ref_rows;
+    DriveRefEpoch e;
+    e.t = s.t;
+    e.lat = s.lat;
+    e.lon = s.lon;
+    e.h = s.h;
+    e.v_ned = s.v_ned;
+    e.rpy = s.rpy;
+    b.reference(e);
+  };
+  drivesim::simulate_drive(cfg, sinks, until_s);
+  in.data = b.finish();
+  return in;
+}
+
+DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* coeffs) {
+  DriveDiagRun run;
+  DriveDiagnoseOptions opt;
+  EffectTerms carried;
+  if (coeffs) {
+    run.current = coeffs->set;
+    carried = coeffs->carried;
+    run.coeffs_given = true;
+    opt.fixed_scale = true;
+  } else {
+    run.current.device = in.meta.device;
+  }
+  run.result = diagnose_drive(in.data, run.current.errors, carried, opt);
+  const DiagnoseResult& r = run.result.core;
+  run.improved = run.current;
+  run.improved.device = run.current.device.serial.empty() ? in.meta.device : run.current.device;
+  run.improved.errors = r.improved;
+  for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity", "scale_asymmetry",
+                        "time_offset", "lever_arm", "misalignment", "table_wobble", "correlated_drift", "diagnosis"})
+    run.improved.extra.erase(k);
+  effects_to_json(r.improved_terms, r.terms_sigma, run.improved.extra);
+  nlohmann::json added = nlohmann::json::array();
+  for (const auto& f : r.findings) added.push_back(f.term.label());
+  nlohmann::json dj = {{"effects_added", added}, {"recording_kind", "drive"},
+                       {"note", "b (and M without --coeffs) re-estimated on this drive; the bias of a drive is its "
+                                "turn-on and in-run value"}};
+  if (run.coeffs_given) {
+    const Mat3 C = ins::dcm_from_rpy(in.mounting_rpy_deg * units::kDeg) *
+                   ins::quat_from_rotvec(run.result.mounting_delta).toRotationMatrix();
+    dj["mounting_rpy_deg"] = {{"value", to_json(Vec3(ins::rpy_from_dcm(C) / units::kDeg))},
+                              {"sigma", to_json(Vec3(run.result.mounting_sigma / units::kDeg))},
+                              {"tested", to_json(in.mounting_rpy_deg)}};
+  }
+  run.improved.extra["diagnosis"] = dj;
+  return run;
+}
+
+std::string drive_finding_sentence(const DiagFinding& f) {
+  const Term& t = f.term;
+  const int s = f.report_sensor < 2 ? f.report_sensor : 0;
+  std::string who = std::string(kSensor[t.sensor < 2 ? t.sensor : s]);
+  if (t.sensor < 2 && f.report_axis >= 0) who += std::string(" ") + kAxis[f.report_axis];
+  std::string what;
+  switch (t.effect) {
+    case EffectId::g_sensitivity: what = "g-sensitivity"; break;
+    case EffectId::scale_nonlinearity: what = "scale-factor nonlinearity"; break;
+    case EffectId::scale_asymmetry: what = "scale-factor asymmetry"; break;
+    case EffectId::time_offset: what = "time offset between IMU and reference (IMU late by τ)"; break;
+    case EffectId::lever_arm: what = "lever arm: the MEMS sits elsewhere than meta.json says"; break;
+    case EffectId::temperature_bias: what = "temperature-dependent bias"; break;
+    case EffectId::temperature_scale: what = "temperature-dependent scale factor"; break;
+    case EffectId::correlated_drift: what = "bias drift larger than the data sheet's (run calbench identify)"; break;
+    default: what = effect_name(t.effect);
+  }
+  std::string head;
+  if (t.effect == EffectId::time_offset) head = "all axes follow the derivative of their input";
+  else if (t.effect == EffectId::lever_arm) head = "accelerometer error grows with rotation rate and angular acceleration";
+  else if (t.effect == EffectId::correlated_drift) head = who + " residual wanders slowly in time";
+  else head = who + " error grows with " + condition_text(f.condition);
+  const int rs = f.report_sensor < 2 ? f.report_sensor : 0;
+  return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
+         disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs);
+}
+
+nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun& run) {
+  const DriveDiagnoseResult& R = run.result;
+  const DiagnoseResult& r = R.core;
+  nlohmann::json j;
+  j["kind"] = "drive";
+  nlohmann::json fs = nlohmann::json::array();
+  for (const auto& f : r.findings) {
+    nlohmann::json x;
+    x["effect"] = effect_name(f.term.effect);
+    x["sensor"] = kSensor[f.term.sensor];
+    x["axis"] = f.report_axis >= 0 ? kAxis[f.report_axis] : "all";
+    if (f.value.size() == 1) {
+      x["value"] = f.value[0];
+      x["sigma"] = std::isfinite(f.sigma[0]) ? nlohmann::json(f.sigma[0]) : nlohmann::json(nullptr);
+    } else {
+      x["value"] = f.value;
+      x["sigma"] = f.sigma;
+    }
+    x["unit"] = f.unit;
+    nlohmann::json ev = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic},
+                         {"heldout_delta_chi2", f.heldout_delta_chi2}, {"revealing_condition", f.condition},
+                         {"correlation_before", f.condition_r}};
+    if (f.term.effect == EffectId::correlated_drift) ev["tau_s"] = f.noise_tau_s;
+    if (f.report_sensor < 2 && f.report_axis >= 0) {
+      const int a = f.report_sensor * 3 + f.report_axis;
+      ev["ljung_box_p_before"] = r.before[a].ljung_box_p;
+      ev["ljung_box_p_after"] = r.after[a].ljung_box_p;
+    }
+    x["evidence"] = ev;
+    x["rms_before"] = f.rms_before;
+    x["rms_after"] = f.rms_after;
+    x["sentence"] = drive_finding_sentence(f);
+    fs.push_back(x);
+  }
+  j["findings"] = fs;
+  nlohmann::json us = nlohmann::json::array();
+  for (const auto& u : r.unexplained) {
+    nlohmann::json c = nlohmann::json::array();
+    for (const auto& cc : u.correlations) c.push_back({{"condition", cc.condition}, {"r", cc.r}});
+    nlohmann::json w = nlohmann::json::array();
+    for (int s : u.worst_steps) w.push_back({20.0 * s, 20.0 * (s + 1)});
+    us.push_back({{"sensor", kSensor[u.sensor]}, {"axis", kAxis[u.axis]}, {"chi2_per_dof", u.chi2_dof},
+                  {"ljung_box_p", u.ljung_box_p}, {"systematic_rms", u.systematic_rms}, {"worst_windows_s", w},
+                  {"correlations", c}});
+  }
+  j["unexplained"] = us;
+  nlohmann::json axes;
+  for (int a = 0; a < 6; ++a) {
+    auto st = [](const AxisStats& s) {
+      return nlohmann::json{{"systematic_rms", s.systematic_rms}, {"chi2_per_dof", s.chi2_dof},
+                            {"ljung_box_p", s.ljung_box_p}};
+    };
+    nlohmann::json cb = nlohmann::json::array(), ca = nlohmann::json::array();
+    for (std::size_t k = 0; k < r.correlations_before[a].size() && k < 5; ++k)
+      cb.push_back({{"condition", r.correlations_before[a][k].condition}, {"r", r.correlations_before[a][k].r}});
+    for (std::size_t k = 0; k < R.correlations_after[a].size() && k < 5; ++k)
+      ca.push_back({{"condition", R.correlations_after[a][k].condition}, {"r", R.correlations_after[a][k].r}});
+    axes[kAxisName[a]] = {{"before", st(r.before[a])}, {"after", st(r.after[a])},
+                          {"white_sigma_per_sample", r.white_sigma[a]}, {"block_noise_sigma", R.block_noise_sigma[a]},
+                          {"correlations_before", cb}, {"correlations_after", ca}};
+  }
+  j["axes"] = axes;
+  nlohmann::json segs = nlohmann::json::array();
+  for (const auto& s : R.segments) {
+    nlohmann::json m;
+    for (int a = 0; a < 6; ++a)
+      m[kAxisName[a]] = {{"mean_before", s.mean_before[a]}, {"mean_after", s.mean_after[a]},
+                         {"z_before", s.z_before[a]}, {"z_after", s.z_after[a]}};
+    segs.push_back({{"motion", s.motion}, {"blocks", s.blocks}, {"seconds", s.seconds}, {"axes", m}});
+  }
+  j["segments"] = segs;
+  j["coefficients_tested"] = run.coeffs_given ? "given (M fixed; bias and mounting re-estimated)"
+                                              : "none given: bias and M fitted on this drive";
+  nlohmann::json mount = {{"tested_rpy_deg", to_json(in.mounting_rpy_deg)}, {"source", in.mounting_source},
+                          {"lever_arm_m", to_json(in.meta.mounting ? in.meta.mounting->lever_arm_m : Vec3::Zero())}};
+  if (run.coeffs_given) {
+    mount["correction_rad"] = to_json(R.mounting_delta);
+    mount["correction_sigma_rad"] = to_json(R.mounting_sigma);
+  }
+  j["mounting"] = mount;
+  j["noise_model"] = {{"gyro_drift_sigma_rad_s", r.drift_sigma[0]}, {"gyro_drift_tau_s", r.drift_tau[0]},
+                      {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]}};
+  j["data"] = {{"blocks", r.parents}, {"intervals", r.subs}, {"seconds", r.data_s},
+               {"imu_rate_hz", in.data.imu_rate_hz}, {"skipped_intervals", in.data.skipped_intervals}};
+  return j;
+}
+
+std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& run) {
+  const DriveDiagnoseResult& R = run.result;
+  const DiagnoseResult& r = R.core;
+  std::ostringstream o;
+  o << "drive: " << r.parents << " blocks, " << fmt(r.data_s, 4) << " s; reference intervals " << r.subs
+    << "; coefficients tested: "
+    << (run.coeffs_given ? "given (M fixed; bias and mounting re-estimated)" : "none (bias and M fitted on this drive)")
+    << "\n";
+  if (run.coeffs_given)
+    o << "mounting correction (MEMS axes): " << fmt(R.mounting_delta(0) / units::kDeg) << ", "
+      << fmt(R.mounting_delta(1) / units::kDeg) << ", " << fmt(R.mounting_delta(2) / units::kDeg) << " ° (σ "
+      << fmt(R.mounting_sigma.maxCoeff() / units::kDeg) << " °) relative to " << in.mounting_source << "\n";
+  if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the noise\n";
+  for (const auto& f : r.findings) o << "* " << drive_finding_sentence(f) << "\n";
+  for (const auto& u : r.unexplained) {
+    o << "! unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " χ²/dof " << fmt(u.chi2_dof)
+      << ", Ljung–Box p " << fmt(u.ljung_box_p, 2) << "; strongest correlations:";
+    for (const auto& c : u.correlations) o << " " << c.condition << " (r " << fmt(c.r, 2) << ")";
+    o << "\n";
+  }
+  o << "per axis (systematic RMS, χ²/dof, Ljung–Box p) before → after:\n";
+  for (int a = 0; a < 6; ++a) {
+    const int s = a / 3;
+    o << "  " << kSensor[s] << " " << kAxis[a % 3] << ": " << fmt(disp(r.before[a].systematic_rms, s)) << " "
+      << disp_unit(s) << " → " << fmt(disp(r.after[a].systematic_rms, s)) << " " << disp_unit(s) << ";  "
+      << fmt(r.before[a].chi2_dof) << " → " << fmt(r.after[a].chi2_dof) << ";  " << fmt(r.before[a].ljung_box_p, 2)
+      << " → " << fmt(r.after[a].ljung_box_p, 2) << "\n";
+  }
+  o << "per motion class (mean residual z-score before → after, |z| > 3 marked):\n";
+  for (const auto& sg : R.segments) {
+    o << "  " << sg.motion << " (" << fmt(sg.seconds, 4) << " s):";
+    for (int a = 0; a < 6; ++a) {
+      o << " " << kAxisName[a] << " " << fmt(sg.z_before[a], 2) << "→" << fmt(sg.z_after[a], 2);
+      if (std::abs(sg.z_after[a]) > 3) o << "!";
+    }
+    o << "\n";
+  }
+  return o.str();
+}
+
+void write_drive_diagnosis_report(const std::filesystem::path& html, const DriveDiagInput& in, const DriveDiagRun& run,
+                                  const std::string& title) {
+  const DiagnoseResult& r = run.result.core;
+  std::ostringstream h;
+  h << "<!doctype html><html><head><meta charset=\"utf-8\"><title>calbench diagnose (drive) "
+    << report::html_escape(title) << "</title></head><body><h1>Drive diagnosis: " << report::html_escape(title)
+    << "</h1><pre>" << report::html_escape(drive_diagnosis_text(in, run)) << "</pre>";
+  std::vector<std::pair<int, std::string>> plots;  // axis, condition
+  for (const auto& f : r.findings) {
+    if (f.term.effect == EffectId::correlated_drift) {
+      plots.push_back({f.term.sensor * 3, "time"});
+      continue;
+    }
+    int a = f.report_sensor * 3 + std::max(0, f.report_axis);
+    if (f.term.effect == EffectId::lever_arm || f.term.sensor == 2) {
+      double worst = -1;
+      for (int b = 0; b < 6; ++b)
+        if ((f.term.sensor == 2 || b >= 3) && r.before[b].systematic_rms > worst) {
+          worst = r.before[b].systematic_rms;
+          a = b;
+        }
+    }
+    plots.push_back({a, f.condition.empty() ? "time" : f.condition});
+  }
+  if (plots.empty())
+    for (int a = 0; a < 6; ++a) plots.push_back({a, "time"});
+  for (const auto& [a, cond] : plots) {
+    std::ostringstream data;
+    const int s = a / 3;
+    for (int k = 0; k < r.parents; ++k)
+      data << drive_condition_value(in.data, k, cond) << " " << disp(r.residual[a].before[k], s) << " "
+           << disp(r.residual[a].after[k], s) << "\n";
+    const std::string script = "set terminal pngcairo size 800,420\nset output 'plot.png'\nset xlabel '" + cond +
+                               "'\nset ylabel '" + kAxisName[a] + " residual (" + disp_unit(s) +
+                               ")'\nset key outside\nplot 'd.txt' u 1:2 w p pt 7 ps 0.4 lc rgb 'red' t 'before', "
+                               "'' u 1:3 w p pt 7 ps 0.4 lc rgb 'blue' t 'after'\n";
+    h << "<h2>" << kAxisName[a] << " vs " << report::html_escape(cond) << "</h2>";
+    try {
+      h << "<img src=\"" << report::png_data_uri(report::run_gnuplot(script, {{"d.txt", data.str()}})) << "\">";
+    } catch (const std::exception& e) {
+      h << "<p><i>(plot unavailable: " << report::html_escape(e.what()) << ")</i></p>";
+    }
+  }
+  h << "</body></html>\n";
+  write_text_atomic(html, h.str());
+}
+
+}  // namespace calbench

@@ -1,0 +1,793 @@
+#include "calibration/diagnosis/drive_diagnose.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+
+#include "calibration/ins/nav_math.hpp"
+
+namespace calbench {
+
+namespace {
+
+constexpr int kAxes = 6;
+constexpr int kLags = 3;
+enum Subset { kAll = 0, kEven = 1, kOdd = 2 };
+
+bool in_subset(const ParentBlock& p, int subset) {
+  if (subset == kAll) return true;
+  const bool even = (p.step % 2 + 2) % 2 == 0;
+  return even == (subset == kEven);
+}
+
+bool drive_term(const Term& t, bool temperature) {
+  switch (t.effect) {
+    case EffectId::temperature_bias:
+    case EffectId::temperature_scale: return temperature;
+    case EffectId::misalignment:
+    case EffectId::table_wobble:
+    case EffectId::correlated_drift: return false;
+    default: return true;
+  }
+}
+
+// Global parameters: 6 biases, then 18 ΔM (M free) or 3 mounting angles (M fixed), then the
+// candidate terms' parameters.
+struct Design {
+  bool fixed = false;
+  int n_base = 0;
+  std::vector<Term> terms;
+  std::vector<int> term_off;  // global index of each term's first parameter
+  int P = 0;
+  std::vector<Eigen::VectorXd> z;  // per axis, per sub
+  std::vector<Eigen::MatrixXd> X;  // per axis: Nsub × P
+  std::vector<Eigen::VectorXd> zp;  // per axis, per parent
+  std::vector<Eigen::MatrixXd> Xp;  // per axis: Nparent × P
+  std::vector<std::vector<int>> touched;  // per term: axes with a non-zero column
+  std::vector<char> contig;  // sub j follows sub j−1 without a gap
+  // Short-range noise per axis: sub-level autocovariance (lags 0..3), and the parent-level
+  // banded covariance (variance, covariance with the next parent).
+  double gamma[kAxes][kLags + 1] = {};
+  double endpoint_var[kAxes] = {};
+  std::vector<double> pvar[kAxes], pcov[kAxes];
+};
+
+Design build_design(const DriveDiagData& d, const SensorErrors& cur, const EffectTerms& carried, bool fixed) {
+  Design D;
+  D.fixed = fixed;
+  D.n_base = 6 + (fixed ? 3 : 18);
+  for (const Term& t : candidate_terms())
+    if (drive_term(t, d.has_temperature)) D.terms.push_back(t);
+  D.P = D.n_base;
+  for (const Term& t : D.terms) {
+    D.term_off.push_back(D.P);
+    D.P += t.nparams();
+  }
+  const int N = static_cast<int>(d.subs.size());
+  D.z.assign(kAxes, Eigen::VectorXd::Zero(N));
+  D.X.assign(kAxes, Eigen::MatrixXd::Zero(N, D.P));
+  D.contig.assign(N, 0);
+  D.touched.assign(D.terms.size(), {});
+  std::vector<std::vector<char>> touch(D.terms.size(), std::vector<char>(kAxes, 0));
+  const bool carry = carried.any();
+  for (int j = 0; j < N; ++j) {
+    const SubBlock& s = d.subs[j];
+    if (j > 0) {
+      const SubBlock& p = d.subs[j - 1];
+      D.contig[j] = std::abs((p.t_mid + 0.5 * p.duration) - (s.t_mid - 0.5 * s.duration)) < 1e-6;
+    }
+    Vec3 cg = Vec3::Zero(), ca = Vec3::Zero();
+    if (carry) predict_extra(carried, s, cg, ca);
+    const Vec3 pg = cur.gyro.measure(s.w), pa = cur.accel.measure(s.f);
+    for (int a = 0; a < kAxes; ++a) {
+      const int i = a % 3;
+      D.z[a](j) = a < 3 ? s.gyro(i) - pg(i) - cg(i) : s.accel(i) - pa(i) - ca(i);
+      D.X[a](j, a) = 1.0;
+      const Vec3& x = a < 3 ? s.w : s.f;
+      if (!fixed) {
+        for (int c = 0; c < 3; ++c) D.X[a](j, 6 + 3 * a + c) = x(c);
+      } else {
+        // measured ideal output with the MEMS turned by δ: Exp(−δ)·x = x + x×δ = skew(x)·δ + x.
+        const Mat3 S = ins::skew(x);
+        for (int c = 0; c < 3; ++c) D.X[a](j, 6 + c) = S(i, c);
+      }
+    }
+    for (std::size_t t = 0; t < D.terms.size(); ++t) {
+      const Term& term = D.terms[t];
+      for (int p = 0; p < term.nparams(); ++p) {
+        EffectTerms unit;
+        unit.t0_c = carried.t0_c;
+        term.add_param(unit, p, 1.0);
+        Vec3 dg, da;
+        predict_extra(unit, s, dg, da);
+        for (int a = 0; a < kAxes; ++a) {
+          const double v = a < 3 ? dg(a) : da(a - 3);
+          if (v != 0) {
+            D.X[a](j, D.term_off[t] + p) = v;
+            touch[t][a] = 1;
+          }
+        }
+      }
+    }
+  }
+  for (std::size_t t = 0; t < D.terms.size(); ++t)
+    for (int a = 0; a < kAxes; ++a)
+      if (touch[t][a]) D.touched[t].push_back(a);
+  // Parent means (duration-weighted).
+  const int NP = static_cast<int>(d.parents.size());
+  D.zp.assign(kAxes, Eigen::VectorXd::Zero(NP));
+  D.Xp.assign(kAxes, Eigen::MatrixXd::Zero(NP, D.P));
+  for (int k = 0; k < NP; ++k) {
+    const ParentBlock& pb = d.parents[k];
+    for (int j = pb.first; j < pb.first + pb.count; ++j) {
+      const double w = d.subs[j].duration / pb.duration;
+      for (int a = 0; a < kAxes; ++a) {
+        D.zp[a](k) += w * D.z[a](j);
+        D.Xp[a].row(k) += w * D.X[a].row(j);
+      }
+    }
+  }
+  // Short-range noise: autocovariance of high-pass residuals (z minus a centred moving average of
+  // ~2 s over contiguous intervals), corrected for the removed mean.
+  const int W = std::max(9, 2 * static_cast<int>(std::round(1.0 / std::max(d.mean_sub_s, 1e-3))) + 1);
+  std::vector<int> run_id(N, 0);
+  for (int j = 1; j < N; ++j) run_id[j] = D.contig[j] ? run_id[j - 1] : run_id[j - 1] + 1;
+  for (int a = 0; a < kAxes; ++a) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(N);
+    std::vector<char> ok(N, 0);
+    for (int j = 0; j < N; ++j) {
+      const int lo = j - W / 2, hi = j + W / 2;
+      if (lo < 0 || hi >= N || run_id[lo] != run_id[j] || run_id[hi] != run_id[j]) continue;
+      e(j) = D.z[a](j) - D.z[a].segment(lo, W).mean();
+      ok[j] = 1;
+    }
+    double g[kLags + 1] = {};
+    for (int l = 0; l <= kLags; ++l) {
+      double s = 0;
+      long n = 0;
+      for (int j = 0; j + l < N; ++j)
+        if (ok[j] && ok[j + l] && run_id[j] == run_id[j + l]) {
+          s += e(j) * e(j + l);
+          ++n;
+        }
+      g[l] = n > 0 ? s / n : 0;
+    }
+    // Structural model of a block mean: the IMU's white noise (σ²/n, from its sample-to-sample
+    // differences) plus the reference's errors at the interval ends, which telescope: a block of
+    // length T gets (x_end − x_start)/T with var(x) = v, i.e. variance 2v/T² and covariance −v/(T·T')
+    // with the next block. v from the sub-level autocovariance of a telescoping process:
+    // v = −T_s²·Σ_l l·γ_l (exact for x of short memory; γ dominated by the reference at lag ≤ 3).
+    double sl = 0;
+    for (int l = 1; l <= kLags; ++l) sl += l * g[l];
+    const double v_end = std::max(0.0, -sl * d.mean_sub_s * d.mean_sub_s);
+    for (int l = 0; l <= kLags; ++l) D.gamma[a][l] = g[l];
+    D.endpoint_var[a] = v_end;
+    // Parent-level banded covariance.
+    D.pvar[a].assign(NP, 0);
+    D.pcov[a].assign(NP, 0);
+    for (int k = 0; k < NP; ++k) {
+      const ParentBlock& pk = d.parents[k];
+      D.pvar[a][k] = d.sample_white_var[a] / std::max(pk.n, 1) + 2 * v_end / (pk.duration * pk.duration);
+      if (k + 1 < NP) {
+        const ParentBlock& pl = d.parents[k + 1];
+        const bool adjacent = D.contig[pl.first] != 0;
+        if (adjacent) D.pcov[a][k] = -v_end / (pk.duration * pl.duration);
+      }
+    }
+  }
+  return D;
+}
+
+struct Dataset {
+  int axis = 0;
+  std::vector<int> parents;
+  Eigen::MatrixXd L;
+  Eigen::MatrixXd G;
+  Eigen::VectorXd g;
+  double zz = 0, logdet = 0;
+  int n = 0;
+  double ds = 0, tau = 1;
+};
+
+Eigen::MatrixXd parent_cov(const DriveDiagData& d, const Design& D, const std::vector<int>& P, int a, double ds,
+                           double tau, bool with_drift) {
+  const int N = static_cast<int>(P.size());
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(N, N);
+  for (int k = 0; k < N; ++k) {
+    R(k, k) = D.pvar[a][P[k]];
+    if (k + 1 < N && P[k + 1] == P[k] + 1) R(k, k + 1) = R(k + 1, k) = D.pcov[a][P[k]];
+    if (with_drift)
+      for (int l = 0; l <= k; ++l) {
+        const double v = ds * ds * std::exp(-std::abs(d.parents[P[k]].t_mid - d.parents[P[l]].t_mid) / tau);
+        R(k, l) += v;
+        if (l != k) R(l, k) += v;
+      }
+  }
+  return R;
+}
+
+Dataset build_dataset(const DriveDiagData& d, const Design& D, int a, int subset, double ds, double tau) {
+  Dataset S;
+  S.axis = a;
+  S.ds = ds;
+  S.tau = tau;
+  for (int p = 0; p < static_cast<int>(d.parents.size()); ++p)
+    if (in_subset(d.parents[p], subset)) S.parents.push_back(p);
+  const int N = static_cast<int>(S.parents.size());
+  Eigen::VectorXd z(N);
+  Eigen::MatrixXd X(N, D.P);
+  for (int k = 0; k < N; ++k) {
+    z(k) = D.zp[a](S.parents[k]);
+    X.row(k) = D.Xp[a].row(S.parents[k]);
+  }
+  Eigen::MatrixXd R = parent_cov(d, D, S.parents, a, ds, tau, true);
+  Eigen::LLT<Eigen::MatrixXd> llt(R);
+  for (int tries = 0; llt.info() != Eigen::Success && tries < 8; ++tries) {
+    R.diagonal() *= 1.05;
+    llt.compute(R);
+  }
+  S.L = llt.matrixL();
+  const Eigen::VectorXd zl = S.L.triangularView<Eigen::Lower>().solve(z);
+  const Eigen::MatrixXd Xl = S.L.triangularView<Eigen::Lower>().solve(X);
+  S.G = Xl.transpose() * Xl;
+  S.g = Xl.transpose() * zl;
+  S.zz = zl.squaredNorm();
+  S.logdet = 2 * S.L.diagonal().array().log().sum();
+  S.n = N;
+  return S;
+}
+
+struct FitOut {
+  Eigen::VectorXd theta;  // global, zeros outside the model
+  Eigen::MatrixXd cov;    // global (model rows/cols filled)
+  double chi2 = 0;
+  double chi2_axis[kAxes] = {};
+};
+
+std::vector<int> model_params(const Design& D, const std::vector<int>& terms) {
+  std::vector<int> idx(D.n_base);
+  std::iota(idx.begin(), idx.end(), 0);
+  for (int t : terms)
+    for (int p = 0; p < D.terms[t].nparams(); ++p) idx.push_back(D.term_off[t] + p);
+  return idx;
+}
+
+double axis_chi2(const Dataset& S, const std::vector<int>& idx, const Eigen::VectorXd& theta) {
+  double c = S.zz;
+  for (int p : idx) {
+    c -= 2 * theta(p) * S.g(p);
+    for (int q : idx) c += theta(p) * S.G(p, q) * theta(q);
+  }
+  return c;
+}
+
+FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vector<const Dataset*>& sets) {
+  const std::vector<int> idx = model_params(D, terms);
+  const int K = static_cast<int>(idx.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(K, K);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(K);
+  for (const Dataset* S : sets)
+    for (int u = 0; u < K; ++u) {
+      b(u) += S->g(idx[u]);
+      for (int v = 0; v < K; ++v) A(u, v) += S->G(idx[u], idx[v]);
+    }
+  Eigen::VectorXd s(K);
+  for (int i = 0; i < K; ++i) s(i) = A(i, i) > 0 ? 1.0 / std::sqrt(A(i, i)) : 1.0;
+  Eigen::MatrixXd As = s.asDiagonal() * A * s.asDiagonal();
+  As.diagonal().array() += 1e-9;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(As);
+  const Eigen::VectorXd th = s.asDiagonal() * ldlt.solve(s.asDiagonal() * b);
+  const Eigen::MatrixXd C = s.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(K, K)) * s.asDiagonal();
+  FitOut out;
+  out.theta = Eigen::VectorXd::Zero(D.P);
+  out.cov = Eigen::MatrixXd::Zero(D.P, D.P);
+  for (int u = 0; u < K; ++u) {
+    out.theta(idx[u]) = th(u);
+    for (int v = 0; v < K; ++v) out.cov(idx[u], idx[v]) = C(u, v);
+  }
+  for (const Dataset* S : sets) {
+    const double c = axis_chi2(*S, idx, out.theta);
+    out.chi2_axis[S->axis] += c;
+    out.chi2 += c;
+  }
+  return out;
+}
+
+double heldout_chi2(const Design& D, const std::vector<int>& terms, const std::vector<Dataset>& even,
+                    const std::vector<Dataset>& odd) {
+  std::vector<const Dataset*> se, so;
+  for (const auto& s : even) se.push_back(&s);
+  for (const auto& s : odd) so.push_back(&s);
+  const FitOut fe = fit_model(D, terms, se), fo = fit_model(D, terms, so);
+  const std::vector<int> idx = model_params(D, terms);
+  double c = 0;
+  for (const auto& S : odd) c += axis_chi2(S, idx, fe.theta);
+  for (const auto& S : even) c += axis_chi2(S, idx, fo.theta);
+  return c;
+}
+
+// Parent-level residual of axis a for global parameters theta.
+Eigen::VectorXd residual(const Design& D, int a, const Eigen::VectorXd& theta) { return D.zp[a] - D.Xp[a] * theta; }
+
+// The drift the noise model attributes to a residual (GLS smoother), per parent.
+Eigen::VectorXd smoothed_drift(const DriveDiagData& d, const Dataset& S, const Eigen::VectorXd& r) {
+  const int N = S.n;
+  const Eigen::VectorXd w = S.L.triangularView<Eigen::Lower>().solve(r);
+  const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(w);
+  Eigen::VectorXd drift(N);
+  for (int k = 0; k < N; ++k) {
+    double s = 0;
+    for (int l = 0; l < N; ++l)
+      s += S.ds * S.ds * std::exp(-std::abs(d.parents[S.parents[k]].t_mid - d.parents[S.parents[l]].t_mid) / S.tau) * v(l);
+    drift(k) = s;
+  }
+  return drift;
+}
+
+// Systematic RMS of residual r (drift removed) over groups of parents: each group's mean squared
+// minus the short-range noise variance of that mean.
+double grouped_systematic(const Design& D, int a, const Eigen::VectorXd& r, const std::vector<std::vector<int>>& groups) {
+  double num = 0, den = 0;
+  for (const auto& gr : groups) {
+    if (gr.empty()) continue;
+    double m = 0, v = 0;
+    for (int k : gr) m += r(k);
+    const double n = static_cast<double>(gr.size());
+    m /= n;
+    std::vector<int> sorted = gr;
+    std::sort(sorted.begin(), sorted.end());
+    for (std::size_t i = 0; i < sorted.size(); ++i) {
+      v += D.pvar[a][sorted[i]];
+      if (i + 1 < sorted.size() && sorted[i + 1] == sorted[i] + 1) v += 2 * D.pcov[a][sorted[i]];
+    }
+    v /= n * n;
+    num += n * (m * m - v);
+    den += n;
+  }
+  return den > 0 ? std::sqrt(std::max(0.0, num / den)) : 0.0;
+}
+
+std::vector<std::vector<int>> time_groups(int N, int size) {
+  std::vector<std::vector<int>> g;
+  for (int k = 0; k < N; k += size) {
+    std::vector<int> x;
+    for (int l = k; l < std::min(N, k + size); ++l) x.push_back(l);
+    g.push_back(x);
+  }
+  return g;
+}
+
+std::vector<std::vector<int>> quantile_groups(const Eigen::VectorXd& key, int bins) {
+  const int N = static_cast<int>(key.size());
+  std::vector<int> order(N);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int i, int j) { return key(i) < key(j); });
+  std::vector<std::vector<int>> g(bins);
+  for (int r = 0; r < N; ++r) g[std::min(bins - 1, r * bins / std::max(N, 1))].push_back(order[r]);
+  return g;
+}
+
+AxisStats axis_stats(const DriveDiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& r, int nparams,
+                     Eigen::VectorXd& r_nodrift) {
+  AxisStats st;
+  const int N = S.n;
+  const Eigen::VectorXd rw = S.L.triangularView<Eigen::Lower>().solve(r);
+  st.chi2_dof = rw.squaredNorm() / std::max(1, N - nparams / kAxes);
+  std::vector<double> rv(rw.data(), rw.data() + rw.size());
+  ljung_box(rv, std::min(10, std::max(1, N / 5)), st.ljung_box_q, st.ljung_box_p);
+  r_nodrift = r - smoothed_drift(d, S, r);
+  st.systematic_rms = grouped_systematic(D, S.axis, r_nodrift, time_groups(N, 10));
+  st.step_rms = st.systematic_rms;
+  return st;
+}
+
+double pearson(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  const double mx = x.mean(), my = y.mean();
+  const double sxy = ((x.array() - mx) * (y.array() - my)).sum();
+  const double sxx = (x.array() - mx).square().sum(), syy = (y.array() - my).square().sum();
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+}
+
+std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eigen::VectorXd& r) {
+  std::vector<ConditionCorrelation> out;
+  const int N = static_cast<int>(d.parents.size());
+  for (const auto& name : drive_condition_names(d.has_temperature)) {
+    Eigen::VectorXd c(N);
+    for (int k = 0; k < N; ++k) c(k) = drive_condition_value(d, k, name);
+    out.push_back({name, pearson(c, r)});
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return std::abs(a.r) > std::abs(b.r); });
+  return out;
+}
+
+std::string unit_of(const Term& t) {
+  const bool g = t.sensor == 0;
+  switch (t.effect) {
+    case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
+    case EffectId::temperature_scale: return "1/K";
+    case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
+    case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
+    case EffectId::scale_asymmetry: return "1";
+    case EffectId::time_offset: return "s";
+    case EffectId::lever_arm: return "m";
+    case EffectId::misalignment: return "rad";
+    case EffectId::table_wobble: return "rad";
+    case EffectId::correlated_drift: return g ? "rad/s" : "m/s^2";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::vector<std::string> drive_condition_names(bool with_temperature) {
+  std::vector<std::string> n = {"speed", "w_x", "w_y", "w_z", "f_x", "f_y", "f_z", "|w|", "|f|",
+                                "ang_accel", "turn_rate", "along_accel", "time"};
+  if (with_temperature) n.push_back("temperature");
+  return n;
+}
+
+double drive_condition_value(const DriveDiagData& d, int k, const std::string& name) {
+  const ParentBlock& p = d.parents[k];
+  const DriveParentInfo& i = d.info[k];
+  if (name == "speed") return i.speed;
+  if (name == "w_x") return p.w(0);
+  if (name == "w_y") return p.w(1);
+  if (name == "w_z") return p.w(2);
+  if (name == "f_x") return p.f(0);
+  if (name == "f_y") return p.f(1);
+  if (name == "f_z") return p.f(2);
+  if (name == "|w|") return p.w.norm();
+  if (name == "|f|") return p.f.norm();
+  if (name == "ang_accel") return i.ang_accel;
+  if (name == "turn_rate") return i.turn_rate;
+  if (name == "along_accel") return i.along_accel;
+  if (name == "time") return p.t_mid;
+  if (name == "temperature") {
+    double t = 0, w = 0;
+    for (int j = p.first; j < p.first + p.count; ++j)
+      if (std::isfinite(d.subs[j].temp_c)) {
+        t += d.subs[j].temp_c;
+        w += 1;
+      }
+    return w > 0 ? t / w : 0.0;
+  }
+  return 0.0;
+}
+
+DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors& current, const EffectTerms& carried,
+                                   const DriveDiagnoseOptions& opt) {
+  DriveDiagnoseResult out;
+  DiagnoseResult& res = out.core;
+  if (data.parents.size() < 20) throw std::runtime_error("diagnose: fewer than 20 blocks of drive data");
+  const Design D = build_design(data, current, carried, opt.fixed_scale);
+  const int NP = static_cast<int>(data.parents.size());
+  res.parents = NP;
+  res.subs = static_cast<int>(data.subs.size());
+  for (const auto& p : data.parents) {
+    res.data_s += p.duration;
+    out.parent_t.push_back(p.t_mid);
+  }
+  for (int a = 0; a < kAxes; ++a) {
+    res.white_sigma[a] = std::sqrt(data.sample_white_var[a]);
+    for (int l = 0; l <= kLags; ++l) out.gamma[a][l] = D.gamma[a][l];
+    double v = 0;
+    for (int k = 0; k < NP; ++k) v += D.pvar[a][k];
+    out.block_noise_sigma[a] = std::sqrt(v / NP);
+  }
+  res.base_before = current;
+
+  double ds[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
+  double tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
+  std::vector<Dataset> all(kAxes), even(kAxes), odd(kAxes);
+  auto rebuild = [&](int triad) {
+    for (int a = triad * 3; a < triad * 3 + 3; ++a) {
+      all[a] = build_dataset(data, D, a, kAll, ds[triad], tau[triad]);
+      even[a] = build_dataset(data, D, a, kEven, ds[triad], tau[triad]);
+      odd[a] = build_dataset(data, D, a, kOdd, ds[triad], tau[triad]);
+    }
+  };
+  rebuild(0);
+  rebuild(1);
+  auto ptrs = [](const std::vector<Dataset>& v) {
+    std::vector<const Dataset*> p;
+    for (const auto& s : v) p.push_back(&s);
+    return p;
+  };
+
+  // Before: the base model (bias, and M or the mounting) refitted, no catalogue term.
+  std::vector<int> model;
+  FitOut cur = fit_model(D, model, ptrs(all));
+  const FitOut base_fit = cur;
+  double cur_held = heldout_chi2(D, model, even, odd);
+  Eigen::VectorXd r_before[kAxes], rn_before[kAxes];
+  const int nbase = D.n_base;
+  for (int a = 0; a < kAxes; ++a) {
+    r_before[a] = residual(D, a, base_fit.theta);
+    res.before[a] = axis_stats(data, D, all[a], r_before[a], nbase, rn_before[a]);
+    res.correlations_before[a] = correlations(data, rn_before[a]);
+    if (std::getenv("CALBENCH_DRIVE_DEBUG")) {
+      const Eigen::VectorXd& x = r_before[a];
+      double v0 = 0, v1 = 0, pv = 0, pc = 0;
+      for (int k = 0; k < NP; ++k) { v0 += x(k) * x(k); pv += D.pvar[a][k]; if (k + 1 < NP) { v1 += x(k) * x(k + 1); pc += D.pcov[a][k]; } }
+      std::fprintf(stderr, "axis %d gamma %.3g %.3g %.3g %.3g | parent var emp %.3g model %.3g | lag1 emp %.3g model %.3g\n", a,
+                   D.gamma[a][0], D.gamma[a][1], D.gamma[a][2], D.gamma[a][3], v0 / NP, pv / NP, v1 / NP, pc / NP);
+    }
+  }
+
+  struct Accepted {
+    int term;  // −1 − triad for correlated_drift
+    double dchi2, dbic, dheld;
+  };
+  std::vector<Accepted> accepted;
+  bool drift_done[2] = {false, false};
+  const double pen = opt.penalty_per_param;
+  while (static_cast<int>(accepted.size()) < opt.max_findings) {
+    int best = -1;
+    double best_score = 0, best_d = 0, best_held = 0, best_pen = 0;
+    FitOut best_fit;
+    for (std::size_t t = 0; t < D.terms.size(); ++t) {
+      if (std::find(model.begin(), model.end(), static_cast<int>(t)) != model.end()) continue;
+      if (D.touched[t].empty()) continue;
+      std::vector<int> m = model;
+      m.push_back(static_cast<int>(t));
+      FitOut f = fit_model(D, m, ptrs(all));
+      const double dchi2 = cur.chi2 - f.chi2;
+      int rows = 0;
+      for (int a : D.touched[t]) rows += all[a].n;
+      const double penalty = D.terms[t].nparams() * (std::log(std::max(rows, 2)) + pen);
+      const double score = dchi2 - penalty;
+      if (dchi2 < opt.min_delta_chi2 || score <= best_score) continue;
+      const double held = heldout_chi2(D, m, even, odd);
+      if (held >= cur_held && dchi2 < 5 * opt.min_delta_chi2) continue;
+      best = static_cast<int>(t);
+      best_score = score;
+      best_d = dchi2;
+      best_held = cur_held - held;
+      best_pen = penalty;
+      best_fit = std::move(f);
+    }
+    if (best >= 0) {
+      model.push_back(best);
+      cur = std::move(best_fit);
+      cur_held -= best_held;
+      accepted.push_back({best, best_d, best_d - best_pen, best_held});
+      continue;
+    }
+    // No linear term: a drift larger than the data sheet says?
+    int best_triad = -1;
+    double best_gain = 0, best_s = 0, best_t = 0;
+    for (int triad = 0; triad < 2; ++triad) {
+      if (drift_done[triad]) continue;
+      auto score = [&](double s, double t) {
+        std::vector<Dataset> tmp;
+        for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(build_dataset(data, D, a, kAll, s, t));
+        std::vector<const Dataset*> p;
+        for (int a = 0; a < kAxes; ++a)
+          if (a / 3 != triad) p.push_back(&all[a]);
+        for (auto& x : tmp) p.push_back(&x);
+        const FitOut f = fit_model(D, model, p);
+        double v = 0;
+        for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
+        return v;
+      };
+      const double base = score(ds[triad], tau[triad]);
+      for (double mult : {2.0, 4.0, 8.0, 16.0, 32.0})
+        for (double t : {60.0, 300.0, 1200.0}) {
+          const double gain = base - score(ds[triad] * mult, t);
+          const double penalty = 2 * (std::log(static_cast<double>(NP)) + pen);
+          if (gain - penalty > best_gain && gain > opt.min_delta_chi2) {
+            best_gain = gain - penalty;
+            best_triad = triad;
+            best_s = ds[triad] * mult;
+            best_t = t;
+          }
+        }
+    }
+    if (best_triad < 0) break;
+    drift_done[best_triad] = true;
+    ds[best_triad] = best_s;
+    tau[best_triad] = best_t;
+    rebuild(best_triad);
+    cur = fit_model(D, model, ptrs(all));
+    cur_held = heldout_chi2(D, model, even, odd);
+    accepted.push_back({-1 - best_triad, best_gain, best_gain, 0});
+  }
+
+  // Improved model: b (and M) corrected, catalogue terms added.
+  res.improved = current;
+  res.improved_terms = carried;
+  res.terms_sigma = EffectTerms{};
+  for (int a = 0; a < kAxes; ++a) {
+    TriadErrors& te = a < 3 ? res.improved.gyro : res.improved.accel;
+    const int i = a % 3;
+    te.bias(i) += cur.theta(a);
+    te.sigma_bias(i) = std::sqrt(std::max(cur.cov(a, a), 0.0));
+    if (!opt.fixed_scale)
+      for (int c = 0; c < 3; ++c) {
+        const int p = 6 + 3 * a + c;
+        te.M(i, c) += cur.theta(p);
+        te.sigma_M(i, c) = std::sqrt(std::max(cur.cov(p, p), 0.0));
+      }
+  }
+  if (opt.fixed_scale)
+    for (int c = 0; c < 3; ++c) {
+      out.mounting_delta(c) = cur.theta(6 + c);
+      out.mounting_sigma(c) = std::sqrt(std::max(cur.cov(6 + c, 6 + c), 0.0));
+    }
+  for (int t : model) {
+    const Term& term = D.terms[t];
+    for (int p = 0; p < term.nparams(); ++p) {
+      const int idx = D.term_off[t] + p;
+      term.add_param(res.improved_terms, p, cur.theta(idx));
+      term.add_param(res.terms_sigma, p, std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
+    }
+  }
+  for (int triad = 0; triad < 2; ++triad) {
+    res.drift_sigma[triad] = ds[triad];
+    res.drift_tau[triad] = tau[triad];
+  }
+  Eigen::VectorXd r_after[kAxes], rn_after[kAxes];
+  const int np = static_cast<int>(model_params(D, model).size());
+  for (int a = 0; a < kAxes; ++a) {
+    r_after[a] = residual(D, a, cur.theta);
+    res.after[a] = axis_stats(data, D, all[a], r_after[a], np, rn_after[a]);
+    out.correlations_after[a] = correlations(data, rn_after[a]);
+    res.residual[a].before.assign(rn_before[a].data(), rn_before[a].data() + NP);
+    res.residual[a].after.assign(rn_after[a].data(), rn_after[a].data() + NP);
+  }
+
+  // Findings.
+  for (const auto& acc : accepted) {
+    DiagFinding f;
+    if (acc.term < 0) {
+      const int triad = -1 - acc.term;
+      f.term = Term{EffectId::correlated_drift, triad, -1};
+      f.value = {ds[triad]};
+      f.sigma = {std::numeric_limits<double>::quiet_NaN()};
+      f.noise_tau_s = tau[triad];
+      f.unit = unit_of(f.term);
+      f.report_sensor = triad;
+      f.report_axis = -1;
+      f.delta_chi2 = acc.dchi2;
+      f.delta_bic = acc.dbic;
+      f.condition = "time";
+      double rb = 0, ra = 0;
+      for (int a = triad * 3; a < triad * 3 + 3; ++a) {
+        rb += std::pow(res.before[a].systematic_rms, 2);
+        ra += std::pow(res.after[a].systematic_rms, 2);
+      }
+      f.rms_before = std::sqrt(rb / 3);
+      f.rms_after = std::sqrt(ra / 3);
+      TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
+      te.drift_sigma = ds[triad];
+      te.drift_tau_s = tau[triad];
+      res.findings.push_back(f);
+      continue;
+    }
+    const Term& t = D.terms[acc.term];
+    f.term = t;
+    for (int p = 0; p < t.nparams(); ++p) {
+      const int idx = D.term_off[acc.term] + p;
+      f.value.push_back(cur.theta(idx) + t.get_param(carried, p));
+      f.sigma.push_back(std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
+    }
+    f.unit = unit_of(t);
+    f.delta_chi2 = acc.dchi2;
+    f.delta_bic = acc.dbic;
+    f.heldout_delta_chi2 = acc.dheld;
+    f.report_sensor = t.sensor;
+    f.report_axis = t.axis;
+    if (t.effect == EffectId::lever_arm) {
+      int imax = 0;
+      for (int i = 1; i < 3; ++i)
+        if (std::abs(f.value[i]) > std::abs(f.value[imax])) imax = i;
+      double others = 0;
+      for (int i = 0; i < 3; ++i)
+        if (i != imax) others = std::max(others, std::abs(f.value[i]));
+      f.report_axis = others < 0.3 * std::abs(f.value[imax]) ? imax : -1;
+    }
+    // Systematic residual along the finding's own signature: parents binned by the fitted
+    // contribution of the term on the axis where it is largest; before = base model, after = final.
+    int show = D.touched[acc.term].front();
+    double best_var = -1;
+    Eigen::VectorXd contrib_show;
+    for (int a : D.touched[acc.term]) {
+      Eigen::VectorXd c = Eigen::VectorXd::Zero(NP);
+      for (int p = 0; p < t.nparams(); ++p) {
+        const int idx = D.term_off[acc.term] + p;
+        c += D.Xp[a].col(idx) * cur.theta(idx);
+      }
+      const double v = (c.array() - c.mean()).square().mean();
+      if (v > best_var) {
+        best_var = v;
+        show = a;
+        contrib_show = c;
+      }
+    }
+    const auto groups = quantile_groups(contrib_show, 10);
+    f.rms_before = grouped_systematic(D, show, rn_before[show], groups);
+    f.rms_after = grouped_systematic(D, show, rn_after[show], groups);
+    if (t.sensor == 2) {
+      f.report_sensor = show / 3;  // reported on the axis where it shows most
+    }
+    // Revealing condition: the one most correlated with the term's signature.
+    double best_r = 0;
+    for (const auto& name : drive_condition_names(data.has_temperature)) {
+      if (name == "time") continue;
+      Eigen::VectorXd c(NP);
+      for (int k = 0; k < NP; ++k) c(k) = drive_condition_value(data, k, name);
+      const double r = pearson(c, contrib_show);
+      if (std::abs(r) > std::abs(best_r)) {
+        best_r = r;
+        f.condition = name;
+      }
+    }
+    for (const auto& c : res.correlations_before[show])
+      if (c.condition == f.condition) f.condition_r = c.r;
+    res.findings.push_back(f);
+  }
+
+  // Unexplained: an axis still far from its noise model.
+  for (int a = 0; a < kAxes; ++a) {
+    const AxisStats& s = res.after[a];
+    const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, all[a].n) / 2.0);
+    if (z_low < 6 && s.ljung_box_p > 1e-4) continue;
+    DiagUnexplained u;
+    u.sensor = a / 3;
+    u.axis = a % 3;
+    u.chi2_dof = s.chi2_dof;
+    u.ljung_box_p = s.ljung_box_p;
+    u.systematic_rms = s.systematic_rms;
+    u.correlations = out.correlations_after[a];
+    if (u.correlations.size() > 4) u.correlations.resize(4);
+    std::map<int, std::pair<double, double>> win;
+    for (int k = 0; k < NP; ++k) {
+      auto& x = win[data.parents[k].step];
+      x.first += rn_after[a](k);
+      x.second += 1;
+    }
+    std::vector<std::pair<double, int>> score;
+    const double sig = out.block_noise_sigma[a];
+    for (const auto& [w, x] : win) score.push_back({std::abs(x.first / x.second) * std::sqrt(x.second) / sig, w});
+    std::sort(score.rbegin(), score.rend());
+    for (std::size_t k = 0; k < score.size() && k < 3; ++k) u.worst_steps.push_back(score[k].second);
+    res.unexplained.push_back(u);
+  }
+
+  // Per motion class: mean residual and its z-score (short-range noise only).
+  for (MotionClass mc : {MotionClass::stationary, MotionClass::straight, MotionClass::turning, MotionClass::accelerating}) {
+    DriveSegmentStat st;
+    st.motion = motion_class_name(mc);
+    std::vector<int> idx;
+    for (int k = 0; k < NP; ++k)
+      if (data.info[k].motion == mc) {
+        idx.push_back(k);
+        st.seconds += data.parents[k].duration;
+      }
+    st.blocks = static_cast<int>(idx.size());
+    if (idx.empty()) continue;
+    for (int a = 0; a < kAxes; ++a) {
+      double mb = 0, ma = 0, v = 0;
+      for (std::size_t i = 0; i < idx.size(); ++i) {
+        mb += rn_before[a](idx[i]);
+        ma += rn_after[a](idx[i]);
+        v += D.pvar[a][idx[i]];
+        if (i + 1 < idx.size() && idx[i + 1] == idx[i] + 1) v += 2 * D.pcov[a][idx[i]];
+      }
+      const double n = static_cast<double>(idx.size());
+      st.mean_before[a] = mb / n;
+      st.mean_after[a] = ma / n;
+      const double sd = std::sqrt(std::max(v, 1e-300)) / n;
+      st.z_before[a] = st.mean_before[a] / sd;
+      st.z_after[a] = st.mean_after[a] / sd;
+    }
+    out.segments.push_back(st);
+  }
+  return out;
+}
+
+}  // namespace calbench

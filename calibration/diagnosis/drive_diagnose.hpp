@@ -1,0 +1,67 @@
+// Physics discovery on a drive recording (issue 7, docs/diagnosis.md "Drives"): the MEMS output
+// predicted from the reference trajectory (calibration/diagnosis/drive_data.hpp) is compared with
+// what the MEMS measured, per ~1 s block; the residual is located (per axis, per motion class,
+// correlation with the conditions of the drive), named from the catalogue by evidence and fitted.
+//
+// Statistical model per sensor axis a (gyro x..accel z), z = measured − (I+M)·predicted − b − carried:
+//   z = Δb_a + [ΔM_a·predicted | mounting δ] + Σ_terms regressor·θ + drift + short-range noise
+// * Δb: the bias of a drive is re-estimated always (turn-on repeatability), and it drifts: the
+//   data-sheet first-order Gauss–Markov drift is part of the noise covariance (as on the bench).
+// * Without given coefficients M is fitted too (the drive then *is* the "fit first"); with given
+//   coefficients M stays fixed and only the mounting rotation δ (3 angles, MEMS axes, shared by
+//   both triads) is estimated with the bias: the mounting is installation, not sensor.
+// * Short-range noise: IMU white noise plus the reference's own noise, which enters through the
+//   differences of its attitudes and velocities at the ends of each interval (adjacent blocks
+//   anti-correlated). Its autocovariance up to 3 intervals is estimated from the data (high-pass
+//   residuals at the reference interval), floored by the IMU's sample-to-sample white noise.
+// Candidates are added greedily by Δχ² with a BIC penalty (k·ln N) and a held-out check (fit on
+// even 20 s windows, predict odd ones and vice versa); correlated_drift is a noise-side candidate
+// (drift σ ×2…×32, τ 60/300/1200 s by maximum likelihood), as on the bench.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "calibration/diagnosis/diagnose.hpp"
+#include "calibration/diagnosis/drive_data.hpp"
+
+namespace calbench {
+
+struct DriveDiagnoseOptions {
+  NoiseSpec noise = adis16488a_noise();  // data-sheet drift prior
+  bool fixed_scale = false;              // coefficients given: M fixed, mounting δ estimated
+  double min_delta_chi2 = 40;
+  double penalty_per_param = 0;
+  int max_findings = 6;
+};
+
+// Mean residual per motion class and axis (before/after), in units of its own σ (z-score).
+struct DriveSegmentStat {
+  std::string motion;
+  int blocks = 0;
+  double seconds = 0;
+  double mean_before[6] = {0, 0, 0, 0, 0, 0}, mean_after[6] = {0, 0, 0, 0, 0, 0};
+  double z_before[6] = {0, 0, 0, 0, 0, 0}, z_after[6] = {0, 0, 0, 0, 0, 0};
+};
+
+struct DriveDiagnoseResult {
+  // findings, unexplained (worst_steps = worst 20 s windows), per-axis stats before/after,
+  // correlations_before, improved b/M and terms, drift model, per-parent residuals.
+  DiagnoseResult core;
+  std::vector<ConditionCorrelation> correlations_after[6];
+  std::vector<DriveSegmentStat> segments;
+  Vec3 mounting_delta = Vec3::Zero(), mounting_sigma = Vec3::Zero();  // MEMS axes, rad (fixed_scale)
+  double block_noise_sigma[6] = {0, 0, 0, 0, 0, 0};  // short-range noise of a ~1 s block (SI)
+  double gamma[6][4] = {};                           // its sub-level autocovariance, lags 0..3
+  std::vector<double> parent_t;                      // block times (for plots)
+};
+
+// `current`: coefficients to test (b, M) and the extra terms they already carry.
+DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors& current, const EffectTerms& carried,
+                                   const DriveDiagnoseOptions& opt);
+
+// Conditions of a drive block for correlations: "speed", "w_x".."w_z", "f_x".."f_z" (MEMS axes),
+// "|w|", "|f|", "ang_accel", "turn_rate", "along_accel", "time", "temperature".
+std::vector<std::string> drive_condition_names(bool with_temperature);
+double drive_condition_value(const DriveDiagData& d, int parent, const std::string& name);
+
+}  // namespace calbench
