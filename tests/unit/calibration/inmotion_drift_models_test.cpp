@@ -10,7 +10,9 @@
 // reaches only the error statistics, never the filter or the identification.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <random>
 
@@ -71,7 +73,14 @@ Route route(int laps) {
 // The real drift of the simulated unit: the gyros differ from adis16488a_noise() (first order,
 // 5.1 °/h, 300 s), the accelerometers follow it (0.1 mg, 300 s: far below what a drive resolves
 // next to the horizontal bias/tilt ambiguity, so their series is not identified here).
-constexpr double kGyroSigma = 20 * kDegPerHour, kGyroAlpha = 1.0 / 40, kGyroBeta = 0.05;  // exp-cosine
+// For the figures in docs/identification.md: INMOTION_DRIFT_LAPS=18 (≈ 35 min, the default route's
+// length) and INMOTION_DRIFT_GM=1 (gyro first order, σ 20 °/h, T 60 s, instead of exp-cosine).
+int env_int(const char* name, int dflt) {
+  const char* v = std::getenv(name);
+  return v && *v ? std::atoi(v) : dflt;
+}
+const bool kGm = env_int("INMOTION_DRIFT_GM", 0) != 0;
+const double kGyroSigma = 20 * kDegPerHour, kGyroAlpha = kGm ? 1.0 / 60 : 1.0 / 40, kGyroBeta = kGm ? 0.0 : 0.05;
 constexpr double kAccelSigma = 0.1 * kMilliG, kAccelT = 300;                              // first order
 
 struct Drive {
@@ -87,7 +96,7 @@ const Drive& drive() {
   static const Drive d = [] {
     Drive d;
     DriveSimConfig cfg;
-    cfg.route = route(5);
+    cfg.route = route(std::max(3, env_int("INMOTION_DRIFT_LAPS", 5)));
     cfg.mems = draw_random_unit(21);
     cfg.noise.gyro.drift_sigma = 0;  // the drift is added below, with its truth kept
     cfg.noise.accel.drift_sigma = 0;
@@ -110,7 +119,8 @@ const Drive& drive() {
     std::mt19937_64 rng(2021);
     std::vector<double> p[6];
     for (int i = 0; i < 3; ++i) {
-      p[i] = identification::simulate_exp_cosine(n, dt, kGyroSigma, kGyroAlpha, kGyroBeta, rng);
+      p[i] = kGm ? identification::simulate_gauss_markov(n, dt, kGyroSigma, 1 / kGyroAlpha, rng)
+                 : identification::simulate_exp_cosine(n, dt, kGyroSigma, kGyroAlpha, kGyroBeta, rng);
       p[3 + i] = identification::simulate_gauss_markov(n, dt, kAccelSigma, kAccelT, rng);
     }
     d.drift.resize(n);
@@ -229,7 +239,7 @@ TEST(InmotionDriftModels, ExpCosineBlockKeepsItsStationaryCovariance) {
   // stay at P∞ (eqs 35–36 discretised; a wrong sign or a transposed A would not).
   InMotionConfig fc;
   std::array<DriftPrior, 3> g;
-  for (auto& p : g) p = DriftPrior{kGyroSigma, 1 / kGyroAlpha, true, kGyroBeta};
+  for (auto& p : g) p = DriftPrior{kGyroSigma, 40, true, 0.05};
   fc.gyro_drift = g;
   ASSERT_TRUE(needs_augmented_layout(fc));
   InMotionConfig plain;
@@ -237,7 +247,7 @@ TEST(InmotionDriftModels, ExpCosineBlockKeepsItsStationaryCovariance) {
   RefObs r0{0, 0.5, 2.0, 30, Vec3(5, 0, 0), Vec3(0, 0, 0.3), 0.02, 0.005, 1e-4};
   InMotionFilterAug f(fc, Mat3::Identity(), Vec3::Zero(), r0);
   const identification::ShapingFilter sf =
-      identification::shaping_filter({identification::DriftModelKind::exp_cosine, kGyroSigma, kGyroAlpha, kGyroBeta});
+      identification::shaping_filter({identification::DriftModelKind::exp_cosine, kGyroSigma, 1.0 / 40, 0.05});
   const double dt = 0.01;
   for (int k = 1; k <= 20000; ++k) f.imu(k * dt, Vec3::Zero(), Vec3(0, 0, -9.8 * dt), dt);
   for (int i = 0; i < 3; ++i) {
