@@ -1,24 +1,64 @@
 // calbench fit bench DIR --out COEFFS.json [--method lsq|ekf] [--model paper|full] [--json]
+//   [--effects IMPROVED.json]   (catalogue terms held fixed, docs/diagnosis.md)
 #include <iostream>
 
 #include "bench/bench_recording.hpp"
 #include "bench/cli/registry.hpp"
+#include "bench/diagnose/diagnose_run.hpp"
+#include "bench/diagnose/effects_json.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
+#include "calibration/bench_fit_effects.hpp"
 
 namespace calbench::cli {
 namespace {
 
 struct FitBenchArgs {
-  std::string dir, out, method = "lsq", model = "full", plan;
+  std::string dir, out, method = "lsq", model = "full", plan, effects;
   double block_s = 1.0;
   bool json = false;
 };
+
+// --effects: the catalogue terms of a coefficient set (e.g. diagnose's IMPROVED.json) are held
+// fixed: their predicted output is removed at 0.05 s resolution before the fit of b and M, and the
+// keys are carried into the output coefficients.
+void run_fit_bench_effects(const FitBenchArgs& a, BenchFitOptions opt) {
+  EffectTerms sigma;
+  const EffectTerms fx = effects_from_json(read_json_file(a.effects), a.effects, &sigma);
+  const std::vector<std::string> ids = effect_ids_present(fx);
+  if (ids.empty())
+    throw InputError(a.effects, 0, "", "no catalogue key (temperature_bias, g_sensitivity, ... docs/diagnosis.md) in this file");
+  const DiagInput in = load_diag_input(a.dir, a.block_s);
+  opt.table = a.plan.empty() ? recording_table_spec(in.meta) : load_plan(a.plan).table;
+  if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
+  const BenchFitResult r = fit_bench_with_effects(in.data, fx, opt, &sigma);
+  CoefficientSet c = bench_result_to_coefficients(r, opt, in.meta, a.dir);
+  effects_to_json(fx, sigma, c.extra);
+  c.extra["calibration"]["effects_held_fixed"] = ids;
+  c.extra["calibration"]["effects_from"] = a.effects;
+  if (!a.out.empty()) write_coefficients(a.out, c);
+  if (a.json) {
+    auto j = bench_result_json(r, c);
+    j["effects_held_fixed"] = ids;
+    j["effects_from"] = a.effects;
+    j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"reference_rows", in.ref_rows},
+                      {"rows_in_steps", in.used_rows}, {"complete", in.meta.complete}};
+    print_json(j.dump(2));
+  } else {
+    std::cout << "bench fit (" << a.method << ", model " << a.model << ") of " << a.dir << ": " << in.imu_rows
+              << " IMU rows\ncatalogue terms held fixed (from " << a.effects << "):";
+    for (const auto& id : ids) std::cout << " " << id;
+    std::cout << "\n" << bench_result_text(r);
+    if (!a.out.empty()) std::cout << "coefficients written to " << a.out << " (with the catalogue keys)\n";
+  }
+}
 
 void run_fit_bench(const FitBenchArgs& a) {
   BenchFitOptions opt;
   opt.method = a.method == "ekf" ? BenchMethod::ekf : BenchMethod::lsq;
   opt.model = a.model == "paper" ? BenchModel::paper : BenchModel::full;
+  if (!a.effects.empty()) return run_fit_bench_effects(a, opt);
   const BenchRecordingData data = load_bench_blocks(a.dir, a.block_s);
   opt.table = a.plan.empty() ? recording_table_spec(data.meta) : load_plan(a.plan).table;
   if (data.used_rows == 0)
@@ -55,6 +95,10 @@ const bool registered = add_command(30, [](CLI::App& app) {
   b->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
   b->add_option("--block", a->block_s, "block length for averaging, seconds")->check(CLI::Range(0.01, 100.0));
+  b->add_option("--effects", a->effects,
+                "hold the catalogue terms of this coefficient set fixed (e.g. IMPROVED.json from `calbench diagnose`): "
+                "their predicted output is removed before b and M are fitted, and the keys go into --out")
+      ->check(CLI::ExistingFile);
   b->add_flag("--json", a->json, "print the result as JSON on stdout");
   b->callback([a] { run_fit_bench(*a); });
 });

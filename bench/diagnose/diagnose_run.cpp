@@ -1,5 +1,6 @@
 #include "bench/diagnose/diagnose_run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
+#include "calibration/bench_fit_effects.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {
@@ -23,25 +25,29 @@ const char* kCatalogueKeys[] = {"temperature_bias", "temperature_scale", "g_sens
                                 "scale_asymmetry",  "time_offset",       "lever_arm",     "misalignment",
                                 "table_wobble",     "correlated_drift"};
 
+// Parent blocks kept by the diagnosis (dense covariance per axis): longer parents beyond this.
+constexpr int kMaxParents = 1000;
+
 void feed(DiagDataBuilder& db, BenchBlockBuilder& bb, const DiagSample& s) {
   db.add(s);
   bb.add(s.t, s.dt, s.gyro, s.accel, s.w, s.f, s.step, s.temp_c);
 }
 }  // namespace
 
-DiagInput load_diag_input(const std::filesystem::path& dir) {
+DiagInput load_diag_input(const std::filesystem::path& dir, double parent_s) {
   DiagInput in;
   in.meta = read_meta(dir);
   if (in.meta.kind != RecordingKind::bench)
     throw InputError((dir / "meta.json").string(), 0, "kind",
-                     "this is a drive recording; `diagnose` handles bench recordings (the drive side is not implemented yet)");
+                     "this is a drive recording; this command needs kind \"bench\"");
   ImuReader imu(dir / "imu.csv", in.meta.imu_rate_hz);
   BenchRefReader ref(dir / "reference.csv");
-  DiagDataBuilder db;
-  BenchBlockBuilder bb(1.0);
+  DiagDataBuilder db(std::min(0.05, parent_s), parent_s, kMaxParents);
+  BenchBlockBuilder bb(parent_s);
   BenchRefRow r0, r1;
   if (!ref.next(r0)) throw InputError((dir / "reference.csv").string(), 0, "", "no data rows");
   bool have_r1 = ref.next(r1);
+  in.ref_rows = have_r1 ? 2 : 1;
   ImuRecord s;
   while (imu.next(s)) {
     ++in.imu_rows;
@@ -55,6 +61,7 @@ DiagInput load_diag_input(const std::filesystem::path& dir) {
     while (have_r1 && r1.t < x.t) {
       r0 = r1;
       have_r1 = ref.next(r1);
+      if (have_r1) ++in.ref_rows;
     }
     if (x.t == r0.t) {
       x.w = r0.w;
@@ -71,8 +78,10 @@ DiagInput load_diag_input(const std::filesystem::path& dir) {
     } else {
       continue;
     }
+    if (x.step >= 0) ++in.used_rows;
     feed(db, bb, x);
   }
+  while (have_r1 && ref.next(r1)) ++in.ref_rows;
   in.data = db.finish();
   in.blocks = bb.finish();
   if (in.data.parents.empty())
@@ -86,7 +95,7 @@ DiagInput simulate_diag_input(const BenchPlan& plan, const SensorErrors& truth, 
   in.meta.site = plan.site;
   in.meta.imu_rate_hz = opt.noise.output_rate_hz;
   in.meta.extra["bench"] = {{"plan", plan.name}, {"table", table_spec_json(plan.table)}};
-  DiagDataBuilder db;
+  DiagDataBuilder db(0.05, 1.0, kMaxParents);
   BenchBlockBuilder bb(1.0);
   const double dt = 1.0 / opt.noise.output_rate_hz;
   simulate_bench(plan, plan.site, truth, opt, [&](const BenchSample& s) {
@@ -102,6 +111,8 @@ DiagInput simulate_diag_input(const BenchPlan& plan, const SensorErrors& truth, 
     x.angle_deg = s.angle_deg;
     feed(db, bb, x);
     ++in.imu_rows;
+    ++in.ref_rows;
+    if (x.step >= 0) ++in.used_rows;
   });
   in.data = db.finish();
   in.blocks = bb.finish();
@@ -117,7 +128,9 @@ DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const T
   } else {
     BenchFitOptions fo;
     fo.table = table;
-    const BenchFitResult r = fit_bench(in.blocks, fo);
+    // Long runs (a thermal plan: thousands of 1 s blocks) are fitted on the diagnosis's parent blocks.
+    const BenchFitResult r = in.blocks.size() > 2000 ? fit_bench(blocks_without_effects(in.data, EffectTerms{}), fo)
+                                                     : fit_bench(in.blocks, fo);
     run.current = bench_result_to_coefficients(r, fo, in.meta, "");
     run.fitted_first = true;
   }

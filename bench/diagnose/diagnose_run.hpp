@@ -19,10 +19,12 @@ struct DiagInput {
   DiagData data;
   std::vector<BenchBlock> blocks;  // 1 s blocks for the bench fit
   std::size_t imu_rows = 0;
+  std::size_t ref_rows = 0, used_rows = 0;  // reference.csv rows; IMU rows inside plan steps
 };
 
 // One pass over imu.csv and reference.csv.
-DiagInput load_diag_input(const std::filesystem::path& dir);
+// parent_s: length of the parent blocks (the bench fit's blocks), sub-blocks min(0.05 s, parent_s).
+DiagInput load_diag_input(const std::filesystem::path& dir, double parent_s = 1.0);
 // In memory: the bench simulator with injected effects.
 DiagInput simulate_diag_input(const BenchPlan& plan, const SensorErrors& truth, const BenchSimOptions& opt);
 
