@@ -44,12 +44,26 @@ struct PlanStep {
   int line = 0;            // line in the plan file, for messages
 };
 
+// Temperature of the device during the run (the bench simulator; docs/bench-calibration.md,
+// [temperature]). Without it (set = false) the simulator's default applies: self-heating warm-up
+// from 25 °C towards 31 °C (τ = 15 min). With it: a chamber follows the piecewise-linear setpoints
+// (held before the first and after the last point), the device follows the chamber through a
+// first-order lag, and self-heating adds self_heating_k·(1 − e^(−t/τ)).
+struct TemperatureProfile {
+  bool set = false;
+  std::vector<std::pair<double, double>> chamber;  // (t s, °C), t increasing
+  double lag_s = 0;                                // device vs chamber time constant
+  double self_heating_k = 0, self_heating_tau_s = 900;
+  double chamber_at(double t) const;               // setpoint at t
+};
+
 struct BenchPlan {
   std::string name;
   std::string description;
   Site site;               // default site (a recording's meta.json overrides)
   TableSpec table;
   std::vector<PlanStep> steps;
+  TemperatureProfile temperature;
 };
 
 // C_B→P of the cube fixture that puts IMU axis `mount` (0..2) along the platform's z.

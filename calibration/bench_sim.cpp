@@ -53,6 +53,33 @@ double simulated_temperature(double t) {
   return std::round(v / 0.00565) * 0.00565;
 }
 
+double TemperatureProfile::chamber_at(double t) const {
+  if (chamber.empty()) return 25.0;
+  if (t <= chamber.front().first) return chamber.front().second;
+  for (std::size_t k = 1; k < chamber.size(); ++k)
+    if (t <= chamber[k].first) {
+      const auto& [t0, c0] = chamber[k - 1];
+      const auto& [t1, c1] = chamber[k];
+      return t1 > t0 ? c0 + (c1 - c0) * (t - t0) / (t1 - t0) : c1;
+    }
+  return chamber.back().second;
+}
+
+ProfileTemperature::ProfileTemperature(const TemperatureProfile& p) : p_(p), dev_(p.chamber_at(0.0)) {}
+
+double ProfileTemperature::at(double t) {
+  // First-order lag of the device behind the chamber, integrated forward in steps of ≤ 0.5 s
+  // (exact for a setpoint that is constant over the step).
+  while (t_ < t) {
+    const double h = std::min(0.5, t - t_);
+    const double c = p_.chamber_at(t_ + 0.5 * h);
+    dev_ = p_.lag_s > 0 ? c + (dev_ - c) * std::exp(-h / p_.lag_s) : c;
+    t_ += h;
+  }
+  const double v = dev_ + p_.self_heating_k * (1.0 - std::exp(-t / std::max(p_.self_heating_tau_s, 1e-9)));
+  return std::round(v / 0.00565) * 0.00565;
+}
+
 void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors& truth, const BenchSimOptions& opt,
                     const std::function<void(const BenchSample&)>& sink) {
   const BenchTimeline tl(plan);
@@ -84,9 +111,16 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
     w = k.w_ib_b;
     f = k.f_b;
     C = k.C_b_l;
-    if (!fx.table_tilt_rad.isZero(0)) f += table_tilt_force(fx.table_tilt_rad, k.C_b_l, k.f_b);
+    if (!fx.table_tilt_rad.isZero(0)) {
+      // Tilted base: gravity and Earth rate reach the IMU through C_bLᵀ(I − [ψ×]); the table's own
+      // rate (relative to its base) is unchanged in IMU axes.
+      f += table_tilt_force(fx.table_tilt_rad, k.C_b_l, k.f_b);
+      w += table_tilt_force(fx.table_tilt_rad, k.C_b_l, k.C_b_l.transpose() * earth.w_ie_ned);
+    }
   };
   ImuErrorSimulator imu(truth, noise, opt.seed);
+  ProfileTemperature profile(plan.temperature);
+  auto temperature = [&](double t) { return plan.temperature.set ? profile.at(t) : simulated_temperature(t); };
   const double dt = 1.0 / opt.noise.output_rate_hz;
   BenchSample s;
   std::size_t ph = 0;
@@ -100,13 +134,14 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
     const AxisState o = tl.outer(t), i = tl.inner(t);
     const BenchKinematics k = bench_kinematics(earth, o, i, p.mount);
     Vec3 w_in = k.w_ib_b, f_in = k.f_b;
+    const double temp = temperature(t);
     if (effects) {
       Mat3 C;
       true_kinematics(t, p.mount, w_in, f_in, C);
       EffectContext c;
       c.w = w_in;
       c.f = f_in;
-      c.temp_c = simulated_temperature(t);
+      c.temp_c = temp;
       if (!fx.lever_arm_m.isZero(0)) {
         constexpr double h = 2e-4;
         Vec3 wa, wb, fa, fb;
@@ -126,7 +161,7 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
     s.gyro = out.gyro;
     s.accel = out.accel;
     s.saturated = out.saturated;
-    s.temp_c = simulated_temperature(t);
+    s.temp_c = temp;
     s.w_ref = k.w_ib_b;
     s.f_ref = k.f_b;
     s.step = p.step;

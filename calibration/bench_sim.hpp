@@ -60,4 +60,16 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
 // to the TEMP_OUT step of 0.00565 °C.
 double simulated_temperature(double t);
 
+// The device temperature of a plan's [temperature] profile (TemperatureProfile), quantised like
+// TEMP_OUT. Stateful (the lag is integrated forward): call with non-decreasing t.
+class ProfileTemperature {
+ public:
+  explicit ProfileTemperature(const TemperatureProfile& p);
+  double at(double t);
+
+ private:
+  TemperatureProfile p_;
+  double t_ = 0, dev_ = 25;
+};
+
 }  // namespace calbench

@@ -76,12 +76,15 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     if (!std::filesystem::exists(file)) throw InputError(c.file, 0, "", "cannot open: no such file");
     throw InputError(c.file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
   }
-  check_keys(c, root, "", {"plan", "site", "table", "step"});
+  check_keys(c, root, "", {"plan", "site", "table", "step", "temperature"});
   BenchPlan p;
+  int repeat = 1;
   if (const auto* t = root["plan"].as_table()) {
-    check_keys(c, *t, "plan.", {"name", "description"});
+    check_keys(c, *t, "plan.", {"name", "description", "repeat"});
     p.name = c.str(*t, "plan.", "name", std::string(file.stem()));
     p.description = c.str(*t, "plan.", "description", std::string());
+    repeat = static_cast<int>(c.num(*t, "plan.", "repeat", 1.0, 1, 1000));
+    if (const toml::node* r = t->get("repeat"); r && !r->is_integer()) c.fail(r, "plan.repeat", "expected an integer");
   } else {
     p.name = file.stem().string();
   }
@@ -163,6 +166,41 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     st.label = c.str(*s, pre, "label", kind + " " + std::to_string(i + 1));
     mount = st.mount;
     p.steps.push_back(st);
+  }
+  // [plan] repeat = N: the step list N times (e.g. one cycle per stretch of a temperature ramp).
+  const std::size_t cycle = p.steps.size();
+  for (int r = 1; r < repeat; ++r)
+    for (std::size_t i = 0; i < cycle; ++i) p.steps.push_back(p.steps[i]);
+  if (const toml::node* tn = root.get("temperature")) {
+    const toml::table* tt2 = tn->as_table();
+    if (!tt2) c.fail(tn, "temperature", "expected a table [temperature]");
+    const toml::table& T = *tt2;
+    check_keys(c, T, "temperature.", {"start_c", "chamber", "lag_s", "self_heating_k", "self_heating_tau_s"});
+    TemperatureProfile& tp = p.temperature;
+    tp.set = true;
+    const double start = c.num(T, "temperature.", "start_c", 25.0, -60, 150);
+    tp.chamber.push_back({0.0, start});
+    if (const toml::node* ch = T.get("chamber")) {
+      const toml::array* a = ch->as_array();
+      if (!a) c.fail(ch, "temperature.chamber", "expected an array of [time_s, temperature_c] pairs");
+      for (std::size_t k = 0; k < a->size(); ++k) {
+        const std::string key = "temperature.chamber[" + std::to_string(k + 1) + "]";
+        const toml::array* pt = (*a)[k].as_array();
+        std::optional<double> ts, tc;
+        if (pt && pt->size() == 2) {
+          ts = (*pt)[0].value<double>();
+          tc = (*pt)[1].value<double>();
+        }
+        if (!ts || !tc || !std::isfinite(*ts) || !std::isfinite(*tc))
+          c.fail(&(*a)[k], key, "expected [time_s, temperature_c] (two numbers)");
+        if (*ts < tp.chamber.back().first) c.fail(&(*a)[k], key, "times must not decrease");
+        if (*tc < -60 || *tc > 150) c.fail(&(*a)[k], key, "temperature out of range [-60, 150] °C");
+        tp.chamber.push_back({*ts, *tc});
+      }
+    }
+    tp.lag_s = c.num(T, "temperature.", "lag_s", 0.0, 0, 86400);
+    tp.self_heating_k = c.num(T, "temperature.", "self_heating_k", 0.0, -20, 50);
+    tp.self_heating_tau_s = c.num(T, "temperature.", "self_heating_tau_s", 900.0, 1, 86400);
   }
   return p;
 }

@@ -112,6 +112,31 @@ bool static_attitude(const Vec3& w, const Vec3& f, Mat3& C) {
   return true;
 }
 
+bool bench_attitude(const Vec3& w, const Vec3& f, Mat3& C) {
+  if (w.norm() <= 1e-3) return static_attitude(w, f, C);
+  if (f.norm() < 1.0) return false;
+  int m = 0;
+  w.cwiseAbs().maxCoeff(&m);
+  const Vec3 k = Vec3::Unit(m);
+  const Vec3 w_perp = w - w(m) * k;             // Earth rate only when the table spins about IMU axis m
+  if (w_perp.norm() > 1e-3) return false;
+  const Vec3 d = -f.normalized();
+  const Vec3 c = k.cross(d);
+  Vec3 n;
+  if (c.norm() > 1e-3) {
+    n = c.normalized();                          // north ⟂ k and ⟂ down
+    if (w.dot(n) < 0) n = -n;                    // the horizontal Earth rate points north
+  } else {
+    if (w_perp.norm() < 1e-7) return false;      // at a pole, or no Earth rate in the reference
+    n = (w_perp - w_perp.dot(d) * d).normalized();
+  }
+  const Vec3 e = d.cross(n);
+  C.row(0) = n.transpose();
+  C.row(1) = e.transpose();
+  C.row(2) = d.transpose();
+  return true;
+}
+
 void predict_extra(const EffectTerms& e, const SubBlock& s, Vec3& dg, Vec3& da) {
   EffectTerms sensor_only = e;
   EffectContext c;
@@ -133,8 +158,18 @@ void predict_extra(const EffectTerms& e, const SubBlock& s, Vec3& dg, Vec3& da) 
     da += wobble_angle(e.wobble_rad, s.angle) * s.df / s.angle_rate;
   }
   if (!e.table_tilt_rad.isZero(0)) {
+    // The tilted base turns the level frame seen by the IMU: gravity and the Earth rate, both
+    // fixed in the level frame, reach the IMU through C_bLᵀ(I − [ψ×]) (the table's own rate is
+    // unaffected). Static and rotating steps alike.
     Mat3 C;
-    if (static_attitude(s.w, s.f, C)) da += table_tilt_force(e.table_tilt_rad, C, s.f);
+    if (bench_attitude(s.w, s.f, C)) {
+      da += table_tilt_force(e.table_tilt_rad, C, s.f);
+      // Earth-rate part (≤ Ω·|ψ|, 2e-8 rad/s at 60″): its vertical component is known from the
+      // reference only when the table is still or spins about a horizontal axis.
+      const Vec3 wl = C * s.w;
+      if (s.w.norm() <= 1e-3 || std::abs(C.row(2).dot(s.w.normalized())) < 1e-6)
+        dg += table_tilt_force(e.table_tilt_rad, C, C.transpose() * Vec3(wl(0), 0.0, wl(2)));
+    }
   }
 }
 

@@ -1,5 +1,6 @@
 #include "calibration/diagnosis/diag_data.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace calbench {
@@ -81,6 +82,11 @@ DiagData DiagDataBuilder::finish() {
   close_sub();
   d_.sample_rate_hz = samples_ > 0 ? rate_sum_ / static_cast<double>(samples_) : 0.0;
   auto& subs = d_.subs;
+  if (max_parents_ > 0) {
+    double total = 0;
+    for (const auto& s : subs) total += s.duration;
+    parent_s_ = std::max(parent_s_, total / max_parents_);
+  }
   // Parents: consecutive sub-blocks of one step, about parent_s long.
   for (std::size_t k = 0; k < subs.size(); ++k) {
     const SubBlock& s = subs[k];

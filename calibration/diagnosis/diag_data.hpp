@@ -51,13 +51,17 @@ struct DiagData {
 
 class DiagDataBuilder {
  public:
-  explicit DiagDataBuilder(double sub_s = 0.05, double parent_s = 1.0) : sub_s_(sub_s), parent_s_(parent_s) {}
+  // max_parents > 0: longer parents when the data would give more than that many (long thermal
+  // runs; the diagnosis keeps a dense parent covariance per axis).
+  explicit DiagDataBuilder(double sub_s = 0.05, double parent_s = 1.0, int max_parents = 0)
+      : sub_s_(sub_s), parent_s_(parent_s), max_parents_(max_parents) {}
   void add(const DiagSample& s);
   DiagData finish();
 
  private:
   void close_sub();
   double sub_s_, parent_s_;
+  int max_parents_ = 0;
   DiagData d_;
   bool open_ = false;
   SubBlock cur_;
