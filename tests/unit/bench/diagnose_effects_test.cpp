@@ -120,17 +120,19 @@ TEST(DiagnoseEffects, TableWobble) {
   expect_found(fx, EffectId::table_wobble, 2, -1, 0, fx.wobble_rad(0), 81);
 }
 
-// The table-tilt model is applied in static steps only (the IMU attitude is reconstructed from
-// gravity and Earth rate); in rotating steps the tilt stays in the residual, so only name, sensor
-// and value are required here (documented limitation, docs/diagnosis.md).
+// Table tilt: modelled in static and rotating steps (the IMU attitude is reconstructed from
+// gravity and the Earth rate, north ⟂ the spinning IMU axis); several magnitudes, both axes.
 TEST(DiagnoseEffects, Misalignment) {
-  EffectTerms fx;
-  fx.table_tilt_rad(1) = 60.0 / 3600 * kDeg;
-  const DiagRun r = diagnose_sim(fx, 91);
-  const DiagFinding* f = find(r, EffectId::misalignment);
-  ASSERT_NE(f, nullptr) << summary(r);
-  EXPECT_EQ(f->report_sensor, 2);
-  EXPECT_NEAR(f->value[1], fx.table_tilt_rad(1), 0.2 * fx.table_tilt_rad(1)) << summary(r);
+  const struct {
+    int axis;
+    double arcsec;
+    std::uint64_t seed;
+  } cases[] = {{1, 60, 91}, {0, -40, 92}, {1, 30, 93}};
+  for (const auto& c : cases) {
+    EffectTerms fx;
+    fx.table_tilt_rad(c.axis) = c.arcsec / 3600 * kDeg;
+    expect_found(fx, EffectId::misalignment, 2, -1, c.axis, fx.table_tilt_rad(c.axis), c.seed);
+  }
 }
 
 TEST(DiagnoseEffects, CleanRecordingsHaveNoFinding) {
