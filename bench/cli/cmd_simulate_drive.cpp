@@ -24,6 +24,10 @@ const bool registered = add_command(11, [](CLI::App& app) {
                 "g_sensitivity:axis=x,f=y,value=1.6e-5, time_offset:value=0.002, lever_arm:x=0.05");
   d->add_option("--effects", a->effects, "JSON file with catalogue keys (as in IMPROVED.json) to inject")
       ->check(CLI::ExistingFile);
+  d->add_option("--noise", a->noise,
+                "JSON with the unit's in-run drift instead of the data sheet's: {\"gyro\": {\"drift_sigma_deg_h\", "
+                "\"drift_tau_s\"}, \"accel\": {\"drift_sigma_mg\", \"drift_tau_s\"}} (kept in truth.json)")
+      ->check(CLI::ExistingFile);
   d->callback([a] {
     const SimulateDriveSummary s = simulate_drive_recording(*a);
     std::cout << "simulated " << s.imu_rows << " IMU samples (" << s.duration_s << " s), " << s.ref_rows

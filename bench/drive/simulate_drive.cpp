@@ -12,6 +12,36 @@
 
 namespace calbench {
 
+namespace {
+// --noise NOISE.json (see simulate_drive.hpp): the unit's drift levels, data-sheet default else.
+NoiseSpec read_noise_file(const std::string& file) {
+  NoiseSpec n = adis16488a_noise();
+  const nlohmann::json j = read_json_file(file);
+  if (!j.is_object()) throw InputError(file, 0, "", "not a JSON object");
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const bool gyro = it.key() == "gyro";
+    if (!gyro && it.key() != "accel") throw InputError(file, 0, it.key(), "unknown key (gyro, accel)");
+    if (!it.value().is_object()) throw InputError(file, 0, it.key(), "must be an object");
+    TriadNoise& t = gyro ? n.gyro : n.accel;
+    const std::string sk = gyro ? "drift_sigma_deg_h" : "drift_sigma_mg";
+    for (auto k = it.value().begin(); k != it.value().end(); ++k) {
+      const std::string key = it.key() + "." + k.key();
+      const double v = jnum(k.value(), file, key);
+      if (k.key() == sk) {
+        if (!(v >= 0)) throw InputError(file, 0, key, "must not be negative");
+        t.drift_sigma = v * (gyro ? units::kDegPerHour : units::kMilliG);
+      } else if (k.key() == "drift_tau_s") {
+        if (!(v > 0)) throw InputError(file, 0, key, "must be positive");
+        t.drift_tau_s = v;
+      } else {
+        throw InputError(file, 0, key, "unknown key (" + sk + ", drift_tau_s)");
+      }
+    }
+  }
+  return n;
+}
+}  // namespace
+
 SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   using units::kDeg;
   const RouteFile rf = load_route(a.route);
@@ -65,6 +95,13 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   // The true mounting (what the filter should find); meta.json carries the nominal one. A
   // catalogue lever_arm (IMU axes) is on top of mounting.lever_arm_m.
   truth.extra["mounting"] = {{"rpy_deg", to_json(true_rpy_deg)}, {"lever_arm_m", to_json(lever)}};
+  const NoiseSpec noise = a.noise.empty() ? adis16488a_noise() : read_noise_file(a.noise);
+  if (!a.noise.empty())
+    truth.extra["noise"] = {{"model", "first-order Gauss-Markov in-run drift (simulate drive --noise)"},
+                            {"gyro", {{"drift_sigma_deg_h", noise.gyro.drift_sigma / units::kDegPerHour},
+                                      {"drift_tau_s", noise.gyro.drift_tau_s}}},
+                            {"accel", {{"drift_sigma_mg", noise.accel.drift_sigma / units::kMilliG},
+                                       {"drift_tau_s", noise.accel.drift_tau_s}}}};
 
   const fs::path out(a.out);
   if (fs::exists(out / "meta.json") && !a.force)
@@ -92,6 +129,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   cfg.gnss = rf.gnss;
   cfg.seed = a.seed;
   cfg.effects = effects;
+  cfg.noise = noise;
 
   SimulateDriveSummary sum;
   RecordingWriter w(out, meta, ImuForm::rates, false, false, rf.gnss.rate_hz > 0);

@@ -17,6 +17,10 @@ struct SimulateDriveArgs {
   // --effects JSON file (a TRUTH.json carrying the keys is injected too).
   std::vector<std::string> inject;
   std::string effects;
+  // --noise NOISE.json: the simulated unit's in-run drift instead of the data sheet's (first-order
+  // Gauss–Markov per sensor): {"gyro": {"drift_sigma_deg_h": 20, "drift_tau_s": 60},
+  // "accel": {"drift_sigma_mg": 0.1, "drift_tau_s": 300}}; every key optional; kept in truth.json.
+  std::string noise;
 };
 
 struct SimulateDriveSummary {
