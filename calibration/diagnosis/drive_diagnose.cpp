@@ -1,8 +1,6 @@
 #include "calibration/diagnosis/drive_diagnose.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -53,6 +51,7 @@ struct Design {
   // banded covariance (variance, covariance with the next parent).
   double gamma[kAxes][kLags + 1] = {};
   double endpoint_var[kAxes] = {};
+  std::vector<double> prior_sigma;  // per term parameter
   std::vector<double> pvar[kAxes], pcov[kAxes];
 };
 
@@ -66,6 +65,18 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
   for (const Term& t : D.terms) {
     D.term_off.push_back(D.P);
     D.P += t.nparams();
+    double ps = 1;
+    switch (t.effect) {
+      case EffectId::g_sensitivity: ps = 2e-4; break;                       // ~0.1 °/s/g
+      case EffectId::scale_nonlinearity: ps = t.sensor == 0 ? 1e-2 : 1e-3; break;
+      case EffectId::scale_asymmetry: ps = 1e-2; break;
+      case EffectId::time_offset: ps = 0.05; break;
+      case EffectId::lever_arm: ps = 0.3; break;
+      case EffectId::temperature_bias: ps = t.sensor == 0 ? 1e-4 : 1e-2; break;
+      case EffectId::temperature_scale: ps = 1e-3; break;
+      default: ps = 1;
+    }
+    for (int p = 0; p < t.nparams(); ++p) D.prior_sigma.push_back(ps);
   }
   const int N = static_cast<int>(d.subs.size());
   D.z.assign(kAxes, Eigen::VectorXd::Zero(N));
@@ -275,6 +286,10 @@ FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vect
       b(u) += S->g(idx[u]);
       for (int v = 0; v < K; ++v) A(u, v) += S->G(idx[u], idx[v]);
     }
+  // Weak zero-mean priors on the catalogue parameters: a component a drive cannot see (e.g. the
+  // g-sensitivity to the always-vertical gravity, which the bias absorbs, or the lever arm along
+  // the yaw axis) stays at zero with σ ≈ its prior instead of trading off against the bias.
+  for (int u = D.n_base; u < K; ++u) A(u, u) += 1.0 / std::pow(D.prior_sigma[idx[u] - D.n_base], 2);
   Eigen::VectorXd s(K);
   for (int i = 0; i < K; ++i) s(i) = A(i, i) > 0 ? 1.0 / std::sqrt(A(i, i)) : 1.0;
   Eigen::MatrixXd As = s.asDiagonal() * A * s.asDiagonal();
@@ -509,13 +524,6 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
     r_before[a] = residual(D, a, base_fit.theta);
     res.before[a] = axis_stats(data, D, all[a], r_before[a], nbase, rn_before[a]);
     res.correlations_before[a] = correlations(data, rn_before[a]);
-    if (std::getenv("CALBENCH_DRIVE_DEBUG")) {
-      const Eigen::VectorXd& x = r_before[a];
-      double v0 = 0, v1 = 0, pv = 0, pc = 0;
-      for (int k = 0; k < NP; ++k) { v0 += x(k) * x(k); pv += D.pvar[a][k]; if (k + 1 < NP) { v1 += x(k) * x(k + 1); pc += D.pcov[a][k]; } }
-      std::fprintf(stderr, "axis %d gamma %.3g %.3g %.3g %.3g | parent var emp %.3g model %.3g | lag1 emp %.3g model %.3g\n", a,
-                   D.gamma[a][0], D.gamma[a][1], D.gamma[a][2], D.gamma[a][3], v0 / NP, pv / NP, v1 / NP, pc / NP);
-    }
   }
 
   struct Accepted {
@@ -682,18 +690,22 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
     f.report_sensor = t.sensor;
     f.report_axis = t.axis;
     if (t.effect == EffectId::lever_arm) {
+      // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
+      // rolls or pitches, so the component along the yaw axis is poorly determined).
+      auto sig = [&](int i) { return std::abs(f.value[i]) > 3 * f.sigma[i] ? std::abs(f.value[i]) : 0.0; };
       int imax = 0;
       for (int i = 1; i < 3; ++i)
-        if (std::abs(f.value[i]) > std::abs(f.value[imax])) imax = i;
+        if (sig(i) > sig(imax)) imax = i;
       double others = 0;
       for (int i = 0; i < 3; ++i)
-        if (i != imax) others = std::max(others, std::abs(f.value[i]));
-      f.report_axis = others < 0.3 * std::abs(f.value[imax]) ? imax : -1;
+        if (i != imax) others = std::max(others, sig(i));
+      f.report_axis = others < 0.3 * sig(imax) ? imax : -1;
     }
     // Systematic residual along the finding's own signature: parents binned by the fitted
-    // contribution of the term on the axis where it is largest; before = base model, after = final.
+    // contribution of the term on each axis it touches; reported on the axis where the base-model
+    // residual shows it most (relative to that axis's block noise). Before = base model, after = final.
     int show = D.touched[acc.term].front();
-    double best_var = -1;
+    double best_rel = -1;
     Eigen::VectorXd contrib_show;
     for (int a : D.touched[acc.term]) {
       Eigen::VectorXd c = Eigen::VectorXd::Zero(NP);
@@ -701,16 +713,19 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
         const int idx = D.term_off[acc.term] + p;
         c += D.Xp[a].col(idx) * cur.theta(idx);
       }
-      const double v = (c.array() - c.mean()).square().mean();
-      if (v > best_var) {
-        best_var = v;
+      if ((c.array() - c.mean()).abs().maxCoeff() <= 0) continue;
+      const auto groups = quantile_groups(c, 10);
+      const double rb = grouped_systematic(D, a, rn_before[a], groups);
+      const double rel = rb / out.block_noise_sigma[a];
+      if (rel > best_rel) {
+        best_rel = rel;
         show = a;
         contrib_show = c;
+        f.rms_before = rb;
+        f.rms_after = grouped_systematic(D, a, rn_after[a], groups);
       }
     }
-    const auto groups = quantile_groups(contrib_show, 10);
-    f.rms_before = grouped_systematic(D, show, rn_before[show], groups);
-    f.rms_after = grouped_systematic(D, show, rn_after[show], groups);
+    if (contrib_show.size() == 0) contrib_show = Eigen::VectorXd::Zero(NP);
     if (t.sensor == 2) {
       f.report_sensor = show / 3;  // reported on the axis where it shows most
     }
