@@ -11,9 +11,12 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "bench/drive/route_toml.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
@@ -99,8 +102,19 @@ void BM_InMotion_FitThroughput(benchmark::State& state) {
 }
 BENCHMARK(BM_InMotion_FitThroughput)->Unit(benchmark::kSecond)->Iterations(1)->Repetitions(3);
 
+// σ of the gyro states at a time of the fit (the observability story of --obs).
+struct Checkpoint {
+  double t = 0;
+  Vec3 drift_total_sigma, drift_const_sigma;  // °/h
+  double scale_sigma_ppm = 0, skew_sigma_ppm = 0;  // RMS over the three scales / six skews
+  Vec3 mount_sigma_deg;
+};
+
 struct SeedResult {
   int within = 0, params = 0, mount_within = 0;
+  std::vector<Checkpoint> checkpoints;
+  long rejected[3] = {0, 0, 0}, used[3] = {0, 0, 0};
+  double mean_nis[3] = {0, 0, 0};
   double cpe_bench = 0, cpe_inmotion = 0, cpe_bench_nominal_mount = 0;
   Vec3 gyro_sigma, gyro_err, gyro_total_sigma;
 };
@@ -125,7 +139,8 @@ SensorErrors bench_set(const SensorErrors& truth, std::uint64_t seed) {
   return b;
 }
 
-SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc_horizon) {
+SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc_horizon,
+                    const std::vector<double>& checkpoint_times = {}) {
   drivesim::DriveSimConfig cfg;
   cfg.route = rf.route;
   cfg.mems = draw_random_unit(seed);
@@ -147,6 +162,7 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
 
   inmotion::InMotionConfig fc;
   fc.obs_att = att;
+  if (const char* e = std::getenv("INMOTION_PRIOR_GYRO_DPS")) fc.sigma_gyro_bias = std::atof(e) * kDeg;
   std::unique_ptr<inmotion::InMotionFilter> f;
   std::unique_ptr<qc::InertialRun> qb, qi, qbn;
   SensorErrors total;
@@ -179,6 +195,22 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
     }
     if (!qb) {
       f->reference(r);
+      while (out.checkpoints.size() < checkpoint_times.size() && r.t >= checkpoint_times[out.checkpoints.size()]) {
+        Checkpoint c;
+        c.t = r.t;
+        c.drift_total_sigma = f->gyro_total_drift_sigma() / units::kDegPerHour;
+        const SensorErrors e = f->estimate();
+        c.drift_const_sigma = e.gyro.sigma_bias / units::kDegPerHour;
+        double sc = 0, sk = 0;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) (i == j ? sc : sk) += e.gyro.sigma_M(i, j) * e.gyro.sigma_M(i, j);
+        c.scale_sigma_ppm = std::sqrt(sc / 3) * 1e6;
+        c.skew_sigma_ppm = std::sqrt(sk / 6) * 1e6;
+        Vec3 rpy, sig;
+        f->mounting_rpy(rpy, sig);
+        c.mount_sigma_deg = sig / kDeg;
+        out.checkpoints.push_back(c);
+      }
       if (r.t >= t_fit) {
         total = compose(bench, f->estimate());
         f->mounting_rpy(mr, ms);
@@ -214,6 +246,11 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
   out.gyro_sigma = total.gyro.sigma_bias / units::kDegPerHour;
   out.gyro_err = (total.gyro.bias - cfg.mems.gyro.bias) / units::kDegPerHour;
   out.gyro_total_sigma = f->gyro_total_drift_sigma() / units::kDegPerHour;
+  for (int k = 0; k < 3; ++k) {
+    out.rejected[k] = f->consistency(k).rejected;
+    out.used[k] = f->consistency(k).used;
+    out.mean_nis[k] = f->consistency(k).mean_nis();
+  }
   return out;
 }
 
@@ -263,5 +300,69 @@ void BM_InMotion_Acceptance(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_InMotion_Acceptance)->Unit(benchmark::kSecond)->Iterations(1);
+
+// The paper's motivation for the attitude observation (eq 15), over several seeds: the σ of the
+// gyro states as the drive goes on, and the errors at the end, with --obs pos,vel,att and pos,vel.
+void BM_InMotion_ObsComparison(benchmark::State& state) {
+  const RouteFile rf = load_route(std::string(CALBENCH_SOURCE_DIR) + "/bench/routes/default.toml");
+  if (!std::getenv("INMOTION_ACCEPTANCE")) {
+    state.SkipWithError("set INMOTION_ACCEPTANCE=1 (bench/drive/acceptance.sh) to run the obs comparison");
+    for (auto _ : state) {
+    }
+    return;
+  }
+  int seeds = 4;
+  if (const char* e = std::getenv("INMOTION_OBS_SEEDS")) seeds = std::max(1, std::atoi(e));
+  const std::vector<double> cps = {30, 60, 120, 300, 600, 1500};
+  for (auto _ : state) {
+    for (int att = 1; att >= 0; --att) {
+      std::vector<Checkpoint> mean(cps.size());
+      double err2 = 0, nerr2 = 0, worst_n = 0;
+      int n = 0;
+      for (int s = 1; s <= seeds; ++s) {
+        const SeedResult r = run_seed(rf, static_cast<std::uint64_t>(s), att == 1, 600.0, cps);
+        for (std::size_t k = 0; k < r.checkpoints.size(); ++k) {
+          const Checkpoint& c = r.checkpoints[k];
+          mean[k].t += c.t / seeds;
+          mean[k].drift_total_sigma += c.drift_total_sigma / seeds;
+          mean[k].drift_const_sigma += c.drift_const_sigma / seeds;
+          mean[k].scale_sigma_ppm += c.scale_sigma_ppm / seeds;
+          mean[k].skew_sigma_ppm += c.skew_sigma_ppm / seeds;
+          mean[k].mount_sigma_deg += c.mount_sigma_deg / seeds;
+        }
+        std::printf("  seed %d: gyro drift error %.2f %.2f %.2f °/h, σ %.2f %.2f %.2f; obs used/rejected/mean NIS"
+                    " pos %ld/%ld/%.2f vel %ld/%ld/%.2f att %ld/%ld/%.2f\n",
+                    s, r.gyro_err(0), r.gyro_err(1), r.gyro_err(2), r.gyro_sigma(0), r.gyro_sigma(1), r.gyro_sigma(2),
+                    r.used[0], r.rejected[0], r.mean_nis[0], r.used[1], r.rejected[1], r.mean_nis[1], r.used[2],
+                    r.rejected[2], r.mean_nis[2]);
+        for (int i = 0; i < 3; ++i) {
+          err2 += r.gyro_err(i) * r.gyro_err(i);
+          const double z = r.gyro_err(i) / r.gyro_sigma(i);
+          nerr2 += z * z;
+          worst_n = std::max(worst_n, std::abs(z));
+          ++n;
+        }
+      }
+      const char* name = att ? "pos,vel,att" : "pos,vel";
+      std::printf("--obs %s (%d seeds, mean σ):\n", name, seeds);
+      std::printf("  %7s %28s %28s %9s %9s %22s\n", "t [s]", "total drift σ x/y/z [°/h]", "constant drift σ x/y/z [°/h]",
+                  "scale σ", "skew σ", "mounting σ r/p/y [°]");
+      for (const Checkpoint& c : mean)
+        std::printf("  %7.0f %8.2f %8.2f %8.2f   %8.2f %8.2f %8.2f   %6.0f ppm %6.0f ppm %6.3f %6.3f %6.3f\n", c.t,
+                    c.drift_total_sigma(0), c.drift_total_sigma(1), c.drift_total_sigma(2), c.drift_const_sigma(0),
+                    c.drift_const_sigma(1), c.drift_const_sigma(2), c.scale_sigma_ppm, c.skew_sigma_ppm,
+                    c.mount_sigma_deg(0), c.mount_sigma_deg(1), c.mount_sigma_deg(2));
+      std::printf("  end of fit: constant gyro drift error RMS %.2f °/h, RMS error/σ %.2f, worst |error|/σ %.2f\n",
+                  std::sqrt(err2 / n), std::sqrt(nerr2 / n), worst_n);
+      std::fflush(stdout);
+      const std::string p = att ? "att_" : "noatt_";
+      state.counters[p + "drift_err_rms_dph"] = std::sqrt(err2 / n);
+      state.counters[p + "drift_err_over_sigma_rms"] = std::sqrt(nerr2 / n);
+      state.counters[p + "total_sigma_z_60s_dph"] = mean[1].drift_total_sigma(2);
+      state.counters[p + "total_sigma_z_end_dph"] = mean.back().drift_total_sigma(2);
+    }
+  }
+}
+BENCHMARK(BM_InMotion_ObsComparison)->Unit(benchmark::kSecond)->Iterations(1);
 
 }  // namespace
