@@ -264,7 +264,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
   nlohmann::json j;
   j["kind"] = "drive";
   nlohmann::json fs = nlohmann::json::array();
-  for (const auto& f : r.findings) {
+  for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
+    const DiagFinding& f = r.findings[fi];
     nlohmann::json x;
     x["effect"] = effect_name(f.term.effect);
     x["sensor"] = kSensor[f.term.sensor];
@@ -281,6 +282,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
                          {"heldout_delta_chi2", f.heldout_delta_chi2}, {"revealing_condition", f.condition},
                          {"correlation_before", f.condition_r}};
     if (f.term.effect == EffectId::correlated_drift) ev["tau_s"] = f.noise_tau_s;
+    if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
     if (f.report_sensor < 2 && f.report_axis >= 0) {
       const int a = f.report_sensor * 3 + f.report_axis;
       ev["ljung_box_p_before"] = r.before[a].ljung_box_p;

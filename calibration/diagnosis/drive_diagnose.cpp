@@ -345,8 +345,11 @@ Eigen::VectorXd smoothed_drift(const DriveDiagData& d, const Dataset& S, const E
 
 // Systematic RMS of residual r (drift removed) over groups of parents: each group's mean squared
 // minus the short-range noise variance of that mean.
-double grouped_systematic(const Design& D, int a, const Eigen::VectorXd& r, const std::vector<std::vector<int>>& groups) {
-  double num = 0, den = 0;
+// floor: the noise level of this estimate (√(2·sd of the estimated mean square)): a systematic
+// RMS below it cannot be told from zero.
+double grouped_systematic(const Design& D, int a, const Eigen::VectorXd& r, const std::vector<std::vector<int>>& groups,
+                          double* floor = nullptr) {
+  double num = 0, den = 0, var_ms = 0;
   for (const auto& gr : groups) {
     if (gr.empty()) continue;
     double m = 0, v = 0;
@@ -362,7 +365,9 @@ double grouped_systematic(const Design& D, int a, const Eigen::VectorXd& r, cons
     v /= n * n;
     num += n * (m * m - v);
     den += n;
+    var_ms += n * n * 2 * v * v;
   }
+  if (floor) *floor = den > 0 ? std::sqrt(2 * std::sqrt(var_ms) / den) : 0.0;
   return den > 0 ? std::sqrt(std::max(0.0, num / den)) : 0.0;
 }
 
@@ -670,6 +675,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       }
       f.rms_before = std::sqrt(rb / 3);
       f.rms_after = std::sqrt(ra / 3);
+      out.rms_floor.push_back(0.0);
       TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
       te.drift_sigma = ds[triad];
       te.drift_tau_s = tau[triad];
@@ -701,11 +707,13 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
         if (i != imax) others = std::max(others, sig(i));
       f.report_axis = others < 0.3 * sig(imax) ? imax : -1;
     }
-    // Systematic residual along the finding's own signature: parents binned by the fitted
-    // contribution of the term on each axis it touches; reported on the axis where the base-model
-    // residual shows it most (relative to that axis's block noise). Before = base model, after = final.
+    // Systematic residual along the finding's own signature, on each axis the term touches:
+    // parents binned by the term's fitted contribution c; before = the final residual with the
+    // term taken out (residual + c: what this drive shows without the term, other parameters as
+    // fitted; the base-model residual would hide part of it in M), after = the final residual.
+    // Reported on the axis where it stands out most from that axis's block noise.
     int show = D.touched[acc.term].front();
-    double best_rel = -1;
+    double best_rel = -1, floor = 0;
     Eigen::VectorXd contrib_show;
     for (int a : D.touched[acc.term]) {
       Eigen::VectorXd c = Eigen::VectorXd::Zero(NP);
@@ -715,14 +723,15 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       }
       if ((c.array() - c.mean()).abs().maxCoeff() <= 0) continue;
       const auto groups = quantile_groups(c, 10);
-      const double rb = grouped_systematic(D, a, rn_before[a], groups);
+      const Eigen::VectorXd without = rn_after[a] + (c.array() - c.mean()).matrix();
+      const double rb = grouped_systematic(D, a, without, groups);
       const double rel = rb / out.block_noise_sigma[a];
       if (rel > best_rel) {
         best_rel = rel;
         show = a;
         contrib_show = c;
         f.rms_before = rb;
-        f.rms_after = grouped_systematic(D, a, rn_after[a], groups);
+        f.rms_after = grouped_systematic(D, a, rn_after[a], groups, &floor);
       }
     }
     if (contrib_show.size() == 0) contrib_show = Eigen::VectorXd::Zero(NP);
@@ -744,6 +753,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
     for (const auto& c : res.correlations_before[show])
       if (c.condition == f.condition) f.condition_r = c.r;
     res.findings.push_back(f);
+    out.rms_floor.push_back(floor);
   }
 
   // Unexplained: an axis still far from its noise model.

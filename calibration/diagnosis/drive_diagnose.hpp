@@ -53,6 +53,9 @@ struct DriveDiagnoseResult {
   double block_noise_sigma[6] = {0, 0, 0, 0, 0, 0};  // short-range noise of a ~1 s block (SI)
   double gamma[6][4] = {};                           // its sub-level autocovariance, lags 0..3
   std::vector<double> parent_t;                      // block times (for plots)
+  // Per finding: noise level of its systematic RMS figure (binned by the term's contribution);
+  // rms_after below it cannot be told from zero.
+  std::vector<double> rms_floor;
 };
 
 // `current`: coefficients to test (b, M) and the extra terms they already carry.
