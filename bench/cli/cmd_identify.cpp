@@ -55,6 +55,7 @@ struct Series {
 };
 
 struct Loaded {
+  bool inmotion_series = false;  // a fit drive --series file
   std::string file;  // the file the rows came from (for messages)
   double dt = 0;
   std::vector<Series> series;
@@ -105,6 +106,7 @@ Loaded load_csv(const IdentifyArgs& a) {
   Loaded L;
   L.file = a.input;
   CsvReader r(a.input);
+  L.inmotion_series = is_inmotion_series(r.header());
   const int t = r.require("t_s");
   r.set_time_slot(t);
   std::vector<std::string> names = a.columns;
@@ -530,6 +532,9 @@ void run_identify(const IdentifyArgs& a) {
     return;
   }
   std::cout << "identify " << a.input << ": " << L.series.front().x.size() << " samples at " << L.dt << " s\n";
+  if (L.inmotion_series && a.from_s < -1e299)
+    std::cout << "note: an in-motion series; its first tens of seconds are the filter converging, not drift "
+                 "(skip them with --from)\n";
   for (const auto& c : cols) {
     if (!c["usable"].get<bool>())
       std::printf("%-12s no usable drift model (no resolvable correlation: white noise, too short, or a trend?)\n",
