@@ -231,7 +231,7 @@ DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* co
   return run;
 }
 
-std::string drive_finding_sentence(const DiagFinding& f) {
+std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
   const Term& t = f.term;
   const int s = f.report_sensor < 2 ? f.report_sensor : 0;
   std::string who = std::string(kSensor[t.sensor < 2 ? t.sensor : s]);
@@ -253,7 +253,7 @@ std::string drive_finding_sentence(const DiagFinding& f) {
   else if (t.effect == EffectId::lever_arm) head = "accelerometer error grows with rotation rate and angular acceleration";
   else if (t.effect == EffectId::correlated_drift) head = who + " residual wanders slowly in time";
   else head = who + " error grows with " + condition_text(f.condition);
-  const int rs = f.report_sensor < 2 ? f.report_sensor : 0;
+  const int rs = shown_sensor >= 0 ? shown_sensor : (f.report_sensor < 2 ? f.report_sensor : 0);
   return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
          disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs);
 }
@@ -283,6 +283,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
                          {"correlation_before", f.condition_r}};
     if (f.term.effect == EffectId::correlated_drift) ev["tau_s"] = f.noise_tau_s;
     if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
+    if (fi < R.shown_on.size() && f.term.effect != EffectId::correlated_drift) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
     if (f.report_sensor < 2 && f.report_axis >= 0) {
       const int a = f.report_sensor * 3 + f.report_axis;
       ev["ljung_box_p_before"] = r.before[a].ljung_box_p;
@@ -291,7 +292,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     x["evidence"] = ev;
     x["rms_before"] = f.rms_before;
     x["rms_after"] = f.rms_after;
-    x["sentence"] = drive_finding_sentence(f);
+    x["sentence"] = drive_finding_sentence(f, fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1);
     fs.push_back(x);
   }
   j["findings"] = fs;
@@ -360,7 +361,8 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
       << fmt(R.mounting_delta(1) / units::kDeg) << ", " << fmt(R.mounting_delta(2) / units::kDeg) << " ° (σ "
       << fmt(R.mounting_sigma.maxCoeff() / units::kDeg) << " °) relative to " << in.mounting_source << "\n";
   if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the noise\n";
-  for (const auto& f : r.findings) o << "* " << drive_finding_sentence(f) << "\n";
+  for (std::size_t fi = 0; fi < r.findings.size(); ++fi)
+    o << "* " << drive_finding_sentence(r.findings[fi], fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1) << "\n";
   for (const auto& u : r.unexplained) {
     o << "! unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " χ²/dof " << fmt(u.chi2_dof)
       << ", Ljung–Box p " << fmt(u.ljung_box_p, 2) << "; strongest correlations:";

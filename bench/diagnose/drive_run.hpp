@@ -53,7 +53,8 @@ DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* co
 
 nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun& run);
 std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& run);
-std::string drive_finding_sentence(const DiagFinding& f);
+// shown_sensor: sensor (0 gyro, 1 accel) of the axis the RMS figures are for (−1: the finding's).
+std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor = -1);
 // HTML report: per finding, the residual of the axis where it shows against its revealing
 // condition, before (red) and after (blue), gnuplot PNG embedded.
 void write_drive_diagnosis_report(const std::filesystem::path& html, const DriveDiagInput& in, const DriveDiagRun& run,

@@ -676,6 +676,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       f.rms_before = std::sqrt(rb / 3);
       f.rms_after = std::sqrt(ra / 3);
       out.rms_floor.push_back(0.0);
+      out.shown_on.push_back(triad * 3);
       TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
       te.drift_sigma = ds[triad];
       te.drift_tau_s = tau[triad];
@@ -754,6 +755,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       if (c.condition == f.condition) f.condition_r = c.r;
     res.findings.push_back(f);
     out.rms_floor.push_back(floor);
+    out.shown_on.push_back(show);
   }
 
   // Unexplained: an axis still far from its noise model.

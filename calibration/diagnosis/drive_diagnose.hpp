@@ -56,6 +56,7 @@ struct DriveDiagnoseResult {
   // Per finding: noise level of its systematic RMS figure (binned by the term's contribution);
   // rms_after below it cannot be told from zero.
   std::vector<double> rms_floor;
+  std::vector<int> shown_on;  // per finding: axis (gyro x..accel z) its RMS figures are given for
 };
 
 // `current`: coefficients to test (b, M) and the extra terms they already carry.
