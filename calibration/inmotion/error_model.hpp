@@ -54,8 +54,7 @@ void drift_blocks(const Vec3& alpha_g, const Vec3& alpha_a, StateMatN<N>& F);
 // x[1] (H = [0 1]), so its Jacobian into the attitude/velocity rows is the kDg/kDa column that
 // gyro_blocks/accel_blocks already fill. Only in the augmented layout.
 void expcos_drift_block(const identification::ShapingFilter& f, int aux, int drift, StateMatN<kStatesAug>& F);
-// Its discrete process noise over T (exact, shaping_filter.hpp discretise()) into Q.
-void expcos_drift_noise(const identification::ShapingFilter& f, double T, int aux, int drift,
-                        StateMatN<kStatesAug>& Q);
+// Its discrete process noise over a step (exact: Qd of shaping_filter.hpp discretise()) into Q.
+void expcos_drift_noise(const identification::DiscreteShapingFilter& d, int aux, int drift, StateMatN<kStatesAug>& Q);
 
 }  // namespace calbench::inmotion

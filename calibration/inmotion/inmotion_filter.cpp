@@ -148,7 +148,7 @@ void InMotionFilterT<N>::propagate() {
   }
   if constexpr (N == kStatesAug)
     for (int k = 0; k < 6; ++k)
-      if (expcos_[k]) expcos_drift_noise(sf_[k], T, k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3, Q);
+      if (expcos_[k]) expcos_drift_noise(discrete(k, T), k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3, Q);
   Mat P_next = Phi * P_ * Phi.transpose() + Q;
   P_next = 0.5 * (P_next + P_next.transpose()).eval();
 
@@ -258,14 +258,21 @@ void InMotionFilterT<N>::feedback(const Vec& dx) {
 }
 
 template <int N>
+const identification::DiscreteShapingFilter& InMotionFilterT<N>::discrete(int k, double T) {
+  // The propagation step takes few distinct values (cov_dt plus whole IMU intervals, and the
+  // remainders at reference epochs); recompute only when it changes.
+  if (disc_[k].dt != T) disc_[k] = identification::discretise(sf_[k], T);
+  return disc_[k];
+}
+
+template <int N>
 void InMotionFilterT<N>::propagate_drift_nominal(double T) {
   // x̂ ← Φ·x̂ (the prediction of the shaping filters). First-order axes only on request.
   for (int k = 0; k < 6; ++k) {
     double& d = k < 3 ? dg_(k) : da_(k - 3);
     if (expcos_[k]) {
       double& x0 = k < 3 ? xg0_(k) : xa0_(k - 3);
-      const identification::DiscreteShapingFilter ds = identification::discretise(sf_[k], T);
-      const Eigen::Vector2d x = ds.Phi * Eigen::Vector2d(x0, d);
+      const Eigen::Vector2d x = discrete(k, T).Phi * Eigen::Vector2d(x0, d);
       x0 = x(0);
       d = x(1);
     } else if (cfg_.propagate_drift) {

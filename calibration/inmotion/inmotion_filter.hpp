@@ -128,6 +128,8 @@ class InMotionFilterT {
   // states x[0] (the drift x[1] is dg_/da_).
   bool expcos_[6] = {false, false, false, false, false, false};
   identification::ShapingFilter sf_[6];
+  identification::DiscreteShapingFilter disc_[6];  // discretised for the step disc_[k].dt (cache)
+  const identification::DiscreteShapingFilter& discrete(int k, double T);
   Vec3 xg0_ = Vec3::Zero(), xa0_ = Vec3::Zero();
   Mat P_;
   FAccumulator acc_;
