@@ -64,9 +64,10 @@ const bool registered = add_command(60, [](CLI::App& app) {
   auto a = std::make_shared<DiagnoseArgs>();
   auto* d = app.add_subcommand("diagnose",
                                "Physics discovery: locate where recording and model disagree, name the missing effect, "
-                               "model it, show the fit improve (bench recordings)");
+                               "model it, show the fit improve (bench and drive recordings)");
   d->add_option("dir", a->dir, "recording folder (bench or drive)")->required()->check(CLI::ExistingDirectory);
-  d->add_option("--coeffs", a->coeffs, "coefficients to test (default: fit them first with the bench fit)")
+  d->add_option("--coeffs", a->coeffs, "coefficients to test (default: fit them first with the bench fit; on a drive: b and M fitted on "
+                "the drive; a drive also takes an in-motion RESULT.json, mounting included)")
       ->check(CLI::ExistingFile);
   d->add_flag("--json", a->json, "print findings as JSON on stdout");
   d->add_option("--report", a->report, "write an HTML report with before/after plots (gnuplot)");
