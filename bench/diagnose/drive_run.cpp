@@ -319,7 +319,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     for (std::size_t k = 0; k < R.correlations_after[a].size() && k < 5; ++k)
       ca.push_back({{"condition", R.correlations_after[a][k].condition}, {"r", R.correlations_after[a][k].r}});
     axes[kAxisName[a]] = {{"before", st(r.before[a])}, {"after", st(r.after[a])},
-                          {"white_sigma_per_sample", r.white_sigma[a]}, {"block_noise_sigma", R.block_noise_sigma[a]},
+                          {"white_sigma_per_sample", r.white_sigma[a]}, {"white_scale", R.white_scale[a]},
+                          {"block_noise_sigma", R.block_noise_sigma[a]},
                           {"correlations_before", cb}, {"correlations_after", ca}};
   }
   j["axes"] = axes;

@@ -51,6 +51,7 @@ struct Design {
   // banded covariance (variance, covariance with the next parent).
   double gamma[kAxes][kLags + 1] = {};
   double endpoint_var[kAxes] = {};
+  double white_scale[kAxes] = {1, 1, 1, 1, 1, 1};
   std::vector<double> prior_sigma;  // per term parameter
   std::vector<double> pvar[kAxes], pcov[kAxes];
 };
@@ -177,12 +178,50 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
     const double v_end = std::max(0.0, -sl * d.mean_sub_s * d.mean_sub_s);
     for (int l = 0; l <= kLags; ++l) D.gamma[a][l] = g[l];
     D.endpoint_var[a] = v_end;
+    // The IMU's sample-to-sample scatter overstates its block noise when it is vibration (a real
+    // car: high-frequency, averages out faster than white noise). Check against the blocks: the
+    // variance V of a block's residual after an unweighted base fit, from first differences
+    // (a = E δ², b = E δ_k δ_k+1, V = a + b; slow signals and drift cancel). Only a clear
+    // overstatement (V below half the model) scales the white part down; never up, so an
+    // unexplained effect cannot hide itself in the noise model.
+    double white_scale = 1;
+    {
+      std::vector<int> base_cols = {a};
+      for (int c = 6; c < D.n_base; ++c)
+        if (D.Xp[a].col(c).squaredNorm() > 0) base_cols.push_back(c);
+      Eigen::MatrixXd Xb(NP, base_cols.size());
+      for (std::size_t c = 0; c < base_cols.size(); ++c) Xb.col(c) = D.Xp[a].col(base_cols[c]);
+      const Eigen::VectorXd r = D.zp[a] - Xb * Xb.colPivHouseholderQr().solve(D.zp[a]);
+      double sa = 0, sb = 0, white = 0, endp = 0;
+      int na = 0, nb = 0;
+      for (int k = 0; k + 1 < NP; ++k) {
+        if (!D.contig[d.parents[k + 1].first]) continue;
+        const double dk = r(k + 1) - r(k);
+        sa += dk * dk;
+        ++na;
+        if (k + 2 < NP && D.contig[d.parents[k + 2].first]) {
+          sb += dk * (r(k + 2) - r(k + 1));
+          ++nb;
+        }
+      }
+      for (int k = 0; k < NP; ++k) {
+        white += d.sample_white_var[a] / std::max(d.parents[k].n, 1);
+        endp += 2 * v_end / (d.parents[k].duration * d.parents[k].duration);
+      }
+      white /= NP;
+      endp /= NP;
+      if (na > 20 && nb > 20 && white > 0) {
+        const double V = sa / na + sb / nb;
+        if (V < 0.5 * (white + endp)) white_scale = std::clamp((V - endp) / white, 0.05, 1.0);
+      }
+    }
+    D.white_scale[a] = white_scale;
     // Parent-level banded covariance.
     D.pvar[a].assign(NP, 0);
     D.pcov[a].assign(NP, 0);
     for (int k = 0; k < NP; ++k) {
       const ParentBlock& pk = d.parents[k];
-      D.pvar[a][k] = d.sample_white_var[a] / std::max(pk.n, 1) + 2 * v_end / (pk.duration * pk.duration);
+      D.pvar[a][k] = white_scale * d.sample_white_var[a] / std::max(pk.n, 1) + 2 * v_end / (pk.duration * pk.duration);
       if (k + 1 < NP) {
         const ParentBlock& pl = d.parents[k + 1];
         const bool adjacent = D.contig[pl.first] != 0;
@@ -494,6 +533,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
   for (int a = 0; a < kAxes; ++a) {
     res.white_sigma[a] = std::sqrt(data.sample_white_var[a]);
     for (int l = 0; l <= kLags; ++l) out.gamma[a][l] = D.gamma[a][l];
+    out.white_scale[a] = D.white_scale[a];
     double v = 0;
     for (int k = 0; k < NP; ++k) v += D.pvar[a][k];
     out.block_noise_sigma[a] = std::sqrt(v / NP);

@@ -52,6 +52,7 @@ struct DriveDiagnoseResult {
   Vec3 mounting_delta = Vec3::Zero(), mounting_sigma = Vec3::Zero();  // MEMS axes, rad (fixed_scale)
   double block_noise_sigma[6] = {0, 0, 0, 0, 0, 0};  // short-range noise of a ~1 s block (SI)
   double gamma[6][4] = {};                           // its sub-level autocovariance, lags 0..3
+  double white_scale[6] = {1, 1, 1, 1, 1, 1};        // IMU white part scaled down (vibration), see .cpp
   std::vector<double> parent_t;                      // block times (for plots)
   // Per finding: noise level of its systematic RMS figure (binned by the term's contribution);
   // rms_after below it cannot be told from zero.
