@@ -42,7 +42,6 @@ struct Design {
   std::vector<int> term_off;  // global index of each term's first parameter
   int P = 0;
   std::vector<Eigen::VectorXd> z;  // per axis, per sub
-  std::vector<Eigen::MatrixXd> X;  // per axis: Nsub × P
   std::vector<Eigen::VectorXd> zp;  // per axis, per parent
   std::vector<Eigen::MatrixXd> Xp;  // per axis: Nparent × P
   std::vector<std::vector<int>> touched;  // per term: axes with a non-zero column
@@ -80,8 +79,12 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
     for (int p = 0; p < t.nparams(); ++p) D.prior_sigma.push_back(ps);
   }
   const int N = static_cast<int>(d.subs.size());
+  const int NP = static_cast<int>(d.parents.size());
   D.z.assign(kAxes, Eigen::VectorXd::Zero(N));
-  D.X.assign(kAxes, Eigen::MatrixXd::Zero(N, D.P));
+  // Regressors are accumulated straight into the ~1 s parent means (duration-weighted): an
+  // interval-level matrix would take N·P·6 doubles (0.5 GB for a 35-minute drive at 100 Hz).
+  D.Xp.assign(kAxes, Eigen::MatrixXd::Zero(NP, D.P));
+  Eigen::MatrixXd X(kAxes, D.P);
   D.contig.assign(N, 0);
   D.touched.assign(D.terms.size(), {});
   std::vector<std::vector<char>> touch(D.terms.size(), std::vector<char>(kAxes, 0));
@@ -95,17 +98,18 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
     Vec3 cg = Vec3::Zero(), ca = Vec3::Zero();
     if (carry) predict_extra(carried, s, cg, ca);
     const Vec3 pg = cur.gyro.measure(s.w), pa = cur.accel.measure(s.f);
+    X.setZero();
     for (int a = 0; a < kAxes; ++a) {
       const int i = a % 3;
       D.z[a](j) = a < 3 ? s.gyro(i) - pg(i) - cg(i) : s.accel(i) - pa(i) - ca(i);
-      D.X[a](j, a) = 1.0;
+      X(a, a) = 1.0;
       const Vec3& x = a < 3 ? s.w : s.f;
       if (!fixed) {
-        for (int c = 0; c < 3; ++c) D.X[a](j, 6 + 3 * a + c) = x(c);
+        for (int c = 0; c < 3; ++c) X(a, 6 + 3 * a + c) = x(c);
       } else {
         // measured ideal output with the MEMS turned by δ: Exp(−δ)·x = x + x×δ = skew(x)·δ + x.
         const Mat3 S = ins::skew(x);
-        for (int c = 0; c < 3; ++c) D.X[a](j, 6 + c) = S(i, c);
+        for (int c = 0; c < 3; ++c) X(a, 6 + c) = S(i, c);
       }
     }
     for (std::size_t t = 0; t < D.terms.size(); ++t) {
@@ -119,28 +123,27 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
         for (int a = 0; a < kAxes; ++a) {
           const double v = a < 3 ? dg(a) : da(a - 3);
           if (v != 0) {
-            D.X[a](j, D.term_off[t] + p) = v;
+            X(a, D.term_off[t] + p) = v;
             touch[t][a] = 1;
           }
         }
       }
     }
+    if (s.parent >= 0) {
+      const double w = s.duration / d.parents[s.parent].duration;
+      for (int a = 0; a < kAxes; ++a) D.Xp[a].row(s.parent) += w * X.row(a);
+    }
   }
   for (std::size_t t = 0; t < D.terms.size(); ++t)
     for (int a = 0; a < kAxes; ++a)
       if (touch[t][a]) D.touched[t].push_back(a);
-  // Parent means (duration-weighted).
-  const int NP = static_cast<int>(d.parents.size());
+  // Parent means of z (duration-weighted).
   D.zp.assign(kAxes, Eigen::VectorXd::Zero(NP));
-  D.Xp.assign(kAxes, Eigen::MatrixXd::Zero(NP, D.P));
   for (int k = 0; k < NP; ++k) {
     const ParentBlock& pb = d.parents[k];
     for (int j = pb.first; j < pb.first + pb.count; ++j) {
       const double w = d.subs[j].duration / pb.duration;
-      for (int a = 0; a < kAxes; ++a) {
-        D.zp[a](k) += w * D.z[a](j);
-        D.Xp[a].row(k) += w * D.X[a].row(j);
-      }
+      for (int a = 0; a < kAxes; ++a) D.zp[a](k) += w * D.z[a](j);
     }
   }
   // Short-range noise: autocovariance of high-pass residuals (z minus a centred moving average of
