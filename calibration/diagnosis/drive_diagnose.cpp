@@ -606,14 +606,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       best_pen = penalty;
       best_fit = std::move(f);
     }
-    if (best >= 0) {
-      model.push_back(best);
-      cur = std::move(best_fit);
-      cur_held -= best_held;
-      accepted.push_back({best, best_d, best_d - best_pen, best_held});
-      continue;
-    }
-    // No linear term: a drift larger than the data sheet says?
+    // A drift larger than the data sheet says (correlated_drift) competes with the linear terms in
+    // every round: a wandering bias would otherwise be half-explained by spurious linear terms.
     int best_triad = -1;
     double best_gain = 0, best_s = 0, best_t = 0;
     for (int triad = 0; triad < 2; ++triad) {
@@ -642,6 +636,13 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
             best_t = t;
           }
         }
+    }
+    if (best >= 0 && (best_triad < 0 || best_score >= best_gain)) {
+      model.push_back(best);
+      cur = std::move(best_fit);
+      cur_held -= best_held;
+      accepted.push_back({best, best_d, best_d - best_pen, best_held});
+      continue;
     }
     if (best_triad < 0) break;
     drift_done[best_triad] = true;

@@ -86,6 +86,18 @@ TEST(DiagnoseDriveEffects, ScaleAsymmetryAndNonlinearity) {
   check_one(22, "scale_nonlinearity:sensor=gyro,axis=z,value=4e-3", {EffectId::scale_nonlinearity, 0, 2, 0, 4e-3});
 }
 
+// A bias that wanders more than the data sheet says is named correlated_drift (noise side, σ on a
+// ×2 grid, so the value is checked to a factor of 2), not explained by spurious linear terms.
+TEST(DiagnoseDriveEffects, CorrelatedDrift) {
+  const DriveDiagRun run = diagnose(51, {"correlated_drift:sensor=gyro,sigma=5e-4,tau=60"});
+  const auto& fs = run.result.core.findings;
+  ASSERT_EQ(fs.size(), 1u) << describe(run);
+  EXPECT_EQ(fs[0].term.effect, EffectId::correlated_drift);
+  EXPECT_EQ(fs[0].term.sensor, 0);
+  EXPECT_GT(fs[0].value[0], 2.5e-4);
+  EXPECT_LT(fs[0].value[0], 1e-3);
+}
+
 TEST(DiagnoseDriveEffects, CleanDrivesHaveNoFinding) {
   for (std::uint64_t seed : {31, 32, 33, 34, 35, 36}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
