@@ -1,5 +1,5 @@
 // Drive diagnosis on concealed effects (issue 7, docs/diagnosis.md "Drives"): drives simulated in
-// memory on tests/data/drive_diag_route.toml (4.5 minutes, 200 Hz IMU, 50 Hz reference, random
+// memory on tests/data/drive_diag_route.toml (3.6 minutes, 200 Hz IMU, 50 Hz reference, random
 // unit and mounting per seed), with one catalogue effect injected into the MEMS output while the
 // diagnosis's model lacks it. No truth reaches the diagnosis: it fits b and M itself
 // (no --coeffs) and predicts with the route's nominal mounting.
@@ -66,7 +66,7 @@ void check_one(std::uint64_t seed, const std::string& inject, const Expect& x) {
 }
 
 TEST(DiagnoseDriveEffects, GSensitivity) {
-  // 6e-5 rad/s per m/s² = 0.034 °/s/g (the data sheet's 0.009 °/s/g is below what 4.5 minutes show).
+  // 6e-5 rad/s per m/s² = 0.034 °/s/g (the data sheet's 0.009 °/s/g is below what 3.6 minutes show).
   check_one(21, "g_sensitivity:axis=x,f=y,value=6e-5", {EffectId::g_sensitivity, 0, 0, 1, 6e-5});
   check_one(22, "g_sensitivity:axis=z,f=x,value=-6e-5", {EffectId::g_sensitivity, 0, 2, 0, -6e-5});
 }
