@@ -55,6 +55,14 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
   d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
   d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
+  d->add_option("--prior-gyro-bias", a->prior_gyro_bias_dps,
+                 "prior 1-sigma of the gyro drift, deg/s (default 0.5 for raw data; with --coeffs the set's sigma "
+                 "combined with a 0.1 deg/s turn-on allowance)")
+      ->check(CLI::PositiveNumber);
+  d->add_option("--prior-accel-bias", a->prior_accel_bias_mg,
+                 "prior 1-sigma of the accelerometer bias, mg (default 30 for raw data; with --coeffs the set's sigma "
+                 "combined with a 5 mg turn-on allowance)")
+      ->check(CLI::PositiveNumber);
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(CLI::PositiveNumber);
   d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(CLI::PositiveNumber);
   d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)");

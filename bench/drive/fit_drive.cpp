@@ -106,6 +106,11 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     }
     if (!cfg.obs_pos && !cfg.obs_vel && !cfg.obs_att) throw InputError("--obs", 0, "", "no observation selected");
   }
+  // Bias priors: data corrected by a bench set deviate from it only by the set's σ and the
+  // turn-on shift since; raw data by the data-sheet initial bias. --prior-* override both.
+  if (bench) inmotion::bench_corrected_bias_priors(cfg, bench->errors.gyro.sigma_bias, bench->errors.accel.sigma_bias);
+  if (a.prior_gyro_bias_dps > 0) cfg.sigma_gyro_bias = a.prior_gyro_bias_dps * kDeg;
+  if (a.prior_accel_bias_mg > 0) cfg.sigma_accel_bias = a.prior_accel_bias_mg * kMilliG;
   cfg.obs_rate_hz = a.obs_rate_hz;
   cfg.cov_dt = a.cov_dt;
   cfg.store_for_smoother = a.smooth;
@@ -253,7 +258,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   for (int i = 0; i < 3; ++i) {
     if (!used[i]) continue;
     const auto& c = f->consistency(i);
-    cons[names[i]] = {{"equation", eqs[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"mean_nis", c.mean_nis()},
+    cons[names[i]] = {{"equation", eqs[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
                       {"expected_nis", 3.0},
                       {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
   }

@@ -22,6 +22,13 @@ DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, co
 }
 }  // namespace
 
+void bench_corrected_bias_priors(InMotionConfig& cfg, const Vec3& set_sigma_gyro_bias, const Vec3& set_sigma_accel_bias) {
+  const double g = set_sigma_gyro_bias.allFinite() ? set_sigma_gyro_bias.maxCoeff() : 0.0;
+  const double a = set_sigma_accel_bias.allFinite() ? set_sigma_accel_bias.maxCoeff() : 0.0;
+  cfg.sigma_gyro_bias = std::hypot(g, kTurnOnGyroBiasAllowance);
+  cfg.sigma_accel_bias = std::hypot(a, kTurnOnAccelBiasAllowance);
+}
+
 bool needs_augmented_layout(const InMotionConfig& cfg) {
   for (int i = 0; i < 3; ++i)
     if ((cfg.gyro_drift && (*cfg.gyro_drift)[i].exp_cosine) || (cfg.accel_drift && (*cfg.accel_drift)[i].exp_cosine))
@@ -211,18 +218,41 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       H.template leftCols<kStates>() = o.H;  // the augmented states are not observed directly
     }
     const Vec3 nu = o.z - H * dx;
-    const Eigen::Matrix<double, N, 3> PHt = P_ * H.transpose();
-    const Mat3 S = H * PHt + o.R;
-    const Eigen::LDLT<Mat3> Sl(S);
+    Eigen::Matrix<double, N, 3> PHt = P_ * H.transpose();
+    Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
     const double nis = nu.dot(Sl.solve(nu));
     ConsistencyStats& st = stats_[type];
     if (!(nis <= cfg_.gate_nis)) {
-      ++st.rejected;
-      continue;
+      if (st.rejected_since < 0) st.rejected_since = r.t;
+      if (!std::isfinite(nis) || r.t - st.rejected_since < cfg_.gate_recover_s) {
+        ++st.rejected;
+        continue;
+      }
+      // Lost track: widen the navigation block (D·P·D, D = √λ on position, velocity, attitude)
+      // until this innovation is at the gate, then use it.
+      ++st.forced;
+      st.rejected_since = -1;
+      double lo = 1, hi = nis / cfg_.gate_nis * 1e4;
+      for (int it = 0; it < 40; ++it) {  // bisection on λ (NIS falls monotonically with it)
+        const double lam = std::sqrt(lo * hi);
+        Mat Pl = P_;
+        const double d = std::sqrt(lam);
+        Pl.template middleRows<9>(kPos) *= d;
+        Pl.template middleCols<9>(kPos) *= d;
+        const Eigen::LDLT<Mat3> Sx(H * Pl * H.transpose() + o.R);
+        (nu.dot(Sx.solve(nu)) > cfg_.gate_nis ? lo : hi) = lam;
+      }
+      const double d = std::sqrt(hi);
+      P_.template middleRows<9>(kPos) *= d;
+      P_.template middleCols<9>(kPos) *= d;
+      PHt = P_ * H.transpose();
+      Sl.compute(H * PHt + o.R);
+    } else {
+      st.rejected_since = -1;
+      ++st.used;
+      st.nis_sum += nis;
+      if (nis <= kChi2_3_95) ++st.within95;
     }
-    ++st.used;
-    st.nis_sum += nis;
-    if (nis <= kChi2_3_95) ++st.within95;
     const Eigen::Matrix<double, N, 3> K = Sl.solve(PHt.transpose()).transpose();
     dx += K * nu;
     P_ -= K * PHt.transpose();

@@ -35,7 +35,9 @@ struct InMotionConfig {
   // prediction). Always done for exponential-cosine axes (whose first state only acts through
   // the dynamics); for first-order axes only when set, so that the default filter is unchanged.
   bool propagate_drift = false;
-  // Prior 1σ of the constant parameters (relative to the data the filter sees).
+  // Prior 1σ of the constant parameters (relative to the data the filter sees). The bias
+  // defaults are the data-sheet class of a raw ADIS16488A (initial bias error); for data already
+  // corrected by a bench set use bench_corrected_bias_priors().
   double sigma_gyro_bias = 0.5 * units::kDeg;     // rad/s
   double sigma_accel_bias = 30 * units::kMilliG;  // m/s²
   double sigma_scale = 1e-2;
@@ -49,11 +51,25 @@ struct InMotionConfig {
   // Reference accuracy when reference.csv has no sigma columns.
   double ref_sigma_pos = 0.1, ref_sigma_vel = 0.02, ref_sigma_att = 0.01 * units::kDeg;
   double gate_nis = 50;        // innovation gate (3 dof); larger NIS is rejected and counted
+  // When one observation type has been rejected for this long without a break, the filter has
+  // lost track (its navigation covariance is too optimistic, e.g. a heading error grown beyond
+  // the linear range before the first manoeuvre): the next epoch is used anyway after the
+  // position, velocity and attitude rows and columns of P are scaled so that its NIS equals the
+  // gate (the parameters keep what they learnt), and counted as `forced`.
+  double gate_recover_s = 10;
   bool store_for_smoother = false;
 };
 
+// Bias priors for data corrected by a bench set whose bias σ are given (rad/s, m/s²): the set's
+// σ combined with a turn-on repeatability allowance (the bias moves between power-ups and since
+// the factory: 0.1 °/s and 5 mg, five times the shifts seen in practice for this class).
+inline constexpr double kTurnOnGyroBiasAllowance = 0.1 * units::kDeg;
+inline constexpr double kTurnOnAccelBiasAllowance = 5 * units::kMilliG;
+void bench_corrected_bias_priors(InMotionConfig& cfg, const Vec3& set_sigma_gyro_bias, const Vec3& set_sigma_accel_bias);
+
 struct ConsistencyStats {
-  long used = 0, rejected = 0, within95 = 0;
+  long used = 0, rejected = 0, within95 = 0, forced = 0;
+  double rejected_since = -1;  // time of the first rejection of the current streak, s (−1: none)
   double nis_sum = 0;
   double mean_nis() const { return used ? nis_sum / static_cast<double>(used) : 0.0; }
 };
