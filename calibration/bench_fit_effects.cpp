@@ -104,6 +104,7 @@ std::vector<std::string> effect_ids_present(const EffectTerms& e) {
   auto nz = [](const Vec3& v) { return !v.isZero(0); };
   if (nz(e.gyro.temp_bias) || nz(e.accel.temp_bias)) out.push_back(effect_name(EffectId::temperature_bias));
   if (nz(e.gyro.temp_scale) || nz(e.accel.temp_scale)) out.push_back(effect_name(EffectId::temperature_scale));
+  if (nz(e.gyro.temp_rate) || nz(e.accel.temp_rate)) out.push_back(effect_name(EffectId::temperature_rate));
   if (!e.g_sensitivity.isZero(0)) out.push_back(effect_name(EffectId::g_sensitivity));
   if (nz(e.gyro.nonlinearity) || nz(e.accel.nonlinearity)) out.push_back(effect_name(EffectId::scale_nonlinearity));
   if (nz(e.gyro.asymmetry) || nz(e.accel.asymmetry)) out.push_back(effect_name(EffectId::scale_asymmetry));

@@ -65,6 +65,8 @@ double TemperatureProfile::chamber_at(double t) const {
   return chamber.back().second;
 }
 
+double simulated_temperature_rate(double t) { return 6.0 / 900.0 * std::exp(-t / 900.0); }
+
 ProfileTemperature::ProfileTemperature(const TemperatureProfile& p) : p_(p), dev_(p.chamber_at(0.0)) {}
 
 double ProfileTemperature::at(double t) {
@@ -78,6 +80,14 @@ double ProfileTemperature::at(double t) {
   }
   const double v = dev_ + p_.self_heating_k * (1.0 - std::exp(-t / std::max(p_.self_heating_tau_s, 1e-9)));
   return std::round(v / 0.00565) * 0.00565;
+}
+
+double ProfileTemperature::rate() const {
+  const double tau = std::max(p_.self_heating_tau_s, 1e-9);
+  const double self = p_.self_heating_k / tau * std::exp(-t_ / tau);
+  if (p_.lag_s > 0) return (p_.chamber_at(t_) - dev_) / p_.lag_s + self;
+  constexpr double h = 0.25;
+  return (p_.chamber_at(t_ + h) - p_.chamber_at(std::max(0.0, t_ - h))) / (t_ + h - std::max(0.0, t_ - h)) + self;
 }
 
 void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors& truth, const BenchSimOptions& opt,
@@ -142,6 +152,7 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
       c.w = w_in;
       c.f = f_in;
       c.temp_c = temp;
+      c.dtemp_k_s = plan.temperature.set ? profile.rate() : simulated_temperature_rate(t);
       if (!fx.lever_arm_m.isZero(0)) {
         constexpr double h = 2e-4;
         Vec3 wa, wb, fa, fb;

@@ -59,6 +59,8 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
 // The simulated device temperature: warm-up from 25 °C towards 31 °C (τ = 15 min), quantised
 // to the TEMP_OUT step of 0.00565 °C.
 double simulated_temperature(double t);
+// Its time derivative dT/dt (K/s, not quantised): what drives the temperature_rate (thermal lag) term.
+double simulated_temperature_rate(double t);
 
 // The device temperature of a plan's [temperature] profile (TemperatureProfile), quantised like
 // TEMP_OUT. Stateful (the lag is integrated forward): call with non-decreasing t.
@@ -66,6 +68,9 @@ class ProfileTemperature {
  public:
   explicit ProfileTemperature(const TemperatureProfile& p);
   double at(double t);
+  // dT/dt (K/s, not quantised) at the time of the last at(t): the lag's (chamber − device)/lag_s
+  // (or the chamber slope without a lag) plus the self-heating rate.
+  double rate() const;
 
  private:
   TemperatureProfile p_;

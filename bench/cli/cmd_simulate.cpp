@@ -46,7 +46,7 @@ void run_simulate_bench(const SimBenchArgs& a) {
   if (effects.any()) {
     for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
                           "scale_asymmetry", "time_offset", "lever_arm", "misalignment", "table_wobble",
-                          "correlated_drift"})
+                          "correlated_drift", "temperature_rate"})
       truth.extra.erase(k);
     effects_to_json(effects, EffectTerms{}, truth.extra);
   }

@@ -23,7 +23,7 @@ const char* kSensor[] = {"gyro", "accel", "reference"};
 const char* kAxis[] = {"x", "y", "z"};
 const char* kCatalogueKeys[] = {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
                                 "scale_asymmetry",  "time_offset",       "lever_arm",     "misalignment",
-                                "table_wobble",     "correlated_drift"};
+                                "table_wobble",     "correlated_drift",  "temperature_rate"};
 
 // Parent blocks kept by the diagnosis (dense covariance per axis): longer parents beyond this.
 constexpr int kMaxParents = 1000;
@@ -185,6 +185,8 @@ std::string human_value(const DiagFinding& f, double v) {
   switch (f.term.effect) {
     case EffectId::temperature_bias: return g ? fmt(v / kDegPerHour) + " °/h/K" : fmt(v / kMilliG) + " mg/K";
     case EffectId::temperature_scale: return fmt(v / kPpm) + " ppm/K";
+    case EffectId::temperature_rate:
+      return g ? fmt(v / kDegPerHour / 60.0) + " °/h per K/min" : fmt(v / kMilliG / 60.0) + " mg per K/min";
     case EffectId::g_sensitivity: return fmt(v * kG0 / kDeg) + " °/s/g";
     case EffectId::scale_nonlinearity: return g ? fmt(v * kDeg / kPpm) + " ppm/(°/s)" : fmt(v * kG0 / kPpm) + " ppm/g";
     case EffectId::scale_asymmetry: return fmt(v / kPpm) + " ppm";
@@ -239,6 +241,7 @@ std::string finding_sentence(const DiagFinding& f) {
   switch (f.term.effect) {
     case EffectId::temperature_bias: o << who << " error grows with temperature: temperature-dependent bias, "; break;
     case EffectId::temperature_scale: o << who << " scale factor changes with temperature: temperature-dependent scale factor, "; break;
+    case EffectId::temperature_rate: o << who << " error follows the rate of temperature change (opposite on heating and cooling): thermal lag (dT/dt), "; break;
     case EffectId::g_sensitivity: o << who << " error grows with " << condition_phrase(f.condition) << ": g-sensitivity, "; break;
     case EffectId::scale_nonlinearity: o << who << " scale error grows with |input|: quadratic scale-factor nonlinearity, "; break;
     case EffectId::scale_asymmetry: o << who << " scale differs between positive and negative inputs: scale asymmetry, "; break;

@@ -212,7 +212,7 @@ DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* co
   run.improved.device = run.current.device.serial.empty() ? in.meta.device : run.current.device;
   run.improved.errors = r.improved;
   for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity", "scale_asymmetry",
-                        "time_offset", "lever_arm", "misalignment", "table_wobble", "correlated_drift", "diagnosis"})
+                        "time_offset", "lever_arm", "misalignment", "table_wobble", "correlated_drift", "temperature_rate", "diagnosis"})
     run.improved.extra.erase(k);
   effects_to_json(r.improved_terms, r.terms_sigma, run.improved.extra);
   nlohmann::json added = nlohmann::json::array();

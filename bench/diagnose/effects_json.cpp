@@ -43,6 +43,13 @@ EffectTerms effects_from_json(const nlohmann::json& j, const std::string& f, Eff
     s.gyro.temp_scale = optsig3(o, "gyro_sigma", f, "temperature_scale");
     s.accel.temp_scale = optsig3(o, "accel_sigma", f, "temperature_scale");
   }
+  if (j.contains("temperature_rate")) {
+    const auto& o = j["temperature_rate"];
+    e.gyro.temp_rate = opt3(o, "gyro_rad_s_per_K_per_s", f, "temperature_rate");
+    e.accel.temp_rate = opt3(o, "accel_m_s2_per_K_per_s", f, "temperature_rate");
+    s.gyro.temp_rate = optsig3(o, "gyro_sigma", f, "temperature_rate");
+    s.accel.temp_rate = optsig3(o, "accel_sigma", f, "temperature_rate");
+  }
   if (j.contains("g_sensitivity")) {
     const auto& o = j["g_sensitivity"];
     e.g_sensitivity = jmat3(jreq(o, "gyro_rad_s_per_m_s2", f, "g_sensitivity"), f, "g_sensitivity.gyro_rad_s_per_m_s2");
@@ -108,6 +115,11 @@ void effects_to_json(const EffectTerms& e, const EffectTerms& s, nlohmann::json&
                               {"gyro_sigma", sigma_json(s.gyro.temp_scale)},
                               {"accel_per_K", to_json(e.accel.temp_scale)},
                               {"accel_sigma", sigma_json(s.accel.temp_scale)}};
+  if (nz(e.gyro.temp_rate) || nz(e.accel.temp_rate))
+    j["temperature_rate"] = {{"gyro_rad_s_per_K_per_s", to_json(e.gyro.temp_rate)},
+                             {"gyro_sigma", sigma_json(s.gyro.temp_rate)},
+                             {"accel_m_s2_per_K_per_s", to_json(e.accel.temp_rate)},
+                             {"accel_sigma", sigma_json(s.accel.temp_rate)}};
   if (!e.g_sensitivity.isZero(0))
     j["g_sensitivity"] = {{"gyro_rad_s_per_m_s2", to_json(e.g_sensitivity)}, {"sigma", sigma_json(s.g_sensitivity)}};
   if (nz(e.gyro.nonlinearity) || nz(e.accel.nonlinearity))
@@ -191,6 +203,9 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
   } else if (name == "temperature_scale") {
     auto& t = triad();
     t.temp_scale(axis("axis")) += num("value");
+  } else if (name == "temperature_rate") {
+    auto& t = triad();
+    t.temp_rate(axis("axis")) += num("value");
   } else if (name == "scale_nonlinearity") {
     auto& t = triad();
     t.nonlinearity(axis("axis")) += num("value");
@@ -216,7 +231,7 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
   } else {
     throw InputError(where, 0, "effect",
                      "unknown effect '" + name +
-                         "' (temperature_bias, temperature_scale, g_sensitivity, scale_nonlinearity, scale_asymmetry, "
+                         "' (temperature_bias, temperature_scale, temperature_rate, g_sensitivity, scale_nonlinearity, scale_asymmetry, "
                          "time_offset, lever_arm, misalignment, table_wobble, correlated_drift)");
   }
   for (const auto& [k, v] : kv)

@@ -77,8 +77,8 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   {
     const std::string src = a.inject.empty() ? (a.effects.empty() ? a.truth : a.effects) : "--inject";
     if (!effects.gyro.temp_bias.isZero(0) || !effects.accel.temp_bias.isZero(0) || !effects.gyro.temp_scale.isZero(0) ||
-        !effects.accel.temp_scale.isZero(0))
-      throw InputError(src, 0, "temperature_bias/temperature_scale",
+        !effects.accel.temp_scale.isZero(0) || !effects.gyro.temp_rate.isZero(0) || !effects.accel.temp_rate.isZero(0))
+      throw InputError(src, 0, "temperature_bias/temperature_scale/temperature_rate",
                        "a simulated drive has no temperature: temperature terms cannot be injected");
     if (!effects.table_tilt_rad.isZero(0) || !effects.wobble_rad.isZero(0))
       throw InputError(src, 0, "misalignment/table_wobble",
@@ -88,7 +88,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   if (effects.any()) {
     for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
                           "scale_asymmetry", "time_offset", "lever_arm", "misalignment", "table_wobble",
-                          "correlated_drift"})
+                          "correlated_drift", "temperature_rate"})
       truth.extra.erase(k);
     effects_to_json(effects, EffectTerms{}, truth.extra);
   }

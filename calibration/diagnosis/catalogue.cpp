@@ -1,13 +1,14 @@
 #include "calibration/diagnosis/catalogue.hpp"
 
 #include <cmath>
+#include <iterator>
 
 namespace calbench {
 
 namespace {
 constexpr const char* kNames[] = {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
                                   "scale_asymmetry",  "time_offset",       "lever_arm",     "misalignment",
-                                  "table_wobble",     "correlated_drift"};
+                                  "table_wobble",     "correlated_drift",  "temperature_rate"};
 TriadEffectTerms& triad(EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
 const TriadEffectTerms& triad(const EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
 }  // namespace
@@ -15,7 +16,7 @@ const TriadEffectTerms& triad(const EffectTerms& e, int sensor) { return sensor 
 const char* effect_name(EffectId e) { return kNames[static_cast<int>(e)]; }
 
 bool effect_from_name(const std::string& s, EffectId& e) {
-  for (int k = 0; k < 10; ++k)
+  for (int k = 0; k < static_cast<int>(std::size(kNames)); ++k)
     if (s == kNames[k]) {
       e = static_cast<EffectId>(k);
       return true;
@@ -56,6 +57,7 @@ void Term::add_param(EffectTerms& e, int p, double v) const {
   switch (effect) {
     case EffectId::temperature_bias: triad(e, sensor).temp_bias(axis) += v; break;
     case EffectId::temperature_scale: triad(e, sensor).temp_scale(axis) += v; break;
+    case EffectId::temperature_rate: triad(e, sensor).temp_rate(axis) += v; break;
     case EffectId::scale_nonlinearity: triad(e, sensor).nonlinearity(axis) += v; break;
     case EffectId::scale_asymmetry: triad(e, sensor).asymmetry(axis) += v; break;
     case EffectId::g_sensitivity: e.g_sensitivity(axis, p) += v; break;
@@ -71,6 +73,7 @@ double Term::get_param(const EffectTerms& e, int p) const {
   switch (effect) {
     case EffectId::temperature_bias: return triad(e, sensor).temp_bias(axis);
     case EffectId::temperature_scale: return triad(e, sensor).temp_scale(axis);
+    case EffectId::temperature_rate: return triad(e, sensor).temp_rate(axis);
     case EffectId::scale_nonlinearity: return triad(e, sensor).nonlinearity(axis);
     case EffectId::scale_asymmetry: return triad(e, sensor).asymmetry(axis);
     case EffectId::g_sensitivity: return e.g_sensitivity(axis, p);
@@ -87,7 +90,7 @@ std::vector<Term> candidate_terms() {
   std::vector<Term> out;
   for (int s = 0; s < 2; ++s)
     for (int a = 0; a < 3; ++a)
-      for (EffectId e : {EffectId::temperature_bias, EffectId::temperature_scale, EffectId::scale_nonlinearity,
+      for (EffectId e : {EffectId::temperature_bias, EffectId::temperature_scale, EffectId::temperature_rate, EffectId::scale_nonlinearity,
                          EffectId::scale_asymmetry})
         out.push_back({e, s, a});
   for (int a = 0; a < 3; ++a) out.push_back({EffectId::g_sensitivity, 0, a});
@@ -145,6 +148,7 @@ void predict_extra(const EffectTerms& e, const SubBlock& s, Vec3& dg, Vec3& da) 
   c.dw = s.dw;
   c.df = s.df;
   c.temp_c = std::isfinite(s.temp_c) ? s.temp_c : e.t0_c;
+  c.dtemp_k_s = std::isfinite(s.temp_c) ? s.dtemp : 0.0;
   sensor_side_terms(sensor_only, c, dg, da);
   // Reference-side terms: the true input differs from the reference by Δ; the output by ≈ Δ.
   if (e.time_offset_s != 0) {

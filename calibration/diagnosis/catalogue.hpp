@@ -22,6 +22,7 @@ enum class EffectId {
   misalignment,
   table_wobble,
   correlated_drift,
+  temperature_rate,  // thermal lag: bias ∝ dT/dt (appended: the IDs above keep their indices)
 };
 
 const char* effect_name(EffectId e);

@@ -131,12 +131,14 @@ DiagData DiagDataBuilder::finish() {
     d_.has_temperature = d_.has_temperature || tn > 0;
   }
   for (const auto& s : subs) d_.has_angle = d_.has_angle || std::isfinite(s.angle);
-  // dT/dt: least-squares slope over blocks within ±30 s.
+  // dT/dt: least-squares slope over blocks within ±kHalf s (the temperature readout is quantised:
+  // a slope over tens of seconds; short enough to follow the corners of a chamber ramp).
+  constexpr double kHalf = 15.0;
   const auto& ps = d_.parents;
   for (std::size_t k = 0; k < ps.size(); ++k) {
     double st = 0, sT = 0, stt = 0, stT = 0, n = 0;
     for (std::size_t l = 0; l < ps.size(); ++l) {
-      if (std::abs(ps[l].t_mid - ps[k].t_mid) > 30.0 || !std::isfinite(ps[l].temp_c)) continue;
+      if (std::abs(ps[l].t_mid - ps[k].t_mid) > kHalf || !std::isfinite(ps[l].temp_c)) continue;
       const double t = ps[l].t_mid - ps[k].t_mid;
       st += t;
       sT += ps[l].temp_c;
@@ -147,6 +149,7 @@ DiagData DiagDataBuilder::finish() {
     const double den = n * stt - st * st;
     d_.parents[k].dtemp = (n > 2 && den > 0) ? (n * stT - st * sT) / den : 0.0;
   }
+  for (auto& s : subs) s.dtemp = s.parent >= 0 ? d_.parents[s.parent].dtemp : 0.0;
   return std::move(d_);
 }
 

@@ -26,6 +26,7 @@ struct SubBlock {
   Vec3 gyro = Vec3::Zero(), accel = Vec3::Zero(), w = Vec3::Zero(), f = Vec3::Zero();  // means
   Vec3 dw = Vec3::Zero(), df = Vec3::Zero();  // reference derivatives over the sub-block (1/s)
   double temp_c = std::numeric_limits<double>::quiet_NaN();
+  double dtemp = 0;  // dT/dt (K/s): that of the parent block (smoothed, see ParentBlock)
   double angle = std::numeric_limits<double>::quiet_NaN();  // rad, middle of the sub-block
   double angle_rate = 0;                                      // rad/s from the angle column
   Vec3 gyro_ss = Vec3::Zero(), accel_ss = Vec3::Zero();       // Σ (resid − mean)² inside

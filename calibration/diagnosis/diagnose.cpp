@@ -492,6 +492,7 @@ const char* revealing_condition(EffectId e) {
   switch (e) {
     case EffectId::temperature_bias: return "temperature";
     case EffectId::temperature_scale: return "temperature";
+    case EffectId::temperature_rate: return "dT/dt";
     case EffectId::g_sensitivity: return "f";
     case EffectId::scale_nonlinearity: return "rate";
     case EffectId::scale_asymmetry: return "rate";
@@ -509,6 +510,7 @@ std::string unit_of(const Term& t) {
   switch (t.effect) {
     case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
     case EffectId::temperature_scale: return "1/K";
+    case EffectId::temperature_rate: return g ? "rad/s/(K/s)" : "m/s^2/(K/s)";
     case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
     case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
     case EffectId::scale_asymmetry: return "1";

@@ -26,6 +26,7 @@ bool drive_term(const Term& t, bool temperature) {
   switch (t.effect) {
     case EffectId::temperature_bias:
     case EffectId::temperature_scale: return temperature;
+    case EffectId::temperature_rate:  // not applicable on drives: no dT/dt is derived from a drive (simulated drives have no temperature)
     case EffectId::misalignment:
     case EffectId::table_wobble:
     case EffectId::correlated_drift: return false;
@@ -471,6 +472,7 @@ std::string unit_of(const Term& t) {
   switch (t.effect) {
     case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
     case EffectId::temperature_scale: return "1/K";
+    case EffectId::temperature_rate: return g ? "rad/s/(K/s)" : "m/s^2/(K/s)";
     case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
     case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
     case EffectId::scale_asymmetry: return "1";

@@ -6,7 +6,7 @@ namespace calbench {
 
 namespace {
 bool nz(const TriadEffectTerms& t) {
-  return !t.temp_bias.isZero(0) || !t.temp_scale.isZero(0) || !t.nonlinearity.isZero(0) || !t.asymmetry.isZero(0);
+  return !t.temp_bias.isZero(0) || !t.temp_scale.isZero(0) || !t.temp_rate.isZero(0) || !t.nonlinearity.isZero(0) || !t.asymmetry.isZero(0);
 }
 }  // namespace
 
@@ -24,7 +24,7 @@ void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro
   auto triad = [&](const TriadEffectTerms& t, const Vec3& x) {
     Vec3 d;
     for (int i = 0; i < 3; ++i)
-      d(i) = t.temp_bias(i) * dT + t.temp_scale(i) * dT * x(i) + t.nonlinearity(i) * x(i) * std::abs(x(i)) +
+      d(i) = t.temp_bias(i) * dT + t.temp_scale(i) * dT * x(i) + t.temp_rate(i) * c.dtemp_k_s + t.nonlinearity(i) * x(i) * std::abs(x(i)) +
              t.asymmetry(i) * std::abs(x(i));
     return d;
   };

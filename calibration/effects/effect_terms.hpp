@@ -5,6 +5,8 @@
 // Sensor-side terms (added to the output of a triad, evaluated at the true input x = ω or f):
 //   temperature_bias    b_T,i·(T − T0)                       gyro rad/s/K, accel m/s²/K
 //   temperature_scale   s_T,i·(T − T0)·x_i                   1/K
+//   temperature_rate    r_T,i·dT/dt  (thermal lag: gradient-driven bias during warm-up and ramps)
+//                                                            gyro rad/s per K/s, accel m/s² per K/s
 //   g_sensitivity       G·f   (gyro only, 3×3)               rad/s per m/s²
 //   scale_nonlinearity  k_i·x_i·|x_i|                        1/(rad/s), 1/(m/s²)
 //   scale_asymmetry     a_i·|x_i|  (scale M_ii + a_i for x_i > 0, M_ii − a_i for x_i < 0)
@@ -27,6 +29,7 @@ namespace calbench {
 struct TriadEffectTerms {
   Vec3 temp_bias = Vec3::Zero();    // per K
   Vec3 temp_scale = Vec3::Zero();   // 1/K
+  Vec3 temp_rate = Vec3::Zero();    // per K/s (bias ∝ dT/dt)
   Vec3 nonlinearity = Vec3::Zero(); // 1/(input unit)
   Vec3 asymmetry = Vec3::Zero();    // dimensionless
   double drift_sigma = 0;           // correlated_drift (0 = the data-sheet prior applies)
@@ -51,6 +54,7 @@ struct EffectContext {
   Vec3 w = Vec3::Zero(), f = Vec3::Zero();        // true (or reference) rate and specific force
   Vec3 dw = Vec3::Zero(), df = Vec3::Zero();      // their time derivatives
   double temp_c = 25.0;
+  double dtemp_k_s = 0.0;  // dT/dt (K/s)
 };
 
 // Sensor-side extra output (added to (I+M)·x + b): gyro and accel.
