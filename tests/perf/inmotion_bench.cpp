@@ -115,7 +115,7 @@ struct SeedResult {
   std::vector<Checkpoint> checkpoints;
   long rejected[3] = {0, 0, 0}, used[3] = {0, 0, 0}, forced[3] = {0, 0, 0};
   double mean_nis[3] = {0, 0, 0};
-  double cpe_bench = 0, cpe_inmotion = 0, cpe_bench_nominal_mount = 0;
+  double cpe_bench = 0, cpe_inmotion = 0, cpe_bench_nominal_mount = 0, cpe_oracle = 0;
   Vec3 gyro_sigma, gyro_err, gyro_total_sigma;
 };
 
@@ -166,7 +166,7 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
   inmotion::bench_corrected_bias_priors(fc, Vec3::Zero(), Vec3::Zero());
   if (const char* e = std::getenv("INMOTION_PRIOR_GYRO_DPS")) fc.sigma_gyro_bias = std::atof(e) * kDeg;
   std::unique_ptr<inmotion::InMotionFilter> f;
-  std::unique_ptr<qc::InertialRun> qb, qi, qbn;
+  std::unique_ptr<qc::InertialRun> qb, qi, qbn, qo;
   SensorErrors total;
   Vec3 mr, ms;
   Vec3 wp, ap;
@@ -183,6 +183,7 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
         qb->imu(m.t, dth, dv, dt);
         qi->imu(m.t, dth, dv, dt);
         qbn->imu(m.t, dth, dv, dt);
+        qo->imu(m.t, dth, dv, dt);
       }
     }
     wp = m.gyro;
@@ -220,6 +221,9 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
         qb = std::make_unique<qc::InertialRun>(bench, C_est, cfg.lever_arm, r);
         qi = std::make_unique<qc::InertialRun>(total, C_est, cfg.lever_arm, r);
         qbn = std::make_unique<qc::InertialRun>(bench, C_nom, cfg.lever_arm, r);
+        // The floor no calibration can beat: the unit's true constant errors and true mounting
+        // (evaluation only; the estimator never sees them). What remains is the in-run drift.
+        qo = std::make_unique<qc::InertialRun>(cfg.mems, ins::dcm_from_rpy(cfg.mounting_rpy), cfg.lever_arm, r);
         t_qc0 = r.t;
       }
       return;
@@ -228,6 +232,7 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
       out.cpe_bench = qb->cpe(r);
       out.cpe_inmotion = qi->cpe(r);
       out.cpe_bench_nominal_mount = qbn->cpe(r);
+      out.cpe_oracle = qo->cpe(r);
     }
   };
   drivesim::simulate_drive(cfg, s);
@@ -270,7 +275,7 @@ void BM_InMotion_Acceptance(benchmark::State& state) {
   if (const char* e = std::getenv("INMOTION_SEEDS")) seeds = std::max(1, std::atoi(e));
   for (auto _ : state) {
     int within = 0, params = 0, mount_within = 0;
-    std::vector<double> ratios, ratios_nominal;
+    std::vector<double> ratios, ratios_nominal, over_floor;
     for (int s = 1; s <= seeds; ++s) {
       const SeedResult r = run_seed(rf, static_cast<std::uint64_t>(s), true, 600.0);
       within += r.within;
@@ -278,19 +283,26 @@ void BM_InMotion_Acceptance(benchmark::State& state) {
       mount_within += r.mount_within;
       ratios.push_back(r.cpe_bench / r.cpe_inmotion);
       ratios_nominal.push_back(r.cpe_bench_nominal_mount / r.cpe_inmotion);
+      over_floor.push_back(r.cpe_inmotion / r.cpe_oracle);
       std::printf("seed %2d: %2d/%2d params within 3σ, mounting %d/3; ΔS(600 s) bench-only %.1f m (nominal mounting %.1f m),"
-                  " bench+in-motion %.1f m, ratio %.1f\n",
+                  " bench+in-motion %.1f m, ratio %.1f; true constant errors %.1f m\n",
                   s, r.within, r.params, r.mount_within, r.cpe_bench, r.cpe_bench_nominal_mount, r.cpe_inmotion,
-                  r.cpe_bench / r.cpe_inmotion);
+                  r.cpe_bench / r.cpe_inmotion, r.cpe_oracle);
       std::fflush(stdout);
     }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      const std::size_t n = v.size();
+      return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    };
     std::sort(ratios.begin(), ratios.end());
-    std::sort(ratios_nominal.begin(), ratios_nominal.end());
     state.counters["params_within_3sigma_pct"] = 100.0 * within / params;
     state.counters["mounting_within_3sigma_pct"] = 100.0 * mount_within / (3.0 * seeds);
     state.counters["cpe_ratio_min"] = ratios.front();
-    state.counters["cpe_ratio_median"] = ratios[ratios.size() / 2];
-    state.counters["cpe_ratio_nominal_mount_median"] = ratios_nominal[ratios_nominal.size() / 2];
+    state.counters["cpe_ratio_median"] = median(ratios);
+    state.counters["cpe_ratio_max"] = ratios.back();
+    state.counters["cpe_ratio_nominal_mount_median"] = median(ratios_nominal);
+    state.counters["cpe_inmotion_over_true_median"] = median(over_floor);
     // The paper's point: gyro drift with and without the attitude observation (seed 1).
     const SeedResult a = run_seed(rf, 1, true, 600.0), b = run_seed(rf, 1, false, 600.0);
     for (int i = 0; i < 3; ++i)
