@@ -22,52 +22,42 @@ Vec3 optsig3(const nlohmann::json& o, const char* k, const std::string& f, const
   return o.contains(k) ? jsigma3(o[k], f, pre + "." + k) : Vec3::Zero();
 }
 
+// The per-axis terms of a triad, as data: JSON key, the gyro and accel value keys, whether the
+// key carries the reference temperature, and the member they fill. Sigma keys are gyro_sigma,
+// accel_sigma.
+struct TriadKey {
+  const char* key;
+  const char* gyro;
+  const char* accel;
+  bool t0;
+  Vec3 TriadEffectTerms::*member;
+};
+constexpr TriadKey kTriadKeys[] = {
+    {"temperature_bias", "gyro_rad_s_per_K", "accel_m_s2_per_K", true, &TriadEffectTerms::temp_bias},
+    {"temperature_scale", "gyro_per_K", "accel_per_K", true, &TriadEffectTerms::temp_scale},
+    {"temperature_rate", "gyro_rad_s_per_K_per_s", "accel_m_s2_per_K_per_s", false, &TriadEffectTerms::temp_rate},
+    {"scale_nonlinearity", "gyro_per_rad_s", "accel_per_m_s2", false, &TriadEffectTerms::nonlinearity},
+    {"scale_asymmetry", "gyro", "accel", false, &TriadEffectTerms::asymmetry},
+};
+
 }  // namespace
 
 EffectTerms effects_from_json(const nlohmann::json& j, const std::string& f, EffectTerms* sigma) {
   EffectTerms e, s;
   if (!j.is_object()) return e;
-  if (j.contains("temperature_bias")) {
-    const auto& o = j["temperature_bias"];
-    if (o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, "temperature_bias.t0_c");
-    e.gyro.temp_bias = opt3(o, "gyro_rad_s_per_K", f, "temperature_bias");
-    e.accel.temp_bias = opt3(o, "accel_m_s2_per_K", f, "temperature_bias");
-    s.gyro.temp_bias = optsig3(o, "gyro_sigma", f, "temperature_bias");
-    s.accel.temp_bias = optsig3(o, "accel_sigma", f, "temperature_bias");
-  }
-  if (j.contains("temperature_scale")) {
-    const auto& o = j["temperature_scale"];
-    if (o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, "temperature_scale.t0_c");
-    e.gyro.temp_scale = opt3(o, "gyro_per_K", f, "temperature_scale");
-    e.accel.temp_scale = opt3(o, "accel_per_K", f, "temperature_scale");
-    s.gyro.temp_scale = optsig3(o, "gyro_sigma", f, "temperature_scale");
-    s.accel.temp_scale = optsig3(o, "accel_sigma", f, "temperature_scale");
-  }
-  if (j.contains("temperature_rate")) {
-    const auto& o = j["temperature_rate"];
-    e.gyro.temp_rate = opt3(o, "gyro_rad_s_per_K_per_s", f, "temperature_rate");
-    e.accel.temp_rate = opt3(o, "accel_m_s2_per_K_per_s", f, "temperature_rate");
-    s.gyro.temp_rate = optsig3(o, "gyro_sigma", f, "temperature_rate");
-    s.accel.temp_rate = optsig3(o, "accel_sigma", f, "temperature_rate");
+  for (const TriadKey& t : kTriadKeys) {
+    if (!j.contains(t.key)) continue;
+    const auto& o = j[t.key];
+    if (t.t0 && o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, std::string(t.key) + ".t0_c");
+    e.gyro.*t.member = opt3(o, t.gyro, f, t.key);
+    e.accel.*t.member = opt3(o, t.accel, f, t.key);
+    s.gyro.*t.member = optsig3(o, "gyro_sigma", f, t.key);
+    s.accel.*t.member = optsig3(o, "accel_sigma", f, t.key);
   }
   if (j.contains("g_sensitivity")) {
     const auto& o = j["g_sensitivity"];
     e.g_sensitivity = jmat3(jreq(o, "gyro_rad_s_per_m_s2", f, "g_sensitivity"), f, "g_sensitivity.gyro_rad_s_per_m_s2");
     if (o.contains("sigma")) s.g_sensitivity = jsigmamat3(o["sigma"], f, "g_sensitivity.sigma");
-  }
-  if (j.contains("scale_nonlinearity")) {
-    const auto& o = j["scale_nonlinearity"];
-    e.gyro.nonlinearity = opt3(o, "gyro_per_rad_s", f, "scale_nonlinearity");
-    e.accel.nonlinearity = opt3(o, "accel_per_m_s2", f, "scale_nonlinearity");
-    s.gyro.nonlinearity = optsig3(o, "gyro_sigma", f, "scale_nonlinearity");
-    s.accel.nonlinearity = optsig3(o, "accel_sigma", f, "scale_nonlinearity");
-  }
-  if (j.contains("scale_asymmetry")) {
-    const auto& o = j["scale_asymmetry"];
-    e.gyro.asymmetry = opt3(o, "gyro", f, "scale_asymmetry");
-    e.accel.asymmetry = opt3(o, "accel", f, "scale_asymmetry");
-    s.gyro.asymmetry = optsig3(o, "gyro_sigma", f, "scale_asymmetry");
-    s.accel.asymmetry = optsig3(o, "accel_sigma", f, "scale_asymmetry");
   }
   if (j.contains("time_offset")) {
     const auto& o = j["time_offset"];
@@ -103,35 +93,18 @@ EffectTerms effects_from_json(const nlohmann::json& j, const std::string& f, Eff
 
 void effects_to_json(const EffectTerms& e, const EffectTerms& s, nlohmann::json& j) {
   auto nz = [](const Vec3& v) { return !v.isZero(0); };
-  if (nz(e.gyro.temp_bias) || nz(e.accel.temp_bias))
-    j["temperature_bias"] = {{"t0_c", e.t0_c},
-                             {"gyro_rad_s_per_K", to_json(e.gyro.temp_bias)},
-                             {"gyro_sigma", sigma_json(s.gyro.temp_bias)},
-                             {"accel_m_s2_per_K", to_json(e.accel.temp_bias)},
-                             {"accel_sigma", sigma_json(s.accel.temp_bias)}};
-  if (nz(e.gyro.temp_scale) || nz(e.accel.temp_scale))
-    j["temperature_scale"] = {{"t0_c", e.t0_c},
-                              {"gyro_per_K", to_json(e.gyro.temp_scale)},
-                              {"gyro_sigma", sigma_json(s.gyro.temp_scale)},
-                              {"accel_per_K", to_json(e.accel.temp_scale)},
-                              {"accel_sigma", sigma_json(s.accel.temp_scale)}};
-  if (nz(e.gyro.temp_rate) || nz(e.accel.temp_rate))
-    j["temperature_rate"] = {{"gyro_rad_s_per_K_per_s", to_json(e.gyro.temp_rate)},
-                             {"gyro_sigma", sigma_json(s.gyro.temp_rate)},
-                             {"accel_m_s2_per_K_per_s", to_json(e.accel.temp_rate)},
-                             {"accel_sigma", sigma_json(s.accel.temp_rate)}};
+  for (const TriadKey& t : kTriadKeys) {
+    if (!nz(e.gyro.*t.member) && !nz(e.accel.*t.member)) continue;
+    nlohmann::json o = nlohmann::json::object();
+    if (t.t0) o["t0_c"] = e.t0_c;
+    o[t.gyro] = to_json(e.gyro.*t.member);
+    o["gyro_sigma"] = sigma_json(s.gyro.*t.member);
+    o[t.accel] = to_json(e.accel.*t.member);
+    o["accel_sigma"] = sigma_json(s.accel.*t.member);
+    j[t.key] = o;
+  }
   if (!e.g_sensitivity.isZero(0))
     j["g_sensitivity"] = {{"gyro_rad_s_per_m_s2", to_json(e.g_sensitivity)}, {"sigma", sigma_json(s.g_sensitivity)}};
-  if (nz(e.gyro.nonlinearity) || nz(e.accel.nonlinearity))
-    j["scale_nonlinearity"] = {{"gyro_per_rad_s", to_json(e.gyro.nonlinearity)},
-                               {"gyro_sigma", sigma_json(s.gyro.nonlinearity)},
-                               {"accel_per_m_s2", to_json(e.accel.nonlinearity)},
-                               {"accel_sigma", sigma_json(s.accel.nonlinearity)}};
-  if (nz(e.gyro.asymmetry) || nz(e.accel.asymmetry))
-    j["scale_asymmetry"] = {{"gyro", to_json(e.gyro.asymmetry)},
-                            {"gyro_sigma", sigma_json(s.gyro.asymmetry)},
-                            {"accel", to_json(e.accel.asymmetry)},
-                            {"accel_sigma", sigma_json(s.accel.asymmetry)}};
   if (e.time_offset_s != 0) j["time_offset"] = {{"s", e.time_offset_s}, {"sigma", s.time_offset_s}};
   if (nz(e.lever_arm_m)) j["lever_arm"] = {{"m", to_json(e.lever_arm_m)}, {"sigma", sigma_json(s.lever_arm_m)}};
   if (!e.table_tilt_rad.isZero(0))
