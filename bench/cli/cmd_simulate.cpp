@@ -34,22 +34,8 @@ void run_simulate_bench(const SimBenchArgs& a) {
     if (!a.serial.empty()) truth.device.serial = a.serial;
   }
   // Physics beyond the spec's model: from the truth's own extra keys, an effects file, --inject.
-  EffectTerms effects = effects_from_json(truth.extra, a.truth);
-  if (!a.effects.empty()) {
-    const EffectTerms more = effects_from_json(read_json_file(a.effects), a.effects);
-    nlohmann::json tmp = nlohmann::json::object();
-    effects_to_json(more, EffectTerms{}, tmp);
-    if (tmp.empty()) throw InputError(a.effects, 0, "", "no catalogue key (docs/diagnosis.md) in this file");
-    effects = more;  // the file replaces terms carried by the truth
-  }
-  for (const auto& o : a.inject) apply_inject_option(o, effects);
-  if (effects.any()) {
-    for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
-                          "scale_asymmetry", "time_offset", "lever_arm", "misalignment", "table_wobble",
-                          "correlated_drift", "temperature_rate"})
-      truth.extra.erase(k);
-    effects_to_json(effects, EffectTerms{}, truth.extra);
-  }
+  const EffectTerms effects = simulation_effects(truth.extra, a.truth, a.effects, a.inject);
+  if (effects.any()) replace_effect_keys(effects, truth.extra);
   const fs::path out(a.out);
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");

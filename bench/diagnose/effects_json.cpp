@@ -211,4 +211,25 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
     if (!used.count(k)) throw InputError(where, 0, k, "unknown key for " + name);
 }
 
+EffectTerms simulation_effects(const nlohmann::json& truth_extra, const std::string& truth_file,
+                               const std::string& effects_file, const std::vector<std::string>& inject) {
+  EffectTerms effects = effects_from_json(truth_extra, truth_file);
+  if (!effects_file.empty()) {
+    const EffectTerms more = effects_from_json(read_json_file(effects_file), effects_file);
+    nlohmann::json tmp = nlohmann::json::object();
+    effects_to_json(more, EffectTerms{}, tmp);
+    if (tmp.empty()) throw InputError(effects_file, 0, "", "no catalogue key (docs/diagnosis.md) in this file");
+    effects = more;  // the file replaces terms carried by the truth
+  }
+  for (const auto& o : inject) apply_inject_option(o, effects);
+  return effects;
+}
+
+void replace_effect_keys(const EffectTerms& e, nlohmann::json& j) {
+  for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity", "scale_asymmetry",
+                        "time_offset", "lever_arm", "misalignment", "table_wobble", "correlated_drift", "temperature_rate"})
+    j.erase(k);
+  effects_to_json(e, EffectTerms{}, j);
+}
+
 }  // namespace calbench

@@ -3,6 +3,7 @@
 #pragma once
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "calibration/effects/effect_terms.hpp"
 
@@ -16,5 +17,12 @@ void effects_to_json(const EffectTerms& e, const EffectTerms& sigma, nlohmann::j
 
 // One --inject option, e.g. "g_sensitivity:axis=x,f=y,value=1.6e-4". Throws InputError naming the option.
 void apply_inject_option(const std::string& opt, EffectTerms& e);
+
+// The terms a simulation injects: the truth file's own catalogue keys, replaced by those of an
+// effects file when one is given (it must hold at least one), then each --inject option.
+EffectTerms simulation_effects(const nlohmann::json& truth_extra, const std::string& truth_file,
+                               const std::string& effects_file, const std::vector<std::string>& inject);
+// Replace every catalogue key of `j` by the non-zero terms of `e` (written without σ).
+void replace_effect_keys(const EffectTerms& e, nlohmann::json& j);
 
 }  // namespace calbench

@@ -65,15 +65,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     }
   }
   // Physics beyond the spec's model: the truth's own catalogue keys, an effects file, --inject.
-  EffectTerms effects = effects_from_json(truth.extra, a.truth);
-  if (!a.effects.empty()) {
-    const EffectTerms more = effects_from_json(read_json_file(a.effects), a.effects);
-    nlohmann::json tmp = nlohmann::json::object();
-    effects_to_json(more, EffectTerms{}, tmp);
-    if (tmp.empty()) throw InputError(a.effects, 0, "", "no catalogue key (docs/diagnosis.md) in this file");
-    effects = more;  // the file replaces terms carried by the truth
-  }
-  for (const auto& o : a.inject) apply_inject_option(o, effects);
+  const EffectTerms effects = simulation_effects(truth.extra, a.truth, a.effects, a.inject);
   {
     const std::string src = a.inject.empty() ? (a.effects.empty() ? a.truth : a.effects) : "--inject";
     if (!effects.gyro.temp_bias.isZero(0) || !effects.accel.temp_bias.isZero(0) || !effects.gyro.temp_scale.isZero(0) ||
@@ -85,13 +77,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
                        "table terms belong to the bench; on a drive the mounting is drawn by --truth random "
                        "(misalignment_sigma_deg) and estimated by fit drive");
   }
-  if (effects.any()) {
-    for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
-                          "scale_asymmetry", "time_offset", "lever_arm", "misalignment", "table_wobble",
-                          "correlated_drift", "temperature_rate"})
-      truth.extra.erase(k);
-    effects_to_json(effects, EffectTerms{}, truth.extra);
-  }
+  if (effects.any()) replace_effect_keys(effects, truth.extra);
   // The true mounting (what the filter should find); meta.json carries the nominal one. A
   // catalogue lever_arm (IMU axes) is on top of mounting.lever_arm_m.
   truth.extra["mounting"] = {{"rpy_deg", to_json(true_rpy_deg)}, {"lever_arm_m", to_json(lever)}};

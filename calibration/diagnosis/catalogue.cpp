@@ -177,4 +177,22 @@ void predict_extra(const EffectTerms& e, const SubBlock& s, Vec3& dg, Vec3& da) 
   }
 }
 
+std::string term_unit(const Term& t) {
+  const bool g = t.sensor == 0;
+  switch (t.effect) {
+    case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
+    case EffectId::temperature_scale: return "1/K";
+    case EffectId::temperature_rate: return g ? "rad/s/(K/s)" : "m/s^2/(K/s)";
+    case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
+    case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
+    case EffectId::scale_asymmetry: return "1";
+    case EffectId::time_offset: return "s";
+    case EffectId::lever_arm: return "m";
+    case EffectId::misalignment: return "rad";
+    case EffectId::table_wobble: return "rad";
+    case EffectId::correlated_drift: return g ? "rad/s" : "m/s^2";
+  }
+  return "";
+}
+
 }  // namespace calbench

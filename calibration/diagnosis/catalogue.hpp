@@ -43,6 +43,8 @@ struct Term {
 
 // Every linear candidate (correlated_drift is handled by the noise model, not here).
 std::vector<Term> candidate_terms();
+// SI unit of a term's parameters (as reported in findings and IMPROVED.json).
+std::string term_unit(const Term& t);
 
 // Extra output predicted for a sub-block from its reference conditions: sensor-side terms
 // plus reference-side terms (time offset, wobble, table tilt), linearised. temp_c NaN → no

@@ -505,25 +505,31 @@ const char* revealing_condition(EffectId e) {
   return "time";
 }
 
-std::string unit_of(const Term& t) {
-  const bool g = t.sensor == 0;
-  switch (t.effect) {
-    case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
-    case EffectId::temperature_scale: return "1/K";
-    case EffectId::temperature_rate: return g ? "rad/s/(K/s)" : "m/s^2/(K/s)";
-    case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
-    case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
-    case EffectId::scale_asymmetry: return "1";
-    case EffectId::time_offset: return "s";
-    case EffectId::lever_arm: return "m";
-    case EffectId::misalignment: return "rad";
-    case EffectId::table_wobble: return "rad";
-    case EffectId::correlated_drift: return g ? "rad/s" : "m/s^2";
-  }
-  return "";
-}
 
 }  // namespace
+
+DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, double delta_chi2, double delta_bic,
+                                     const AxisStats (&before)[6], const AxisStats (&after)[6]) {
+  DiagFinding f;
+  f.term = Term{EffectId::correlated_drift, triad, -1};
+  f.value = {sigma};
+  f.sigma = {std::numeric_limits<double>::quiet_NaN()};
+  f.noise_tau_s = tau_s;
+  f.unit = term_unit(f.term);
+  f.report_sensor = triad;
+  f.report_axis = -1;
+  f.delta_chi2 = delta_chi2;
+  f.delta_bic = delta_bic;
+  f.condition = "time";
+  double rb = 0, ra = 0;
+  for (int a = triad * 3; a < triad * 3 + 3; ++a) {
+    rb += std::pow(before[a].systematic_rms, 2);
+    ra += std::pow(after[a].systematic_rms, 2);
+  }
+  f.rms_before = std::sqrt(rb / 3);
+  f.rms_after = std::sqrt(ra / 3);
+  return f;
+}
 
 std::vector<std::string> condition_names() {
   return {"rate", "w_x", "w_y", "w_z", "f_x", "f_y", "f_z", "temperature", "dT/dt", "time", "angle"};
@@ -725,26 +731,9 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
 
   // Findings.
   for (const auto& acc : accepted) {
-    DiagFinding f;
     if (acc.term < 0) {
       const int triad = -1 - acc.term;
-      f.term = Term{EffectId::correlated_drift, triad, -1};
-      f.value = {ds[triad]};
-      f.sigma = {std::numeric_limits<double>::quiet_NaN()};
-      f.noise_tau_s = tau[triad];
-      f.unit = unit_of(f.term);
-      f.report_sensor = triad;
-      f.report_axis = -1;
-      f.delta_chi2 = acc.dchi2;
-      f.delta_bic = acc.dbic;
-      f.condition = "time";
-      double rb = 0, ra = 0;
-      for (int a = triad * 3; a < triad * 3 + 3; ++a) {
-        rb += std::pow(res.before[a].systematic_rms, 2);
-        ra += std::pow(res.after[a].systematic_rms, 2);
-      }
-      f.rms_before = std::sqrt(rb / 3);
-      f.rms_after = std::sqrt(ra / 3);
+      const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], acc.dchi2, acc.dbic, res.before, res.after);
       res.findings.push_back(f);
       res.improved_terms.gyro.drift_sigma = ds[0] > opt.noise.gyro.drift_sigma ? ds[0] : 0;
       res.improved_terms.gyro.drift_tau_s = ds[0] > opt.noise.gyro.drift_sigma ? tau[0] : 0;
@@ -752,6 +741,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
       res.improved_terms.accel.drift_tau_s = ds[1] > opt.noise.accel.drift_sigma ? tau[1] : 0;
       continue;
     }
+    DiagFinding f;
     const Term& t = D.terms[acc.term];
     const std::size_t k = std::find(model.terms.begin(), model.terms.end(), acc.term) - model.terms.begin();
     f.term = t;
@@ -760,7 +750,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
       f.value.push_back(cur.theta(idx) + t.get_param(carried, p));
       f.sigma.push_back(std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
     }
-    f.unit = unit_of(t);
+    f.unit = term_unit(t);
     f.delta_chi2 = acc.dchi2;
     f.delta_bic = acc.dbic;
     f.heldout_delta_chi2 = acc.dheld;

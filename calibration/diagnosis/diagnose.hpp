@@ -95,6 +95,11 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
 
 // Value of a condition for a sub-block (used for correlations and plots). Names:
 // "rate", "w_x".."w_z", "f_x".."f_z", "temperature", "dT/dt", "time", "angle".
+// The finding of a drift larger or slower than the prior on one triad (0 gyro, 1 accel):
+// first-order σ and τ (no σ of its own), systematic residual as the RMS over the triad's axes.
+DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, double delta_chi2, double delta_bic,
+                                     const AxisStats (&before)[6], const AxisStats (&after)[6]);
+
 std::vector<std::string> condition_names();
 double condition_value(const DiagData& d, const SubBlock& s, const std::string& name);
 

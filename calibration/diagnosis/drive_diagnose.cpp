@@ -467,23 +467,6 @@ std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eig
   return out;
 }
 
-std::string unit_of(const Term& t) {
-  const bool g = t.sensor == 0;
-  switch (t.effect) {
-    case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
-    case EffectId::temperature_scale: return "1/K";
-    case EffectId::temperature_rate: return g ? "rad/s/(K/s)" : "m/s^2/(K/s)";
-    case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
-    case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
-    case EffectId::scale_asymmetry: return "1";
-    case EffectId::time_offset: return "s";
-    case EffectId::lever_arm: return "m";
-    case EffectId::misalignment: return "rad";
-    case EffectId::table_wobble: return "rad";
-    case EffectId::correlated_drift: return g ? "rad/s" : "m/s^2";
-  }
-  return "";
-}
 
 }  // namespace
 
@@ -701,26 +684,9 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
 
   // Findings.
   for (const auto& acc : accepted) {
-    DiagFinding f;
     if (acc.term < 0) {
       const int triad = -1 - acc.term;
-      f.term = Term{EffectId::correlated_drift, triad, -1};
-      f.value = {ds[triad]};
-      f.sigma = {std::numeric_limits<double>::quiet_NaN()};
-      f.noise_tau_s = tau[triad];
-      f.unit = unit_of(f.term);
-      f.report_sensor = triad;
-      f.report_axis = -1;
-      f.delta_chi2 = acc.dchi2;
-      f.delta_bic = acc.dbic;
-      f.condition = "time";
-      double rb = 0, ra = 0;
-      for (int a = triad * 3; a < triad * 3 + 3; ++a) {
-        rb += std::pow(res.before[a].systematic_rms, 2);
-        ra += std::pow(res.after[a].systematic_rms, 2);
-      }
-      f.rms_before = std::sqrt(rb / 3);
-      f.rms_after = std::sqrt(ra / 3);
+      const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], acc.dchi2, acc.dbic, res.before, res.after);
       out.rms_floor.push_back(0.0);
       out.shown_on.push_back(triad * 3);
       TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
@@ -729,6 +695,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       res.findings.push_back(f);
       continue;
     }
+    DiagFinding f;
     const Term& t = D.terms[acc.term];
     f.term = t;
     for (int p = 0; p < t.nparams(); ++p) {
@@ -736,7 +703,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       f.value.push_back(cur.theta(idx) + t.get_param(carried, p));
       f.sigma.push_back(std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
     }
-    f.unit = unit_of(t);
+    f.unit = term_unit(t);
     f.delta_chi2 = acc.dchi2;
     f.delta_bic = acc.dbic;
     f.heldout_delta_chi2 = acc.dheld;
