@@ -32,6 +32,18 @@ void print_summary(const nlohmann::json& j) {
       if (m["beta_rad_s"].get<double>() > 0) std::cout << ", beta " << m["beta_rad_s"].get<double>() << " rad/s";
       std::cout << "  (" << m["source"].get<std::string>() << ")\n";
     }
+  if (j.contains("effects")) {
+    const auto& e = j["effects"];
+    std::cout << "  catalogue terms applied:";
+    if (e["applied"].empty()) std::cout << " none";
+    for (const auto& k : e["applied"]) {
+      std::cout << ' ' << k.get<std::string>();
+      if (k == "time_offset") std::cout << " (" << e["time_offset_s"].get<double>() * 1e3 << " ms: stamps t -> t - τ)";
+    }
+    std::cout << "\n";
+    for (const auto& k : e["ignored"])
+      std::cout << "  catalogue term ignored: " << k["key"].get<std::string>() << " (" << k["reason"].get<std::string>() << ")\n";
+  }
   for (const auto& [k, v] : j["consistency"].items())
     std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected\n";
   if (j["qc"].contains("sets"))

@@ -19,7 +19,7 @@ inmotion::RefObs to_ref_obs(const DriveRefRow& r) {
   return o;
 }
 
-DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre) : dir_(dir) {
+DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre, const EffectTerms* effects) : dir_(dir) {
   meta_ = read_meta(dir);
   if (meta_.kind != RecordingKind::drive)
     throw InputError((dir / "meta.json").string(), 0, "kind", "expected a drive recording (kind \"drive\")");
@@ -31,6 +31,8 @@ DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>&
     cg_ = TriadCorrector(pre->gyro);
     ca_ = TriadCorrector(pre->accel);
   }
+  if (effects && (effects->any_sensor_side() || effects->time_offset_s != 0))
+    comp_.emplace(*effects, pre ? *pre : SensorErrors{});
   have_ref_ = ref_->next(ref_row_);
 }
 
@@ -55,6 +57,13 @@ bool DriveStream::next(Event& e) {
   e.is_ref = false;
   e.t = r.t;
   e.dt = r.dt;
+  e.temp_c = r.temp_c;
+  if (std::isfinite(r.temp_c)) ++rows_temp_;
+  if (comp_) {
+    e.t = comp_->corrected_time(r.t);
+    if (imu_->form() == ImuForm::rates) comp_->rates(r.gyro, r.accel, r.dt, r.temp_c);
+    else comp_->increments(r.gyro, r.accel, r.dt, r.temp_c);
+  }
   if (imu_->form() == ImuForm::rates) integ_(r.gyro, r.accel, r.dt, e.dtheta, e.dv);
   else {
     e.dtheta = r.gyro;
@@ -64,7 +73,7 @@ bool DriveStream::next(Event& e) {
     e.dtheta = cg_->increment(e.dtheta, r.dt);
     e.dv = ca_->increment(e.dv, r.dt);
   }
-  last_imu_t_ = r.t;
+  last_imu_t_ = e.t;
   return true;
 }
 

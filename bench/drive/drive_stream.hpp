@@ -1,12 +1,15 @@
 // Reads a drive recording in time order for the in-motion fit and the QC: IMU rows turned into
 // increments (rates are integrated by the trapezoidal rule), optionally corrected with a
 // coefficient set first, interleaved with the reference epochs (each delivered right after the
-// IMU row that reaches its time).
+// IMU row that reaches its time). Catalogue terms of the set (docs/diagnosis.md) are compensated
+// on the raw samples first (calibration/effects/effect_compensation.hpp): output terms removed,
+// time stamps moved by the time offset.
 #pragma once
 #include <filesystem>
 #include <optional>
 
 #include "bench/io/recording.hpp"
+#include "calibration/effects/effect_compensation.hpp"
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/ins/strapdown.hpp"
 
@@ -16,7 +19,8 @@ inmotion::RefObs to_ref_obs(const DriveRefRow& r);
 
 class DriveStream {
  public:
-  DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre_correction);
+  // effects: catalogue terms to compensate (with the set they belong to: pre_correction, or zero).
+  DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre_correction, const EffectTerms* effects = nullptr);
   const RecordingMeta& meta() const { return meta_; }
   Mat3 nominal_mounting() const;  // C_mb from meta.json
   Vec3 lever_arm() const;
@@ -25,10 +29,13 @@ class DriveStream {
     bool is_ref = false;
     double t = 0, dt = 0;
     Vec3 dtheta = Vec3::Zero(), dv = Vec3::Zero();  // IMU increments
+    double temp_c = std::numeric_limits<double>::quiet_NaN();  // device temperature, if recorded
     inmotion::RefObs ref;
   };
   // Next IMU interval or reference epoch; false at the end.
   bool next(Event& e);
+  // IMU rows read so far that carried a temperature.
+  long rows_with_temperature() const { return rows_temp_; }
 
  private:
   fs::path dir_;
@@ -36,6 +43,8 @@ class DriveStream {
   std::unique_ptr<ImuReader> imu_;
   std::unique_ptr<DriveRefReader> ref_;
   std::optional<TriadCorrector> cg_, ca_;
+  std::optional<ImuEffectCompensator> comp_;
+  long rows_temp_ = 0;
   ins::RateIntegrator integ_;
   bool have_ref_ = false, imu_done_ = false;
   DriveRefRow ref_row_;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "bench/io/coefficients_json.hpp"
@@ -82,17 +83,30 @@ nlohmann::json apply_drift_models(const std::string& file, inmotion::InMotionCon
           {"axes", axes}};
 }
 
+// Catalogue terms carried by the input coefficients (with σ), and what the drive filter does with them.
+struct InputEffects {
+  EffectTerms terms, sigma;
+  bool present = false;
+  nlohmann::json ignored = nlohmann::json::array();  // [{"key", "reason"}] decided before the run
+  nlohmann::json drift;                              // correlated_drift as the filter's drift prior
+};
+
 template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
-                       double t0, double t1, const nlohmann::json& models);
+                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx);
 
 }  // namespace
 
 nlohmann::json fit_drive(const FitDriveArgs& a) {
   using namespace units;
   const auto [t0, t1] = parse_window(a.window);
-  std::optional<CoefficientSet> bench;
-  if (!a.coeffs.empty()) bench = read_coefficients(a.coeffs);
+  std::optional<CoefficientSet> bench = a.coeffs_set;
+  if (!bench && !a.coeffs.empty()) bench = read_coefficients(a.coeffs);
+  InputEffects fx;
+  if (bench) {
+    fx.terms = effects_from_json(bench->extra, a.coeffs.empty() ? "--coeffs" : a.coeffs, &fx.sigma);
+    fx.present = fx.terms.any();
+  }
   inmotion::InMotionConfig cfg;
   cfg.obs_pos = cfg.obs_vel = cfg.obs_att = false;
   {
@@ -116,18 +130,33 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   cfg.store_for_smoother = a.smooth;
   nlohmann::json models;
   if (!a.drift_models.empty()) models = apply_drift_models(a.drift_models, cfg);
-  if (inmotion::needs_augmented_layout(cfg)) return run_fit<inmotion::InMotionFilterAug>(a, cfg, bench, t0, t1, models);
-  return run_fit<inmotion::InMotionFilter>(a, cfg, bench, t0, t1, models);
+  // correlated_drift (drift σ, τ beyond the data sheet's) becomes the filter's first-order drift
+  // prior of that sensor, unless identified models were given.
+  for (int s = 0; s < 2; ++s) {
+    const TriadEffectTerms& t = s == 0 ? fx.terms.gyro : fx.terms.accel;
+    if (!(t.drift_sigma > 0)) continue;
+    const char* sn = s == 0 ? "gyro" : "accel";
+    if (!a.drift_models.empty()) {
+      fx.ignored.push_back({{"key", std::string("correlated_drift.") + sn}, {"reason", "--drift-models given: they set the drift model"}});
+      continue;
+    }
+    const TriadNoise& n = s == 0 ? cfg.noise.gyro : cfg.noise.accel;
+    inmotion::DriftPrior p{t.drift_sigma, t.drift_tau_s > 0 ? t.drift_tau_s : n.drift_tau_s};
+    (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
+    fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
+  }
+  if (inmotion::needs_augmented_layout(cfg)) return run_fit<inmotion::InMotionFilterAug>(a, cfg, bench, t0, t1, models, fx);
+  return run_fit<inmotion::InMotionFilter>(a, cfg, bench, t0, t1, models, fx);
 }
 
 namespace {
 
 template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
-                       double t0, double t1, const nlohmann::json& models) {
+                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx) {
   using namespace units;
   constexpr int N = Filter::kN;
-  DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt);
+  DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr);
   std::unique_ptr<Filter> f;
   std::unique_ptr<CsvWriter> series;
   // Series columns: t_s, every state (then the augmented ones), their sigma_, then the total
@@ -167,7 +196,13 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
         t_first = e.t;
         continue;
       }
-      if (f->reference(e.ref) && series) {
+      const bool took = f->reference(e.ref);
+      if (took && a.on_innovation) {
+        const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};
+        for (int k = 0; k < 3; ++k)
+          if (used[k]) a.on_innovation(k, f->last_innovation(k));
+      }
+      if (took && series) {
         typename Filter::Vec x, s;
         typename Filter::Vec6 tx, ts;
         f->totals(x, s);
@@ -243,6 +278,22 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   j["coefficients"] = set_json(dev, total);
   j["correction"] = set_json(dev, corr);
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
+  if (fx.present) {
+    // The catalogue terms are part of the sensor model of the result too (qc applies them).
+    effects_to_json(fx.terms, fx.sigma, j["coefficients"]);
+    const EffectUse use = drive_effect_use(fx.terms, st.rows_with_temperature() > 0);
+    nlohmann::json applied = use.applied, ignored = fx.ignored;
+    for (const auto& [k, why] : use.ignored) ignored.push_back({{"key", k}, {"reason", why}});
+    if (fx.drift.contains("gyro") || fx.drift.contains("accel")) applied.push_back("correlated_drift");
+    nlohmann::json ej = {{"source", a.coeffs.empty() ? "in memory" : a.coeffs},
+                         {"applied", applied},
+                         {"ignored", ignored},
+                         {"how", "output terms removed from the raw IMU samples before the set's correction; time stamps "
+                                 "t -> t - time_offset; correlated_drift as the filter's drift prior"}};
+    if (fx.terms.time_offset_s != 0) ej["time_offset_s"] = fx.terms.time_offset_s;
+    if (!fx.drift.is_null()) ej["drift_prior"] = fx.drift;
+    j["effects"] = ej;
+  }
   Vec3 mr, ms;
   f->mounting_rpy(mr, ms);
   j["mounting_rpy_deg"] = {{"value", to_json(Vec3(mr / kDeg))}, {"sigma", to_json(Vec3(ms / kDeg))},
@@ -271,8 +322,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   if (a.qc) {
     const bool oos = t_data_end > t_last + 10.0;
     const double from = oos ? t_last : t_first;
-    QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, std::nullopt, std::nullopt};
-    QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt};
+    QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, std::nullopt, std::nullopt, fx.terms};
+    QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms};
     const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s);
     qj = qc_json(q);
     qj["sample"] = oos ? "out-of-sample (after the fit window)" : "in-sample (no data after the fit window)";
@@ -280,7 +331,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     qj = {{"sample", "not run"}};
   }
   j["qc"] = qj;
-  write_text_atomic(a.out, j.dump(2) + "\n");
+  if (a.write_out) write_text_atomic(a.out, j.dump(2) + "\n");
   return j;
 }
 

@@ -1,9 +1,14 @@
 // `calbench fit drive`: the in-motion calibration of a drive recording (calibration/inmotion),
 // producing RESULT.json (contract in docs/in-motion.md) and optionally the estimate series.
 #pragma once
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+
+#include "bench/io/coefficients_json.hpp"
+#include "calibration/inmotion/inmotion_filter.hpp"
 
 namespace calbench {
 
@@ -16,9 +21,17 @@ struct FitDriveArgs {
   double sigma_pos = 0, sigma_vel = 0, sigma_att_deg = 0;  // 0: from reference.csv or defaults
   bool qc = true;             // out-of-sample ΔS after the window, when data remain
   double qc_horizon_s = 600;
+  // In memory instead of --coeffs (a.coeffs then only names it): the set and its extra keys.
+  std::optional<CoefficientSet> coeffs_set;
+  // Called after every reference epoch the filter took, per observation type (0 pos, 1 vel, 2 att).
+  std::function<void(int type, const inmotion::InnovationRecord&)> on_innovation;
+  bool write_out = true;      // false: return RESULT.json without writing a.out
 };
 
-// Runs the fit, writes args.out (and args.series), returns RESULT.json.
+// Runs the fit, writes args.out (and args.series), returns RESULT.json. Catalogue keys of the
+// coefficients (docs/diagnosis.md) are compensated on the IMU samples before the filter
+// (calibration/effects/effect_compensation.hpp); RESULT.json "effects" says which were applied and
+// which ignored, and its "coefficients" carry them. Without such keys nothing changes.
 nlohmann::json fit_drive(const FitDriveArgs& a);
 
 }  // namespace calbench

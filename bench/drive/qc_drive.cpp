@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/input_error.hpp"
@@ -23,11 +24,13 @@ QcSet load_qc_set(const std::string& arg) {
   const nlohmann::json j = read_json_file(arg);
   if (j.is_object() && j.contains("coefficients")) {
     s.errors = coefficients_from_json(j["coefficients"], arg).errors;
+    s.effects = effects_from_json(j["coefficients"], arg);
     if (j.contains("mounting_rpy_deg")) s.mounting_rpy_deg = jvec3(jreq(j["mounting_rpy_deg"], "value", arg, "mounting_rpy_deg.value"), arg, "mounting_rpy_deg.value");
     if (j.contains("window_s") && j["window_s"].is_array() && j["window_s"].size() == 2)
       s.fit_window_s = std::make_pair(jnum(j["window_s"][0], arg, "window_s[0]"), jnum(j["window_s"][1], arg, "window_s[1]"));
   } else {
     s.errors = coefficients_from_json(j, arg).errors;
+    s.effects = effects_from_json(j, arg);
     // A simulator truth.json states the true mounting (key "mounting"); use it like a result's.
     if (j.is_object() && j.contains("mounting") && j["mounting"].is_object() && j["mounting"].contains("rpy_deg"))
       s.mounting_rpy_deg = jvec3(j["mounting"]["rpy_deg"], arg, "mounting.rpy_deg");
@@ -35,14 +38,19 @@ QcSet load_qc_set(const std::string& arg) {
   return s;
 }
 
-QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s, double horizon_s) {
-  DriveStream st(dir, std::nullopt);
+namespace {
+// One pass over the recording for the sets `idx` (all with the same time offset).
+void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx,
+                  std::optional<double> from_s, double horizon_s, QcOutcome& q) {
+  EffectTerms shift;  // the stream moves the time stamps; each set removes its own output terms
+  shift.time_offset_s = sets[idx[0]].effects.time_offset_s;
+  DriveStream st(dir, std::nullopt, shift.time_offset_s != 0 ? &shift : nullptr);
   const Mat3 C_nom = st.nominal_mounting();
   const Vec3 lever = st.lever_arm();
-  QcOutcome q;
-  q.horizon_s = horizon_s;
-  std::vector<std::unique_ptr<qc::InertialRun>> runs(sets.size());
-  for (const QcSet& s : sets) q.curves.push_back(QcCurve{s.name, {}, {}});
+  std::vector<std::unique_ptr<qc::InertialRun>> runs(idx.size());
+  std::vector<std::optional<ImuEffectCompensator>> comp(idx.size());
+  for (std::size_t i = 0; i < idx.size(); ++i)
+    if (sets[idx[i]].effects.any_sensor_side()) comp[i].emplace(sets[idx[i]].effects, sets[idx[i]].errors);
   bool started = false;
   double t0 = 0;
   DriveStream::Event e;
@@ -53,23 +61,51 @@ QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optio
         started = true;
         t0 = e.t;
         q.from_s = t0;
-        for (std::size_t i = 0; i < sets.size(); ++i) {
-          const Mat3 C = sets[i].mounting_rpy_deg ? ins::dcm_from_rpy(*sets[i].mounting_rpy_deg * units::kDeg) : C_nom;
-          runs[i] = std::make_unique<qc::InertialRun>(sets[i].errors, C, lever, e.ref);
+        for (std::size_t i = 0; i < idx.size(); ++i) {
+          const QcSet& s = sets[idx[i]];
+          const Mat3 C = s.mounting_rpy_deg ? ins::dcm_from_rpy(*s.mounting_rpy_deg * units::kDeg) : C_nom;
+          runs[i] = std::make_unique<qc::InertialRun>(s.errors, C, lever, e.ref);
         }
         continue;
       }
       if (e.t - t0 > horizon_s + 1e-9) break;
       if (e.t > runs[0]->time() + 1e-6) continue;  // beyond the IMU data
-      for (std::size_t i = 0; i < sets.size(); ++i) {
-        q.curves[i].t.push_back(e.t - t0);
-        q.curves[i].cpe.push_back(runs[i]->cpe(e.ref));
+      for (std::size_t i = 0; i < idx.size(); ++i) {
+        q.curves[idx[i]].t.push_back(e.t - t0);
+        q.curves[idx[i]].cpe.push_back(runs[i]->cpe(e.ref));
       }
     } else if (started) {
-      for (auto& r : runs) r->imu(e.t, e.dtheta, e.dv, e.dt);
+      for (std::size_t i = 0; i < idx.size(); ++i) {
+        if (!comp[i]) {
+          runs[i]->imu(e.t, e.dtheta, e.dv, e.dt);
+          continue;
+        }
+        Vec3 dth = e.dtheta, dv = e.dv;
+        comp[i]->increments(dth, dv, e.dt, e.temp_c);
+        runs[i]->imu(e.t, dth, dv, e.dt);
+      }
     }
   }
   if (!started) throw InputError(dir.string(), 0, "--from", "no reference epoch at or after the start time");
+}
+}  // namespace
+
+QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s, double horizon_s) {
+  QcOutcome q;
+  q.horizon_s = horizon_s;
+  for (const QcSet& s : sets) q.curves.push_back(QcCurve{s.name, {}, {}});
+  std::vector<std::vector<std::size_t>> groups;  // by time offset, in order of appearance
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    bool placed = false;
+    for (auto& g : groups)
+      if (sets[g[0]].effects.time_offset_s == sets[i].effects.time_offset_s) {
+        g.push_back(i);
+        placed = true;
+        break;
+      }
+    if (!placed) groups.push_back({i});
+  }
+  for (const auto& g : groups) run_qc_group(dir, sets, g, from_s, horizon_s, q);
   if (!q.curves.empty() && !q.curves[0].t.empty()) q.horizon_s = std::min(horizon_s, q.curves[0].t.back());
   return q;
 }

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/effects/effect_terms.hpp"
 #include "calibration/sensor_model.hpp"
 
 namespace calbench {
@@ -16,8 +17,10 @@ struct QcSet {
   SensorErrors errors;                 // zero for "none"
   std::optional<Vec3> mounting_rpy_deg;  // from an in-motion RESULT.json; else the nominal one
   std::optional<std::pair<double, double>> fit_window_s;  // the data the set was fitted on, if known
+  EffectTerms effects;                 // catalogue keys of the set (compensated on the IMU samples)
 };
 // A coefficients.json, an in-motion RESULT.json (its "coefficients" and "mounting_rpy_deg"), or "none".
+// Catalogue keys (docs/diagnosis.md) of the set are read into `effects`.
 QcSet load_qc_set(const std::string& arg);
 
 struct QcCurve {
@@ -28,6 +31,9 @@ struct QcOutcome {
   double from_s = 0, horizon_s = 0;
   std::vector<QcCurve> curves;
 };
+// Sets with catalogue terms: the output terms are removed from the raw samples before the set's
+// correction and the time stamps moved by the time offset (one pass over the data per distinct
+// time offset); bench-only terms are ignored.
 QcOutcome run_qc(const std::filesystem::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s,
                  double horizon_s);
 // The JSON: {"from_s", "horizon_s", "sets": [{"name", "final_cpe_m", "max_cpe_m", "cpe_m_at": {...}}]}.

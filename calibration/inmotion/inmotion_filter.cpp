@@ -222,12 +222,20 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
     Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
     const double nis = nu.dot(Sl.solve(nu));
     ConsistencyStats& st = stats_[type];
+    InnovationRecord& rec = innov_[type];
+    rec.t = r.t;
+    rec.nu = nu;
+    rec.S = H * PHt + o.R;
+    rec.nis = nis;
+    rec.status = InnovationRecord::used;
     if (!(nis <= cfg_.gate_nis)) {
       if (st.rejected_since < 0) st.rejected_since = r.t;
       if (!std::isfinite(nis) || r.t - st.rejected_since < cfg_.gate_recover_s) {
         ++st.rejected;
+        rec.status = InnovationRecord::rejected;
         continue;
       }
+      rec.status = InnovationRecord::forced;
       // Lost track: widen the navigation block (D·P·D, D = √λ on position, velocity, attitude)
       // until this innovation is at the gate, then use it.
       ++st.forced;

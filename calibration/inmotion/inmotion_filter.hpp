@@ -74,6 +74,18 @@ struct ConsistencyStats {
   double mean_nis() const { return used ? nis_sum / static_cast<double>(used) : 0.0; }
 };
 
+// The innovation of one observation type at the last reference epoch the filter took: ν = z − H·δx
+// (before this type's update), its covariance S = H·P·Hᵀ + R, NIS = νᵀS⁻¹ν (before any widening),
+// and what became of it. For innovation diagnostics (docs/diagnosis.md, Drives); read-only.
+struct InnovationRecord {
+  enum Status { used = 0, rejected = 1, forced = 2 };
+  double t = -1;  // reference epoch time, s (−1: none yet)
+  Vec3 nu = Vec3::Zero();
+  Mat3 S = Mat3::Zero();
+  double nis = 0;
+  Status status = used;
+};
+
 // True when some axis carries an exponential-cosine model: use InMotionFilterT<kStatesAug>.
 bool needs_augmented_layout(const InMotionConfig& cfg);
 
@@ -111,6 +123,7 @@ class InMotionFilterT {
   // Mounting as roll, pitch, yaw (rad) and their 1σ (through the Jacobian of the angles).
   void mounting_rpy(Vec3& rpy, Vec3& sigma) const;
   const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
+  const InnovationRecord& last_innovation(int type) const { return innov_[type]; }
   // Totals of every state (series units, see state_names(), then aux_state_names()) and their 1σ.
   void totals(Vec& x, Vec& sigma) const;
   // Total drift per axis, constant part + in-run shaping-filter state (b + d; series units
@@ -152,6 +165,7 @@ class InMotionFilterT {
   Vec3 w_last_ = Vec3::Zero();
   double last_obs_t_ = -1e300;
   ConsistencyStats stats_[3];
+  InnovationRecord innov_[3];
 
   // Smoother storage (float to halve memory): per propagation step k → k+1.
   struct Stored {
