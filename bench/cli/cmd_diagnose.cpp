@@ -16,6 +16,7 @@ namespace {
 struct DiagnoseArgs {
   std::string dir, coeffs, report, out, plan;
   bool json = false;
+  bool no_innovations = false;
 };
 
 // Drive recordings (meta.json kind "drive"): bench/diagnose/drive_run.hpp, docs/diagnosis.md "Drives".
@@ -24,7 +25,7 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
   if (!a.coeffs.empty()) given = read_drive_coeffs(a.coeffs);
   const DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
-  const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr);
+  const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr, !a.no_innovations);
   if (!a.out.empty()) write_coefficients(a.out, run.improved);
   if (!a.report.empty()) write_drive_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
@@ -74,6 +75,9 @@ const bool registered = add_command(60, [](CLI::App& app) {
   d->add_option("--out", a->out, "write IMPROVED.json: coefficients refitted with the new terms as extra keys");
   d->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
+  d->add_flag("--no-innovations", a->no_innovations,
+              "drives: skip the in-motion filter runs whose innovation statistics are reported (before/after the "
+              "new terms)");
   d->callback([a] { run_diagnose(*a); });
 });
 

@@ -1,12 +1,14 @@
 #include "bench/diagnose/drive_run.hpp"
 
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <random>
 #include <sstream>
 
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/drive/fit_drive.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "bench/io/input_error.hpp"
@@ -114,6 +116,7 @@ DriveCoeffs read_drive_coeffs(const std::string& file) {
 
 DriveDiagInput load_drive_diag_input(const std::filesystem::path& dir, const std::optional<Vec3>& rpy_deg) {
   DriveDiagInput in;
+  in.dir = dir;
   in.meta = read_meta(dir);
   const std::string mf = (dir / "meta.json").string();
   if (in.meta.kind != RecordingKind::drive) throw InputError(mf, 0, "kind", "expected a drive recording");
@@ -194,7 +197,40 @@ DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uin
   return in;
 }
 
-DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* coeffs) {
+DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun& run) {
+  DriveInnovations out;
+  const std::clock_t c0 = std::clock();
+  auto filter_run = [&](const CoefficientSet& set, InnovationStats (&stats)[3], std::vector<std::string>& applied) {
+    std::vector<InnovationSample> x[3];
+    FitDriveArgs a;
+    a.dir = in.dir.string();
+    a.coeffs_set = set;
+    a.qc = false;
+    a.write_out = false;
+    a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
+      x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
+    };
+    const nlohmann::json j = fit_drive(a);
+    if (j.contains("effects"))
+      for (const auto& k : j["effects"]["applied"]) applied.push_back(k.get<std::string>());
+    for (int k = 0; k < 3; ++k) stats[k] = innovation_stats(x[k], &in.data);
+  };
+  // "before": the improved b and M with only the terms that were tested (those the given
+  // coefficients carried); "after": IMPROVED.json. The difference is the new terms alone.
+  CoefficientSet before = run.improved;
+  before.extra = run.current.extra;
+  filter_run(before, out.before, out.applied_before);
+  out.compared = !run.result.core.findings.empty();
+  if (out.compared) filter_run(run.improved, out.after, out.applied_after);
+  else {
+    for (int k = 0; k < 3; ++k) out.after[k] = out.before[k];
+    out.applied_after = out.applied_before;
+  }
+  out.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  return out;
+}
+
+DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* coeffs, bool innovations) {
   DriveDiagRun run;
   DriveDiagnoseOptions opt;
   EffectTerms carried;
@@ -228,7 +264,88 @@ DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* co
                               {"tested", to_json(in.mounting_rpy_deg)}};
   }
   run.improved.extra["diagnosis"] = dj;
+  if (in.dir.empty()) return run;
+  if (!innovations) run.innovations_skipped = "skipped (--no-innovations)";
+  else run.innovations = drive_innovations(in, run);
   return run;
+}
+
+namespace {
+const char* kObsName[] = {"position", "velocity", "attitude"};
+
+nlohmann::json innovation_stats_json(const InnovationStats& s) {
+  nlohmann::json w = nlohmann::json::array(), c = nlohmann::json::array();
+  for (const auto& x : s.worst_windows)
+    w.push_back({{"t0_s", x.t0}, {"t1_s", x.t1}, {"nis_per_dof", x.nis_per_dof}, {"epochs", x.epochs}});
+  for (std::size_t k = 0; k < s.correlations.size() && k < 5; ++k)
+    c.push_back({{"condition", s.correlations[k].condition}, {"r", s.correlations[k].r}});
+  return {{"epochs", s.epochs},
+          {"used", s.used},
+          {"rejected", s.rejected},
+          {"forced", s.forced},
+          {"nis_per_dof", s.nis_per_dof},
+          {"median_nis_per_dof", s.median_nis_per_dof},
+          {"fraction_within_95pct", s.fraction_within_95},
+          {"ljung_box_p", {s.ljung_box_p[0], s.ljung_box_p[1], s.ljung_box_p[2]}},
+          {"ljung_box_p_min", s.ljung_box_p_min},
+          {"lag1_autocorr", {s.lag1_autocorr[0], s.lag1_autocorr[1], s.lag1_autocorr[2]}},
+          {"worst_windows_s", w},
+          {"correlations", c},
+          {"correlation_blocks", s.correlation_blocks}};
+}
+
+// One sentence per observation type: NIS/dof, gating, whiteness, worst window, strongest condition.
+std::string innovation_sentence(int type, const DriveInnovations& v) {
+  const InnovationStats& b = v.before[type];
+  const InnovationStats& a = v.after[type];
+  auto arrow = [&](double x, double y, int prec = 3) { return v.compared ? fmt(x, prec) + " → " + fmt(y, prec) : fmt(x, prec); };
+  std::ostringstream o;
+  o << kObsName[type] << " innovations: NIS/dof " << arrow(b.nis_per_dof, a.nis_per_dof) << " (1 if consistent), gated "
+    << (v.compared ? std::to_string(b.rejected) + " → " + std::to_string(a.rejected) : std::to_string(b.rejected)) << " of "
+    << b.epochs << "; whiteness (Ljung–Box p, worst component) " << arrow(b.ljung_box_p_min, a.ljung_box_p_min, 2)
+    << (a.ljung_box_p_min < 1e-4 ? " (not white)" : " (white)");
+  if (!a.worst_windows.empty()) {
+    const auto& w = a.worst_windows[0];
+    o << "; worst 20 s window " << fmt(w.t0, 4) << "–" << fmt(w.t1, 4) << " s (NIS/dof " << fmt(w.nis_per_dof) << ")";
+  }
+  if (!a.correlations.empty()) {
+    const auto& c = a.correlations[0];
+    double rb = 0;
+    for (const auto& x : b.correlations)
+      if (x.condition == c.condition) rb = x.r;
+    o << "; normalised magnitude follows " << c.condition << " most (r "
+      << (v.compared ? fmt(rb, 2) + " → " + fmt(c.r, 2) : fmt(c.r, 2)) << ", " << a.correlation_blocks << " blocks)";
+  }
+  return o.str();
+}
+}  // namespace
+
+nlohmann::json drive_innovations_json(const DriveDiagRun& run) {
+  if (!run.innovations) return {{"skipped", run.innovations_skipped}};
+  const DriveInnovations& v = *run.innovations;
+  nlohmann::json j;
+  j["method"] = "in-motion filter as `fit drive --coeffs` runs it (obs pos,vel,att); normalised innovation "
+                "ν_i/√S_ii per component (position, velocity: N, E, D; attitude: small-rotation axes)";
+  j["before"] = {{"coefficients", "the improved b and M with only the tested catalogue terms"},
+                 {"effects_applied", v.applied_before}};
+  j["after"] = {{"coefficients", v.compared ? "IMPROVED.json (the new terms too)" : "same as before (no new term)"},
+                {"effects_applied", v.applied_after}};
+  j["compared"] = v.compared;
+  j["cpu_s"] = v.cpu_s;
+  for (int k = 0; k < 3; ++k)
+    j[kObsName[k]] = {{"before", innovation_stats_json(v.before[k])}, {"after", innovation_stats_json(v.after[k])},
+                      {"sentence", innovation_sentence(k, v)}};
+  return j;
+}
+
+std::string drive_innovations_text(const DriveDiagRun& run) {
+  if (!run.innovations) return run.innovations_skipped.empty() ? "" : "in-motion filter innovations: " + run.innovations_skipped + "\n";
+  const DriveInnovations& v = *run.innovations;
+  std::ostringstream o;
+  o << "in-motion filter innovations (fit drive over the whole drive; " << (v.compared ? "without → with the new terms" : "no new term")
+    << ", " << fmt(v.cpu_s, 2) << " s CPU):\n";
+  for (int k = 0; k < 3; ++k) o << "  " << innovation_sentence(k, v) << "\n";
+  return o.str();
 }
 
 std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
@@ -346,6 +463,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
                       {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]}};
   j["data"] = {{"blocks", r.parents}, {"intervals", r.subs}, {"seconds", r.data_s},
                {"imu_rate_hz", in.data.imu_rate_hz}, {"skipped_intervals", in.data.skipped_intervals}};
+  if (run.innovations || !run.innovations_skipped.empty()) j["innovations"] = drive_innovations_json(run);
   return j;
 }
 
@@ -387,6 +505,7 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
     }
     o << "\n";
   }
+  o << drive_innovations_text(run);
   return o.str();
 }
 

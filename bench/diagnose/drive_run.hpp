@@ -12,6 +12,7 @@
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/recording.hpp"
 #include "calibration/diagnosis/drive_diagnose.hpp"
+#include "calibration/diagnosis/drive_innovations.hpp"
 
 namespace calbench {
 
@@ -26,6 +27,7 @@ struct DriveCoeffs {
 DriveCoeffs read_drive_coeffs(const std::string& file);
 
 struct DriveDiagInput {
+  std::filesystem::path dir;  // the recording (empty: simulated in memory)
   RecordingMeta meta;
   DriveDiagData data;
   Vec3 mounting_rpy_deg = Vec3::Zero();  // used for the prediction
@@ -42,16 +44,36 @@ DriveDiagInput load_drive_diag_input(const std::filesystem::path& dir, const std
 DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uint64_t seed, const EffectTerms& effects,
                                          double until_s = 0);
 
+// The in-motion filter (as `fit drive --coeffs` runs it, default observations pos,vel,att) over the
+// drive, once with the improved b and M and only the catalogue terms that were tested (those the
+// given coefficients carried: "before"), once with IMPROVED.json (the new terms too: "after"), and
+// its innovation statistics per observation type (calibration/diagnosis/drive_innovations.hpp).
+// Without new terms the second run is the first.
+struct DriveInnovations {
+  InnovationStats before[3], after[3];  // position, velocity, attitude
+  bool compared = false;                // a second run with the new terms was made
+  std::vector<std::string> applied_before, applied_after;  // catalogue keys the filter applied
+  double cpu_s = 0;                     // both runs
+};
+
 struct DriveDiagRun {
   DriveDiagnoseResult result;
   CoefficientSet current;   // what was tested ("before")
   CoefficientSet improved;  // IMPROVED.json
   bool coeffs_given = false;
+  std::optional<DriveInnovations> innovations;  // with a recording on disk, unless skipped
+  std::string innovations_skipped;              // why not (empty: ran, or simulated in memory)
 };
 
-DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* coeffs);
+// innovations: run the in-motion filter for the innovation statistics (needs in.dir).
+DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* coeffs, bool innovations = true);
+// The innovation part alone (run_drive_diagnosis calls it).
+DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun& run);
 
 nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun& run);
+// The "innovations" object of the JSON and its text lines (empty when simulated in memory).
+nlohmann::json drive_innovations_json(const DriveDiagRun& run);
+std::string drive_innovations_text(const DriveDiagRun& run);
 std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& run);
 // shown_sensor: sensor (0 gyro, 1 accel) of the axis the RMS figures are for (−1: the finding's).
 std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor = -1);

@@ -1,0 +1,132 @@
+#include "calibration/diagnosis/drive_innovations.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "calibration/diagnosis/drive_diagnose.hpp"
+
+namespace calbench {
+
+namespace {
+constexpr double kChi2_3_95 = 7.814727903251178;
+
+double corr(const std::vector<double>& x, const std::vector<double>& y) {
+  const std::size_t n = x.size();
+  if (n < 3) return 0.0;
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    mx += x[i];
+    my += y[i];
+  }
+  mx /= n;
+  my /= n;
+  double sxy = 0, sxx = 0, syy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+}
+}  // namespace
+
+InnovationStats innovation_stats(const std::vector<InnovationSample>& x, const DriveDiagData* data, double window_s,
+                                 int n_worst, int n_correlations) {
+  InnovationStats s;
+  std::vector<double> comp[3], nis_all;
+  double nis_used = 0;
+  long within = 0;
+  for (const InnovationSample& e : x) {
+    if (!std::isfinite(e.nis)) continue;
+    ++s.epochs;
+    nis_all.push_back(e.nis / 3.0);
+    if (e.status == 1) ++s.rejected;
+    else {
+      if (e.status == 2) ++s.forced;
+      else {
+        ++s.used;
+        nis_used += e.nis;
+        if (e.nis <= kChi2_3_95) ++within;
+      }
+    }
+    for (int i = 0; i < 3; ++i) comp[i].push_back(e.S(i, i) > 0 ? e.nu(i) / std::sqrt(e.S(i, i)) : 0.0);
+  }
+  if (s.epochs == 0) return s;
+  s.nis_per_dof = s.used ? nis_used / (3.0 * static_cast<double>(s.used)) : 0.0;
+  s.fraction_within_95 = s.used ? static_cast<double>(within) / static_cast<double>(s.used) : 0.0;
+  {
+    std::vector<double> v = nis_all;
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    s.median_nis_per_dof = v[v.size() / 2];
+  }
+  s.ljung_box_p_min = 1;
+  for (int i = 0; i < 3; ++i) {
+    double q = 0, p = 1;
+    ljung_box(comp[i], 10, q, p);
+    s.ljung_box_p[i] = p;
+    s.ljung_box_p_min = std::min(s.ljung_box_p_min, p);
+    const std::vector<double>& c = comp[i];
+    std::vector<double> a(c.begin() + 1, c.end()), b(c.begin(), c.end() - 1);
+    s.lag1_autocorr[i] = corr(a, b);
+  }
+
+  // Worst windows by mean NIS/dof (all epochs: a gated stretch is the worst place).
+  std::map<long, std::pair<double, int>> win;
+  for (const InnovationSample& e : x) {
+    if (!std::isfinite(e.nis)) continue;
+    auto& w = win[static_cast<long>(std::floor(e.t / window_s))];
+    w.first += e.nis / 3.0;
+    ++w.second;
+  }
+  for (const auto& [k, w] : win)
+    s.worst_windows.push_back({k * window_s, (k + 1) * window_s, w.first / w.second, w.second});
+  std::sort(s.worst_windows.begin(), s.worst_windows.end(),
+            [](const auto& a, const auto& b) { return a.nis_per_dof > b.nis_per_dof; });
+  if (static_cast<int>(s.worst_windows.size()) > n_worst) s.worst_windows.resize(static_cast<std::size_t>(n_worst));
+
+  // Correlation with the drive conditions over the diagnosis blocks.
+  if (data && !data->parents.empty()) {
+    const int NP = static_cast<int>(data->parents.size());
+    std::vector<double> sum(NP, 0.0);
+    std::vector<int> cnt(NP, 0);
+    std::vector<double> starts(NP);
+    for (int k = 0; k < NP; ++k) starts[k] = data->parents[k].t_mid - 0.5 * data->parents[k].duration;
+    for (const InnovationSample& e : x) {
+      if (!std::isfinite(e.nis)) continue;
+      const auto it = std::upper_bound(starts.begin(), starts.end(), e.t);
+      if (it == starts.begin()) continue;
+      const int k = static_cast<int>(it - starts.begin()) - 1;
+      if (e.t > data->parents[k].t_mid + 0.5 * data->parents[k].duration + 1e-9) continue;
+      sum[k] += std::sqrt(std::max(0.0, e.nis) / 3.0);
+      ++cnt[k];
+    }
+    std::vector<int> ks;
+    std::vector<double> y;
+    for (int k = 0; k < NP; ++k)
+      if (cnt[k] > 0) {
+        ks.push_back(k);
+        y.push_back(sum[k] / cnt[k]);
+      }
+    s.correlation_blocks = static_cast<int>(ks.size());
+    if (ks.size() >= 10) {
+      for (const std::string& name : drive_condition_names(data->has_temperature)) {
+        std::vector<double> c;
+        for (int k : ks) c.push_back(drive_condition_value(*data, k, name));
+        s.correlations.push_back({name, corr(c, y)});
+        const bool is_signed = name.size() == 3 && name[1] == '_';
+        if (is_signed || name == "turn_rate" || name == "along_accel") {
+          for (double& v : c) v = std::abs(v);
+          s.correlations.push_back({"|" + name + "|", corr(c, y)});
+        }
+      }
+      std::sort(s.correlations.begin(), s.correlations.end(),
+                [](const auto& a, const auto& b) { return std::abs(a.r) > std::abs(b.r); });
+      if (n_correlations >= 0 && static_cast<int>(s.correlations.size()) > n_correlations)
+        s.correlations.resize(static_cast<std::size_t>(n_correlations));
+    }
+  }
+  return s;
+}
+
+}  // namespace calbench
