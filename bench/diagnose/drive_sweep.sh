@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Issue-7 acceptance sweep of the DRIVE diagnosis (tests/perf/diagnose_drive_sweep_bench.cpp; slow:
+# ~190 in-memory simulations of the 3.6-minute test route tests/data/drive_diag_route.toml, each
+# diagnosed): clean drives (false findings, anything unexplained; DIAGNOSE_DRIVE_CLEAN_SEEDS, default
+# 40) and every drive catalogue effect × 3 magnitudes around its detection limit ×
+# DIAGNOSE_DRIVE_SWEEP_SEEDS seeds, axes and signs (default 5), plus two effects at once: detection,
+# right sensor/axis, value error, cut of the systematic residual, other findings, unexplained.
+# Prints one row per benchmark with its counters, then (with jq) the same as a markdown table;
+# runs that miss a criterion are listed on stderr with seed and --inject options.
+# Usage: bench/diagnose/drive_sweep.sh [BUILD_DIR] [extra benchmark args, e.g. --benchmark_filter=lever_arm]
+set -euo pipefail
+BUILD=${1:-build}
+shift || true
+cmake --build "$BUILD" --target calbench_perf >/dev/null
+json=$(mktemp /tmp/drive_sweep.XXXXXX.json)
+trap 'rm -f "$json"' EXIT
+DIAGNOSE_DRIVE_SWEEP=1 "$BUILD/tests/calbench_perf" \
+  --benchmark_filter="${DIAGNOSE_DRIVE_SWEEP_FILTER:-BM_DiagnoseDrive_Sweep}" \
+  --benchmark_counters_tabular=true --benchmark_out="$json" --benchmark_out_format=json "$@"
+command -v jq >/dev/null || exit 0
+echo
+jq -r '
+  def pct: if . == null or (type == "number" and isnan) then "–" else (. * 10 | round / 10 | tostring) end;
+  [.benchmarks[] | select(.name | test("SweepClean"))][] |
+    "**Clean drives: \(.runs) seeds, no finding in \(.no_finding_pct | pct) %, \(.false_findings) false findings, \(.runs_with_unexplained) with something unexplained; χ²/dof before \(.chi2_dof_min * 100 | round / 100)–\(.chi2_dof_max * 100 | round / 100) (median \(.chi2_dof_median * 100 | round / 100)).**"
+' "$json"
+echo
+echo "| effect / magnitude | runs | detected | right sensor, axis | value within 20 % | value error median / max | cut ≥ 80 % or to floor (measurable) | cut not measurable | runs with another finding | runs with unexplained | all criteria |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+jq -r '
+  def pct: if . == null or (type == "number" and isnan) then "–" else (. * 10 | round / 10 | tostring) end;
+  .benchmarks[] | select(.name | test("SweepClean") | not) | select(.runs != null) |
+    "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
+' "$json"

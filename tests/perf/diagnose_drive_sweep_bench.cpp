@@ -1,0 +1,363 @@
+// Issue 7 acceptance sweep of the DRIVE diagnosis (docs/diagnosis.md, "Drives"), the drive-side
+// counterpart of diagnose_sweep_bench.cpp: many seeds of clean drives (false findings, anything
+// "unexplained") and every drive catalogue effect × 3 magnitudes bracketing the detection limit the
+// docs quote for drives × several seeds, axes and signs, plus two effects at once.
+// Drives simulated in memory on tests/data/drive_diag_route.toml (3.6 minutes, 200 Hz IMU, 50 Hz
+// reference; random unit and mounting per seed), the concealed effect injected through the
+// `--inject` option text (apply_inject_option), diagnosed without --coeffs (run_drive_diagnosis):
+// the diagnosis sees only the simulated recording and the route's nominal mounting.
+// Criteria per run are those of tests/unit/bench/diagnose_drive_effects_test.cpp (check_one): the
+// effect found, with the right sensor (term) and reported axis; value within 20 %; systematic
+// residual measurable (rms_before > 2·floor) and cut: rms_after ≤ max(0.2·rms_before, floor);
+// no other finding; nothing unexplained.
+// Takes minutes: runs only with DIAGNOSE_DRIVE_SWEEP=1 (bench/diagnose/drive_sweep.sh), otherwise
+// every row skips at once. DIAGNOSE_DRIVE_SWEEP_SEEDS (default 5) seeds per effect and magnitude,
+// DIAGNOSE_DRIVE_CLEAN_SEEDS (default 40) clean drives. Seeds: effects 1000 + 50·(table row) + k
+// (the same seeds for every magnitude of an effect), two effects 3000 + 50·row + k, clean 5000 + k;
+// the unit tests use 11–139. A run that misses any criterion is printed on stderr with its seed
+// and --inject options (to reproduce it with `calbench simulate drive --route ... --truth random
+// --seed S --inject ...`).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "bench/diagnose/drive_run.hpp"
+#include "bench/diagnose/effects_json.hpp"
+
+namespace calbench {
+namespace {
+
+int env_int(const char* name, int def) {
+  const char* e = std::getenv(name);
+  return e ? std::max(1, std::atoi(e)) : def;
+}
+
+const std::string& route() {
+  static const std::string r = std::string(CALBENCH_SOURCE_DIR) + "/tests/data/drive_diag_route.toml";
+  return r;
+}
+
+bool skip_unless_enabled(benchmark::State& state) {
+  if (std::getenv("DIAGNOSE_DRIVE_SWEEP")) return false;
+  state.SkipWithError("set DIAGNOSE_DRIVE_SWEEP=1 (bench/diagnose/drive_sweep.sh) to run the drive diagnosis sweep (minutes)");
+  return true;
+}
+
+// One catalogue effect as the sweep injects and expects it.
+// `inject`: the --inject option with placeholders {v} (the signed value), {a} (the axis letter),
+// {f} (the second axis letter: g-sensitivity force axis).
+// `axes`: (axis, second axis) pairs cycled by the seed index k; the sign flips every full cycle
+// (every seed when there is one pair), so axis and sign both vary with k.
+// Expected finding: `effect`, term sensor `sensor` (0 gyro, 1 accel, 2 reference), reported axis =
+// the pair's axis (−1: all axes), compared parameter: `param` = 0, 'a' (the axis) or 'f' (second).
+struct Spec {
+  const char* name;
+  const char* inject;
+  EffectId effect;
+  int sensor;
+  std::vector<std::pair<int, int>> axes;
+  char param;         // '0', 'a' or 'f'
+  bool signed_value;  // false: always positive (drift σ)
+  const char* unit;   // label unit
+  double label_scale; // magnitude × label_scale in the row name
+};
+
+struct Component {
+  const Spec* spec;
+  double magnitude;
+};
+
+// Drive detection limits quoted in docs/diagnosis.md ("Drives", measured on this route):
+// g-sensitivity ≈ 4–5e-5 rad/s/(m/s²), time offset < 1 ms, lever arm a few mm horizontally,
+// gyro z asymmetry ≈ 500 ppm. For the terms without a quoted limit the magnitudes bracket the
+// one the unit-test value implies (Δχ² ∝ value²; Δχ² ≥ 40 needed): gyro z nonlinearity
+// 4e-3/(rad/s) had Δχ² 237 (limit ≈ 1.6e-3), accelerometer asymmetry 2000 ppm 580 (≈ 530 ppm),
+// accelerometer nonlinearity 1e-3/(m/s²) 352 (≈ 3.4e-4). correlated_drift: σ is chosen on a ×2
+// grid of the data-sheet value (5.1 °/h, 0.1 mg) with τ ∈ {60, 300, 1200} s, so the injected σ are
+// grid points (×4, ×8, ×16) with τ = 60 s — the 20 % criterion then asks for the right grid cell
+// (neighbours are 50 % / 100 % off).
+// Axes: what a car shows (docs: gyro z scale terms, horizontal forces and lever-arm components;
+// the IMU's z is vertical on this route's mounting, its x and y horizontal).
+const std::vector<Spec>& specs() {
+  using P = std::pair<int, int>;
+  static const std::vector<Spec> s = {
+      {"g_sensitivity", "g_sensitivity:axis={a},f={f},value={v}", EffectId::g_sensitivity, 0,
+       {P{0, 1}, P{2, 0}, P{1, 0}, P{2, 1}}, 'f', true, "rad_s_per_m_s2", 1},
+      {"time_offset", "time_offset:value={v}", EffectId::time_offset, 2, {P{-1, -1}}, '0', true, "ms", 1e3},
+      {"lever_arm", "lever_arm:{a}={v}", EffectId::lever_arm, 1, {P{0, 0}, P{1, 1}}, 'a', true, "mm", 1e3},
+      {"scale_asymmetry/gyro", "scale_asymmetry:sensor=gyro,axis={a},value={v}", EffectId::scale_asymmetry, 0,
+       {P{2, 2}}, '0', true, "ppm", 1e6},
+      {"scale_asymmetry/accel", "scale_asymmetry:sensor=accel,axis={a},value={v}", EffectId::scale_asymmetry, 1,
+       {P{0, 0}, P{1, 1}}, '0', true, "ppm", 1e6},
+      {"scale_nonlinearity/gyro", "scale_nonlinearity:sensor=gyro,axis={a},value={v}", EffectId::scale_nonlinearity, 0,
+       {P{2, 2}}, '0', true, "per_rad_s", 1},
+      {"scale_nonlinearity/accel", "scale_nonlinearity:sensor=accel,axis={a},value={v}", EffectId::scale_nonlinearity,
+       1, {P{0, 0}, P{1, 1}}, '0', true, "per_m_s2", 1},
+      {"correlated_drift/gyro", "correlated_drift:sensor=gyro,sigma={v},tau=60", EffectId::correlated_drift, 0,
+       {P{-1, -1}}, '0', false, "rad_s_tau60s", 1},
+      {"correlated_drift/accel", "correlated_drift:sensor=accel,sigma={v},tau=60", EffectId::correlated_drift, 1,
+       {P{-1, -1}}, '0', false, "m_s2_tau60s", 1},
+  };
+  return s;
+}
+
+const Spec& spec(const char* name) {
+  for (const auto& s : specs())
+    if (std::string(s.name) == name) return s;
+  std::abort();
+}
+
+// The sweep table: effect × magnitudes (SI).
+struct Row {
+  const char* spec;
+  std::vector<double> magnitudes;
+};
+const std::vector<Row>& rows() {
+  const double gs = 5.1 * M_PI / 180 / 3600;  // data-sheet gyro drift σ, rad/s
+  const double as = 0.1e-3 * 9.80665;         // data-sheet accelerometer drift σ, m/s²
+  static const std::vector<Row> r = {
+      {"g_sensitivity", {3e-5, 5e-5, 8e-5}},
+      {"time_offset", {0.5e-3, 1e-3, 2e-3}},
+      {"lever_arm", {0.003, 0.006, 0.012}},
+      {"scale_asymmetry/gyro", {300e-6, 500e-6, 800e-6}},
+      {"scale_asymmetry/accel", {500e-6, 1000e-6, 2000e-6}},
+      {"scale_nonlinearity/gyro", {1.5e-3, 2.5e-3, 4e-3}},
+      {"scale_nonlinearity/accel", {3e-4, 6e-4, 1e-3}},
+      {"correlated_drift/gyro", {4 * gs, 8 * gs, 16 * gs}},
+      {"correlated_drift/accel", {4 * as, 8 * as, 16 * as}},
+  };
+  return r;
+}
+
+// Two effects at once, above their limits.
+struct Combo {
+  const char* name;
+  std::vector<std::pair<const char*, double>> parts;
+};
+const std::vector<Combo>& combos() {
+  static const std::vector<Combo> c = {
+      {"g_sensitivity_6e-5+lever_arm_10mm", {{"g_sensitivity", 6e-5}, {"lever_arm", 0.010}}},
+      {"time_offset_1.5ms+scale_asymmetry_gyro_800ppm", {{"time_offset", 1.5e-3}, {"scale_asymmetry/gyro", 800e-6}}},
+  };
+  return c;
+}
+
+std::string fmt(double v, const char* f = "%.9g") {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+struct Expected {
+  EffectId effect;
+  int sensor, axis, param;
+  double value;
+  std::string inject;
+};
+
+Expected expect(const Component& c, int k) {
+  const Spec& s = *c.spec;
+  const int n = static_cast<int>(s.axes.size());
+  const auto [a, f] = s.axes[k % n];
+  const double sign = s.signed_value && (k / n) % 2 ? -1.0 : 1.0;
+  Expected x;
+  x.effect = s.effect;
+  x.sensor = s.sensor;
+  x.axis = a;
+  x.param = s.param == 'a' ? a : s.param == 'f' ? f : 0;
+  x.value = sign * c.magnitude;
+  const char* letters = "xyz";
+  std::string t = s.inject;
+  auto repl = [&](const std::string& key, const std::string& by) {
+    for (std::size_t p; (p = t.find(key)) != std::string::npos;) t.replace(p, key.size(), by);
+  };
+  repl("{v}", fmt(x.value));
+  if (a >= 0) repl("{a}", std::string(1, letters[a]));
+  if (f >= 0) repl("{f}", std::string(1, letters[f]));
+  x.inject = t;
+  return x;
+}
+
+std::string describe(const DriveDiagRun& run) {
+  std::string s;
+  const auto& R = run.result;
+  for (std::size_t i = 0; i < R.core.findings.size(); ++i) {
+    const DiagFinding& f = R.core.findings[i];
+    s += f.term.label() + " axis " + std::to_string(f.report_axis) + " [";
+    for (double v : f.value) s += fmt(v, "%.3g") + " ";
+    s += "] rms " + fmt(f.rms_before, "%.3g") + " -> " + fmt(f.rms_after, "%.3g");
+    if (i < R.rms_floor.size()) s += " (floor " + fmt(R.rms_floor[i], "%.3g") + ")";
+    s += "; ";
+  }
+  for (const auto& u : R.core.unexplained)
+    s += std::string("unexplained ") + (u.sensor ? "accel " : "gyro ") + "xyz"[u.axis] + "; ";
+  return s.empty() ? "no finding" : s;
+}
+
+struct Tally {
+  int runs = 0, detected = 0, right_place = 0, value_ok = 0, cut_ok = 0, cut_na = 0, other = 0, unexplained = 0,
+      all_ok = 0;
+  std::vector<double> rel_err, cut;
+};
+
+// One drive with `parts` concealed (seed index k), scored against every part.
+void run_one(const std::string& row, const std::vector<Component>& parts, int k, std::uint64_t seed, Tally& t) {
+  EffectTerms fx;
+  std::vector<Expected> xs;
+  std::string injects;
+  for (const auto& c : parts) {
+    xs.push_back(expect(c, k));
+    apply_inject_option(xs.back().inject, fx);
+    injects += " --inject " + xs.back().inject;
+  }
+  const DriveDiagInput in = simulate_drive_diag_input(route(), seed, fx);
+  const DriveDiagRun run = run_drive_diagnosis(in, nullptr);
+  const auto& fs = run.result.core.findings;
+  ++t.runs;
+  bool all_det = true, all_place = true, all_val = true, all_cut = true;
+  std::size_t matched = 0;
+  std::vector<std::string> why;
+  for (const auto& x : xs) {
+    int fi = -1;
+    for (std::size_t i = 0; i < fs.size(); ++i)  // that effect, on the expected sensor if there are two
+      if (fs[i].term.effect == x.effect && (fi < 0 || fs[i].term.sensor == x.sensor)) fi = static_cast<int>(i);
+    if (fi < 0) {
+      all_det = all_place = all_val = all_cut = false;
+      why.push_back("not detected");
+      continue;
+    }
+    ++matched;
+    const DiagFinding& f = fs[fi];
+    const bool place = f.term.sensor == x.sensor && f.report_axis == x.axis;
+    const double e = static_cast<int>(f.value.size()) > x.param
+                         ? std::abs(f.value[x.param] - x.value) / std::abs(x.value)
+                         : std::nan("");
+    t.rel_err.push_back(e);
+    // Cut: as the unit tests (rms_before > 2·floor, rms_after ≤ max(0.2·rms_before, floor)); a
+    // figure not above twice its noise floor is "not measurable" (counted apart, as on the bench).
+    const double floor = static_cast<std::size_t>(fi) < run.result.rms_floor.size() ? run.result.rms_floor[fi] : 0.0;
+    const bool measurable = f.rms_before > 2 * floor && f.rms_before > 0;
+    const bool cut = !measurable || f.rms_after <= std::max(0.2 * f.rms_before, floor);
+    if (measurable) t.cut.push_back(1.0 - f.rms_after / f.rms_before);
+    t.cut_na += !measurable;
+    if (!place) why.push_back("wrong place");
+    if (!(e <= 0.2)) why.push_back("value off " + fmt(100 * e, "%.1f") + " %");
+    if (!cut) why.push_back("cut only " + fmt(100 * (1.0 - f.rms_after / f.rms_before), "%.0f") + " %");
+    all_place = all_place && place;
+    all_val = all_val && e <= 0.2;
+    all_cut = all_cut && cut;
+    t.cut_ok += measurable && cut;
+  }
+  const bool other = fs.size() > matched;
+  const bool unexp = !run.result.core.unexplained.empty();
+  if (other) why.push_back("another finding");
+  if (unexp) why.push_back("unexplained");
+  t.detected += all_det;
+  t.right_place += all_place;
+  t.value_ok += all_val;
+  t.other += other;
+  t.unexplained += unexp;
+  const bool ok = all_det && all_place && all_val && all_cut && !other && !unexp;
+  t.all_ok += ok;
+  if (!ok) {
+    std::string w;
+    for (const auto& s : why) w += (w.empty() ? "" : ", ") + s;
+    std::fprintf(stderr, "drive sweep %s: seed %llu%s: %s | %s\n", row.c_str(), static_cast<unsigned long long>(seed),
+                 injects.c_str(), w.c_str(), describe(run).c_str());
+  }
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void report(benchmark::State& state, const Tally& t, double magnitude) {
+  const double n = std::max(1, t.runs);
+  state.counters["magnitude"] = magnitude;
+  state.counters["runs"] = t.runs;
+  state.counters["detected_pct"] = 100.0 * t.detected / n;
+  state.counters["right_axis_pct"] = 100.0 * t.right_place / n;
+  state.counters["value_within20_pct"] = 100.0 * t.value_ok / n;
+  state.counters["value_err_median_pct"] = 100.0 * median(t.rel_err);
+  state.counters["value_err_max_pct"] =
+      t.rel_err.empty() ? std::nan("") : 100.0 * *std::max_element(t.rel_err.begin(), t.rel_err.end());
+  const int measurable = static_cast<int>(t.cut.size());
+  state.counters["cut_ge80_pct"] = measurable > 0 ? 100.0 * t.cut_ok / measurable : std::nan("");
+  state.counters["cut_not_measurable"] = t.cut_na;
+  state.counters["cut_median_pct"] = 100.0 * median(t.cut);
+  state.counters["other_findings_runs"] = t.other;
+  state.counters["unexplained_runs"] = t.unexplained;
+  state.counters["all_criteria_pct"] = 100.0 * t.all_ok / n;
+}
+
+void sweep_row(benchmark::State& state, const std::string& name, const std::vector<Component>& parts,
+               std::uint64_t seed0) {
+  if (skip_unless_enabled(state)) return;
+  const int seeds = env_int("DIAGNOSE_DRIVE_SWEEP_SEEDS", 5);
+  for (auto _ : state) {
+    Tally t;
+    for (int k = 0; k < seeds; ++k) run_one(name, parts, k, seed0 + k, t);
+    report(state, t, parts.size() == 1 ? parts[0].magnitude : 0.0);
+  }
+}
+
+void BM_DiagnoseDrive_SweepClean(benchmark::State& state) {
+  if (skip_unless_enabled(state)) return;
+  const int seeds = env_int("DIAGNOSE_DRIVE_CLEAN_SEEDS", 40);
+  for (auto _ : state) {
+    int with = 0, findings = 0, unexplained = 0;
+    std::vector<double> chi2;
+    for (int k = 0; k < seeds; ++k) {
+      const std::uint64_t seed = 5000 + k;
+      const DriveDiagRun run = run_drive_diagnosis(simulate_drive_diag_input(route(), seed, EffectTerms{}), nullptr);
+      const auto& R = run.result.core;
+      with += !R.findings.empty();
+      findings += static_cast<int>(R.findings.size());
+      unexplained += !R.unexplained.empty();
+      for (int a = 0; a < 6; ++a) chi2.push_back(R.before[a].chi2_dof);
+      if (!R.findings.empty() || !R.unexplained.empty())
+        std::fprintf(stderr, "drive sweep clean: seed %llu: %s\n", static_cast<unsigned long long>(seed),
+                     describe(run).c_str());
+    }
+    state.counters["runs"] = seeds;
+    state.counters["no_finding_pct"] = 100.0 * (seeds - with) / seeds;
+    state.counters["false_findings"] = findings;
+    state.counters["runs_with_unexplained"] = unexplained;
+    state.counters["chi2_dof_min"] = *std::min_element(chi2.begin(), chi2.end());
+    state.counters["chi2_dof_median"] = median(chi2);
+    state.counters["chi2_dof_max"] = *std::max_element(chi2.begin(), chi2.end());
+  }
+}
+BENCHMARK(BM_DiagnoseDrive_SweepClean)->Unit(benchmark::kSecond)->Iterations(1);
+
+void register_sweeps() {
+  auto add = [](const std::string& name, std::vector<Component> parts, std::uint64_t seed0) {
+    benchmark::RegisterBenchmark(("BM_DiagnoseDrive_Sweep/" + name).c_str(),
+                                 [name, parts, seed0](benchmark::State& s) { sweep_row(s, name, parts, seed0); })
+        ->Unit(benchmark::kSecond)
+        ->Iterations(1);
+  };
+  for (std::size_t i = 0; i < rows().size(); ++i) {
+    const Spec& s = spec(rows()[i].spec);
+    for (double m : rows()[i].magnitudes)
+      add(std::string(s.name) + "/" + fmt(m * s.label_scale, "%.3g") + s.unit, {{&s, m}}, 1000 + 50 * i);
+  }
+  for (std::size_t i = 0; i < combos().size(); ++i) {
+    std::vector<Component> parts;
+    for (const auto& [n, m] : combos()[i].parts) parts.push_back({&spec(n), m});
+    add(std::string("two_effects/") + combos()[i].name, parts, 3000 + 50 * i);
+  }
+}
+
+const bool registered = (register_sweeps(), true);
+
+}  // namespace
+}  // namespace calbench
