@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
-# The drive estimators understand IMPROVED.json: simulate a drive with a concealed time offset,
-# diagnose it (--out IMPROVED.json; the JSON's "innovations" compare the in-motion filter without
-# and with the found terms), then `fit drive --coeffs IMPROVED.json` says it applied the time
-# offset and its attitude and velocity NIS are lower than with the same coefficients without the
-# catalogue keys, and lower than with the time offset of the wrong sign (the sign round-trips).
-# `qc` applies the keys of a RESULT.json; bench-only keys are ignored with a note.
+# The drive estimators understand IMPROVED.json: simulate a drive with a concealed time offset and
+# accelerometer lever arm, diagnose it (--out IMPROVED.json; the JSON's "innovations" compare the
+# in-motion filter without and with the found terms), then `fit drive --coeffs IMPROVED.json` says
+# it applied both, and its attitude and velocity NIS are lower than with the same coefficients
+# without the catalogue keys, which in turn gate out fewer epochs than the time offset with the
+# wrong sign (the sign round-trips). `qc` applies the keys of a RESULT.json; bench-only keys are
+# ignored with a note; --no-innovations skips the filter runs.
 set -euo pipefail
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 ROUTE="$SRC/tests/data/drive_diag_route.toml"
 "$CALBENCH" simulate drive --route "$ROUTE" --truth random --seed 43 --out "$T/rec" \
-  --inject time_offset:value=0.008 >/dev/null
+  --inject time_offset:value=0.008 --inject lever_arm:y=-0.04 >/dev/null
 "$CALBENCH" diagnose "$T/rec" --json --out "$T/improved.json" >"$T/d.json"
 python3 - "$T" <<'PY'
 import json, sys
@@ -18,9 +19,10 @@ t = sys.argv[1]
 d = json.load(open(t + "/d.json"))
 by = {f["effect"]: f for f in d["findings"]}
 assert "time_offset" in by and abs(by["time_offset"]["value"] - 0.008) < 0.0008, d["findings"]
+assert "lever_arm" in by and abs(by["lever_arm"]["value"][1] + 0.04) < 0.008, d["findings"]
 inn = d["innovations"]
 assert inn["compared"] is True, inn
-assert "time_offset" in inn["after"]["effects_applied"] and "time_offset" not in inn["before"]["effects_applied"], inn
+assert inn["after"]["effects_applied"] == ["lever_arm", "time_offset"] and inn["before"]["effects_applied"] == [], inn
 for k in ("attitude", "velocity"):
     b, a = inn[k]["before"], inn[k]["after"]
     assert a["nis_per_dof"] < 0.8 * b["nis_per_dof"], (k, b["nis_per_dof"], a["nis_per_dof"])
@@ -42,13 +44,13 @@ PY
 for s in improved plain wrong bench; do
   "$CALBENCH" fit drive "$T/rec" --coeffs "$T/$s.json" --out "$T/r_$s.json" --window 0:150 >"$T/fit_$s.txt"
 done
-grep -q "catalogue terms applied: time_offset" "$T/fit_improved.txt" || { cat "$T/fit_improved.txt"; exit 1; }
+grep -q "catalogue terms applied: lever_arm time_offset" "$T/fit_improved.txt" || { cat "$T/fit_improved.txt"; exit 1; }
 grep -q "catalogue term ignored: misalignment" "$T/fit_bench.txt" || { cat "$T/fit_bench.txt"; exit 1; }
 python3 - "$T" <<'PY'
 import json, sys
 t = sys.argv[1]
 r = {s: json.load(open(f"{t}/r_{s}.json")) for s in ("improved", "plain", "wrong", "bench")}
-assert r["improved"]["effects"]["applied"] == ["time_offset"], r["improved"]["effects"]
+assert r["improved"]["effects"]["applied"] == ["lever_arm", "time_offset"], r["improved"]["effects"]
 assert abs(r["improved"]["effects"]["time_offset_s"] - 0.008) < 0.0008, r["improved"]["effects"]
 assert "effects" not in r["plain"], r["plain"].keys()
 assert r["improved"]["coefficients"]["time_offset"]["s"] == r["improved"]["effects"]["time_offset_s"]
