@@ -4,6 +4,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "bench/io/input_error.hpp"
+#include "calibration/effects/effect_compensation.hpp"
 
 namespace calbench::cli {
 namespace {
@@ -32,6 +33,15 @@ void run(const QcArgs& a) {
   const QcOutcome q = run_qc(a.dir, sets, from, a.horizon);
   nlohmann::json j = qc_json(q);
   j["sample"] = sample;
+  // Catalogue terms of a set (docs/diagnosis.md): which were applied, which ignored (only for sets
+  // that carry any, so the output of plain sets is unchanged).
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    if (!sets[i].effects.any()) continue;
+    const EffectUse u = drive_effect_use(sets[i].effects, q.has_temperature);
+    nlohmann::json ign = nlohmann::json::array();
+    for (const auto& [k, why] : u.ignored) ign.push_back({{"key", k}, {"reason", why}});
+    j["sets"][i]["effects"] = {{"applied", u.applied}, {"ignored", ign}};
+  }
   if (!a.plot.empty()) qc_plot(q, a.plot, "Inertial-only navigation, " + a.dir);
   if (a.json) {
     print_json(j.dump(2));
@@ -43,6 +53,11 @@ void run(const QcArgs& a) {
     std::cout << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
               << s["max_cpe_m"].get<double>() << " m";
     for (const auto& [k, v] : s["cpe_m_at"].items()) std::cout << ", @" << k << " s " << v.get<double>() << " m";
+    if (s.contains("effects")) {
+      std::cout << "; catalogue terms applied:";
+      for (const auto& k : s["effects"]["applied"]) std::cout << ' ' << k.get<std::string>();
+      for (const auto& k : s["effects"]["ignored"]) std::cout << " (ignored: " << k["key"].get<std::string>() << ")";
+    }
     std::cout << "\n";
   }
   std::cout << std::flush;

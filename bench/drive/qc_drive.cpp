@@ -87,6 +87,7 @@ void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std
     }
   }
   if (!started) throw InputError(dir.string(), 0, "--from", "no reference epoch at or after the start time");
+  if (st.rows_with_temperature() > 0) q.has_temperature = true;
 }
 }  // namespace
 

@@ -29,6 +29,7 @@ struct QcCurve {
 };
 struct QcOutcome {
   double from_s = 0, horizon_s = 0;
+  bool has_temperature = false;  // the IMU rows read carried a temperature
   std::vector<QcCurve> curves;
 };
 // Sets with catalogue terms: the output terms are removed from the raw samples before the set's
