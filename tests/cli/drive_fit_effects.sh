@@ -74,6 +74,7 @@ import json, sys
 q = json.load(open(sys.argv[1] + "/qc.json"))
 a, b = q["sets"]
 assert a["final_cpe_m"] != b["final_cpe_m"], q
+assert a["effects"]["applied"] == ["lever_arm", "time_offset"] and "effects" not in b, q
 PY
 # --no-innovations skips the filter runs and says so.
 "$CALBENCH" diagnose "$T/rec" --json --no-innovations >"$T/d2.json"
