@@ -48,30 +48,51 @@ bool DriveStream::next(Event& e) {
     have_ref_ = ref_->next(ref_row_);
     return true;
   }
-  if (imu_done_) return false;
-  ImuRecord r;
-  if (!imu_->next(r)) {
-    imu_done_ = true;
-    return next(e);
+  if (have_rest_) {  // the remainder of a split interval
+    e = rest_;
+    have_rest_ = false;
+  } else {
+    if (imu_done_) return false;
+    ImuRecord r;
+    if (!imu_->next(r)) {
+      imu_done_ = true;
+      return next(e);
+    }
+    e.is_ref = false;
+    e.t = r.t;
+    e.dt = r.dt;
+    e.temp_c = r.temp_c;
+    if (std::isfinite(r.temp_c)) ++rows_temp_;
+    if (comp_) {
+      e.t = comp_->corrected_time(r.t);
+      if (imu_->form() == ImuForm::rates) comp_->rates(r.gyro, r.accel, r.dt, r.temp_c);
+      else comp_->increments(r.gyro, r.accel, r.dt, r.temp_c);
+    }
+    if (imu_->form() == ImuForm::rates) integ_(r.gyro, r.accel, r.dt, e.dtheta, e.dv);
+    else {
+      e.dtheta = r.gyro;
+      e.dv = r.accel;
+    }
+    if (cg_) {
+      e.dtheta = cg_->increment(e.dtheta, r.dt);
+      e.dv = ca_->increment(e.dv, r.dt);
+    }
   }
-  e.is_ref = false;
-  e.t = r.t;
-  e.dt = r.dt;
-  e.temp_c = r.temp_c;
-  if (std::isfinite(r.temp_c)) ++rows_temp_;
-  if (comp_) {
-    e.t = comp_->corrected_time(r.t);
-    if (imu_->form() == ImuForm::rates) comp_->rates(r.gyro, r.accel, r.dt, r.temp_c);
-    else comp_->increments(r.gyro, r.accel, r.dt, r.temp_c);
-  }
-  if (imu_->form() == ImuForm::rates) integ_(r.gyro, r.accel, r.dt, e.dtheta, e.dv);
-  else {
-    e.dtheta = r.gyro;
-    e.dv = r.accel;
-  }
-  if (cg_) {
-    e.dtheta = cg_->increment(e.dtheta, r.dt);
-    e.dv = ca_->increment(e.dv, r.dt);
+  // Time stamps moved by a time offset no longer fall on the reference epochs (which they
+  // typically do in a recording): split the interval that straddles the next epoch there,
+  // increments in proportion, so that the epoch is compared at its own time as before.
+  if (comp_ && comp_->time_offset_s() != 0 && have_ref_ && e.dt > 0 && ref_row_.t > e.t - e.dt + 1e-9 &&
+      ref_row_.t < e.t - 1e-9) {
+    const double a = (ref_row_.t - (e.t - e.dt)) / e.dt;
+    rest_ = e;
+    rest_.dt = e.dt * (1 - a);
+    rest_.dtheta = e.dtheta * (1 - a);
+    rest_.dv = e.dv * (1 - a);
+    have_rest_ = true;
+    e.t = ref_row_.t;
+    e.dt *= a;
+    e.dtheta *= a;
+    e.dv *= a;
   }
   last_imu_t_ = e.t;
   return true;

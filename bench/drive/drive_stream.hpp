@@ -44,6 +44,8 @@ class DriveStream {
   std::unique_ptr<DriveRefReader> ref_;
   std::optional<TriadCorrector> cg_, ca_;
   std::optional<ImuEffectCompensator> comp_;
+  Event rest_;  // remainder of an IMU interval split at a reference epoch (time offset only)
+  bool have_rest_ = false;
   long rows_temp_ = 0;
   ins::RateIntegrator integ_;
   bool have_ref_ = false, imu_done_ = false;

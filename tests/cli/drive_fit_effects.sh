@@ -27,6 +27,8 @@ for k in ("attitude", "velocity"):
     b, a = inn[k]["before"], inn[k]["after"]
     assert a["nis_per_dof"] < 0.8 * b["nis_per_dof"], (k, b["nis_per_dof"], a["nis_per_dof"])
     assert a["rejected"] <= b["rejected"], (k, b["rejected"], a["rejected"])
+    # Not white without the terms, white with them (Ljung-Box, worst normalised component).
+    assert b["ljung_box_p_min"] < 1e-6 < 1e-3 < a["ljung_box_p_min"], (k, b["ljung_box_p_min"], a["ljung_box_p_min"])
     assert inn[k]["sentence"].startswith(k), inn[k]["sentence"]
     assert len(b["worst_windows_s"]) >= 1 and len(b["correlations"]) >= 1, b
 imp = json.load(open(t + "/improved.json"))
