@@ -30,5 +30,5 @@ echo "|---|---|---|---|---|---|---|---|---|---|---|"
 jq -r '
   def pct: if . == null or (type == "number" and isnan) then "–" else (. * 10 | round / 10 | tostring) end;
   .benchmarks[] | select(.name | test("SweepClean") | not) | select(.runs != null) |
-    "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
+    "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "") | sub("/iterations:1$"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
 ' "$json"

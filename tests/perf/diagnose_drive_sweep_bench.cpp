@@ -28,6 +28,9 @@
 
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/drive/route_toml.hpp"
+#include "calibration/drive_sim/drive_simulator.hpp"
+#include "calibration/imu_error_sim.hpp"
 
 namespace calbench {
 namespace {
@@ -338,7 +341,90 @@ void BM_DiagnoseDrive_SweepClean(benchmark::State& state) {
 }
 BENCHMARK(BM_DiagnoseDrive_SweepClean)->Unit(benchmark::kSecond)->Iterations(1);
 
+// Reproduce one run in detail: DIAGNOSE_DRIVE_REPRO="SEED[;INJECT[;INJECT...]]" (the seed and
+// --inject options a failing sweep run printed) registers BM_DiagnoseDrive_Repro, which prints the
+// findings, every axis's χ²/dof and Ljung–Box p before → after, and what is unexplained.
+void BM_DiagnoseDrive_Repro(benchmark::State& state) {
+  const std::string spec_text = std::getenv("DIAGNOSE_DRIVE_REPRO");
+  std::vector<std::string> parts;
+  for (std::size_t p = 0, q; p <= spec_text.size(); p = q + 1) {
+    q = spec_text.find(';', p);
+    if (q == std::string::npos) q = spec_text.size();
+    if (q > p) parts.push_back(spec_text.substr(p, q - p));
+  }
+  if (parts.empty()) {
+    state.SkipWithError("DIAGNOSE_DRIVE_REPRO=\"SEED;INJECT;...\"");
+    return;
+  }
+  const std::uint64_t seed = std::strtoull(parts[0].c_str(), nullptr, 10);
+  EffectTerms fx;
+  for (std::size_t i = 1; i < parts.size(); ++i) apply_inject_option(parts[i], fx);
+  for (auto _ : state) {
+    const DriveDiagInput in = simulate_drive_diag_input(route(), seed, fx);
+    const DriveDiagRun run = run_drive_diagnosis(in, nullptr);
+    const auto& R = run.result.core;
+    std::fprintf(stderr, "repro seed %llu: %s\n", static_cast<unsigned long long>(seed), describe(run).c_str());
+    std::fprintf(stderr, "  %zu IMU rows, %zu reference rows, %zu intervals, %zu blocks, mean interval %.4f s\n", in.imu_rows,
+                 in.ref_rows, in.data.subs.size(), in.data.parents.size(), in.data.mean_sub_s);
+    for (const auto& f : R.findings)
+      std::fprintf(stderr, "  finding %s: dchi2 %.1f, dbic %.1f, held-out %.1f, condition %s\n", f.term.label().c_str(),
+                   f.delta_chi2, f.delta_bic, f.heldout_delta_chi2, f.condition.c_str());
+    const char* names[6] = {"gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z"};
+    for (int a = 0; a < 6; ++a)
+      std::fprintf(stderr,
+                   "  %s: chi2/dof %.3f -> %.3f, Ljung-Box p %.2g -> %.2g, white scale %.2f, sample white var %.3g, "
+                   "block noise %.3g, gamma %.3g %.3g %.3g %.3g\n",
+                   names[a], R.before[a].chi2_dof, R.after[a].chi2_dof, R.before[a].ljung_box_p, R.after[a].ljung_box_p,
+                   run.result.white_scale[a], in.data.sample_white_var[a], run.result.block_noise_sigma[a],
+                   run.result.gamma[a][0], run.result.gamma[a][1], run.result.gamma[a][2], run.result.gamma[a][3]);
+    for (const auto& u : R.unexplained) {
+      std::fprintf(stderr, "  unexplained %s %c: chi2/dof %.3f, LB p %.2g, worst windows", u.sensor ? "accel" : "gyro",
+                   "xyz"[u.axis], u.chi2_dof, u.ljung_box_p);
+      for (int w : u.worst_steps) std::fprintf(stderr, " %d", w);
+      for (const auto& c : u.correlations) std::fprintf(stderr, "; %s r %.2f", c.condition.c_str(), c.r);
+      std::fprintf(stderr, "\n");
+    }
+    // The simulated MEMS output itself: the largest sample-to-sample jump per axis (a spike the
+    // noise model's sample-to-sample white estimate would take up).
+    {
+      const RouteFile rf = load_route(route());
+      drivesim::DriveSimConfig cfg;
+      cfg.route = rf.route;
+      cfg.mems = draw_random_unit(seed);
+      cfg.imu_rate_hz = rf.imu_rate_hz;
+      cfg.mounting_rpy = rf.mounting_rpy_deg * (M_PI / 180);
+      cfg.lever_arm = rf.lever_arm_m;
+      cfg.reference = rf.reference;
+      cfg.gnss = rf.gnss;
+      cfg.gnss.rate_hz = 0;
+      cfg.seed = seed;
+      cfg.effects = fx;
+      double jump[6] = {0, 0, 0, 0, 0, 0}, at[6] = {0, 0, 0, 0, 0, 0};
+      bool first = true;
+      Vec3 pg, pa;
+      drivesim::DriveSinks sinks;
+      sinks.imu = [&](const drivesim::SimImu& m) {
+        if (!first)
+          for (int a = 0; a < 6; ++a) {
+            const double d = std::abs(a < 3 ? m.gyro(a) - pg(a) : m.accel(a - 3) - pa(a - 3));
+            if (d > jump[a]) jump[a] = d, at[a] = m.t;
+          }
+        first = false;
+        pg = m.gyro;
+        pa = m.accel;
+      };
+      drivesim::simulate_drive(cfg, sinks);
+      for (int a = 0; a < 6; ++a)
+        std::fprintf(stderr, "  simulated %s: largest sample-to-sample jump %.3g at t = %.3f s\n", names[a], jump[a], at[a]);
+    }
+    state.counters["findings"] = static_cast<double>(R.findings.size());
+    state.counters["unexplained"] = static_cast<double>(R.unexplained.size());
+  }
+}
+
 void register_sweeps() {
+  if (std::getenv("DIAGNOSE_DRIVE_REPRO"))
+    benchmark::RegisterBenchmark("BM_DiagnoseDrive_Repro", BM_DiagnoseDrive_Repro)->Iterations(1);
   auto add = [](const std::string& name, std::vector<Component> parts, std::uint64_t seed0) {
     benchmark::RegisterBenchmark(("BM_DiagnoseDrive_Sweep/" + name).c_str(),
                                  [name, parts, seed0](benchmark::State& s) { sweep_row(s, name, parts, seed0); })
@@ -348,7 +434,7 @@ void register_sweeps() {
   for (std::size_t i = 0; i < rows().size(); ++i) {
     const Spec& s = spec(rows()[i].spec);
     for (double m : rows()[i].magnitudes)
-      add(std::string(s.name) + "/" + fmt(m * s.label_scale, "%.3g") + s.unit, {{&s, m}}, 1000 + 50 * i);
+      add(std::string(s.name) + "/" + fmt(m * s.label_scale, "%.4g") + s.unit, {{&s, m}}, 1000 + 50 * i);
   }
   for (std::size_t i = 0; i < combos().size(); ++i) {
     std::vector<Component> parts;
