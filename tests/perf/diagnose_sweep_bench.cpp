@@ -2,10 +2,11 @@
 // recordings (false findings) and every catalogue effect × 2–3 magnitudes × several seeds and axes
 // (detection of the right effect, sensor and axis; value error; cut of the systematic residual,
 // among the detected runs whose systematic residual before was measurable, i.e. > 0).
-// In-memory simulation of bench/plans/diagnose.toml (temperature terms: tests/data/thermal_short.toml
-// when present), random unit per seed. Takes minutes: runs only with DIAGNOSE_SWEEP=1
+// In-memory simulation of bench/plans/diagnose.toml (temperature terms: tests/data/thermal_short.toml,
+// thermal lag: tests/data/thermal_updown.toml, when present), random unit per seed. Takes minutes: runs only with DIAGNOSE_SWEEP=1
 // (bench/diagnose/sweep.sh). DIAGNOSE_SWEEP_SEEDS (default 3) seeds per effect and magnitude,
-// DIAGNOSE_CLEAN_SEEDS (default 40) clean recordings.
+// DIAGNOSE_CLEAN_SEEDS (default 40) clean recordings, DIAGNOSE_CLEAN_THERMAL_SEEDS (default 10) on
+// each temperature plan. Rows are a table (sweep_rows()).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -13,6 +14,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -30,16 +33,20 @@ int env_int(const char* name, int def) {
   return e ? std::max(1, std::atoi(e)) : def;
 }
 
-const BenchPlan& diag_plan() {
-  static const BenchPlan p = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
-  return p;
-}
-const BenchPlan* thermal_plan() {
-  static const std::string f = std::string(CALBENCH_SOURCE_DIR) + "/tests/data/thermal_short.toml";
-  static const bool exists = std::filesystem::exists(f);
-  if (!exists) return nullptr;
-  static const BenchPlan p = load_plan(f);
-  return &p;
+// The plans of the rows: the 6-minute diagnosis plan; the thermal CI plan (5 → 45 °C); the
+// up-and-down chamber plan (thermal lag). Test plans live in tests/data and may be absent from an
+// installed tree: those rows then skip.
+enum class Plan { diagnose, thermal, updown };
+const BenchPlan* plan_of(Plan which) {
+  static const BenchPlan diag = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
+  if (which == Plan::diagnose) return &diag;
+  const std::string f = std::string(CALBENCH_SOURCE_DIR) +
+                        (which == Plan::thermal ? "/tests/data/thermal_short.toml" : "/tests/data/thermal_updown.toml");
+  if (!std::filesystem::exists(f)) return nullptr;
+  static std::map<Plan, BenchPlan> cache;
+  auto it = cache.find(which);
+  if (it == cache.end()) it = cache.emplace(which, load_plan(f)).first;
+  return &it->second;
 }
 
 DiagRun run(const BenchPlan& plan, const EffectTerms& fx, std::uint64_t seed) {
@@ -66,11 +73,11 @@ bool skip_unless_enabled(benchmark::State& state) {
   return true;
 }
 
-void sweep_effect(benchmark::State& state, const Maker& make, double magnitude, bool thermal) {
+void sweep_effect(benchmark::State& state, const std::string& name, const Maker& make, double magnitude, Plan which) {
   if (skip_unless_enabled(state)) return;
-  const BenchPlan* plan = thermal ? thermal_plan() : &diag_plan();
+  const BenchPlan* plan = plan_of(which);
   if (!plan) {
-    state.SkipWithError("tests/data/thermal_short.toml not found");
+    state.SkipWithError("the row's test plan (tests/data) was not found");
     return;
   }
   const int seeds = env_int("DIAGNOSE_SWEEP_SEEDS", 3);
@@ -79,12 +86,27 @@ void sweep_effect(benchmark::State& state, const Maker& make, double magnitude, 
     std::vector<double> rel_err, cut;
     for (int k = 0; k < seeds; ++k) {
       const Expect x = make(k);
-      const DiagRun r = run(*plan, x.fx, 300 + 17 * k + static_cast<std::uint64_t>(magnitude * 1e3) % 97);
+      const std::uint64_t seed = 300 + 17 * k + static_cast<std::uint64_t>(magnitude * 1e3) % 97;
+      const DiagRun r = run(*plan, x.fx, seed);
       const DiagFinding* f = nullptr;
       for (const auto& g : r.result.findings)
         if (g.term.effect == x.effect) f = &g;
       other += static_cast<int>(r.result.findings.size()) - (f ? 1 : 0) > 0;
-      if (!f) continue;
+      // Every run that misses a criterion is printed (stderr) with its seed, to reproduce it.
+      auto report_miss = [&](const char* why) {
+        std::ostringstream found;
+        for (const auto& g : r.result.findings) {
+          found << ' ' << g.term.label() << " [";
+          for (double v : g.value) found << ' ' << v;
+          found << " ] rms " << g.rms_before << " -> " << g.rms_after << ';';
+        }
+        std::fprintf(stderr, "%s seed %d (k %d, truth %g): %s; findings:%s\n", name.c_str(), static_cast<int>(seed),
+                     k, x.value, why, r.result.findings.empty() ? " none" : found.str().c_str());
+      };
+      if (!f) {
+        report_miss("not detected");
+        continue;
+      }
       ++detected;
       const bool place = f->report_sensor == x.sensor && f->report_axis == x.axis;
       right_place += place;
@@ -98,7 +120,9 @@ void sweep_effect(benchmark::State& state, const Maker& make, double magnitude, 
       if (measurable) cut.push_back(c);
       cut_na += !measurable;
       cut_ok += measurable && c >= 0.8;
-      all_ok += place && e <= 0.2 && c >= 0.8 && r.result.findings.size() == 1;
+      const bool ok = place && e <= 0.2 && c >= 0.8 && r.result.findings.size() == 1;
+      all_ok += ok;
+      if (!ok) report_miss(!place ? "wrong sensor/axis" : e > 0.2 ? "value off by > 20 %" : c < 0.8 ? "cut < 80 %" : "another finding");
     }
     auto median = [](std::vector<double> v) {
       if (v.empty()) return std::nan("");
@@ -120,17 +144,25 @@ void sweep_effect(benchmark::State& state, const Maker& make, double magnitude, 
   }
 }
 
-void BM_Diagnose_SweepClean(benchmark::State& state) {
+// Clean recordings: false findings and unexplained structure. On the diagnosis plan
+// DIAGNOSE_CLEAN_SEEDS (default 40); on the two temperature plans DIAGNOSE_CLEAN_THERMAL_SEEDS
+// (default 10) each, since the temperature terms could be taken for the warm-up and drift there.
+void sweep_clean(benchmark::State& state, Plan which, int seeds, std::uint64_t seed0) {
   if (skip_unless_enabled(state)) return;
-  const int seeds = env_int("DIAGNOSE_CLEAN_SEEDS", 40);
+  const BenchPlan* plan = plan_of(which);
+  if (!plan) {
+    state.SkipWithError("the row's test plan (tests/data) was not found");
+    return;
+  }
   for (auto _ : state) {
     int with = 0, findings = 0, unexplained = 0;
     for (int k = 0; k < seeds; ++k) {
-      const DiagRun r = run(diag_plan(), EffectTerms{}, 9000 + k);
+      const DiagRun r = run(*plan, EffectTerms{}, seed0 + k);
       with += !r.result.findings.empty();
       findings += static_cast<int>(r.result.findings.size());
       unexplained += !r.result.unexplained.empty();
-      for (const auto& f : r.result.findings) std::fprintf(stderr, "clean seed %d: false finding %s\n", 9000 + k, f.term.label().c_str());
+      for (const auto& f : r.result.findings)
+        std::fprintf(stderr, "clean seed %d: false finding %s\n", static_cast<int>(seed0) + k, f.term.label().c_str());
     }
     state.counters["runs"] = seeds;
     state.counters["no_finding_pct"] = 100.0 * (seeds - with) / seeds;
@@ -138,148 +170,140 @@ void BM_Diagnose_SweepClean(benchmark::State& state) {
     state.counters["runs_with_unexplained"] = unexplained;
   }
 }
+void BM_Diagnose_SweepClean(benchmark::State& state) {
+  sweep_clean(state, Plan::diagnose, env_int("DIAGNOSE_CLEAN_SEEDS", 40), 9000);
+}
+void BM_Diagnose_SweepCleanThermal(benchmark::State& state) {
+  sweep_clean(state, Plan::thermal, env_int("DIAGNOSE_CLEAN_THERMAL_SEEDS", 10), 9500);
+}
+void BM_Diagnose_SweepCleanUpdown(benchmark::State& state) {
+  sweep_clean(state, Plan::updown, env_int("DIAGNOSE_CLEAN_THERMAL_SEEDS", 10), 9700);
+}
 BENCHMARK(BM_Diagnose_SweepClean)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_Diagnose_SweepCleanThermal)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_Diagnose_SweepCleanUpdown)->Unit(benchmark::kSecond)->Iterations(1);
+
+// One sweep row family: an effect, the magnitudes (in display units; `unit` converts to SI) and how a
+// seed index k places it (axis and sign vary with k).
+struct Row {
+  std::string name;             // "effect/prefix" + magnitude + suffix
+  std::string suffix;
+  std::vector<double> magnitudes;
+  double unit;
+  Plan plan;
+  std::function<Expect(int k, double si)> make;
+};
+
+// A per-axis triad term (temperature bias/scale/rate, nonlinearity, asymmetry): axis (k + shift) % 3,
+// sign alternating with k.
+std::function<Expect(int, double)> triad_term(EffectId e, int sensor, int shift, Vec3 TriadEffectTerms::*member) {
+  return [=](int k, double si) {
+    Expect x;
+    x.value = (k % 2 ? -si : si);
+    x.effect = e;
+    x.sensor = sensor, x.axis = (k + shift) % 3;
+    ((sensor ? x.fx.accel : x.fx.gyro).*member)(x.axis) = x.value;
+    return x;
+  };
+}
+// A reference-side pair (table tilt ψN/ψE, wobble sin/cos): parameter k % 2, sign flips every 2.
+std::function<Expect(int, double)> table_term(EffectId e, Eigen::Vector2d EffectTerms::*member) {
+  return [=](int k, double si) {
+    Expect x;
+    x.value = (k % 4 >= 2 ? -si : si);
+    x.param = k % 2;
+    (x.fx.*member)(x.param) = x.value;
+    x.effect = e;
+    x.sensor = 2, x.axis = -1;
+    return x;
+  };
+}
+
+std::vector<Row> sweep_rows() {
+  using E = EffectId;
+  constexpr double kPerKPerMin = 60.0;  // a coefficient per (K/min) is 60× the one per (K/s)
+  return {
+      // g-sensitivity, °/s/g: gyro axis i from force axis i+1.
+      {"g_sensitivity/", "dps_g", {0.004, 0.007, 0.011}, kDeg / kG0, Plan::diagnose,
+       [](int k, double si) {
+         Expect x;
+         const int i = k % 3, j = (k + 1) % 3;
+         x.value = (k % 2 ? -si : si);
+         x.fx.g_sensitivity(i, j) = x.value;
+         x.effect = EffectId::g_sensitivity;
+         x.sensor = 0, x.axis = i, x.param = j;
+         return x;
+       }},
+      {"scale_nonlinearity/gyro_", "e-6_per_rad_s", {10, 20, 40}, 1e-6, Plan::diagnose,
+       triad_term(E::scale_nonlinearity, 0, 0, &TriadEffectTerms::nonlinearity)},
+      {"scale_nonlinearity/accel_", "e-6_per_m_s2", {30, 60}, 1e-6, Plan::diagnose,
+       triad_term(E::scale_nonlinearity, 1, 2, &TriadEffectTerms::nonlinearity)},
+      {"scale_asymmetry/gyro_", "ppm", {100, 200, 400}, kPpm, Plan::diagnose,
+       triad_term(E::scale_asymmetry, 0, 1, &TriadEffectTerms::asymmetry)},
+      {"scale_asymmetry/accel_", "ppm", {150, 300}, kPpm, Plan::diagnose,
+       triad_term(E::scale_asymmetry, 1, 0, &TriadEffectTerms::asymmetry)},
+      {"time_offset/", "ms", {0.1, 0.3, 1.0}, 1e-3, Plan::diagnose,
+       [](int k, double si) {
+         Expect x;
+         x.value = k % 2 ? -si : si;
+         x.fx.time_offset_s = x.value;
+         x.effect = EffectId::time_offset;
+         x.sensor = 2, x.axis = -1;
+         return x;
+       }},
+      {"lever_arm/", "mm", {2, 4, 8}, 1e-3, Plan::diagnose,
+       [](int k, double si) {
+         Expect x;
+         x.value = k % 2 ? -si : si;
+         x.fx.lever_arm_m(k % 3) = x.value;
+         x.effect = EffectId::lever_arm;
+         x.sensor = 1, x.axis = k % 3, x.param = k % 3;
+         return x;
+       }},
+      {"misalignment/", "arcsec", {20, 40, 60}, kDeg / 3600, Plan::diagnose,
+       table_term(E::misalignment, &EffectTerms::table_tilt_rad)},
+      {"table_wobble/", "arcsec", {10, 20, 40}, kDeg / 3600, Plan::diagnose,
+       table_term(E::table_wobble, &EffectTerms::wobble_rad)},
+      // Temperature terms on the short warm-up of the diagnosis plan (~2 K): gyro only.
+      {"temperature_bias/gyro_", "dph_K_warmup", {100, 200}, kDegPerHour, Plan::diagnose,
+       triad_term(E::temperature_bias, 0, 0, &TriadEffectTerms::temp_bias)},
+      // On the thermal CI plan (5 → 45 °C): data-sheet class and half of it.
+      {"temperature_bias/gyro_", "dph_K_thermal", {4.5, 9}, kDegPerHour, Plan::thermal,
+       triad_term(E::temperature_bias, 0, 0, &TriadEffectTerms::temp_bias)},
+      {"temperature_bias/accel_", "mg_K_thermal", {0.025, 0.05}, kMilliG, Plan::thermal,
+       triad_term(E::temperature_bias, 1, 1, &TriadEffectTerms::temp_bias)},
+      {"temperature_scale/gyro_", "ppm_K_thermal", {10, 40}, kPpm, Plan::thermal,
+       triad_term(E::temperature_scale, 0, 2, &TriadEffectTerms::temp_scale)},
+      {"temperature_scale/accel_", "ppm_K_thermal", {10, 40}, kPpm, Plan::thermal,
+       triad_term(E::temperature_scale, 1, 0, &TriadEffectTerms::temp_scale)},
+      // Thermal lag on the up-and-down chamber plan (heating and cooling over the same range).
+      {"temperature_rate/gyro_", "dph_per_K_min_updown", {4, 6, 10}, kDegPerHour * kPerKPerMin, Plan::updown,
+       triad_term(E::temperature_rate, 0, 1, &TriadEffectTerms::temp_rate)},
+      {"temperature_rate/accel_", "mg_per_K_min_updown", {0.1, 0.3}, kMilliG * kPerKPerMin, Plan::updown,
+       triad_term(E::temperature_rate, 1, 2, &TriadEffectTerms::temp_rate)},
+  };
+}
+
+std::string magnitude_label(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
 
 void register_sweeps() {
-  auto add = [](const std::string& name, double mag, const Maker& m, bool thermal = false) {
-    benchmark::RegisterBenchmark(("BM_Diagnose_Sweep/" + name).c_str(),
-                                 [m, mag, thermal](benchmark::State& s) { sweep_effect(s, m, mag, thermal); })
-        ->Unit(benchmark::kSecond)
-        ->Iterations(1);
-  };
-  // g-sensitivity, °/s/g: gyro axis i from force axis i+1 (varies with the seed index).
-  for (double v : {0.004, 0.007, 0.011})
-    add("g_sensitivity/" + std::to_string(v).substr(0, 5) + "dps_g", v, [v](int k) {
-      Expect x;
-      const int i = k % 3, j = (k + 1) % 3;
-      x.value = (k % 2 ? -1 : 1) * v * kDeg / kG0;
-      x.fx.g_sensitivity(i, j) = x.value;
-      x.effect = EffectId::g_sensitivity;
-      x.sensor = 0, x.axis = i, x.param = j;
-      return x;
-    });
-  // Scale nonlinearity: gyro /(rad/s), accel /(m/s²).
-  for (double v : {1e-5, 2e-5, 4e-5})
-    add("scale_nonlinearity/gyro_" + std::to_string(static_cast<int>(v * 1e6)) + "e-6_per_rad_s", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -v : v);
-      x.fx.gyro.nonlinearity(k % 3) = x.value;
-      x.effect = EffectId::scale_nonlinearity;
-      x.sensor = 0, x.axis = k % 3;
-      return x;
-    });
-  for (double v : {3e-5, 6e-5})
-    add("scale_nonlinearity/accel_" + std::to_string(static_cast<int>(v * 1e6)) + "e-6_per_m_s2", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -v : v);
-      x.fx.accel.nonlinearity((k + 2) % 3) = x.value;
-      x.effect = EffectId::scale_nonlinearity;
-      x.sensor = 1, x.axis = (k + 2) % 3;
-      return x;
-    });
-  for (double v : {100e-6, 200e-6, 400e-6})
-    add("scale_asymmetry/gyro_" + std::to_string(static_cast<int>(v * 1e6)) + "ppm", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -v : v);
-      x.fx.gyro.asymmetry((k + 1) % 3) = x.value;
-      x.effect = EffectId::scale_asymmetry;
-      x.sensor = 0, x.axis = (k + 1) % 3;
-      return x;
-    });
-  for (double v : {150e-6, 300e-6})
-    add("scale_asymmetry/accel_" + std::to_string(static_cast<int>(v * 1e6)) + "ppm", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -v : v);
-      x.fx.accel.asymmetry(k % 3) = x.value;
-      x.effect = EffectId::scale_asymmetry;
-      x.sensor = 1, x.axis = k % 3;
-      return x;
-    });
-  for (double v : {0.1e-3, 0.3e-3, 1e-3})
-    add("time_offset/" + std::to_string(v * 1e3).substr(0, 3) + "ms", v, [v](int k) {
-      Expect x;
-      x.value = k % 2 ? -v : v;
-      x.fx.time_offset_s = x.value;
-      x.effect = EffectId::time_offset;
-      x.sensor = 2, x.axis = -1;
-      return x;
-    });
-  for (double v : {0.002, 0.004, 0.008})
-    add("lever_arm/" + std::to_string(static_cast<int>(v * 1e3)) + "mm", v, [v](int k) {
-      Expect x;
-      x.value = k % 2 ? -v : v;
-      x.fx.lever_arm_m(k % 3) = x.value;
-      x.effect = EffectId::lever_arm;
-      x.sensor = 1, x.axis = k % 3, x.param = k % 3;
-      return x;
-    });
-  for (double v : {20.0, 40.0, 60.0})
-    add("misalignment/" + std::to_string(static_cast<int>(v)) + "arcsec", v, [v](int k) {
-      Expect x;
-      x.value = (k % 4 >= 2 ? -1 : 1) * v / 3600 * kDeg;
-      x.param = k % 2;
-      x.fx.table_tilt_rad(x.param) = x.value;
-      x.effect = EffectId::misalignment;
-      x.sensor = 2, x.axis = -1;
-      return x;
-    });
-  for (double v : {10.0, 20.0, 40.0})
-    add("table_wobble/" + std::to_string(static_cast<int>(v)) + "arcsec", v, [v](int k) {
-      Expect x;
-      x.value = (k % 4 >= 2 ? -1 : 1) * v / 3600 * kDeg;
-      x.param = k % 2;
-      x.fx.wobble_rad(x.param) = x.value;
-      x.effect = EffectId::table_wobble;
-      x.sensor = 2, x.axis = -1;
-      return x;
-    });
-  // Temperature terms on the short warm-up of the diagnosis plan (~2 K): gyro only.
-  for (double v : {100.0, 200.0})
-    add("temperature_bias/gyro_" + std::to_string(static_cast<int>(v)) + "dph_K_warmup", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -1 : 1) * v * kDegPerHour;
-      x.fx.gyro.temp_bias(k % 3) = x.value;
-      x.effect = EffectId::temperature_bias;
-      x.sensor = 0, x.axis = k % 3;
-      return x;
-    });
-  // Temperature terms on the thermal CI plan (5 → 45 °C): data-sheet class and half of it.
-  for (double v : {4.5, 9.0})
-    add("temperature_bias/gyro_" + std::to_string(v).substr(0, 3) + "dph_K_thermal", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -1 : 1) * v * kDegPerHour;
-      x.fx.gyro.temp_bias(k % 3) = x.value;
-      x.effect = EffectId::temperature_bias;
-      x.sensor = 0, x.axis = k % 3;
-      return x;
-    }, true);
-  for (double v : {0.025, 0.05})
-    add("temperature_bias/accel_" + std::to_string(v).substr(0, 5) + "mg_K_thermal", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -1 : 1) * v * kMilliG;
-      x.fx.accel.temp_bias((k + 1) % 3) = x.value;
-      x.effect = EffectId::temperature_bias;
-      x.sensor = 1, x.axis = (k + 1) % 3;
-      return x;
-    }, true);
-  for (double v : {10.0, 40.0})
-    add("temperature_scale/gyro_" + std::to_string(static_cast<int>(v)) + "ppm_K_thermal", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -1 : 1) * v * kPpm;
-      x.fx.gyro.temp_scale((k + 2) % 3) = x.value;
-      x.effect = EffectId::temperature_scale;
-      x.sensor = 0, x.axis = (k + 2) % 3;
-      return x;
-    }, true);
-  for (double v : {10.0, 40.0})
-    add("temperature_scale/accel_" + std::to_string(static_cast<int>(v)) + "ppm_K_thermal", v, [v](int k) {
-      Expect x;
-      x.value = (k % 2 ? -1 : 1) * v * kPpm;
-      x.fx.accel.temp_scale(k % 3) = x.value;
-      x.effect = EffectId::temperature_scale;
-      x.sensor = 1, x.axis = k % 3;
-      return x;
-    }, true);
+  for (const Row& row : sweep_rows())
+    for (double v : row.magnitudes) {
+      const auto make = row.make;
+      const double si = v * row.unit;
+      const Plan plan = row.plan;
+      const std::string name = row.name + magnitude_label(v) + row.suffix;
+      benchmark::RegisterBenchmark(("BM_Diagnose_Sweep/" + name).c_str(),
+                                   [name, make, si, v, plan](benchmark::State& s) {
+                                     sweep_effect(s, name, [&](int k) { return make(k, si); }, v, plan);
+                                   })
+          ->Unit(benchmark::kSecond)
+          ->Iterations(1);
+    }
 }
 
 const bool registered = (register_sweeps(), true);

@@ -47,6 +47,8 @@ void expect_found(const EffectTerms& fx, EffectId e, int sensor, int axis, int p
   EXPECT_EQ(f->report_sensor, sensor) << summary(r);
   EXPECT_EQ(f->report_axis, axis) << summary(r);
   EXPECT_NEAR(f->value[param], truth, 0.2 * std::abs(truth)) << summary(r);
+  // The systematic residual was measurable (the effect showed beyond the noise model) and is cut.
+  EXPECT_GT(f->rms_before, 0.0) << summary(r);
   EXPECT_LE(f->rms_after, 0.2 * f->rms_before) << summary(r);
   EXPECT_EQ(r.result.findings.size(), 1u) << "seed " << seed << summary(r);
   std::printf("%-20s truth %.4g found %.4g ± %.2g  rms %.3g → %.3g\n", effect_name(e), truth, f->value[param],

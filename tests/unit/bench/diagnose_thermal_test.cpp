@@ -55,6 +55,8 @@ void expect_found(const EffectTerms& fx, const std::vector<Want>& want, std::uin
     EXPECT_EQ(f->report_sensor, w.sensor) << summary(r);
     EXPECT_EQ(f->report_axis, w.axis) << summary(r);
     EXPECT_NEAR(f->value[0], w.value, 0.2 * std::abs(w.value)) << summary(r);
+    // The systematic residual was measurable (the effect showed beyond the noise model) and is cut.
+    EXPECT_GT(f->rms_before, 0.0) << summary(r);
     EXPECT_LE(f->rms_after, 0.2 * f->rms_before) << summary(r);
     std::printf("%-18s %-5s %c truth %.4g found %.4g ± %.2g  Δχ² %.0f  rms %.3g → %.3g\n", effect_name(w.effect),
                 w.sensor ? "accel" : "gyro", "xyz"[w.axis], w.value, f->value[0], f->sigma[0], f->delta_chi2,
