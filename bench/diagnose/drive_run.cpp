@@ -266,7 +266,14 @@ DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* co
   run.improved.extra["diagnosis"] = dj;
   if (in.dir.empty()) return run;
   if (!innovations) run.innovations_skipped = "skipped (--no-innovations)";
-  else run.innovations = drive_innovations(in, run);
+  else {
+    // The diagnosis stands without them: a filter run that fails is reported, not fatal.
+    try {
+      run.innovations = drive_innovations(in, run);
+    } catch (const std::exception& e) {
+      run.innovations_skipped = std::string("not run: the in-motion filter failed: ") + e.what();
+    }
+  }
   return run;
 }
 
