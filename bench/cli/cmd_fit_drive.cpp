@@ -61,7 +61,11 @@ const bool registered = add_command(31, [](CLI::App& app) {
   auto* d = fit->add_subcommand("drive", "In-motion calibration against the reference INS/GNSS of a drive recording "
                                          "(EKF, paper eqs 13-15)");
   d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
-  d->add_option("--coeffs", a->coeffs, "bench coefficients applied to the data first (result = composition)")->check(CLI::ExistingFile);
+  d->add_option("--coeffs", a->coeffs,
+                 "bench coefficients applied to the data first (result = composition); catalogue keys it carries "
+                 "(diagnose --out IMPROVED.json: time_offset, lever_arm, g_sensitivity, scale_*, temperature_*, "
+                 "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note")
+      ->check(CLI::ExistingFile);
   d->add_option("--out", a->out, "RESULT.json to write")->required();
   d->add_option("--obs", a->obs, "observations to use: any of pos,vel,att (eqs 13, 14, 15)");
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");

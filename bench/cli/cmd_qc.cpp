@@ -68,7 +68,10 @@ const bool registered = add_command(50, [](CLI::App& app) {
   auto* q = app.add_subcommand("qc", "Quality control by inertial-only navigation: circular position error (eq 39) "
                                      "per coefficient set against the reference of a drive");
   q->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
-  q->add_option("--coeffs", a->coeffs, "coefficients.json, in-motion RESULT.json, or 'none' (repeatable)")->required();
+  q->add_option("--coeffs", a->coeffs,
+                 "coefficients.json, in-motion RESULT.json, or 'none' (repeatable); catalogue keys of a set "
+                 "(IMPROVED.json) are compensated on the IMU samples")
+      ->required();
   q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)");
   q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(CLI::PositiveNumber);
   q->add_flag("--json", a->json, "machine output");
