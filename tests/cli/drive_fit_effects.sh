@@ -41,6 +41,7 @@ json.dump(wrong, open(t + "/wrong.json", "w"))
 # Bench-only keys are ignored by the drive estimator (with a note), not an error.
 bench = dict(imp)
 bench["misalignment"] = {"table_tilt_rad": [1e-4, 0.0]}
+bench["correlated_drift"] = {"gyro_sigma_rad_s": 1e-4, "gyro_tau_s": 60}  # becomes the filter's drift prior
 json.dump(bench, open(t + "/bench.json", "w"))
 PY
 for s in improved plain wrong bench; do
@@ -57,6 +58,8 @@ assert abs(r["improved"]["effects"]["time_offset_s"] - 0.008) < 0.0008, r["impro
 assert "effects" not in r["plain"], r["plain"].keys()
 assert r["improved"]["coefficients"]["time_offset"]["s"] == r["improved"]["effects"]["time_offset_s"]
 assert [i["key"] for i in r["bench"]["effects"]["ignored"]] == ["misalignment"], r["bench"]["effects"]
+assert r["bench"]["effects"]["applied"] == ["lever_arm", "time_offset", "correlated_drift"], r["bench"]["effects"]
+assert r["bench"]["effects"]["drift_prior"]["gyro"] == {"sigma_si": 1e-4, "T_s": 60}, r["bench"]["effects"]
 nis = {s: {k: r[s]["consistency"][k]["mean_nis"] for k in ("position", "velocity", "attitude")} for s in r}
 rej = {s: {k: r[s]["consistency"][k]["rejected"] for k in ("position", "velocity", "attitude")} for s in r}
 print("mean NIS (expected 3):", nis, "rejected:", rej)
