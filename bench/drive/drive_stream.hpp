@@ -3,7 +3,8 @@
 // coefficient set first, interleaved with the reference epochs (each delivered right after the
 // IMU row that reaches its time). Catalogue terms of the set (docs/diagnosis.md) are compensated
 // on the raw samples first (calibration/effects/effect_compensation.hpp): output terms removed,
-// time stamps moved by the time offset.
+// time stamps moved by the time offset; with a time offset the IMU interval that straddles a
+// reference epoch is split there (increments in proportion), so that epochs still meet IMU stamps.
 #pragma once
 #include <filesystem>
 #include <optional>
