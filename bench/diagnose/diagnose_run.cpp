@@ -260,6 +260,15 @@ std::string finding_sentence(const DiagFinding& f) {
   }
   if (f.term.effect == EffectId::correlated_drift) o << ", τ ≈ " << fmt(f.noise_tau_s) << " s";
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
+  for (const auto& a : f.alternatives) {
+    o << "; NOT told apart on this recording from " << a.term.label() << " (χ² only " << fmt(a.chi2_worse)
+      << " worse)";
+    const bool temperature_pair = (a.term.effect == EffectId::temperature_rate && f.term.effect == EffectId::temperature_bias) ||
+                                  (a.term.effect == EffectId::temperature_bias && f.term.effect == EffectId::temperature_rate);
+    if (temperature_pair)
+      o << ": on a warm-up alone a bias ∝ T and one ∝ dT/dt look alike; a plan that heats and cools over the "
+           "same range (thermal_updown) tells them apart";
+  }
   return o.str();
 }
 
@@ -284,6 +293,16 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                          {"ljung_box_p_before", r.before[ai].ljung_box_p},
                          {"ljung_box_p_after", r.after[ai].ljung_box_p}};
     if (f.term.effect == EffectId::correlated_drift) ev["tau_s"] = f.noise_tau_s;
+    nlohmann::json alts = nlohmann::json::array();
+    for (const auto& a : f.alternatives) {
+      nlohmann::json av = a.value.size() == 1 ? nlohmann::json(a.value[0]) : nlohmann::json(a.value);
+      alts.push_back({{"effect", effect_name(a.term.effect)},
+                      {"label", a.term.label()},
+                      {"value", av},
+                      {"unit", a.unit},
+                      {"chi2_worse", a.chi2_worse}});
+    }
+    ev["indistinguishable_from"] = alts;
     findings.push_back({{"effect", effect_name(f.term.effect)},
                         {"sensor", kSensor[f.report_sensor]},
                         {"axis", f.report_axis >= 0 ? kAxis[f.report_axis] : "all"},

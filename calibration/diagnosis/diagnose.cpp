@@ -787,6 +787,24 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     f.delta_chi2 = acc.dchi2;
     f.delta_bic = acc.dbic;
     f.heldout_delta_chi2 = acc.dheld;
+    // Could another candidate in its place explain the recording as well?
+    for (std::size_t t2 = 0; t2 < D.terms.size(); ++t2) {
+      if (std::find(model.terms.begin(), model.terms.end(), static_cast<int>(t2)) != model.terms.end()) continue;
+      Model m = model;
+      m.terms[k] = static_cast<int>(t2);
+      const FitOut g = fit_model(D, m, ptrs(all));
+      const double worse = g.chi2 - cur.chi2;
+      if (worse >= opt.ambiguity_chi2) continue;
+      DiagAlternative alt;
+      alt.term = D.terms[t2];
+      for (int p = 0; p < alt.term.nparams(); ++p)
+        alt.value.push_back(g.theta(g.offset[k] + p) + alt.term.get_param(carried, p));
+      alt.unit = term_unit(alt.term);
+      alt.chi2_worse = worse;
+      f.alternatives.push_back(alt);
+    }
+    std::sort(f.alternatives.begin(), f.alternatives.end(),
+              [](const DiagAlternative& a, const DiagAlternative& b) { return a.chi2_worse < b.chi2_worse; });
     f.report_sensor = t.sensor;
     f.report_axis = t.axis;
     // Axis on which it shows: the touched axis whose residual it explains most.

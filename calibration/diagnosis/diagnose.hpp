@@ -30,6 +30,9 @@ struct DiagnoseOptions {
   double penalty_per_param = 0;          // extra Δχ² per parameter on top of ln N (0 = default)
   double min_delta_chi2 = 40;            // smallest Δχ² that can count as a finding
   int max_findings = 6;
+  // A candidate that, put in a finding's place in the final model, fits within this Δχ² of it is
+  // reported as an alternative the recording cannot tell apart (likelihood ratio < e^5).
+  double ambiguity_chi2 = 10;
 };
 
 struct AxisStats {
@@ -46,6 +49,15 @@ struct ConditionCorrelation {
   double r = 0;
 };
 
+// Another catalogue term that explains the same residual about as well (e.g. a temperature bias
+// and thermal lag on a warm-up alone, where T − T_end ∝ dT/dt).
+struct DiagAlternative {
+  Term term;
+  std::vector<double> value;  // fitted in the finding's place, SI
+  std::string unit;
+  double chi2_worse = 0;      // χ² of that model minus the chosen one's (< ambiguity_chi2)
+};
+
 struct DiagFinding {
   Term term;
   std::vector<double> value, sigma;  // SI
@@ -57,6 +69,7 @@ struct DiagFinding {
   double condition_r = 0;
   double rms_before = 0, rms_after = 0;  // systematic residual of the reported sensor axis (or all touched)
   double noise_tau_s = 0;                // correlated_drift only
+  std::vector<DiagAlternative> alternatives;  // best first; empty = the effect is told apart
 };
 
 struct DiagUnexplained {

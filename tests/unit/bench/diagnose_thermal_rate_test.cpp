@@ -149,6 +149,34 @@ TEST(DiagnoseThermalRate, TemperatureBiasIsNotTakenForThermalLag) {
   expect_only(fx, EffectId::temperature_bias, 0, 2, fx.gyro.temp_bias(2), 3);
 }
 
+// On a warm-up alone (the diagnosis plan: ~2 K, rising exponentially) T − T_end ∝ dT/dt, so a bias
+// ∝ T and one ∝ dT/dt explain the recording equally well. The diagnosis must not pretend to know:
+// whichever it names, the other is reported as an alternative it cannot tell apart.
+TEST(DiagnoseThermalRate, WarmUpAloneDeclaresBiasAndLagIndistinguishable) {
+  static const BenchPlan warmup = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
+  for (std::uint64_t seed : {41, 42}) {
+    EffectTerms fx;
+    const int axis = static_cast<int>(seed % 3);
+    fx.gyro.temp_bias(axis) = 100 * kDegPerHour;
+    BenchSimOptions so;
+    so.seed = seed;
+    so.effects = fx;
+    const DiagRun r = run_diagnosis(simulate_diag_input(warmup, draw_random_unit(950 + seed), so), nullptr, warmup.table);
+    ASSERT_EQ(r.result.findings.size(), 1u) << "seed " << seed << summary(r);
+    const DiagFinding& f = r.result.findings[0];
+    ASSERT_TRUE(f.term.effect == EffectId::temperature_bias || f.term.effect == EffectId::temperature_rate) << summary(r);
+    EXPECT_EQ(f.report_sensor, 0);
+    EXPECT_EQ(f.report_axis, axis);
+    const EffectId other =
+        f.term.effect == EffectId::temperature_bias ? EffectId::temperature_rate : EffectId::temperature_bias;
+    bool declared = false;
+    for (const auto& a : f.alternatives) declared |= a.term.effect == other && a.term.sensor == 0 && a.term.axis == axis;
+    EXPECT_TRUE(declared) << summary(r);
+    EXPECT_NE(finding_sentence(f).find("NOT told apart"), std::string::npos);
+    std::printf("warm-up seed %d: %s\n", static_cast<int>(seed), finding_sentence(f).c_str());
+  }
+}
+
 // The JSON key round trip (IMPROVED.json, --effects) and the --inject option.
 TEST(DiagnoseThermalRate, JsonKeyAndInjectOption) {
   EffectTerms e, s;
