@@ -344,8 +344,15 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
         {"before", st(r.before[a])}, {"after", st(r.after[a])}, {"white_sigma_per_sample", r.white_sigma[a]},
         {"correlations_before", corr}};
   }
+  nlohmann::json withdrawn = nlohmann::json::array();
+  for (const auto& w : r.withdrawn)
+    withdrawn.push_back({{"effect", effect_name(w.term.effect)},
+                         {"label", w.term.label()},
+                         {"delta_chi2_when_accepted", w.delta_chi2_when_accepted},
+                         {"delta_chi2_final", w.delta_chi2_final}});
   return {{"findings", findings},
           {"unexplained", unexplained},
+          {"withdrawn", withdrawn},
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "bench fit of this recording" : "given"},
           {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
@@ -358,8 +365,11 @@ std::string diagnosis_text(const DiagRun& run) {
     << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\n";
   if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the sensor's noise\n";
   for (const auto& f : r.findings) o << "* " << finding_sentence(f) << "\n";
+  for (const auto& w : r.withdrawn)
+    o << "- withdrawn: " << w.term.label() << " (accepted with Δχ² " << fmt(w.delta_chi2_when_accepted)
+      << ", but in the final model it explains only Δχ² " << fmt(w.delta_chi2_final) << ")\n";
   for (const auto& u : r.unexplained) {
-    o << "? unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)
+    o << "? unexplained (no catalogue effect explains it): " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)
       << " (within steps " << fmt(u.high_chi2_dof) << "), Ljung–Box p " << fmt(u.ljung_box_p) << "; worst steps";
     for (int s : u.worst_steps) o << " " << s;
     o << "; correlates with";

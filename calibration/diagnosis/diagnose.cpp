@@ -719,6 +719,28 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     accepted.push_back({-1 - best_triad, best_gain, best_gain, 0});
   }
 
+  // Backward check (stepwise): a term accepted in an early round can lose its evidence once later
+  // terms or a larger drift (correlated_drift) are in the model — e.g. a g-sensitivity that only
+  // half-fitted an effect outside the catalogue. A linear term whose removal from the final model
+  // costs less than min_delta_chi2 is withdrawn (reported as such, not as a finding).
+  for (bool again = true; again;) {
+    again = false;
+    for (std::size_t j = 0; j < accepted.size(); ++j) {
+      if (accepted[j].term < 0) continue;
+      Model m = model;
+      m.terms.erase(std::find(m.terms.begin(), m.terms.end(), accepted[j].term));
+      FitOut g = fit_model(D, m, ptrs(all));
+      const double cost = g.chi2 - cur.chi2;
+      if (cost >= opt.min_delta_chi2) continue;
+      res.withdrawn.push_back({D.terms[accepted[j].term], accepted[j].dchi2, cost});
+      model = std::move(m);
+      cur = std::move(g);
+      accepted.erase(accepted.begin() + static_cast<std::ptrdiff_t>(j));
+      again = true;
+      break;
+    }
+  }
+
   // The improved model.
   res.improved_terms = carried;
   res.terms_sigma = EffectTerms{};
@@ -787,14 +809,19 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     f.delta_chi2 = acc.dchi2;
     f.delta_bic = acc.dbic;
     f.heldout_delta_chi2 = acc.dheld;
-    // Could another candidate in its place explain the recording as well?
+    // Could another candidate in its place explain the recording as well? It must itself explain
+    // the residual (Δχ² ≥ min_delta_chi2 against the model without the finding: not a null term
+    // that leaves the residual alone) and fit within ambiguity_chi2 of the finding.
+    Model without = model;
+    without.terms.erase(without.terms.begin() + static_cast<std::ptrdiff_t>(k));
+    const double chi2_without = fit_model(D, without, ptrs(all)).chi2;
     for (std::size_t t2 = 0; t2 < D.terms.size(); ++t2) {
       if (std::find(model.terms.begin(), model.terms.end(), static_cast<int>(t2)) != model.terms.end()) continue;
       Model m = model;
       m.terms[k] = static_cast<int>(t2);
       const FitOut g = fit_model(D, m, ptrs(all));
       const double worse = g.chi2 - cur.chi2;
-      if (worse >= opt.ambiguity_chi2) continue;
+      if (worse >= opt.ambiguity_chi2 || chi2_without - g.chi2 < opt.min_delta_chi2) continue;
       DiagAlternative alt;
       alt.term = D.terms[t2];
       for (int p = 0; p < alt.term.nparams(); ++p)

@@ -72,6 +72,14 @@ struct DiagFinding {
   std::vector<DiagAlternative> alternatives;  // best first; empty = the effect is told apart
 };
 
+// A term the greedy search accepted that lost its evidence in the final model (stepwise backward
+// check): not a finding.
+struct DiagWithdrawn {
+  Term term;
+  double delta_chi2_when_accepted = 0;
+  double delta_chi2_final = 0;  // what removing it from the final model costs (< min_delta_chi2)
+};
+
 struct DiagUnexplained {
   int sensor = 0, axis = 0;
   double chi2_dof = 0, high_chi2_dof = 0, ljung_box_p = 1, systematic_rms = 0;
@@ -89,6 +97,7 @@ struct ResidualSeries {
 struct DiagnoseResult {
   std::vector<DiagFinding> findings;
   std::vector<DiagUnexplained> unexplained;
+  std::vector<DiagWithdrawn> withdrawn;
   AxisStats before[6], after[6];                 // gyro x,y,z, accel x,y,z
   std::vector<ConditionCorrelation> correlations_before[6];
   SensorErrors base_before;                      // coefficients used for "before"
