@@ -155,11 +155,20 @@ void predict_extra(const EffectTerms& e, const SubBlock& s, Vec3& dg, Vec3& da) 
     dg -= e.time_offset_s * s.dw;
     da -= e.time_offset_s * s.df;
   }
-  if (!e.wobble_rad.isZero(0) && std::isfinite(s.angle) && std::abs(s.angle_rate) > 0.0174533) {
-    // True angle θ + δ(θ): rate scaled by 1 + δ'(θ), attitude advanced by δ about the rate axis.
-    const Vec3 w_table = s.w;  // Earth rate is negligible beside the table rate
-    dg += wobble_slope(e.wobble_rad, s.angle) * w_table;
-    da += wobble_angle(e.wobble_rad, s.angle) * s.df / s.angle_rate;
+  if (!e.wobble_rad.isZero(0) && std::isfinite(s.angle)) {
+    if (std::abs(s.angle_rate) > 0.0174533) {
+      // True angle θ + δ(θ): rate scaled by 1 + δ'(θ), attitude advanced by δ about the rate axis.
+      const Vec3 w_table = s.w;  // Earth rate is negligible beside the table rate
+      dg += wobble_slope(e.wobble_rad, s.angle) * w_table;
+      da += wobble_angle(e.wobble_rad, s.angle) * s.df / s.angle_rate;
+    } else if (!s.inner_axis.isZero(0)) {
+      // Static position: the table stands at θ + δ(θ). Everything fixed in the level frame —
+      // gravity and the Earth rate — turns in IMU axes by −δ about the axis u of the angle column
+      // (the same f × u = ∂f/∂θ as in a rotating step): Δf = δ·(f × u), Δω = δ·(ω × u).
+      const double d = wobble_angle(e.wobble_rad, s.angle);
+      dg += d * s.w.cross(s.inner_axis);
+      da += d * s.f.cross(s.inner_axis);
+    }
   }
   if (!e.table_tilt_rad.isZero(0)) {
     // The tilted base turns the level frame seen by the IMU: gravity and the Earth rate, both

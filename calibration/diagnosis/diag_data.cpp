@@ -5,11 +5,51 @@
 
 namespace calbench {
 
+namespace {
+constexpr double kAxisChunkS = 0.05;          // rows summed before judging the motion
+constexpr double kAxisMinRate = 0.0872665;    // 5 °/s: the Earth rate is < 0.1 % of it
+constexpr double kAxisOnlyTol = 2e-3;         // |ω| = |θ̇| within this: no other axis turns
+constexpr double kAxisMinTurn = 0.5;          // rad of qualifying rotation per stretch
+constexpr double kAxisAgreement = 0.998;      // |Σ ω·Δθ| / Σ |ω|·|Δθ|: the rows agree on one axis
+}  // namespace
+
+void DiagDataBuilder::track_axis(const DiagSample& s, bool gap) {
+  if (!have_prev_ || gap) {
+    stretches_.emplace_back();
+    ch_wh_.setZero();
+    ch_dth_ = ch_h_ = 0;
+  } else if (std::isfinite(s.angle_deg) && std::isfinite(prev_angle_) && s.t > prev_t_) {
+    const double h = s.t - prev_t_;
+    ch_dth_ += std::remainder((s.angle_deg - prev_angle_) * M_PI / 180.0, 2 * M_PI);
+    ch_wh_ += 0.5 * (s.w + prev_w_) * h;
+    ch_h_ += h;
+    if (ch_h_ >= kAxisChunkS) {
+      const double rate = std::abs(ch_dth_) / ch_h_;
+      const Vec3 w = ch_wh_ / ch_h_;
+      if (rate > kAxisMinRate && std::abs(w.norm() - rate) <= kAxisOnlyTol * rate) {
+        Stretch& st = stretches_.back();
+        st.w_dth += w * ch_dth_;
+        st.w_abs_dth += w.norm() * std::abs(ch_dth_);
+        st.turn += std::abs(ch_dth_);
+      }
+      ch_wh_.setZero();
+      ch_dth_ = ch_h_ = 0;
+    }
+  }
+  have_prev_ = true;
+  prev_t_ = s.t;
+  prev_angle_ = s.angle_deg;
+  prev_w_ = s.w;
+}
+
 void DiagDataBuilder::add(const DiagSample& s) {
   if (open_) {
     const bool gap = (s.t - t_last_) > 1.5 * std::max(s.dt, dt_last_) + 1e-9;
     if (s.step != cur_.step || gap || (s.t - t0_) >= sub_s_ - 0.5 * s.dt) close_sub();
   }
+  // A stretch ends where rows are missing (a remount is not recorded): judged against the previous
+  // row's interval, as a reader of a file gives dt = the time since the previous row.
+  track_axis(s, have_prev_ && (s.t - t_last_) > 1.5 * dt_last_ + 1e-9);
   t_last_ = s.t;
   dt_last_ = s.dt;
   if (s.step < 0) return;
@@ -76,12 +116,19 @@ void DiagDataBuilder::close_sub() {
     cur_.angle_rate = (ang_n_ > 1 && span > 0) ? (a_last_ - a_first_) / span : 0.0;
   }
   d_.subs.push_back(cur_);
+  sub_stretch_.push_back(static_cast<int>(stretches_.size()) - 1);
 }
 
 DiagData DiagDataBuilder::finish() {
   close_sub();
   d_.sample_rate_hz = samples_ > 0 ? rate_sum_ / static_cast<double>(samples_) : 0.0;
   auto& subs = d_.subs;
+  for (const Stretch& st : stretches_) {
+    const double n = st.w_dth.norm();
+    d_.stretch_axes.push_back(st.turn >= kAxisMinTurn && n >= kAxisAgreement * st.w_abs_dth ? Vec3(st.w_dth / n)
+                                                                                              : Vec3::Zero());
+  }
+  for (std::size_t k = 0; k < subs.size(); ++k) subs[k].inner_axis = d_.stretch_axes[sub_stretch_[k]];
   if (max_parents_ > 0) {
     double total = 0;
     for (const auto& s : subs) total += s.duration;

@@ -1,7 +1,8 @@
 // Data of a bench recording as `diagnose` needs it: short sub-blocks (default 0.05 s) that keep
 // what happens within a revolution of the table (angle, rate and specific-force derivatives), and
 // the ~1 s parent blocks they belong to (the level at which slow effects and drift are judged).
-// Only samples inside plan steps (step ≥ 0) are kept.
+// Only samples inside plan steps (step ≥ 0) are kept; the rows between steps (step −1) serve only
+// to find the direction of the table axis whose angle the recording gives (inner_axis below).
 #pragma once
 #include <limits>
 #include <vector>
@@ -30,6 +31,14 @@ struct SubBlock {
   double angle = std::numeric_limits<double>::quiet_NaN();  // rad, middle of the sub-block
   double angle_rate = 0;                                      // rad/s from the angle column
   Vec3 gyro_ss = Vec3::Zero(), accel_ss = Vec3::Zero();       // Σ (resid − mean)² inside
+  // Unit vector, in IMU axes, of the table axis whose angle is in the angle column, signed so that
+  // an increasing angle is a positive rotation about it; zero when the recording does not tell.
+  // Derived per gap-free stretch of the recording (a remount interrupts it) from the rows, steps
+  // and transitions alike, where only that axis turns: there the reference rate is ω = θ̇·u (plus
+  // the Earth rate), so u ∝ Σ ω·Δθ; the stretch's rows must agree (else zero). Known in static
+  // steps too (from the slews and rate steps of the same mounting), where the table angle error
+  // of table_wobble turns gravity and the Earth rate about it.
+  Vec3 inner_axis = Vec3::Zero();
   bool rotating() const { return w.norm() > 0.0174533; }      // |ω| > 1 °/s
 };
 
@@ -48,6 +57,8 @@ struct DiagData {
   std::vector<ParentBlock> parents;
   double sample_rate_hz = 0;
   bool has_temperature = false, has_angle = false;
+  // Per gap-free stretch (see SubBlock::inner_axis): the derived axis (zero if not known).
+  std::vector<Vec3> stretch_axes;
 };
 
 class DiagDataBuilder {
@@ -61,6 +72,7 @@ class DiagDataBuilder {
 
  private:
   void close_sub();
+  void track_axis(const DiagSample& s, bool gap);
   double sub_s_, parent_s_;
   int max_parents_ = 0;
   DiagData d_;
@@ -71,6 +83,20 @@ class DiagDataBuilder {
   double temp_sum_ = 0, ang_sum_ = 0, rate_sum_ = 0;
   int temp_n_ = 0, ang_n_ = 0;
   std::size_t samples_ = 0;
+  // Axis of the angle column per gap-free stretch. Rows are summed into chunks of ≥ 0.05 s (an
+  // encoder's quantisation averages out); a chunk where only that axis turns (|ω| = |θ̇| within
+  // 0.2 %, |θ̇| > 5 °/s) adds Σ ω·Δθ, Σ |ω|·|Δθ|, Σ |Δθ| to its stretch.
+  struct Stretch {
+    Vec3 w_dth = Vec3::Zero();
+    double w_abs_dth = 0, turn = 0;
+  };
+  std::vector<Stretch> stretches_;
+  std::vector<int> sub_stretch_;
+  bool have_prev_ = false;
+  double prev_t_ = 0, prev_angle_ = std::numeric_limits<double>::quiet_NaN();
+  Vec3 prev_w_ = Vec3::Zero();
+  Vec3 ch_wh_ = Vec3::Zero();
+  double ch_dth_ = 0, ch_h_ = 0;
 };
 
 }  // namespace calbench
