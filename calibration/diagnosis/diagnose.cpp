@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "calibration/bench_fit.hpp"
+#include "calibration/diagnosis/greedy_search.hpp"
 
 namespace calbench {
 
@@ -13,17 +14,16 @@ namespace {
 
 constexpr int kAxes = 6;  // a = sensor·3 + axis
 constexpr int kBase = 4;  // b, M_i0, M_i1, M_i2
-enum Subset { kAll = 0, kEven = 1, kOdd = 2 };
 
 // Halves for the held-out check: the first and the second half of every plan step (splitting by
 // whole steps would leave one half without the ±rate pairs or magnitudes a term needs).
 bool in_subset(const DiagData& d, int p, int subset) {
-  if (subset == kAll) return true;
+  if (subset == kSubsetAll) return true;
   int first = p, last = p;
   while (first > 0 && d.parents[first - 1].step == d.parents[p].step) --first;
   while (last + 1 < static_cast<int>(d.parents.size()) && d.parents[last + 1].step == d.parents[p].step) ++last;
   const bool early = 2 * (p - first) < (last - first + 1);
-  return early == (subset == kEven);
+  return early == (subset == kSubsetEven);
 }
 
 // Everything precomputed once: raw observations and regressor columns per sub-block.
@@ -40,7 +40,7 @@ struct Design {
 };
 
 struct Dataset {
-  int axis = 0, subset = kAll;
+  int axis = 0, subset = kSubsetAll;
   std::vector<int> parents;  // parent indices
   Eigen::MatrixXd L;         // Cholesky factor of the parent covariance
   Eigen::VectorXd zl;        // whitened parent-level z
@@ -56,9 +56,7 @@ struct Dataset {
   double drift_sigma = 0, drift_tau = 1;
 };
 
-struct Model {
-  std::vector<int> terms;  // indices into Design::terms
-};
+using Model = std::vector<int>;  // indices into Design::terms
 
 struct FitOut {
   Eigen::VectorXd theta;  // [24 base | term params (only those in the model, in model order)]
@@ -233,7 +231,7 @@ std::vector<std::pair<int, int>> column_map(const Design& D, const Model& m, int
   for (int c = 0; c < kBase; ++c) cm.push_back({c, a * kBase + c});
   offset.clear();
   int off = kAxes * kBase;
-  for (int t : m.terms) {
+  for (int t : m) {
     offset.push_back(off);
     if (D.col_of[a][t] >= 0)
       for (int p = 0; p < D.terms[t].nparams(); ++p) cm.push_back({D.col_of[a][t] + p, off + p});
@@ -244,7 +242,7 @@ std::vector<std::pair<int, int>> column_map(const Design& D, const Model& m, int
 
 int model_params(const Design& D, const Model& m) {
   int n = kAxes * kBase;
-  for (int t : m.terms) n += D.terms[t].nparams();
+  for (int t : m) n += D.terms[t].nparams();
   return n;
 }
 
@@ -289,22 +287,28 @@ FitOut fit_model(const Design& D, const Model& m, const std::vector<const Datase
   return out;
 }
 
-double heldout_chi2(const Design& D, const Model& m, const std::vector<Dataset>& even, const std::vector<Dataset>& odd) {
-  std::vector<const Dataset*> se, so;
-  for (const auto& s : even) se.push_back(&s);
-  for (const auto& s : odd) so.push_back(&s);
-  const FitOut fe = fit_model(D, m, se), fo = fit_model(D, m, so);
-  double chi2 = 0;
-  for (const auto& S : odd) {
+// The bench as a problem of the catalogue search (greedy_search.hpp): parameters [24 base | model
+// terms in model order]; a term's penalty counts the parent and sub-block rows of the axes it
+// touches, correlated_drift's the parent rows.
+struct BenchProblem {
+  using Dataset = calbench::Dataset;
+  using Fit = FitOut;
+  const DiagData& d;
+  const Design& D;
+  const DiagnoseOptions& opt;
+  int n_terms() const { return static_cast<int>(D.terms.size()); }
+  const Term& term(int t) const { return D.terms[t]; }
+  Dataset build(int a, int subset, double ds, double tau) const { return build_dataset(d, D, a, subset, ds, tau, opt); }
+  Fit fit(const Model& m, const std::vector<const Dataset*>& sets) const { return fit_model(D, m, sets); }
+  double chi2(const Dataset& S, const Model& m, const Fit& f) const {
     std::vector<int> off;
-    chi2 += axis_chi2(S, column_map(D, m, S.axis, off), fe.theta, false);
+    return axis_chi2(S, column_map(D, m, S.axis, off), f.theta, false);
   }
-  for (const auto& S : even) {
-    std::vector<int> off;
-    chi2 += axis_chi2(S, column_map(D, m, S.axis, off), fo.theta, false);
-  }
-  return chi2;
-}
+  bool touches(int t, int a) const { return D.col_of[a][t] >= 0; }
+  int rows(const Dataset& S) const { return S.n_low + S.n_high; }
+  int drift_rows(const Dataset& S) const { return S.n_low; }
+  int param_index(const Fit& f, std::size_t k, int /*t*/) const { return f.offset[k]; }
+};
 
 // Residual per sub-block of axis a for parameters theta of model m.
 Eigen::VectorXd residual(const Design& D, const Model& m, int a, const Eigen::VectorXd& theta) {
@@ -608,23 +612,18 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   for (int a = 0; a < kAxes; ++a) res.white_sigma[a] = std::sqrt(D.white_var[a]);
   res.base_before = current;
 
-  double ds[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  double tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  std::vector<Dataset> all(kAxes), even(kAxes), odd(kAxes);
-  auto rebuild = [&](int triad) {
-    for (int a = triad * 3; a < triad * 3 + 3; ++a) {
-      all[a] = build_dataset(data, D, a, kAll, ds[triad], tau[triad], opt);
-      even[a] = build_dataset(data, D, a, kEven, ds[triad], tau[triad], opt);
-      odd[a] = build_dataset(data, D, a, kOdd, ds[triad], tau[triad], opt);
-    }
-  };
-  rebuild(0);
-  rebuild(1);
-  auto ptrs = [](const std::vector<Dataset>& v) {
-    std::vector<const Dataset*> p;
-    for (const auto& s : v) p.push_back(&s);
-    return p;
-  };
+  const BenchProblem problem{data, D, opt};
+  GreedyPolicy policy;
+  policy.min_delta_chi2 = opt.min_delta_chi2;
+  policy.penalty_per_param = opt.penalty_per_param;
+  policy.max_findings = opt.max_findings;
+  policy.drift_competes = false;  // correlated_drift only when no linear term passes
+  const double drift_sigma[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
+  const double drift_tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
+  GreedySearch<BenchProblem> search(problem, policy, drift_sigma, drift_tau);
+  const std::vector<Dataset>& all = search.all;
+  const double* ds = search.ds;
+  const double* tau = search.tau;
 
   // The data-sheet noise model, kept for the before figures (a correlated_drift finding rebuilds `all`).
   const std::vector<Dataset> all_before = all;
@@ -636,122 +635,16 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     res.correlations_before[a] = correlations(data, r_before[a]);
   }
 
-  Model model;
-  FitOut cur = fit_model(D, model, ptrs(all));
-  double cur_held = heldout_chi2(D, model, even, odd);
-  const double pen = opt.penalty_per_param;
-  struct Accepted {
-    int term;  // −1 − triad for correlated_drift
-    double dchi2, dbic, dheld;
-  };
-  std::vector<Accepted> accepted;
-  std::vector<bool> drift_done(2, false);
-  while (static_cast<int>(accepted.size()) < opt.max_findings) {
-    int best = -1;
-    double best_score = 0, best_d = 0, best_held = 0, best_pen = 0;
-    FitOut best_fit;
-    for (std::size_t t = 0; t < D.terms.size(); ++t) {
-      if (std::find(model.terms.begin(), model.terms.end(), static_cast<int>(t)) != model.terms.end()) continue;
-      Model m = model;
-      m.terms.push_back(static_cast<int>(t));
-      FitOut f = fit_model(D, m, ptrs(all));
-      const double dchi2 = cur.chi2 - f.chi2;
-      int rows = 0;
-      for (int a = 0; a < kAxes; ++a)
-        if (D.col_of[a][t] >= 0) rows += all[a].n_low + all[a].n_high;
-      const double penalty = D.terms[t].nparams() * (std::log(std::max(rows, 2)) + pen);
-      const double score = dchi2 - penalty;
-      if (dchi2 < opt.min_delta_chi2 || score <= best_score) continue;
-      const double held = heldout_chi2(D, m, even, odd);
-      // Must predict the other half of the steps better, unless the in-sample evidence is overwhelming.
-      if (held >= cur_held && dchi2 < 5 * opt.min_delta_chi2) continue;
-      best = static_cast<int>(t);
-      best_score = score;
-      best_d = dchi2;
-      best_held = cur_held - held;
-      best_pen = penalty;
-      best_fit = std::move(f);
-    }
-    if (best >= 0) {
-      model.terms.push_back(best);
-      cur = std::move(best_fit);
-      cur_held -= best_held;
-      accepted.push_back({best, best_d, best_d - best_pen, best_held});
-      continue;
-    }
-    // No linear term: is the drift larger than the data sheet says (correlated_drift)?
-    int best_triad = -1;
-    double best_gain = 0, best_s = 0, best_t = 0;
-    for (int triad = 0; triad < 2; ++triad) {
-      if (drift_done[triad]) continue;
-      auto score = [&](double s, double t) {
-        double v = 0;
-        std::vector<Dataset> tmp;
-        for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(build_dataset(data, D, a, kAll, s, t, opt));
-        std::vector<const Dataset*> p;
-        for (int a = 0; a < kAxes; ++a)
-          if (a / 3 != triad) p.push_back(&all[a]);
-        for (auto& x : tmp) p.push_back(&x);
-        const FitOut f = fit_model(D, model, p);
-        for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
-        return v;
-      };
-      const double base = score(ds[triad], tau[triad]);
-      for (double mult : {2.0, 4.0, 8.0, 16.0, 32.0})
-        for (double t : {60.0, 300.0, 1200.0}) {
-          const double gain = base - score(ds[triad] * mult, t);
-          const double penalty = 2 * (std::log(static_cast<double>(all[triad * 3].n_low)) + pen);
-          if (gain - penalty > best_gain && gain > opt.min_delta_chi2) {
-            best_gain = gain - penalty;
-            best_triad = triad;
-            best_s = ds[triad] * mult;
-            best_t = t;
-          }
-        }
-    }
-    if (best_triad < 0) break;
-    drift_done[best_triad] = true;
-    ds[best_triad] = best_s;
-    tau[best_triad] = best_t;
-    rebuild(best_triad);
-    cur = fit_model(D, model, ptrs(all));
-    cur_held = heldout_chi2(D, model, even, odd);
-    accepted.push_back({-1 - best_triad, best_gain, best_gain, 0});
-  }
-
+  search.run();
   // Backward check (stepwise): a term accepted in an early round can lose its evidence once later
   // terms or a larger drift (correlated_drift) are in the model — e.g. a g-sensitivity that only
-  // half-fitted an effect outside the catalogue. A linear term whose removal from the final model
-  // costs less than min_delta_chi2 is withdrawn (reported as such, not as a finding).
-  for (bool again = true; again;) {
-    again = false;
-    for (std::size_t j = 0; j < accepted.size(); ++j) {
-      if (accepted[j].term < 0) continue;
-      Model m = model;
-      m.terms.erase(std::find(m.terms.begin(), m.terms.end(), accepted[j].term));
-      FitOut g = fit_model(D, m, ptrs(all));
-      const double cost = g.chi2 - cur.chi2;
-      if (cost >= opt.min_delta_chi2) continue;
-      res.withdrawn.push_back({D.terms[accepted[j].term], accepted[j].dchi2, cost});
-      model = std::move(m);
-      cur = std::move(g);
-      accepted.erase(accepted.begin() + static_cast<std::ptrdiff_t>(j));
-      again = true;
-      break;
-    }
-  }
+  // half-fitted an effect outside the catalogue. Withdrawn terms are reported, not findings.
+  for (const auto& w : search.withdraw_weak()) res.withdrawn.push_back({D.terms[w.step.term], w.step.dchi2, w.cost});
+  const Model& model = search.model;
+  const FitOut& cur = search.cur;
 
   // The improved model.
-  res.improved_terms = carried;
-  res.terms_sigma = EffectTerms{};
-  for (std::size_t k = 0; k < model.terms.size(); ++k) {
-    const Term& t = D.terms[model.terms[k]];
-    for (int p = 0; p < t.nparams(); ++p) {
-      const int idx = cur.offset[k] + p;
-      t.add_param(res.improved_terms, p, cur.theta(idx));
-      t.add_param(res.terms_sigma, p, std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
-    }
-  }
+  search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
   for (int a = 0; a < kAxes; ++a) {
     TriadErrors& te = a < 3 ? res.improved.gyro : res.improved.accel;
     const int i = a % 3;
@@ -785,7 +678,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   }
 
   // Findings.
-  for (const auto& acc : accepted) {
+  for (const auto& acc : search.steps) {
     if (acc.term < 0) {
       const int triad = -1 - acc.term;
       const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], acc.dchi2, acc.dbic, res.before, res.after);
@@ -796,44 +689,23 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
       res.improved_terms.accel.drift_tau_s = ds[1] > opt.noise.accel.drift_sigma ? tau[1] : 0;
       continue;
     }
-    DiagFinding f;
+    DiagFinding f = search.term_finding(acc, carried);
     const Term& t = D.terms[acc.term];
-    const std::size_t k = std::find(model.terms.begin(), model.terms.end(), acc.term) - model.terms.begin();
-    f.term = t;
-    for (int p = 0; p < t.nparams(); ++p) {
-      const int idx = cur.offset[k] + p;
-      f.value.push_back(cur.theta(idx) + t.get_param(carried, p));
-      f.sigma.push_back(std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
-    }
-    f.unit = term_unit(t);
-    f.delta_chi2 = acc.dchi2;
-    f.delta_bic = acc.dbic;
-    f.heldout_delta_chi2 = acc.dheld;
+    const std::size_t k = std::find(model.begin(), model.end(), acc.term) - model.begin();
     // Could another candidate in its place explain the recording as well? It must itself explain
     // the residual (Δχ² ≥ min_delta_chi2 against the model without the finding: not a null term
     // that leaves the residual alone) and fit within ambiguity_chi2 of the finding.
-    Model without = model;
-    without.terms.erase(without.terms.begin() + static_cast<std::ptrdiff_t>(k));
-    const double chi2_without = fit_model(D, without, ptrs(all)).chi2;
-    for (std::size_t t2 = 0; t2 < D.terms.size(); ++t2) {
-      if (std::find(model.terms.begin(), model.terms.end(), static_cast<int>(t2)) != model.terms.end()) continue;
-      Model m = model;
-      m.terms[k] = static_cast<int>(t2);
-      const FitOut g = fit_model(D, m, ptrs(all));
-      const double worse = g.chi2 - cur.chi2;
-      if (worse >= opt.ambiguity_chi2 || chi2_without - g.chi2 < opt.min_delta_chi2) continue;
+    for (const auto& sw : search.swaps(k, opt.ambiguity_chi2, opt.min_delta_chi2)) {
       DiagAlternative alt;
-      alt.term = D.terms[t2];
+      alt.term = D.terms[sw.term];
       for (int p = 0; p < alt.term.nparams(); ++p)
-        alt.value.push_back(g.theta(g.offset[k] + p) + alt.term.get_param(carried, p));
+        alt.value.push_back(sw.fit.theta(sw.fit.offset[k] + p) + alt.term.get_param(carried, p));
       alt.unit = term_unit(alt.term);
-      alt.chi2_worse = worse;
+      alt.chi2_worse = sw.worse;
       f.alternatives.push_back(alt);
     }
     std::sort(f.alternatives.begin(), f.alternatives.end(),
               [](const DiagAlternative& a, const DiagAlternative& b) { return a.chi2_worse < b.chi2_worse; });
-    f.report_sensor = t.sensor;
-    f.report_axis = t.axis;
     // Axis on which it shows: the touched axis whose residual it explains most.
     std::vector<int> touched;
     for (int a = 0; a < kAxes; ++a)

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "calibration/diagnosis/greedy_search.hpp"
 #include "calibration/ins/nav_math.hpp"
 
 namespace calbench {
@@ -14,12 +15,11 @@ namespace {
 
 constexpr int kAxes = 6;
 constexpr int kLags = 3;
-enum Subset { kAll = 0, kEven = 1, kOdd = 2 };
 
 bool in_subset(const ParentBlock& p, int subset) {
-  if (subset == kAll) return true;
+  if (subset == kSubsetAll) return true;
   const bool even = (p.step % 2 + 2) % 2 == 0;
-  return even == (subset == kEven);
+  return even == (subset == kSubsetEven);
 }
 
 bool drive_term(const Term& t, bool temperature) {
@@ -355,18 +355,26 @@ FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vect
   return out;
 }
 
-double heldout_chi2(const Design& D, const std::vector<int>& terms, const std::vector<Dataset>& even,
-                    const std::vector<Dataset>& odd) {
-  std::vector<const Dataset*> se, so;
-  for (const auto& s : even) se.push_back(&s);
-  for (const auto& s : odd) so.push_back(&s);
-  const FitOut fe = fit_model(D, terms, se), fo = fit_model(D, terms, so);
-  const std::vector<int> idx = model_params(D, terms);
-  double c = 0;
-  for (const auto& S : odd) c += axis_chi2(S, idx, fe.theta);
-  for (const auto& S : even) c += axis_chi2(S, idx, fo.theta);
-  return c;
-}
+// The drive as a problem of the catalogue search (greedy_search.hpp): global parameters; a term
+// with no column on any axis is no candidate; a term's penalty counts the parent rows of the axes
+// it touches, correlated_drift's the parents.
+struct DriveProblem {
+  using Dataset = calbench::Dataset;
+  using Fit = FitOut;
+  const DriveDiagData& d;
+  const Design& D;
+  int n_terms() const { return static_cast<int>(D.terms.size()); }
+  const Term& term(int t) const { return D.terms[t]; }
+  Dataset build(int a, int subset, double ds, double tau) const { return build_dataset(d, D, a, subset, ds, tau); }
+  Fit fit(const std::vector<int>& m, const std::vector<const Dataset*>& sets) const { return fit_model(D, m, sets); }
+  double chi2(const Dataset& S, const std::vector<int>& m, const Fit& f) const {
+    return axis_chi2(S, model_params(D, m), f.theta);
+  }
+  bool touches(int t, int a) const { return std::find(D.touched[t].begin(), D.touched[t].end(), a) != D.touched[t].end(); }
+  int rows(const Dataset& S) const { return S.n; }
+  int drift_rows(const Dataset& S) const { return S.n; }
+  int param_index(const Fit& /*f*/, std::size_t /*k*/, int t) const { return D.term_off[t]; }
+};
 
 // Parent-level residual of axis a for global parameters theta.
 Eigen::VectorXd residual(const Design& D, int a, const Eigen::VectorXd& theta) { return D.zp[a] - D.Xp[a] * theta; }
@@ -528,29 +536,22 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
   }
   res.base_before = current;
 
-  double ds[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  double tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  std::vector<Dataset> all(kAxes), even(kAxes), odd(kAxes);
-  auto rebuild = [&](int triad) {
-    for (int a = triad * 3; a < triad * 3 + 3; ++a) {
-      all[a] = build_dataset(data, D, a, kAll, ds[triad], tau[triad]);
-      even[a] = build_dataset(data, D, a, kEven, ds[triad], tau[triad]);
-      odd[a] = build_dataset(data, D, a, kOdd, ds[triad], tau[triad]);
-    }
-  };
-  rebuild(0);
-  rebuild(1);
-  auto ptrs = [](const std::vector<Dataset>& v) {
-    std::vector<const Dataset*> p;
-    for (const auto& s : v) p.push_back(&s);
-    return p;
-  };
+  const DriveProblem problem{data, D};
+  GreedyPolicy policy;
+  policy.min_delta_chi2 = opt.min_delta_chi2;
+  policy.penalty_per_param = opt.penalty_per_param;
+  policy.max_findings = opt.max_findings;
+  // A drift larger than the data sheet says (correlated_drift) competes with the linear terms in
+  // every round: a wandering bias would otherwise be half-explained by spurious linear terms.
+  policy.drift_competes = true;
+  policy.skip_untouched = true;
+  const double drift_sigma[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
+  const double drift_tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
+  GreedySearch<DriveProblem> search(problem, policy, drift_sigma, drift_tau);
+  const std::vector<Dataset>& all = search.all;
 
   // Before: the base model (bias, and M or the mounting) refitted, no catalogue term.
-  std::vector<int> model;
-  FitOut cur = fit_model(D, model, ptrs(all));
-  const FitOut base_fit = cur;
-  double cur_held = heldout_chi2(D, model, even, odd);
+  const FitOut base_fit = search.cur;
   Eigen::VectorXd r_before[kAxes], rn_before[kAxes];
   const int nbase = D.n_base;
   for (int a = 0; a < kAxes; ++a) {
@@ -559,90 +560,14 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
     res.correlations_before[a] = correlations(data, rn_before[a]);
   }
 
-  struct Accepted {
-    int term;  // −1 − triad for correlated_drift
-    double dchi2, dbic, dheld;
-  };
-  std::vector<Accepted> accepted;
-  bool drift_done[2] = {false, false};
-  const double pen = opt.penalty_per_param;
-  while (static_cast<int>(accepted.size()) < opt.max_findings) {
-    int best = -1;
-    double best_score = 0, best_d = 0, best_held = 0, best_pen = 0;
-    FitOut best_fit;
-    for (std::size_t t = 0; t < D.terms.size(); ++t) {
-      if (std::find(model.begin(), model.end(), static_cast<int>(t)) != model.end()) continue;
-      if (D.touched[t].empty()) continue;
-      std::vector<int> m = model;
-      m.push_back(static_cast<int>(t));
-      FitOut f = fit_model(D, m, ptrs(all));
-      const double dchi2 = cur.chi2 - f.chi2;
-      int rows = 0;
-      for (int a : D.touched[t]) rows += all[a].n;
-      const double penalty = D.terms[t].nparams() * (std::log(std::max(rows, 2)) + pen);
-      const double score = dchi2 - penalty;
-      if (dchi2 < opt.min_delta_chi2 || score <= best_score) continue;
-      const double held = heldout_chi2(D, m, even, odd);
-      if (held >= cur_held && dchi2 < 5 * opt.min_delta_chi2) continue;
-      best = static_cast<int>(t);
-      best_score = score;
-      best_d = dchi2;
-      best_held = cur_held - held;
-      best_pen = penalty;
-      best_fit = std::move(f);
-    }
-    // A drift larger than the data sheet says (correlated_drift) competes with the linear terms in
-    // every round: a wandering bias would otherwise be half-explained by spurious linear terms.
-    int best_triad = -1;
-    double best_gain = 0, best_s = 0, best_t = 0;
-    for (int triad = 0; triad < 2; ++triad) {
-      if (drift_done[triad]) continue;
-      auto score = [&](double s, double t) {
-        std::vector<Dataset> tmp;
-        for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(build_dataset(data, D, a, kAll, s, t));
-        std::vector<const Dataset*> p;
-        for (int a = 0; a < kAxes; ++a)
-          if (a / 3 != triad) p.push_back(&all[a]);
-        for (auto& x : tmp) p.push_back(&x);
-        const FitOut f = fit_model(D, model, p);
-        double v = 0;
-        for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
-        return v;
-      };
-      const double base = score(ds[triad], tau[triad]);
-      for (double mult : {2.0, 4.0, 8.0, 16.0, 32.0})
-        for (double t : {60.0, 300.0, 1200.0}) {
-          const double gain = base - score(ds[triad] * mult, t);
-          const double penalty = 2 * (std::log(static_cast<double>(NP)) + pen);
-          if (gain - penalty > best_gain && gain > opt.min_delta_chi2) {
-            best_gain = gain - penalty;
-            best_triad = triad;
-            best_s = ds[triad] * mult;
-            best_t = t;
-          }
-        }
-    }
-    if (best >= 0 && (best_triad < 0 || best_score >= best_gain)) {
-      model.push_back(best);
-      cur = std::move(best_fit);
-      cur_held -= best_held;
-      accepted.push_back({best, best_d, best_d - best_pen, best_held});
-      continue;
-    }
-    if (best_triad < 0) break;
-    drift_done[best_triad] = true;
-    ds[best_triad] = best_s;
-    tau[best_triad] = best_t;
-    rebuild(best_triad);
-    cur = fit_model(D, model, ptrs(all));
-    cur_held = heldout_chi2(D, model, even, odd);
-    accepted.push_back({-1 - best_triad, best_gain, best_gain, 0});
-  }
+  search.run();
+  const std::vector<int>& model = search.model;
+  const FitOut& cur = search.cur;
+  const double* ds = search.ds;
+  const double* tau = search.tau;
 
   // Improved model: b (and M) corrected, catalogue terms added.
   res.improved = current;
-  res.improved_terms = carried;
-  res.terms_sigma = EffectTerms{};
   for (int a = 0; a < kAxes; ++a) {
     TriadErrors& te = a < 3 ? res.improved.gyro : res.improved.accel;
     const int i = a % 3;
@@ -660,14 +585,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       out.mounting_delta(c) = cur.theta(6 + c);
       out.mounting_sigma(c) = std::sqrt(std::max(cur.cov(6 + c, 6 + c), 0.0));
     }
-  for (int t : model) {
-    const Term& term = D.terms[t];
-    for (int p = 0; p < term.nparams(); ++p) {
-      const int idx = D.term_off[t] + p;
-      term.add_param(res.improved_terms, p, cur.theta(idx));
-      term.add_param(res.terms_sigma, p, std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
-    }
-  }
+  search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
   for (int triad = 0; triad < 2; ++triad) {
     res.drift_sigma[triad] = ds[triad];
     res.drift_tau[triad] = tau[triad];
@@ -683,7 +601,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
   }
 
   // Findings.
-  for (const auto& acc : accepted) {
+  for (const auto& acc : search.steps) {
     if (acc.term < 0) {
       const int triad = -1 - acc.term;
       const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], acc.dchi2, acc.dbic, res.before, res.after);
@@ -695,20 +613,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       res.findings.push_back(f);
       continue;
     }
-    DiagFinding f;
+    DiagFinding f = search.term_finding(acc, carried);
     const Term& t = D.terms[acc.term];
-    f.term = t;
-    for (int p = 0; p < t.nparams(); ++p) {
-      const int idx = D.term_off[acc.term] + p;
-      f.value.push_back(cur.theta(idx) + t.get_param(carried, p));
-      f.sigma.push_back(std::sqrt(std::max(cur.cov(idx, idx), 0.0)));
-    }
-    f.unit = term_unit(t);
-    f.delta_chi2 = acc.dchi2;
-    f.delta_bic = acc.dbic;
-    f.heldout_delta_chi2 = acc.dheld;
-    f.report_sensor = t.sensor;
-    f.report_axis = t.axis;
     if (t.effect == EffectId::lever_arm) {
       // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
       // rolls or pitches, so the component along the yaw axis is poorly determined).

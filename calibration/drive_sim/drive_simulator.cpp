@@ -57,7 +57,6 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
   const Vec3& r = cfg.lever_arm;
   const double dt = 1.0 / cfg.imu_rate_hz;
   const long n = static_cast<long>(std::floor(T * cfg.imu_rate_hz + 1e-9));
-  const double hfd = 1e-4;  // finite-difference step for ω̇
 
   double lat = cfg.route.lat, lon = cfg.route.lon, h = cfg.route.h;
   double plat = lat, plon = lon, ph = h;  // previous sample's position
@@ -83,8 +82,14 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
     // negligible for gravity and Earth rate).
     const double ti = std::max(0.0, t - fx.time_offset_s);
     const Body bi = fx.time_offset_s != 0 ? body_at(prof, ti, lat, h) : b;
-    const Vec3 w_a = body_at(prof, ti + hfd, lat, h).w_ib, w_b = body_at(prof, std::max(0.0, ti - hfd), lat, h).w_ib;
-    const Vec3 wdot = (w_a - w_b) / (ti + hfd - std::max(0.0, ti - hfd));
+    // ω̇ as the mean over the sample interval centred on the sample: (ω(t+T/2) − ω(t−T/2))/T is
+    // exactly the mean of ω̇ there, so ω̇×r is the interval mean of the tangential lever-arm
+    // acceleration (what an IMU's band-limited sample shows; for smooth motion it differs from the
+    // point derivative by ω⃛·T²/24). Finite for any motion: a step of the rate would give Δω×r/T on
+    // one sample, not the Dirac pulse a point derivative (0.1 ms difference) makes of it.
+    const double ta = ti + 0.5 * dt, tb = std::max(0.0, ti - 0.5 * dt);
+    const Vec3 w_a = body_at(prof, ta, lat, h).w_ib, w_b = body_at(prof, tb, lat, h).w_ib;
+    const Vec3 wdot = (w_a - w_b) / (ta - tb);
     const Vec3 f_m = bi.f + wdot.cross(r) + bi.w_ib.cross(bi.w_ib.cross(r));
     Vec3 w_in = C_bm * bi.w_ib, f_in = C_bm * f_m;
     if (sensor_fx) {

@@ -3,7 +3,8 @@
 // what a FOG-grade reference inertial-satellite system reports at its body origin (own rate,
 // small white errors, with its σ), and GNSS fixes. The MEMS IMU sits at lever arm r (reference
 // body axes) with rotation C_mb (MEMS → reference body); its specific force includes the
-// lever-arm terms ω̇×r + ω×(ω×r).
+// lever-arm terms ω̇×r + ω×(ω×r), with ω̇ the mean angular acceleration over the sample interval
+// centred on the sample.
 //
 // Truth quantities (reference body): v^n = C_nb·[v,0,0], ω_nb^b from the Euler-angle rates,
 // ω_ib^b = ω_nb^b + C_bn(ω_ie + ω_en), f^b = C_bn(v̇^n + (2ω_ie + ω_en)×v^n − g). Position is

@@ -104,7 +104,9 @@ RouteProfile::RouteProfile(const Route& r) : route_(r) {
       case SegmentKind::lane_change: {
         if (v <= 0) bad(s, "lane change needs the vehicle moving");
         l.T = s.duration_s > 0 ? s.duration_s : 4.0;
-        l.rate = 2 * kPi * s.width / (v * l.T * l.T);
+        // Heading deviation a·x³(1−x)³, x = τ/T: the lateral offset v·∫δψ dτ = v·T·a/140 = width
+        // (small angles); yaw rate and yaw acceleration are 0 at both ends (see at()).
+        l.rate = 140 * s.width / (v * l.T);
         break;
       }
     }
@@ -156,10 +158,14 @@ Motion RouteProfile::at(double t) const {
       break;
     }
     case SegmentKind::lane_change: {
-      const double w = 2 * kPi / l.T;
-      psi = l.psi0 + l.rate / w * (1 - std::cos(w * tau));
-      psi_dot = after ? 0.0 : l.rate * std::sin(w * tau);
-      psi_ddot = after ? 0.0 : l.rate * w * std::cos(w * tau);
+      // δψ = a·u³ with u = x(1−x), x = τ/T (the lateral position is the 7th-order smoothstep).
+      // ψ̈ starts and ends at 0, so the roll rate −k_r(v̇ψ̇ + vψ̈) and with it ω are continuous —
+      // a sine period of yaw rate (ψ̈ = ±rate·w at the ends) made the roll rate step by k_r·v·rate·w
+      // at both ends, i.e. a Dirac pulse of ω̇ and of the lever-arm force ω̇×r.
+      const double x = tau / l.T, u = x * (1 - x), s = 1 - 2 * x;
+      psi = l.psi0 + l.rate * u * u * u;
+      psi_dot = after ? 0.0 : l.rate / l.T * 3 * u * u * s;
+      psi_ddot = after ? 0.0 : l.rate / (l.T * l.T) * 6 * u * (s * s - u);
       break;
     }
   }

@@ -1,7 +1,8 @@
 // A land-vehicle route as a sequence of manoeuvres, and its exact kinematics: forward speed,
 // its rate, body attitude (roll, pitch, yaw of the forward-right-down body in NED) and the
-// attitude rates, all analytic in time (raised-cosine transitions, so specific force and angular
-// rate are continuous). The vehicle does not slip: its velocity is along the body x axis.
+// attitude rates, all analytic in time (raised-cosine transitions and a smoothstep lane change,
+// so yaw acceleration, specific force and angular rate — including the suspension's roll and
+// pitch rates — are continuous; the angular acceleration has at most finite steps). The vehicle does not slip: its velocity is along the body x axis.
 // Body roll follows the lateral acceleration and pitch the longitudinal one (suspension), which
 // is what makes the horizontal gyro axes move on a real car.
 #pragma once
@@ -57,7 +58,7 @@ class RouteProfile {
     Segment s;
     double t0 = 0, T = 0, v0 = 0, v1 = 0, psi0 = 0;
     double brake_T = 0;  // stop: braking time
-    double rate = 0;     // turn: peak yaw rate; lane change: amplitude
+    double rate = 0;     // turn: peak yaw rate; lane change: heading scale a (δψ = a·[x(1−x)]³)
     double ramp = 0;     // transition time
   };
   Route route_;

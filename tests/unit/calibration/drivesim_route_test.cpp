@@ -2,6 +2,9 @@
 // error-free simulated MEMS IMU (with mounting rotation and lever arm) follows the truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/ins/strapdown.hpp"
 #include "calibration/units.hpp"
@@ -106,4 +109,52 @@ TEST(DrivesimRoute, ErrorFreeImuNavigatesWithTruthThroughMountingAndLeverArm) {
   EXPECT_LT(dp.norm(), 0.05) << dp.transpose();
   EXPECT_LT(ins::rotvec_from_dcm(C_nb * last.C_nb.transpose()).norm(), 1e-5);
   EXPECT_LT((s.v - last.v_ned).norm(), 0.01);
+}
+
+// A vehicle's angular rate is continuous: the roll rate −k_r(v̇ψ̇ + vψ̈) and the pitch rate may not
+// step where one manoeuvre ends and the next begins (a lane change whose ψ̈ started and ended at
+// ±rate·w stepped the roll rate by k_r·v·rate·w, here 6.6e-3 rad/s). Over a step of h the rates
+// change by at most |ω̈|max·h; this route's largest attitude acceleration is below 1 rad/s².
+TEST(DrivesimRoute, AttitudeRatesAreContinuousAcrossManoeuvres) {
+  const RouteProfile p(test_route());
+  const double h = 1e-4;
+  double worst[3] = {0, 0, 0}, at[3] = {0, 0, 0};
+  Motion prev = p.at(0);
+  for (long k = 1; k * h <= p.duration(); ++k) {
+    const Motion m = p.at(k * h);
+    for (int i = 0; i < 3; ++i) {
+      const double d = std::abs(m.rpy_dot(i) - prev.rpy_dot(i));
+      if (d > worst[i]) worst[i] = d, at[i] = k * h;
+    }
+    prev = m;
+  }
+  for (int i = 0; i < 3; ++i) EXPECT_LT(worst[i], 1.0 * h) << "rate " << i << " steps at t = " << at[i];
+}
+
+// The lane change keeps its meaning: the lateral offset is `width` (small angles; the exact offset
+// v·∫sin δψ differs by ~δψ²/6, under 1 % here), the heading returns, and the peak yaw rate stays
+// of the order of the lateral acceleration a lane change of that width and duration needs.
+TEST(DrivesimRoute, LaneChangeOffsetsByItsWidth) {
+  for (double width : {3.5, -3.0}) {
+    Route r;
+    r.heading = 10 * kDeg;
+    Segment s;
+    s.kind = SegmentKind::accelerate; s.to_speed = 20; s.duration_s = 10; r.segments.push_back(s);
+    s = Segment{}; s.kind = SegmentKind::lane_change; s.width = width; s.duration_s = 4; r.segments.push_back(s);
+    s = Segment{}; s.kind = SegmentKind::cruise; s.duration_s = 2; r.segments.push_back(s);
+    const RouteProfile p(r);
+    double y = 0, peak_rate = 0;
+    const double h = 1e-4;
+    for (double t = 10; t < 14 - h / 2; t += h) {
+      const Motion a = p.at(t), b = p.at(t + h);
+      y += 0.5 * (a.v * std::sin(a.rpy(2) - r.heading) + b.v * std::sin(b.rpy(2) - r.heading)) * h;
+      peak_rate = std::max(peak_rate, std::abs(a.rpy_dot(2)));
+    }
+    EXPECT_NEAR(y, width, 0.01 * std::abs(width));
+    EXPECT_NEAR(p.at(p.duration()).rpy(2), r.heading, 1e-12);
+    // Lateral acceleration v·ψ̇: between the sine profile's 2π·W/T² and twice that.
+    const double a_sine = 2 * units::kPi * std::abs(width) / 16;
+    EXPECT_GT(20 * peak_rate, a_sine);
+    EXPECT_LT(20 * peak_rate, 2 * a_sine);
+  }
 }

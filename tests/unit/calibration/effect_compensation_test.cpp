@@ -18,8 +18,10 @@ using units::kDeg;
 
 namespace {
 
-// (No lane change right after a turn: the simulator's ω̇ by central differences sees the kink in
-// the roll rate there as a one-sample spike of several m/s² in the lever-arm term.)
+// (Written when the simulator's ω̇ was a 0.1 ms point difference and a lane change's roll rate
+// stepped: no lane change right after a turn, where that gave a one-sample spike of several m/s²
+// in the lever-arm term. Both are fixed (docs/in-motion.md, "Kinematics are exact"); the route is
+// kept as it is so the test's figures stay comparable.)
 Route lively_route() {
   Route r;
   r.lat = 48.1 * kDeg;

@@ -22,53 +22,17 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/qc/inertial_qc.hpp"
 #include "calibration/units.hpp"
+#include "inmotion_test_drive.hpp"
 
 using namespace calbench;
 using namespace calbench::drivesim;
 using namespace calbench::inmotion;
+using namespace calbench::inmotion_test;
 using units::kDeg;
 using units::kDegPerHour;
 using units::kMilliG;
 
 namespace {
-
-Route route(int laps) {
-  Route r;
-  r.lat = 30.5 * kDeg;
-  r.lon = 114.3 * kDeg;
-  r.h = 30;
-  r.heading = -40 * kDeg;
-  auto add = [&](SegmentKind k, double a = 0, double b = 0) {
-    Segment s;
-    s.kind = k;
-    switch (k) {
-      case SegmentKind::accelerate: s.to_speed = a; s.duration_s = b; break;
-      case SegmentKind::turn: s.angle = a * kDeg; s.radius = b; break;
-      case SegmentKind::climb: s.grade = a * kDeg; s.duration_s = b; break;
-      case SegmentKind::lane_change: s.width = a; s.duration_s = b; break;
-      default: s.duration_s = a;
-    }
-    r.segments.push_back(s);
-  };
-  add(SegmentKind::stop, 20);
-  for (int lap = 0; lap < laps; ++lap) {
-    add(SegmentKind::accelerate, 12, 8);
-    add(SegmentKind::turn, 90, 25);
-    add(SegmentKind::climb, 5, 15);
-    add(SegmentKind::lane_change, 3.5, 4);
-    add(SegmentKind::turn, -180, 30);
-    add(SegmentKind::accelerate, 20, 8);
-    add(SegmentKind::climb, -4, 15);
-    add(SegmentKind::turn, 135, 60);
-    add(SegmentKind::lane_change, -3.5, 4);
-    add(SegmentKind::stop, 8);
-    add(SegmentKind::accelerate, 10, 6);
-    add(SegmentKind::turn, -225, 20);
-    add(SegmentKind::cruise, 10);
-    add(SegmentKind::stop, 8);
-  }
-  return r;
-}
 
 // The real drift of the simulated unit: the gyros differ from adis16488a_noise() (first order,
 // 5.1 °/h, 300 s), the accelerometers follow it (0.1 mg, 300 s: far below what a drive resolves
@@ -95,20 +59,14 @@ struct Drive {
 const Drive& drive() {
   static const Drive d = [] {
     Drive d;
-    DriveSimConfig cfg;
-    cfg.route = route(std::max(3, env_int("INMOTION_DRIFT_LAPS", 5)));
-    cfg.mems = draw_random_unit(21);
+    // Laps near Wuhan at 100 Hz, the unit and simulator of seed 21.
+    const int laps = std::max(3, env_int("INMOTION_DRIFT_LAPS", 5));
+    DriveSimConfig cfg = drive_config(lap_route(30.5, 114.3, 30, -40, laps), 21, 100, Vec3(0.3, -0.4, 0.6),
+                                      Vec3(0.5, -0.3, 0.2));
     cfg.noise.gyro.drift_sigma = 0;  // the drift is added below, with its truth kept
     cfg.noise.accel.drift_sigma = 0;
-    cfg.imu_rate_hz = 100;
-    cfg.reference.rate_hz = 50;
-    cfg.gnss.rate_hz = 0;
-    const Vec3 nominal(0, 0, 90 * kDeg);
-    cfg.mounting_rpy = nominal + Vec3(0.3, -0.4, 0.6) * kDeg;
-    cfg.lever_arm = Vec3(0.5, -0.3, 0.2);
-    cfg.seed = 21;
     d.unit = cfg.mems;
-    d.C_nominal = ins::dcm_from_rpy(nominal);
+    d.C_nominal = nominal_mounting();
     d.lever = cfg.lever_arm;
     DriveSinks s;
     s.imu = [&](const SimImu& m) { d.imu.push_back(m); };
@@ -134,10 +92,6 @@ const Drive& drive() {
   return d;
 }
 
-inmotion::RefObs obs(const SimRef& r) {
-  return {r.t, r.lat, r.lon, r.h, r.v_ned, r.rpy, r.sigma_pos, r.sigma_vel, r.sigma_att};
-}
-
 struct Outcome {
   std::vector<double> t;
   std::vector<std::array<double, 6>> total, total_sigma, truth;  // SI
@@ -154,7 +108,7 @@ template <class Filter>
 Outcome run(const InMotionConfig& fc, double window_end) {
   const Drive& d = drive();
   Outcome o;
-  std::unique_ptr<Filter> f;
+  FilterReplay<Filter> replay(fc, d.C_nominal, d.lever);
   std::size_t r = 0;
   const double t_truth0 = d.imu.front().t;
   const double dt_imu = d.imu[1].t - d.imu[0].t;
@@ -163,19 +117,12 @@ Outcome run(const InMotionConfig& fc, double window_end) {
   std::size_t k = 0;
   for (; k < d.imu.size() && d.imu[k].t <= window_end + 1e-9; ++k) {
     const SimImu& m = d.imu[k];
-    if (f && k > 0) {
-      const SimImu& p = d.imu[k - 1];
-      f->imu(m.t, 0.5 * (m.gyro + p.gyro) * dt_imu, 0.5 * (m.accel + p.accel) * dt_imu, dt_imu);
-    }
+    replay.imu(m, dt_imu);
     while (r < d.ref.size() && d.ref[r].t <= m.t + 1e-9) {
-      const inmotion::RefObs ro = obs(d.ref[r++]);
-      if (!f) {
-        f = std::make_unique<Filter>(fc, d.C_nominal, d.lever, ro);
-        continue;
-      }
-      if (!f->reference(ro)) continue;
+      const inmotion::RefObs ro = ref_obs(d.ref[r++]);
+      if (!replay.reference(ro)) continue;  // the first epoch starts the filter
       typename Filter::Vec6 x, s;
-      f->total_drift(x, s);
+      replay.filter().total_drift(x, s);
       std::array<double, 6> tot, sig, tru;
       const auto ki = static_cast<std::size_t>(std::lround((ro.t - t_truth0) / dt_imu));
       for (int i = 0; i < 6; ++i) {
@@ -197,7 +144,8 @@ Outcome run(const InMotionConfig& fc, double window_end) {
       o.truth.push_back(tru);
     }
   }
-  for (int i = 0; i < 3; ++i) o.mean_nis[i] = f->consistency(i).mean_nis();
+  Filter& f = replay.filter();
+  for (int i = 0; i < 3; ++i) o.mean_nis[i] = f.consistency(i).mean_nis();
   for (int g = 0; g < 2; ++g) {
     o.coverage[g] = static_cast<double>(in3[g]) / static_cast<double>(n[g]);
     o.rms_err[g] = std::sqrt(se[g] / static_cast<double>(n[g]));
@@ -205,18 +153,17 @@ Outcome run(const InMotionConfig& fc, double window_end) {
   }
   // Out of sample: inertial-only navigation from the window end with the estimated set, its
   // biases being the total drift b̂ + d̂ at the end of the window.
-  SensorErrors set = f->estimate();
-  set.gyro.bias += f->gyro_drift();
-  set.accel.bias += f->accel_drift();
+  SensorErrors set = f.estimate();
+  set.gyro.bias += f.gyro_drift();
+  set.accel.bias += f.accel_drift();
   while (r < d.ref.size() && d.ref[r].t < d.imu[k - 1].t - 1e-9) ++r;
   if (r < d.ref.size()) {
-    qc::InertialRun q(set, f->mounting(), d.lever, obs(d.ref[r]));
+    qc::InertialRun q(set, f.mounting(), d.lever, ref_obs(d.ref[r]));
     const double t_start = d.ref[r].t;
     for (std::size_t j = k; j < d.imu.size() && d.imu[j].t <= t_start + 60 + 1e-9; ++j) {
       const SimImu& m = d.imu[j];
-      const SimImu& p = d.imu[j - 1];
-      q.imu(m.t, 0.5 * (m.gyro + p.gyro) * dt_imu, 0.5 * (m.accel + p.accel) * dt_imu, dt_imu);
-      while (r < d.ref.size() && d.ref[r].t <= m.t + 1e-9) o.cpe_60s = q.cpe(obs(d.ref[r++]));
+      imu_increment(q, m, d.imu[j - 1], dt_imu);
+      while (r < d.ref.size() && d.ref[r].t <= m.t + 1e-9) o.cpe_60s = q.cpe(ref_obs(d.ref[r++]));
     }
   }
   return o;

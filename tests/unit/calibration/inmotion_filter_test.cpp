@@ -6,96 +6,40 @@
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/units.hpp"
+#include "inmotion_test_drive.hpp"
 
 using namespace calbench;
 using namespace calbench::drivesim;
 using namespace calbench::inmotion;
+using namespace calbench::inmotion_test;
 using units::kDeg;
 
 namespace {
-Route short_route() {
-  Route r;
-  r.lat = 48.1 * kDeg;
-  r.lon = 11.6 * kDeg;
-  r.h = 520;
-  r.heading = 10 * kDeg;
-  auto add = [&](SegmentKind k, double a = 0, double b = 0) {
-    Segment s;
-    s.kind = k;
-    switch (k) {
-      case SegmentKind::accelerate: s.to_speed = a; s.duration_s = b; break;
-      case SegmentKind::turn: s.angle = a * kDeg; s.radius = b; break;
-      case SegmentKind::climb: s.grade = a * kDeg; s.duration_s = b; break;
-      case SegmentKind::lane_change: s.width = a; s.duration_s = b; break;
-      default: s.duration_s = a;
-    }
-    r.segments.push_back(s);
-  };
-  add(SegmentKind::stop, 20);
-  for (int lap = 0; lap < 2; ++lap) {
-    add(SegmentKind::accelerate, 12, 8);
-    add(SegmentKind::turn, 90, 25);
-    add(SegmentKind::climb, 5, 15);
-    add(SegmentKind::lane_change, 3.5, 4);
-    add(SegmentKind::turn, -180, 30);
-    add(SegmentKind::accelerate, 20, 8);
-    add(SegmentKind::climb, -4, 15);
-    add(SegmentKind::turn, 135, 60);
-    add(SegmentKind::lane_change, -3.5, 4);
-    add(SegmentKind::stop, 8);
-    add(SegmentKind::accelerate, 10, 6);
-    add(SegmentKind::turn, -225, 20);
-    add(SegmentKind::cruise, 10);
-    add(SegmentKind::stop, 8);
-  }
-  return r;
-}
-
 struct DriveRun {
   SensorErrors truth, est;
   Vec3 mount_true, mount_est, mount_sigma, gyro_total_sigma;
   double mean_nis[3];
 };
 
+// Two laps near Munich at 500 Hz, the unit and simulator of `seed`, streamed into the filter.
 DriveRun run(std::uint64_t seed, bool att) {
-  DriveSimConfig cfg;
-  cfg.route = short_route();
-  cfg.mems = draw_random_unit(seed);
-  cfg.imu_rate_hz = 500;
-  cfg.reference.rate_hz = 50;
-  cfg.gnss.rate_hz = 0;
-  const Vec3 nominal(0, 0, 90 * kDeg);
-  cfg.mounting_rpy = nominal + Vec3(0.4, -0.3, 0.5) * kDeg;
-  cfg.lever_arm = Vec3(0.6, -0.4, 0.3);
-  cfg.seed = seed;
+  const DriveSimConfig cfg = drive_config(lap_route(48.1, 11.6, 520, 10, 2), seed, 500, Vec3(0.4, -0.3, 0.5),
+                                          Vec3(0.6, -0.4, 0.3));
   InMotionConfig fc;
   fc.obs_att = att;
-  std::unique_ptr<InMotionFilter> f;
-  Vec3 w_prev, a_prev;
-  double t_prev = -1;
+  FilterReplay<InMotionFilter> replay(fc, nominal_mounting(), cfg.lever_arm);
   DriveSinks sinks;
-  sinks.imu = [&](const SimImu& m) {
-    if (f && t_prev >= 0) {
-      const double dt = m.t - t_prev;
-      f->imu(m.t, 0.5 * (m.gyro + w_prev) * dt, 0.5 * (m.accel + a_prev) * dt, dt);
-    }
-    w_prev = m.gyro;
-    a_prev = m.accel;
-    t_prev = m.t;
-  };
-  sinks.reference = [&](const SimRef& r) {
-    RefObs o{r.t, r.lat, r.lon, r.h, r.v_ned, r.rpy, r.sigma_pos, r.sigma_vel, r.sigma_att};
-    if (!f) f = std::make_unique<InMotionFilter>(fc, ins::dcm_from_rpy(nominal), cfg.lever_arm, o);
-    else f->reference(o);
-  };
+  sinks.imu = [&](const SimImu& m) { replay.imu(m); };
+  sinks.reference = [&](const SimRef& r) { replay.reference(r); };
   simulate_drive(cfg, sinks);
+  InMotionFilter& f = replay.filter();
   DriveRun out;
   out.truth = cfg.mems;
-  out.est = f->estimate();
+  out.est = f.estimate();
   out.mount_true = cfg.mounting_rpy;
-  f->mounting_rpy(out.mount_est, out.mount_sigma);
-  out.gyro_total_sigma = f->gyro_total_drift_sigma();
-  for (int i = 0; i < 3; ++i) out.mean_nis[i] = f->consistency(i).mean_nis();
+  f.mounting_rpy(out.mount_est, out.mount_sigma);
+  out.gyro_total_sigma = f.gyro_total_drift_sigma();
+  for (int i = 0; i < 3; ++i) out.mean_nis[i] = f.consistency(i).mean_nis();
   return out;
 }
 

@@ -1,0 +1,320 @@
+// The catalogue search shared by the bench (diagnose.cpp) and the drive (drive_diagnose.cpp)
+// diagnosis: greedy addition of catalogue terms by Δχ² with a BIC-type penalty and a held-out
+// check, and the noise-side candidate correlated_drift (a larger first-order Gauss–Markov drift
+// σ, τ chosen by Δ(χ² + log det R)). docs/diagnosis.md step 3.
+//
+// The engine is written over a "problem" type that owns the data and the linear algebra:
+//
+//   struct Problem {
+//     using Dataset = ...;  // one axis' data under one noise model; members `int axis`, `double logdet`
+//     using Fit = ...;      // members `double chi2`, `double chi2_axis[6]`, `Eigen::VectorXd theta`,
+//                           // `Eigen::MatrixXd cov`
+//     int n_terms() const;                          // linear candidates 0..n_terms−1
+//     const Term& term(int t) const;
+//     Dataset build(int axis, int subset, double drift_sigma, double drift_tau) const;  // subset: GreedySubset
+//     Fit fit(const std::vector<int>& model, const std::vector<const Dataset*>& sets) const;
+//     double chi2(const Dataset& S, const std::vector<int>& model, const Fit& f) const;  // S under f
+//     bool touches(int t, int axis) const;         // term t has a column on that axis
+//     int rows(const Dataset& S) const;            // rows of S counted for a term's penalty
+//     int drift_rows(const Dataset& S) const;      // rows counted for correlated_drift's penalty
+//     int param_index(const Fit& f, std::size_t k, int t) const;  // theta index of the k-th model term (t)
+//   };
+//
+// What differs between bench and drive is in the problem and in GreedyPolicy; the rest (the loop,
+// the held-out check, the drift grid, the assembly of the fitted terms) is here once.
+#pragma once
+#include <algorithm>
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "calibration/diagnosis/diagnose.hpp"
+
+namespace calbench {
+
+// Subsets of the data blocks: all, and the two halves of the held-out check (each fitted, then
+// predicting the other).
+enum GreedySubset { kSubsetAll = 0, kSubsetEven = 1, kSubsetOdd = 2 };
+
+struct GreedyPolicy {
+  double min_delta_chi2 = 40;     // smallest Δχ² a candidate needs; held-out check waived from 5× it
+  double penalty_per_param = 0;   // on top of ln(rows) per parameter
+  int max_findings = 6;
+  // false (bench): correlated_drift is tried only in a round where no linear term passes;
+  // true (drive): it competes with the best linear term in every round (score vs penalised gain).
+  bool drift_competes = false;
+  // true (drive): a term with a column on no axis is not a candidate.
+  bool skip_untouched = false;
+};
+
+// One accepted candidate, in the order accepted.
+struct GreedyStep {
+  int term = 0;  // index of a linear term, or −1 − triad for correlated_drift
+  double dchi2 = 0, dbic = 0, dheld = 0;
+};
+
+// Penalty of a term with k parameters over `rows` rows: k·(ln max(rows, 2) + extra).
+double greedy_term_penalty(int nparams, int rows, double penalty_per_param);
+// Penalty of correlated_drift (σ and τ) over `rows` rows: 2·(ln rows + extra).
+double greedy_drift_penalty(int rows, double penalty_per_param);
+// The drift grid: σ = prior × these, τ from greedy_drift_taus().
+const std::vector<double>& greedy_drift_multipliers();
+const std::vector<double>& greedy_drift_taus();
+
+// A finding for linear term t from its fitted parameters theta[first..first+k) (value given
+// relative to `carried`, reported as carried + fitted) and the step that accepted it: value, σ,
+// unit, evidence, sensor and axis as the term names them.
+DiagFinding greedy_term_finding(const Term& t, const GreedyStep& step, int first, const Eigen::VectorXd& theta,
+                                const Eigen::MatrixXd& cov, const EffectTerms& carried);
+// Adds term t's fitted parameters theta[first..) to `value` and their σ to `sigma`.
+void greedy_add_term(const Term& t, int first, const Eigen::VectorXd& theta, const Eigen::MatrixXd& cov,
+                     EffectTerms& value, EffectTerms& sigma);
+
+template <class Problem>
+class GreedySearch {
+  const Problem& P_;
+  GreedyPolicy pol_;
+  bool drift_done_[2] = {false, false};
+
+ public:
+  using Dataset = typename Problem::Dataset;
+  using Fit = typename Problem::Fit;
+  static constexpr int kAxes = 6;  // gyro x..z, accel x..z; a triad is axes 3·triad..3·triad+2
+
+  // A candidate that, put in place of the k-th model term, fits within a given Δχ² of the model.
+  struct Swap {
+    int term;
+    Fit fit;
+    double worse;  // χ² of that model minus the current one's
+  };
+
+  // Builds the datasets under the prior drift (σ, τ per triad) and fits the model without terms.
+  GreedySearch(const Problem& problem, const GreedyPolicy& policy, const double (&drift_sigma)[2],
+               const double (&drift_tau)[2])
+      : P_(problem), pol_(policy), all(kAxes), even(kAxes), odd(kAxes) {
+    for (int triad = 0; triad < 2; ++triad) {
+      ds[triad] = drift_sigma[triad];
+      tau[triad] = drift_tau[triad];
+      rebuild(triad);
+    }
+    cur = P_.fit(model, ptrs(all));
+    cur_held = heldout(model);
+  }
+
+  // Adds candidates until none passes or max_findings are accepted.
+  void run() {
+    while (static_cast<int>(steps.size()) < pol_.max_findings) {
+      Linear lin = best_linear();
+      if (lin.term >= 0 && !pol_.drift_competes) {
+        accept(std::move(lin));
+        continue;
+      }
+      const Drift dr = best_drift();
+      if (lin.term >= 0 && (dr.triad < 0 || lin.score >= dr.gain)) {
+        accept(std::move(lin));
+        continue;
+      }
+      if (dr.triad < 0) break;
+      drift_done_[dr.triad] = true;
+      ds[dr.triad] = dr.sigma;
+      tau[dr.triad] = dr.tau;
+      rebuild(dr.triad);
+      cur = P_.fit(model, ptrs(all));
+      cur_held = heldout(model);
+      steps.push_back({-1 - dr.triad, dr.gain, dr.gain, 0});
+    }
+  }
+
+  // Held-out χ²: the model fitted on each half predicts the other.
+  double heldout(const std::vector<int>& m) const {
+    const Fit fe = P_.fit(m, ptrs(even)), fo = P_.fit(m, ptrs(odd));
+    double c = 0;
+    for (const auto& S : odd) c += P_.chi2(S, m, fe);
+    for (const auto& S : even) c += P_.chi2(S, m, fo);
+    return c;
+  }
+
+  // Theta index of the first parameter of model term t (accepted term).
+  int first_param(int t) const {
+    const std::size_t k = std::find(model.begin(), model.end(), t) - model.begin();
+    return P_.param_index(cur, k, t);
+  }
+
+  // The finding of an accepted linear step (value, σ, evidence; the caller adds where it shows).
+  DiagFinding term_finding(const GreedyStep& s, const EffectTerms& carried) const {
+    return greedy_term_finding(P_.term(s.term), s, first_param(s.term), cur.theta, cur.cov, carried);
+  }
+
+  // Carried terms plus the fitted model terms; σ of the fitted ones.
+  void fitted_terms(const EffectTerms& carried, EffectTerms& value, EffectTerms& sigma) const {
+    value = carried;
+    sigma = EffectTerms{};
+    for (std::size_t k = 0; k < model.size(); ++k)
+      greedy_add_term(P_.term(model[k]), P_.param_index(cur, k, model[k]), cur.theta, cur.cov, value, sigma);
+  }
+
+  // Terms not in the model that, in place of the k-th model term, fit within `below` of it and
+  // (min_explain > 0) themselves explain at least min_explain of χ² against the model without it.
+  std::vector<Swap> swaps(std::size_t k, double below, double min_explain = 0) const {
+    std::vector<Swap> out;
+    std::vector<int> without = model;
+    without.erase(without.begin() + static_cast<std::ptrdiff_t>(k));
+    const double chi2_without = min_explain > 0 ? P_.fit(without, ptrs(all)).chi2 : 0.0;
+    for (int t = 0; t < P_.n_terms(); ++t) {
+      if (in_model(t)) continue;
+      std::vector<int> m = model;
+      m[k] = t;
+      Fit g = P_.fit(m, ptrs(all));
+      const double worse = g.chi2 - cur.chi2;
+      if (worse >= below) continue;
+      if (min_explain > 0 && chi2_without - g.chi2 < min_explain) continue;
+      out.push_back({t, std::move(g), worse});
+    }
+    return out;
+  }
+
+  // A linear step withdrawn by the backward check, and what removing it cost in the final model.
+  struct Withdrawn {
+    GreedyStep step;
+    double cost;
+  };
+  // Stepwise backward check after run(): refit the model without each accepted linear term; one
+  // whose removal costs less than min_delta_chi2 (a later term or a larger drift took its place) is
+  // removed from the model and the steps, repeatedly, weakest first found.
+  std::vector<Withdrawn> withdraw_weak() {
+    std::vector<Withdrawn> out;
+    for (bool again = true; again;) {
+      again = false;
+      for (std::size_t j = 0; j < steps.size(); ++j) {
+        if (steps[j].term < 0) continue;
+        std::vector<int> m = model;
+        m.erase(std::find(m.begin(), m.end(), steps[j].term));
+        Fit g = P_.fit(m, ptrs(all));
+        const double cost = g.chi2 - cur.chi2;
+        if (cost >= pol_.min_delta_chi2) continue;
+        out.push_back({steps[j], cost});
+        model = std::move(m);
+        cur = std::move(g);
+        cur_held = heldout(model);
+        steps.erase(steps.begin() + static_cast<std::ptrdiff_t>(j));
+        again = true;
+        break;
+      }
+    }
+    return out;
+  }
+
+  static std::vector<const Dataset*> ptrs(const std::vector<Dataset>& v) {
+    std::vector<const Dataset*> p;
+    for (const auto& s : v) p.push_back(&s);
+    return p;
+  }
+
+  // State: the noise model per triad, the datasets under it, the model and its fit.
+  double ds[2] = {0, 0}, tau[2] = {1, 1};
+  std::vector<Dataset> all, even, odd;
+  std::vector<int> model;  // linear terms, in the order accepted
+  Fit cur;
+  double cur_held = 0;
+  std::vector<GreedyStep> steps;
+
+ private:
+  struct Linear {
+    int term = -1;
+    double score = 0, dchi2 = 0, held = 0, penalty = 0;
+    Fit fit;
+  };
+  struct Drift {
+    int triad = -1;
+    double gain = 0, sigma = 0, tau = 0;
+  };
+
+  bool in_model(int t) const { return std::find(model.begin(), model.end(), t) != model.end(); }
+
+  void rebuild(int triad) {
+    for (int a = triad * 3; a < triad * 3 + 3; ++a) {
+      all[a] = P_.build(a, kSubsetAll, ds[triad], tau[triad]);
+      even[a] = P_.build(a, kSubsetEven, ds[triad], tau[triad]);
+      odd[a] = P_.build(a, kSubsetOdd, ds[triad], tau[triad]);
+    }
+  }
+
+  // The linear term with the best Δχ² − penalty that passes Δχ² ≥ min and the held-out check
+  // (waived at Δχ² ≥ 5·min).
+  Linear best_linear() const {
+    Linear best;
+    for (int t = 0; t < P_.n_terms(); ++t) {
+      if (in_model(t)) continue;
+      int rows = 0;
+      bool touched = false;
+      for (int a = 0; a < kAxes; ++a)
+        if (P_.touches(t, a)) {
+          rows += P_.rows(all[a]);
+          touched = true;
+        }
+      if (pol_.skip_untouched && !touched) continue;
+      std::vector<int> m = model;
+      m.push_back(t);
+      Fit f = P_.fit(m, ptrs(all));
+      const double dchi2 = cur.chi2 - f.chi2;
+      const double penalty = greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param);
+      const double score = dchi2 - penalty;
+      if (dchi2 < pol_.min_delta_chi2 || score <= best.score) continue;
+      const double held = heldout(m);
+      // Must predict the other half better, unless the in-sample evidence is overwhelming.
+      if (held >= cur_held && dchi2 < 5 * pol_.min_delta_chi2) continue;
+      best.term = t;
+      best.score = score;
+      best.dchi2 = dchi2;
+      best.held = cur_held - held;
+      best.penalty = penalty;
+      best.fit = std::move(f);
+    }
+    return best;
+  }
+
+  void accept(Linear lin) {
+    model.push_back(lin.term);
+    cur = std::move(lin.fit);
+    cur_held -= lin.held;
+    steps.push_back({lin.term, lin.dchi2, lin.dchi2 - lin.penalty, lin.held});
+  }
+
+  // Is the drift of a triad larger or slower than the current noise model? Best penalised gain in
+  // χ² + log det R of the triad's axes over the grid (each triad at most once).
+  Drift best_drift() const {
+    Drift best;
+    for (int triad = 0; triad < 2; ++triad) {
+      if (drift_done_[triad]) continue;
+      auto score = [&](double s, double t) {
+        std::vector<Dataset> tmp;
+        for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(P_.build(a, kSubsetAll, s, t));
+        std::vector<const Dataset*> p;
+        for (int a = 0; a < kAxes; ++a)
+          if (a / 3 != triad) p.push_back(&all[a]);
+        for (auto& x : tmp) p.push_back(&x);
+        const Fit f = P_.fit(model, p);
+        double v = 0;
+        for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
+        return v;
+      };
+      const double base = score(ds[triad], tau[triad]);
+      for (double mult : greedy_drift_multipliers())
+        for (double t : greedy_drift_taus()) {
+          const double gain = base - score(ds[triad] * mult, t);
+          const double penalty = greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param);
+          if (gain - penalty > best.gain && gain > pol_.min_delta_chi2) {
+            best.gain = gain - penalty;
+            best.triad = triad;
+            best.sigma = ds[triad] * mult;
+            best.tau = t;
+          }
+        }
+    }
+    return best;
+  }
+};
+
+}  // namespace calbench
