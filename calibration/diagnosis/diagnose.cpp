@@ -617,7 +617,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   policy.min_delta_chi2 = opt.min_delta_chi2;
   policy.penalty_per_param = opt.penalty_per_param;
   policy.max_findings = opt.max_findings;
-  policy.drift_competes = false;  // correlated_drift only when no linear term passes
+  policy.drift_competes = true;  // correlated_drift competes with the best linear term every round
   const double drift_sigma[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
   const double drift_tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
   GreedySearch<BenchProblem> search(problem, policy, drift_sigma, drift_tau);

@@ -288,6 +288,30 @@ std::vector<Row> sweep_rows() {
        triad_term(E::temperature_scale, 0, 2, &TriadEffectTerms::temp_scale)},
       {"temperature_scale/accel_", "ppm_K_thermal", {10, 40}, kPpm, Plan::thermal,
        triad_term(E::temperature_scale, 1, 0, &TriadEffectTerms::temp_scale)},
+      // Drift beyond the data sheet (first-order Gauss–Markov, τ 60 s) at multiples of the data-sheet σ
+      // that lie on the diagnosis's ×2 grid (so "within 20 %" asks for the right grid cell).
+      {"correlated_drift/gyro_x", "_sigma_tau60", {8, 16}, adis16488a_noise().gyro.drift_sigma, Plan::diagnose,
+       [](int k, double si) {
+         Expect x;
+         (void)k;
+         x.value = si;
+         x.fx.gyro.drift_sigma = si;
+         x.fx.gyro.drift_tau_s = 60;
+         x.effect = EffectId::correlated_drift;
+         x.sensor = 0, x.axis = -1;
+         return x;
+       }},
+      {"correlated_drift/accel_x", "_sigma_tau60", {16}, adis16488a_noise().accel.drift_sigma, Plan::diagnose,
+       [](int k, double si) {
+         Expect x;
+         (void)k;
+         x.value = si;
+         x.fx.accel.drift_sigma = si;
+         x.fx.accel.drift_tau_s = 60;
+         x.effect = EffectId::correlated_drift;
+         x.sensor = 1, x.axis = -1;
+         return x;
+       }},
       // Thermal lag on the up-and-down chamber plan (heating and cooling over the same range).
       {"temperature_rate/gyro_", "dph_per_K_min_updown", {4, 6, 10}, kDegPerHour * kPerKPerMin, Plan::updown,
        triad_term(E::temperature_rate, 0, 1, &TriadEffectTerms::temp_rate)},
