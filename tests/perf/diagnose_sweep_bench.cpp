@@ -231,6 +231,20 @@ std::function<Expect(int, double)> table_term(EffectId e, Eigen::Vector2d Effect
   };
 }
 
+// A first-order drift of one triad (σ = si, τ 60 s), reported for the triad (axis "all").
+std::function<Expect(int, double)> drift_term(int sensor) {
+  return [=](int, double si) {
+    Expect x;
+    x.value = si;
+    TriadEffectTerms& t = sensor ? x.fx.accel : x.fx.gyro;
+    t.drift_sigma = si;
+    t.drift_tau_s = 60;
+    x.effect = EffectId::correlated_drift;
+    x.sensor = sensor, x.axis = -1;
+    return x;
+  };
+}
+
 std::vector<Row> sweep_rows() {
   using E = EffectId;
   constexpr double kPerKPerMin = 60.0;  // a coefficient per (K/min) is 60× the one per (K/s)
@@ -291,27 +305,9 @@ std::vector<Row> sweep_rows() {
       // Drift beyond the data sheet (first-order Gauss–Markov, τ 60 s) at multiples of the data-sheet σ
       // that lie on the diagnosis's ×2 grid (so "within 20 %" asks for the right grid cell).
       {"correlated_drift/gyro_x", "_sigma_tau60", {8, 16}, adis16488a_noise().gyro.drift_sigma, Plan::diagnose,
-       [](int k, double si) {
-         Expect x;
-         (void)k;
-         x.value = si;
-         x.fx.gyro.drift_sigma = si;
-         x.fx.gyro.drift_tau_s = 60;
-         x.effect = EffectId::correlated_drift;
-         x.sensor = 0, x.axis = -1;
-         return x;
-       }},
+       drift_term(0)},
       {"correlated_drift/accel_x", "_sigma_tau60", {16}, adis16488a_noise().accel.drift_sigma, Plan::diagnose,
-       [](int k, double si) {
-         Expect x;
-         (void)k;
-         x.value = si;
-         x.fx.accel.drift_sigma = si;
-         x.fx.accel.drift_tau_s = 60;
-         x.effect = EffectId::correlated_drift;
-         x.sensor = 1, x.axis = -1;
-         return x;
-       }},
+       drift_term(1)},
       // Thermal lag on the up-and-down chamber plan (heating and cooling over the same range).
       {"temperature_rate/gyro_", "dph_per_K_min_updown", {4, 6, 10}, kDegPerHour * kPerKPerMin, Plan::updown,
        triad_term(E::temperature_rate, 0, 1, &TriadEffectTerms::temp_rate)},
