@@ -625,8 +625,6 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   const double* ds = search.ds;
   const double* tau = search.tau;
 
-  // The data-sheet noise model, kept for the before figures (a correlated_drift finding rebuilds `all`).
-  const std::vector<Dataset> all_before = all;
   // Before: the given coefficients.
   Eigen::VectorXd r_before[kAxes];
   for (int a = 0; a < kAxes; ++a) {
@@ -668,8 +666,14 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     // systematic part is re-measured against the drift the data-sheet noise model sees in the final
     // residual (for linear findings the same drift the after figure removes; a correlated_drift
     // finding's excess drift stays in the before figure).
-    const Eigen::VectorXd drift = smoothed_drift(data, all_before[a], r_after[a]);
-    const AxisStats sys = axis_stats(data, D, all_before[a], r_before[a], kAxes * kBase, &drift);
+    // The data-sheet noise model: `all` unless a correlated_drift finding rebuilt this triad's
+    // datasets (only then is it built again, not copied up front).
+    const int triad = a / 3;
+    const bool drift_changed = ds[triad] != drift_sigma[triad] || tau[triad] != drift_tau[triad];
+    const Dataset prior = drift_changed ? problem.build(a, kSubsetAll, drift_sigma[triad], drift_tau[triad]) : Dataset{};
+    const Dataset& noise_before = drift_changed ? prior : all[a];
+    const Eigen::VectorXd drift = smoothed_drift(data, noise_before, r_after[a]);
+    const AxisStats sys = axis_stats(data, D, noise_before, r_before[a], kAxes * kBase, &drift);
     res.before[a].step_rms = sys.step_rms;
     res.before[a].within_rms = sys.within_rms;
     res.before[a].systematic_rms = sys.systematic_rms;
