@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "calibration/bench_fit.hpp"
+#include "calibration/gauss_markov_window.hpp"
 
 namespace calbench {
 
@@ -41,7 +42,7 @@ BenchFitResult fit_bench_lsq(const std::vector<BenchBlock>& blocks, const BenchF
     const double s2 = p.drift_sigma * p.drift_sigma;
     for (int k = 0; k < N; ++k) {
       for (int l = 0; l <= k; ++l) {
-        double v = s2 * std::exp(-std::abs(blocks[k].t_mid - blocks[l].t_mid) / p.drift_tau);
+        double v = s2 * gm_window_correlation(blocks[k].t_mid, blocks[k].duration, blocks[l].t_mid, blocks[l].duration, p.drift_tau);
         if (blocks[k].step == blocks[l].step) v += sb(k) * sb(l);
         if (k == l) v += p.white_var / blocks[k].n;
         R(k, l) = v;

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "bench/bench_recording.hpp"
+#include "bench/diagnose/finding_text.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
@@ -252,23 +253,16 @@ std::string finding_sentence(const DiagFinding& f) {
     case EffectId::correlated_drift: o << who << " residual wanders slowly beyond the data-sheet drift: correlated drift, "; break;
   }
   if (f.value.size() == 1) {
-    o << human_value(f, f.value[0]) << " ± " << human_value(f, f.sigma[0]);
+    o << human_value(f, f.value[0]);
+    if (std::isfinite(f.sigma[0])) o << " ± " << human_value(f, f.sigma[0]);
   } else {
     o << "(";
     for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
     o << ")";
   }
-  if (f.term.effect == EffectId::correlated_drift) o << ", τ ≈ " << fmt(f.noise_tau_s) << " s";
+  if (f.term.effect == EffectId::correlated_drift) o << ", τ ≈ " << drift_tau_text(f);
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
-  for (const auto& a : f.alternatives) {
-    o << "; NOT told apart on this recording from " << a.term.label() << " (χ² only " << fmt(a.chi2_worse)
-      << " worse)";
-    const bool temperature_pair = (a.term.effect == EffectId::temperature_rate && f.term.effect == EffectId::temperature_bias) ||
-                                  (a.term.effect == EffectId::temperature_bias && f.term.effect == EffectId::temperature_rate);
-    if (temperature_pair)
-      o << ": on a warm-up alone a bias ∝ T and one ∝ dT/dt look alike; a plan that heats and cools over the "
-           "same range (thermal_updown) tells them apart";
-  }
+  o << alternatives_text(f);
   return o.str();
 }
 
@@ -292,17 +286,8 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                          {"correlation_before", f.condition_r},
                          {"ljung_box_p_before", r.before[ai].ljung_box_p},
                          {"ljung_box_p_after", r.after[ai].ljung_box_p}};
-    if (f.term.effect == EffectId::correlated_drift) ev["tau_s"] = f.noise_tau_s;
-    nlohmann::json alts = nlohmann::json::array();
-    for (const auto& a : f.alternatives) {
-      nlohmann::json av = a.value.size() == 1 ? nlohmann::json(a.value[0]) : nlohmann::json(a.value);
-      alts.push_back({{"effect", effect_name(a.term.effect)},
-                      {"label", a.term.label()},
-                      {"value", av},
-                      {"unit", a.unit},
-                      {"chi2_worse", a.chi2_worse}});
-    }
-    ev["indistinguishable_from"] = alts;
+    if (f.term.effect == EffectId::correlated_drift) add_drift_tau_evidence(f, ev);
+    ev["indistinguishable_from"] = alternatives_json(f);
     findings.push_back({{"effect", effect_name(f.term.effect)},
                         {"sensor", kSensor[f.report_sensor]},
                         {"axis", f.report_axis >= 0 ? kAxis[f.report_axis] : "all"},
@@ -344,15 +329,9 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
         {"before", st(r.before[a])}, {"after", st(r.after[a])}, {"white_sigma_per_sample", r.white_sigma[a]},
         {"correlations_before", corr}};
   }
-  nlohmann::json withdrawn = nlohmann::json::array();
-  for (const auto& w : r.withdrawn)
-    withdrawn.push_back({{"effect", effect_name(w.term.effect)},
-                         {"label", w.term.label()},
-                         {"delta_chi2_when_accepted", w.delta_chi2_when_accepted},
-                         {"delta_chi2_final", w.delta_chi2_final}});
   return {{"findings", findings},
           {"unexplained", unexplained},
-          {"withdrawn", withdrawn},
+          {"withdrawn", withdrawn_json(r.withdrawn)},
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "bench fit of this recording" : "given"},
           {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
@@ -365,9 +344,7 @@ std::string diagnosis_text(const DiagRun& run) {
     << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\n";
   if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the sensor's noise\n";
   for (const auto& f : r.findings) o << "* " << finding_sentence(f) << "\n";
-  for (const auto& w : r.withdrawn)
-    o << "- withdrawn: " << w.term.label() << " (accepted with Δχ² " << fmt(w.delta_chi2_when_accepted)
-      << ", but in the final model it explains only Δχ² " << fmt(w.delta_chi2_final) << ")\n";
+  for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
   for (const auto& u : r.unexplained) {
     o << "? unexplained (no catalogue effect explains it): " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)
       << " (within steps " << fmt(u.high_chi2_dof) << "), Ljung–Box p " << fmt(u.ljung_box_p) << "; worst steps";

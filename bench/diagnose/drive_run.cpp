@@ -7,6 +7,7 @@
 #include <random>
 #include <sstream>
 
+#include "bench/diagnose/finding_text.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/fit_drive.hpp"
 #include "bench/drive/qc_drive.hpp"
@@ -55,8 +56,8 @@ std::string value_text(const DiagFinding& f) {
       return t.sensor == 0 ? list(1.0 / kDegPerHour, "°/h/K") : list(1.0 / kMilliG, "mg/K");
     case EffectId::temperature_scale: return list(1e6, "ppm/K");
     case EffectId::correlated_drift:
-      return t.sensor == 0 ? fmt(f.value[0] / kDegPerHour) + " °/h, τ " + fmt(f.noise_tau_s) + " s"
-                           : fmt(f.value[0] / kMilliG) + " mg, τ " + fmt(f.noise_tau_s) + " s";
+      return t.sensor == 0 ? fmt(f.value[0] / kDegPerHour) + " °/h, τ " + drift_tau_text(f)
+                           : fmt(f.value[0] / kMilliG) + " mg, τ " + drift_tau_text(f);
     default: return list(1.0, f.unit.c_str());
   }
 }
@@ -379,7 +380,7 @@ std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
   else head = who + " error grows with " + condition_text(f.condition);
   const int rs = shown_sensor >= 0 ? shown_sensor : (f.report_sensor < 2 ? f.report_sensor : 0);
   return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
-         disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs);
+         disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs) + alternatives_text(f);
 }
 
 nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun& run) {
@@ -405,7 +406,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     nlohmann::json ev = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic},
                          {"heldout_delta_chi2", f.heldout_delta_chi2}, {"revealing_condition", f.condition},
                          {"correlation_before", f.condition_r}};
-    if (f.term.effect == EffectId::correlated_drift) ev["tau_s"] = f.noise_tau_s;
+    if (f.term.effect == EffectId::correlated_drift) add_drift_tau_evidence(f, ev);
+    ev["indistinguishable_from"] = alternatives_json(f);
     if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
     if (fi < R.shown_on.size() && f.term.effect != EffectId::correlated_drift) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
     if (f.report_sensor < 2 && f.report_axis >= 0) {
@@ -431,6 +433,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
                   {"correlations", c}});
   }
   j["unexplained"] = us;
+  j["withdrawn"] = withdrawn_json(r.withdrawn);
   nlohmann::json axes;
   for (int a = 0; a < 6; ++a) {
     auto st = [](const AxisStats& s) {
@@ -489,6 +492,7 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
   if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the noise\n";
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi)
     o << "* " << drive_finding_sentence(r.findings[fi], fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1) << "\n";
+  for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
   for (const auto& u : r.unexplained) {
     o << "! unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " χ²/dof " << fmt(u.chi2_dof)
       << ", Ljung–Box p " << fmt(u.ljung_box_p, 2) << "; strongest correlations:";

@@ -7,6 +7,7 @@
 
 #include "calibration/bench_fit.hpp"
 #include "calibration/diagnosis/greedy_search.hpp"
+#include "calibration/gauss_markov_window.hpp"
 
 namespace calbench {
 
@@ -64,6 +65,7 @@ struct FitOut {
   double chi2 = 0;
   double chi2_axis[kAxes] = {};
   std::vector<int> offset;  // per model term, start in theta
+  double logdet_info = 0;   // ln det(Xᵀ R⁻¹ X): the restricted-likelihood (REML) term
 };
 
 double sensor_ref(const SubBlock& s, int a, int c) {
@@ -161,7 +163,7 @@ Eigen::MatrixXd parent_cov(const DiagData& d, const std::vector<int>& P, int a, 
   for (int k = 0; k < N; ++k)
     for (int l = 0; l <= k; ++l) {
       const ParentBlock &pk = d.parents[P[k]], &pl = d.parents[P[l]];
-      double v = ds * ds * std::exp(-std::abs(pk.t_mid - pl.t_mid) / tau);
+      double v = ds * ds * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, tau);
       if (pk.step == pl.step) v += sb[k] * sb[l];
       if (k == l) v += white_var / pk.n;
       R(k, l) = R(l, k) = v;
@@ -277,6 +279,7 @@ FitOut fit_model(const Design& D, const Model& m, const std::vector<const Datase
   Eigen::LDLT<Eigen::MatrixXd> ldlt(As);
   out.theta = s.asDiagonal() * ldlt.solve(s.asDiagonal() * b);
   out.cov = s.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(P, P)) * s.asDiagonal();
+  out.logdet_info = ldlt.vectorD().array().log().sum() - 2 * s.array().log().sum();
   for (const Dataset* S : sets) {
     std::vector<int> off;
     const auto cm = column_map(D, m, S->axis, off);
@@ -350,10 +353,12 @@ Eigen::VectorXd smoothed_drift(const DiagData& d, const Dataset& S, const Eigen:
   const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(rw);
   Eigen::VectorXd drift(N);
   for (int k = 0; k < N; ++k) {
+    const ParentBlock& pk = d.parents[S.parents[k]];
     double s = 0;
-    for (int l = 0; l < N; ++l)
-      s += S.drift_sigma * S.drift_sigma *
-           std::exp(-std::abs(d.parents[S.parents[k]].t_mid - d.parents[S.parents[l]].t_mid) / S.drift_tau) * v(l);
+    for (int l = 0; l < N; ++l) {
+      const ParentBlock& pl = d.parents[S.parents[l]];
+      s += S.drift_sigma * S.drift_sigma * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, S.drift_tau) * v(l);
+    }
     drift(k) = s;
   }
   return drift;
@@ -534,13 +539,15 @@ const char* revealing_condition(EffectId e) {
 
 }  // namespace
 
-DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, double delta_chi2, double delta_bic,
-                                     const AxisStats (&before)[6], const AxisStats (&after)[6]) {
+DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, const DriftInterval& interval,
+                                     double delta_chi2, double delta_bic, const AxisStats (&before)[6],
+                                     const AxisStats (&after)[6]) {
   DiagFinding f;
   f.term = Term{EffectId::correlated_drift, triad, -1};
   f.value = {sigma};
-  f.sigma = {std::numeric_limits<double>::quiet_NaN()};
+  f.sigma = {0.5 * (interval.sigma_hi - interval.sigma_lo)};
   f.noise_tau_s = tau_s;
+  f.noise_interval = interval;
   f.unit = term_unit(f.term);
   f.report_sensor = triad;
   f.report_axis = -1;
@@ -637,6 +644,8 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   // Backward check (stepwise): a term accepted in an early round can lose its evidence once later
   // terms or a larger drift (correlated_drift) are in the model — e.g. a g-sensitivity that only
   // half-fitted an effect outside the catalogue. Withdrawn terms are reported, not findings.
+  for (const auto& w : search.recheck_drift())
+    res.withdrawn.push_back({Term{EffectId::correlated_drift, -1 - w.step.term, -1}, w.step.dchi2, w.cost});
   for (const auto& w : search.withdraw_weak()) res.withdrawn.push_back({D.terms[w.step.term], w.step.dchi2, w.cost});
   const Model& model = search.model;
   const FitOut& cur = search.cur;
@@ -685,7 +694,8 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   for (const auto& acc : search.steps) {
     if (acc.term < 0) {
       const int triad = -1 - acc.term;
-      const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], acc.dchi2, acc.dbic, res.before, res.after);
+      const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], search.drift_interval[triad],
+                                                     acc.dchi2, acc.dbic, res.before, res.after);
       res.findings.push_back(f);
       res.improved_terms.gyro.drift_sigma = ds[0] > opt.noise.gyro.drift_sigma ? ds[0] : 0;
       res.improved_terms.gyro.drift_tau_s = ds[0] > opt.noise.gyro.drift_sigma ? tau[0] : 0;

@@ -15,6 +15,7 @@
 // candidate passes. correlated_drift is a candidate on the noise side (a larger drift σ chosen by
 // maximum likelihood).
 #pragma once
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,13 @@ struct DiagAlternative {
   double chi2_worse = 0;      // χ² of that model minus the chosen one's (< ambiguity_chi2)
 };
 
+// 1σ intervals of a correlated_drift finding's σ and τ from the profile likelihood (−2 ln L within
+// 1 of its minimum). NaN: the record leaves that side open (τ, and with it σ, not resolved).
+struct DriftInterval {
+  double sigma_lo = std::numeric_limits<double>::quiet_NaN(), sigma_hi = std::numeric_limits<double>::quiet_NaN();
+  double tau_lo = std::numeric_limits<double>::quiet_NaN(), tau_hi = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct DiagFinding {
   Term term;
   std::vector<double> value, sigma;  // SI
@@ -69,15 +77,19 @@ struct DiagFinding {
   double condition_r = 0;
   double rms_before = 0, rms_after = 0;  // systematic residual of the reported sensor axis (or all touched)
   double noise_tau_s = 0;                // correlated_drift only
+  DriftInterval noise_interval;          // correlated_drift only: 1σ intervals of σ and τ
   std::vector<DiagAlternative> alternatives;  // best first; empty = the effect is told apart
 };
 
 // A term the greedy search accepted that lost its evidence in the final model (stepwise backward
-// check): not a finding.
+// check), or a correlated_drift given up because the search redone without it explains the
+// recording better (a slow deterministic effect it had taken the place of): not a finding.
 struct DiagWithdrawn {
   Term term;
   double delta_chi2_when_accepted = 0;
-  double delta_chi2_final = 0;  // what removing it from the final model costs (< min_delta_chi2)
+  // Linear term: what removing it from the final model costs (< min_delta_chi2). correlated_drift:
+  // the change of the penalised −2 ln L from the model with it to the one redone without (< 0).
+  double delta_chi2_final = 0;
 };
 
 struct DiagUnexplained {
@@ -118,9 +130,11 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
 // Value of a condition for a sub-block (used for correlations and plots). Names:
 // "rate", "w_x".."w_z", "f_x".."f_z", "temperature", "dT/dt", "time", "angle".
 // The finding of a drift larger or slower than the prior on one triad (0 gyro, 1 accel):
-// first-order σ and τ (no σ of its own), systematic residual as the RMS over the triad's axes.
-DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, double delta_chi2, double delta_bic,
-                                     const AxisStats (&before)[6], const AxisStats (&after)[6]);
+// first-order σ and τ with their 1σ intervals (the finding's σ is half the σ interval, NaN when
+// it is open), systematic residual as the RMS over the triad's axes.
+DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, const DriftInterval& interval,
+                                     double delta_chi2, double delta_bic, const AxisStats (&before)[6],
+                                     const AxisStats (&after)[6]);
 
 std::vector<std::string> condition_names();
 double condition_value(const DiagData& d, const SubBlock& s, const std::string& name);

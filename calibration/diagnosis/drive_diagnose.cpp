@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "calibration/diagnosis/greedy_search.hpp"
+#include "calibration/gauss_markov_window.hpp"
 #include "calibration/ins/nav_math.hpp"
 
 namespace calbench {
@@ -256,7 +257,8 @@ Eigen::MatrixXd parent_cov(const DriveDiagData& d, const Design& D, const std::v
     if (k + 1 < N && P[k + 1] == P[k] + 1) R(k, k + 1) = R(k + 1, k) = D.pcov[a][P[k]];
     if (with_drift)
       for (int l = 0; l <= k; ++l) {
-        const double v = ds * ds * std::exp(-std::abs(d.parents[P[k]].t_mid - d.parents[P[l]].t_mid) / tau);
+        const ParentBlock &pk = d.parents[P[k]], &pl = d.parents[P[l]];
+        const double v = ds * ds * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, tau);
         R(k, l) += v;
         if (l != k) R(l, k) += v;
       }
@@ -300,6 +302,7 @@ struct FitOut {
   Eigen::MatrixXd cov;    // global (model rows/cols filled)
   double chi2 = 0;
   double chi2_axis[kAxes] = {};
+  double logdet_info = 0;  // ln det(Xᵀ R⁻¹ X + priors): the restricted-likelihood (REML) term
 };
 
 std::vector<int> model_params(const Design& D, const std::vector<int>& terms) {
@@ -341,6 +344,7 @@ FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vect
   const Eigen::VectorXd th = s.asDiagonal() * ldlt.solve(s.asDiagonal() * b);
   const Eigen::MatrixXd C = s.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(K, K)) * s.asDiagonal();
   FitOut out;
+  out.logdet_info = ldlt.vectorD().array().log().sum() - 2 * s.array().log().sum();
   out.theta = Eigen::VectorXd::Zero(D.P);
   out.cov = Eigen::MatrixXd::Zero(D.P, D.P);
   for (int u = 0; u < K; ++u) {
@@ -386,9 +390,12 @@ Eigen::VectorXd smoothed_drift(const DriveDiagData& d, const Dataset& S, const E
   const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(w);
   Eigen::VectorXd drift(N);
   for (int k = 0; k < N; ++k) {
+    const ParentBlock& pk = d.parents[S.parents[k]];
     double s = 0;
-    for (int l = 0; l < N; ++l)
-      s += S.ds * S.ds * std::exp(-std::abs(d.parents[S.parents[k]].t_mid - d.parents[S.parents[l]].t_mid) / S.tau) * v(l);
+    for (int l = 0; l < N; ++l) {
+      const ParentBlock& pl = d.parents[S.parents[l]];
+      s += S.ds * S.ds * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, S.tau) * v(l);
+    }
     drift(k) = s;
   }
   return drift;
@@ -561,6 +568,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
   }
 
   search.run();
+  for (const auto& w : search.recheck_drift())
+    res.withdrawn.push_back({Term{EffectId::correlated_drift, -1 - w.step.term, -1}, w.step.dchi2, w.cost});
   const std::vector<int>& model = search.model;
   const FitOut& cur = search.cur;
   const double* ds = search.ds;
@@ -604,7 +613,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
   for (const auto& acc : search.steps) {
     if (acc.term < 0) {
       const int triad = -1 - acc.term;
-      const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], acc.dchi2, acc.dbic, res.before, res.after);
+      const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], search.drift_interval[triad],
+                                                     acc.dchi2, acc.dbic, res.before, res.after);
       out.rms_floor.push_back(0.0);
       out.shown_on.push_back(triad * 3);
       TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
@@ -615,6 +625,20 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
     }
     DiagFinding f = search.term_finding(acc, carried);
     const Term& t = D.terms[acc.term];
+    // Another candidate in its place that fits within ambiguity_chi2 and itself explains the
+    // residual (as on the bench): the drive does not tell them apart.
+    const std::size_t k = std::find(model.begin(), model.end(), acc.term) - model.begin();
+    for (const auto& sw : search.swaps(k, opt.ambiguity_chi2, opt.min_delta_chi2)) {
+      DiagAlternative alt;
+      alt.term = D.terms[sw.term];
+      for (int p = 0; p < alt.term.nparams(); ++p)
+        alt.value.push_back(sw.fit.theta(D.term_off[sw.term] + p) + alt.term.get_param(carried, p));
+      alt.unit = term_unit(alt.term);
+      alt.chi2_worse = sw.worse;
+      f.alternatives.push_back(alt);
+    }
+    std::sort(f.alternatives.begin(), f.alternatives.end(),
+              [](const DiagAlternative& a, const DiagAlternative& b) { return a.chi2_worse < b.chi2_worse; });
     if (t.effect == EffectId::lever_arm) {
       // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
       // rolls or pitches, so the component along the yaw axis is poorly determined).

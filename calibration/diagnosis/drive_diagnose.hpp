@@ -30,6 +30,9 @@ struct DriveDiagnoseOptions {
   NoiseSpec noise = adis16488a_noise();  // data-sheet drift prior
   bool fixed_scale = false;              // coefficients given: M fixed, mounting δ estimated
   double min_delta_chi2 = 40;
+  // Another candidate that, in a finding's place, fits within this Δχ² (and itself explains
+  // min_delta_chi2) is reported as not told apart from it (DiagAlternative).
+  double ambiguity_chi2 = 10;
   double penalty_per_param = 0;
   int max_findings = 6;
 };

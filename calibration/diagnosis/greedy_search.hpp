@@ -24,7 +24,9 @@
 // the held-out check, the drift grid, the assembly of the fitted terms) is here once.
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -77,6 +79,7 @@ class GreedySearch {
   const Problem& P_;
   GreedyPolicy pol_;
   bool drift_done_[2] = {false, false};
+  double prior_ds_[2] = {0, 0}, prior_tau_[2] = {1, 1};
 
  public:
   using Dataset = typename Problem::Dataset;
@@ -95,8 +98,8 @@ class GreedySearch {
                const double (&drift_tau)[2])
       : P_(problem), pol_(policy), all(kAxes), even(kAxes), odd(kAxes) {
     for (int triad = 0; triad < 2; ++triad) {
-      ds[triad] = drift_sigma[triad];
-      tau[triad] = drift_tau[triad];
+      ds[triad] = prior_ds_[triad] = drift_sigma[triad];
+      tau[triad] = prior_tau_[triad] = drift_tau[triad];
       rebuild(triad);
     }
     cur = P_.fit(model, ptrs(all));
@@ -117,14 +120,26 @@ class GreedySearch {
         continue;
       }
       if (dr.triad < 0) break;
-      drift_done_[dr.triad] = true;
-      ds[dr.triad] = dr.sigma;
-      tau[dr.triad] = dr.tau;
-      rebuild(dr.triad);
+      const Drift fine = refine_drift(dr);
+      drift_done_[fine.triad] = true;
+      ds[fine.triad] = fine.sigma;
+      tau[fine.triad] = fine.tau;
+      drift_interval[fine.triad] = fine.interval;
+      rebuild(fine.triad);
       cur = P_.fit(model, ptrs(all));
       cur_held = heldout(model);
-      steps.push_back({-1 - dr.triad, dr.gain, dr.gain, 0});
+      const double penalty = greedy_drift_penalty(P_.drift_rows(all[fine.triad * 3]), pol_.penalty_per_param);
+      steps.push_back({-1 - fine.triad, fine.gain + penalty, fine.gain, 0});
     }
+  }
+
+  // Penalised −2 ln L of the current model over all axes: χ² + ln det R + every accepted step's
+  // penalty (Δχ² − ΔBIC). Models with different noise models and terms compare by it.
+  double total_score() const {
+    double v = cur.chi2;
+    for (const auto& S : all) v += S.logdet;
+    for (const auto& s : steps) v += s.dchi2 - s.dbic;
+    return v;
   }
 
   // Held-out χ²: the model fitted on each half predicts the other.
@@ -206,6 +221,28 @@ class GreedySearch {
     return out;
   }
 
+  // After run(): a large drift can take the place of a slow deterministic effect (a temperature
+  // ramp is also a likely path of a Gauss–Markov drift 30× the data sheet), and once it is in the
+  // model the effect no longer passes. So for each triad whose drift was enlarged the search is run
+  // again with that triad's drift held at the prior, and the model with the better total_score()
+  // is kept. Returns the drift steps given up, with what giving each up changed (negative: better).
+  std::vector<Withdrawn> recheck_drift() {
+    std::vector<Withdrawn> out;
+    for (int triad = 0; triad < 2; ++triad) {
+      auto it = std::find_if(steps.begin(), steps.end(), [&](const GreedyStep& s) { return s.term == -1 - triad; });
+      if (it == steps.end()) continue;
+      const GreedyStep given_up = *it;
+      GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
+      alt.drift_done_[triad] = true;
+      alt.run();
+      const double change = alt.total_score() - total_score();
+      if (change >= 0) continue;
+      out.push_back({given_up, change});
+      adopt(std::move(alt));
+    }
+    return out;
+  }
+
   static std::vector<const Dataset*> ptrs(const std::vector<Dataset>& v) {
     std::vector<const Dataset*> p;
     for (const auto& s : v) p.push_back(&s);
@@ -214,6 +251,8 @@ class GreedySearch {
 
   // State: the noise model per triad, the datasets under it, the model and its fit.
   double ds[2] = {0, 0}, tau[2] = {1, 1};
+  // After a correlated_drift step: the 1σ intervals of the triad's drift σ and τ.
+  DriftInterval drift_interval[2];
   std::vector<Dataset> all, even, odd;
   std::vector<int> model;  // linear terms, in the order accepted
   Fit cur;
@@ -226,12 +265,31 @@ class GreedySearch {
     double score = 0, dchi2 = 0, held = 0, penalty = 0;
     Fit fit;
   };
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   struct Drift {
     int triad = -1;
     double gain = 0, sigma = 0, tau = 0;
+    DriftInterval interval;
   };
 
   bool in_model(int t) const { return std::find(model.begin(), model.end(), t) != model.end(); }
+
+  // Take over another search's state (same problem and policy).
+  void adopt(GreedySearch&& o) {
+    for (int triad = 0; triad < 2; ++triad) {
+      drift_done_[triad] = o.drift_done_[triad];
+      ds[triad] = o.ds[triad];
+      tau[triad] = o.tau[triad];
+      drift_interval[triad] = o.drift_interval[triad];
+    }
+    all = std::move(o.all);
+    even = std::move(o.even);
+    odd = std::move(o.odd);
+    model = std::move(o.model);
+    cur = std::move(o.cur);
+    cur_held = o.cur_held;
+    steps = std::move(o.steps);
+  }
 
   void rebuild(int triad) {
     for (int a = triad * 3; a < triad * 3 + 3; ++a) {
@@ -284,22 +342,31 @@ class GreedySearch {
 
   // Is the drift of a triad larger or slower than the current noise model? Best penalised gain in
   // χ² + log det R of the triad's axes over the grid (each triad at most once).
+  // −2 ln L of a triad's axes with its drift σ, τ, the other triad as it is: χ² + ln det R of the
+  // triad's axes; restricted (REML): plus ln det(Xᵀ R⁻¹ X) of the fit. The plain likelihood
+  // decides whether the drift is in the model (it compares with linear terms, and restricted
+  // likelihoods of different regressors do not compare); the restricted one estimates σ and τ:
+  // the plain one treats the fitted bias and scale factors as known and takes the slow part of the
+  // drift they absorb for absent, so σ and τ come out low (a gyro drift 8× the data sheet, τ 60 s,
+  // on the 6-minute plan: ~27 % low; tests/unit/calibration/greedy_search_test.cpp).
+  double drift_score(int triad, double s, double t, bool restricted = false) const {
+    std::vector<Dataset> tmp;
+    for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(P_.build(a, kSubsetAll, s, t));
+    std::vector<const Dataset*> p;
+    for (int a = 0; a < kAxes; ++a)
+      if (a / 3 != triad) p.push_back(&all[a]);
+    for (auto& x : tmp) p.push_back(&x);
+    const Fit f = P_.fit(model, p);
+    double v = restricted ? f.logdet_info : 0.0;
+    for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
+    return v;
+  }
+
   Drift best_drift() const {
     Drift best;
     for (int triad = 0; triad < 2; ++triad) {
       if (drift_done_[triad]) continue;
-      auto score = [&](double s, double t) {
-        std::vector<Dataset> tmp;
-        for (int a = triad * 3; a < triad * 3 + 3; ++a) tmp.push_back(P_.build(a, kSubsetAll, s, t));
-        std::vector<const Dataset*> p;
-        for (int a = 0; a < kAxes; ++a)
-          if (a / 3 != triad) p.push_back(&all[a]);
-        for (auto& x : tmp) p.push_back(&x);
-        const Fit f = P_.fit(model, p);
-        double v = 0;
-        for (int a = triad * 3; a < triad * 3 + 3; ++a) v += f.chi2_axis[a] + tmp[a - triad * 3].logdet;
-        return v;
-      };
+      auto score = [&](double s, double t) { return drift_score(triad, s, t); };
       const double base = score(ds[triad], tau[triad]);
       for (double mult : greedy_drift_multipliers())
         for (double t : greedy_drift_taus()) {
@@ -314,6 +381,120 @@ class GreedySearch {
         }
     }
     return best;
+  }
+
+  // The grid cell of best_drift() refined to the maximum of the restricted likelihood (see
+  // drift_score). σ and τ trade along a
+  // ridge (on a record a few τ long the data see mostly σ²/τ, the random-walk density), so the
+  // search is a profile: for each τ on a log grid (factor √2, from a quarter of the smallest grid
+  // τ to twice the largest) the best ln σ by parabolic steps, started on the grid cell's σ²/τ;
+  // then a parabola through the best three τ and the best σ there. The 1σ intervals are those of
+  // the profile likelihood (−2 ln L within 1 of its minimum): for τ where the profile is within 1,
+  // for σ the union over those τ of the conditional intervals (from each τ's curvature in ln σ),
+  // the profile interpolated linearly in ln τ. A bound the τ range's end reaches is left open (NaN):
+  // the record does not tell τ (and σ) apart beyond it.
+  Drift refine_drift(const Drift& grid) const {
+    Drift out = grid;
+    const int triad = grid.triad;
+    const double base = drift_score(triad, ds[triad], tau[triad]);
+    const double q = grid.sigma * grid.sigma / grid.tau;
+    // Best ln σ at ln τ = v from u0: (ln τ, ln σ, −2 ln L, curvature in ln σ).
+    struct Best {
+      double v, u, D, c;
+    };
+    // Successive parabolic interpolation through the best three points evaluated (starting from
+    // u0 ± 0.1), each step at most 0.4; the curvature is that of the last parabola.
+    auto best_u = [&](double v, double u0) {
+      std::vector<std::pair<double, double>> pts;  // (u, D)
+      auto eval = [&](double u) { pts.push_back({u, drift_score(triad, std::exp(u), std::exp(v), true)}); };
+      eval(u0 - 0.1);
+      eval(u0);
+      eval(u0 + 0.1);
+      double c = 0;
+      for (int it = 0; it < 10; ++it) {
+        std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+        pts.resize(3);
+        const auto [x0, y0] = pts[0];
+        const auto [x1, y1] = pts[1];
+        const auto [x2, y2] = pts[2];
+        // Parabola through the three: curvature and vertex.
+        const double d01 = (y1 - y0) / (x1 - x0), d12 = (y2 - y1) / (x2 - x1);
+        c = 2 * (d12 - d01) / (x2 - x0);
+        double next;
+        if (c > 0) {
+          const double slope0 = d01 - 0.5 * c * (x1 - x0);  // derivative at x0
+          next = x0 + std::clamp(-slope0 / c, -0.4, 0.4);
+        } else {
+          next = x0 + (x0 - (x1 + x2) / 2 > 0 ? 0.4 : -0.4);  // walk away from the worse points
+        }
+        if (c > 0 && std::abs(next - x0) < 0.01) break;
+        bool seen = false;
+        for (const auto& p : pts) seen = seen || std::abs(p.first - next) < 1e-6;
+        if (seen) break;
+        eval(next);
+      }
+      std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+      return Best{v, pts[0].first, pts[0].second, c};
+    };
+    const double v_lo = std::log(greedy_drift_taus().front() / 4), v_hi = std::log(greedy_drift_taus().back() * 2);
+    const double dv = 0.5 * std::log(2.0);
+    // Along the profile ln σ follows the ridge (slope ½ where only σ²/τ counts): each τ starts
+    // from the previous one's optimum moved along it.
+    std::vector<Best> prof;
+    for (double v = v_lo; v <= v_hi + 1e-9; v += dv) {
+      const double u0 = prof.empty() ? 0.5 * std::log(q * std::exp(v))
+                                     : prof.back().u + (prof.size() >= 2 ? std::clamp((prof.back().u - prof[prof.size() - 2].u) / dv, 0.0, 0.5) : 0.5) * dv;
+      prof.push_back(best_u(v, u0));
+    }
+    std::size_t i = 0;
+    for (std::size_t k = 1; k < prof.size(); ++k)
+      if (prof[k].D < prof[i].D) i = k;
+    Best b = prof[i];
+    if (i > 0 && i + 1 < prof.size()) {
+      const double c = (prof[i + 1].D - 2 * prof[i].D + prof[i - 1].D) / (dv * dv);
+      if (c > 0) {
+        const double v = prof[i].v + std::clamp(-(prof[i + 1].D - prof[i - 1].D) / (2 * dv * c), -0.5 * dv, 0.5 * dv);
+        const double slope = (prof[i + 1].u - prof[i - 1].u) / (2 * dv);
+        const Best bv = best_u(v, prof[i].u + slope * (v - prof[i].v));
+        if (bv.D < b.D) {
+          b = bv;
+          prof.insert(prof.begin() + static_cast<std::ptrdiff_t>(v > prof[i].v ? i + 1 : i), bv);
+        }
+      }
+    }
+    // σ, τ: the restricted estimate; the gain reported: the plain likelihood's there (as the grid's).
+    out.sigma = std::exp(b.u);
+    out.tau = std::exp(b.v);
+    out.gain = base - drift_score(triad, out.sigma, out.tau) -
+               greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param);
+    // Profile-likelihood intervals, scanning ln τ in small steps between the profile points.
+    const double limit = b.D + 1;
+    double tlo = kNaN, thi = kNaN, slo = kNaN, shi = kNaN;
+    bool open_lo = false, open_hi = false;
+    for (std::size_t k = 0; k + 1 < prof.size(); ++k) {
+      const Best &p0 = prof[k], &p1 = prof[k + 1];
+      const int n = std::max(1, static_cast<int>(std::ceil((p1.v - p0.v) / 0.02)));
+      for (int j = 0; j <= n; ++j) {
+        const double w = static_cast<double>(j) / n;
+        const double D = p0.D + w * (p1.D - p0.D);
+        if (D > limit) continue;
+        const double v = p0.v + w * (p1.v - p0.v), u = p0.u + w * (p1.u - p0.u), c = p0.c + w * (p1.c - p0.c);
+        open_lo = open_lo || (k == 0 && j == 0);
+        open_hi = open_hi || (k + 2 == prof.size() && j == n);
+        tlo = std::isnan(tlo) ? v : std::min(tlo, v);
+        thi = std::isnan(thi) ? v : std::max(thi, v);
+        const double half = c > 0 ? std::sqrt(2 * (limit - D) / c) : kNaN;
+        slo = std::isnan(slo) ? u - half : std::min(slo, u - half);
+        shi = std::isnan(shi) ? u + half : std::max(shi, u + half);
+      }
+    }
+    // A long-τ end left open leaves σ unbounded above (σ grows along the ridge), a short-τ end σ
+    // unbounded below.
+    out.interval.tau_lo = open_lo ? kNaN : std::exp(tlo);
+    out.interval.tau_hi = open_hi ? kNaN : std::exp(thi);
+    out.interval.sigma_lo = open_lo ? kNaN : std::exp(slo);
+    out.interval.sigma_hi = open_hi ? kNaN : std::exp(shi);
+    return out;
   }
 };
 

@@ -1,0 +1,31 @@
+// Parts of a finding shown the same way by the bench and the drive diagnosis:
+//  - a correlated_drift finding's correlation time: τ with its 1σ interval from the profile
+//    likelihood, an open side marked (the record is too short to bound τ there; what it
+//    determines is σ²/τ, the random-walk density);
+//  - the candidates the recording does not tell apart from a finding (DiagAlternative);
+//  - the terms withdrawn after the search (DiagWithdrawn).
+#pragma once
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "calibration/diagnosis/diagnose.hpp"
+
+namespace calbench {
+
+// "60 s (1σ 45–80 s)", "1200 s (1σ 300 s – not bounded by this record)".
+std::string drift_tau_text(const DiagFinding& f);
+// evidence.tau_s; evidence.tau_s_1sigma and evidence.sigma_1sigma = [lo, hi] (null for an open
+// side); evidence.random_walk_density = σ·√(2/τ) (unit/√s: what a record short against τ determines).
+void add_drift_tau_evidence(const DiagFinding& f, nlohmann::json& evidence);
+
+// evidence.indistinguishable_from: [{effect, label, value, unit, chi2_worse}], best first.
+nlohmann::json alternatives_json(const DiagFinding& f);
+// "; NOT told apart on this recording from X (χ² only 3.2 worse)[: why]" per alternative.
+std::string alternatives_text(const DiagFinding& f);
+
+// "withdrawn": [{effect, label, delta_chi2_when_accepted, delta_chi2_final}].
+nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& w);
+// "- withdrawn: … (accepted with Δχ² …, but …)" without the newline.
+std::string withdrawn_text(const DiagWithdrawn& w);
+
+}  // namespace calbench
