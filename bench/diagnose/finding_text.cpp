@@ -48,7 +48,11 @@ nlohmann::json alternatives_json(const DiagFinding& f) {
 std::string alternatives_text(const DiagFinding& f) {
   std::string o;
   for (const auto& a : f.alternatives) {
-    o += "; NOT told apart on this recording from " + a.term.label() + " (χ² only " + fmt(a.chi2_worse) + " worse)";
+    // A term with more parameters can fit a little better in its place and still lose on the
+    // penalised score that chose the finding.
+    o += "; NOT told apart on this recording from " + a.term.label() +
+         (a.chi2_worse >= 0 ? " (χ² only " + fmt(a.chi2_worse) + " worse)"
+                            : " (χ² " + fmt(-a.chi2_worse) + " better, but with more parameters)");
     const bool temperature_pair = (a.term.effect == EffectId::temperature_rate && f.term.effect == EffectId::temperature_bias) ||
                                   (a.term.effect == EffectId::temperature_bias && f.term.effect == EffectId::temperature_rate);
     if (temperature_pair)

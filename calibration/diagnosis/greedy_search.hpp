@@ -462,11 +462,13 @@ class GreedySearch {
         }
       }
     }
-    // σ, τ: the restricted estimate; the gain reported: the plain likelihood's there (as the grid's).
+    // σ, τ: the restricted estimate. The evidence (gain, plain likelihood as in the competition):
+    // the better of the grid cell's and that at the estimate (the restricted optimum need not
+    // maximise the plain likelihood; the grid cell is what passed the test).
     out.sigma = std::exp(b.u);
     out.tau = std::exp(b.v);
-    out.gain = base - drift_score(triad, out.sigma, out.tau) -
-               greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param);
+    out.gain = std::max(grid.gain, base - drift_score(triad, out.sigma, out.tau) -
+                                       greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param));
     // Profile-likelihood intervals, scanning ln τ in small steps between the profile points.
     const double limit = b.D + 1;
     double tlo = kNaN, thi = kNaN, slo = kNaN, shi = kNaN;

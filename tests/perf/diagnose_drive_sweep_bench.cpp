@@ -195,6 +195,7 @@ std::string describe(const DriveDiagRun& run) {
     for (double v : f.value) s += fmt(v, "%.3g") + " ";
     s += "] rms " + fmt(f.rms_before, "%.3g") + " -> " + fmt(f.rms_after, "%.3g");
     if (i < R.rms_floor.size()) s += " (floor " + fmt(R.rms_floor[i], "%.3g") + ")";
+    for (const auto& a : f.alternatives) s += " (or " + a.term.label() + ", chi2 +" + fmt(a.chi2_worse, "%.3g") + ")";
     s += "; ";
   }
   for (const auto& u : R.core.unexplained)
@@ -204,7 +205,7 @@ std::string describe(const DriveDiagRun& run) {
 
 struct Tally {
   int runs = 0, detected = 0, right_place = 0, value_ok = 0, cut_ok = 0, cut_na = 0, other = 0, unexplained = 0,
-      all_ok = 0;
+      all_ok = 0, values = 0, within_2sigma = 0;
   std::vector<double> rel_err, cut;
 };
 
@@ -241,6 +242,12 @@ void run_one(const std::string& row, const std::vector<Component>& parts, int k,
                          ? std::abs(f.value[x.param] - x.value) / std::abs(x.value)
                          : std::nan("");
     t.rel_err.push_back(e);
+    // Does the finding's own σ cover the truth (2σ)? Where 20 % is below what the drive can tell
+    // (σ of a drift only a few correlation times long), this says whether it says so.
+    if (static_cast<int>(f.value.size()) > x.param) {
+      ++t.values;
+      t.within_2sigma += std::abs(f.value[x.param] - x.value) <= 2 * f.sigma[x.param];
+    }
     // Cut: as the unit tests (rms_before > 2·floor, rms_after ≤ max(0.2·rms_before, floor)); a
     // figure not above twice its noise floor is "not measurable" (counted apart, as on the bench).
     const double floor = static_cast<std::size_t>(fi) < run.result.rms_floor.size() ? run.result.rms_floor[fi] : 0.0;
@@ -290,6 +297,7 @@ void report(benchmark::State& state, const Tally& t, double magnitude) {
   state.counters["right_axis_pct"] = 100.0 * t.right_place / n;
   state.counters["value_within20_pct"] = 100.0 * t.value_ok / n;
   state.counters["value_err_median_pct"] = 100.0 * median(t.rel_err);
+  state.counters["value_within_2sigma_pct"] = t.values > 0 ? 100.0 * t.within_2sigma / t.values : std::nan("");
   state.counters["value_err_max_pct"] =
       t.rel_err.empty() ? std::nan("") : 100.0 * *std::max_element(t.rel_err.begin(), t.rel_err.end());
   const int measurable = static_cast<int>(t.cut.size());
@@ -367,8 +375,9 @@ void BM_DiagnoseDrive_Repro(benchmark::State& state) {
     std::fprintf(stderr, "  %zu IMU rows, %zu reference rows, %zu intervals, %zu blocks, mean interval %.4f s\n", in.imu_rows,
                  in.ref_rows, in.data.subs.size(), in.data.parents.size(), in.data.mean_sub_s);
     for (const auto& f : R.findings)
-      std::fprintf(stderr, "  finding %s: dchi2 %.1f, dbic %.1f, held-out %.1f, condition %s\n", f.term.label().c_str(),
-                   f.delta_chi2, f.delta_bic, f.heldout_delta_chi2, f.condition.c_str());
+      std::fprintf(stderr, "  finding %s: dchi2 %.1f, dbic %.1f, held-out %.1f, condition %s, tau %.3g s [%.3g, %.3g]\n",
+                   f.term.label().c_str(), f.delta_chi2, f.delta_bic, f.heldout_delta_chi2, f.condition.c_str(),
+                   f.noise_tau_s, f.noise_interval.tau_lo, f.noise_interval.tau_hi);
     const char* names[6] = {"gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z"};
     for (int a = 0; a < 6; ++a)
       std::fprintf(stderr,

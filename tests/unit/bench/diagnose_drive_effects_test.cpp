@@ -86,8 +86,9 @@ TEST(DiagnoseDriveEffects, ScaleAsymmetryAndNonlinearity) {
   check_one(22, "scale_nonlinearity:sensor=gyro,axis=z,value=4e-3", {EffectId::scale_nonlinearity, 0, 2, 0, 4e-3});
 }
 
-// A bias that wanders more than the data sheet says is named correlated_drift (noise side, σ on a
-// ×2 grid, so the value is checked to a factor of 2), not explained by spurious linear terms.
+// A bias that wanders more than the data sheet says is named correlated_drift (noise side; σ of a
+// drift on a drive 3.6 correlation times long is known to tens of per cent, so the value is
+// checked to a factor of 2), not explained by spurious linear terms.
 TEST(DiagnoseDriveEffects, CorrelatedDrift) {
   const DriveDiagRun run = diagnose(51, {"correlated_drift:sensor=gyro,sigma=5e-4,tau=60"});
   const auto& fs = run.result.core.findings;
