@@ -312,6 +312,12 @@ std::vector<Row> sweep_rows() {
        drift_term(0)},
       {"correlated_drift/accel_x", "_sigma_tau60", {11, 16}, adis16488a_noise().accel.drift_sigma, Plan::diagnose,
        drift_term(1)},
+      // The same on the 12-minute thermal plan (twice the correlation times): how σ's error shrinks
+      // with the record (no temperature effect injected; clean runs there give no finding).
+      {"correlated_drift/gyro_x", "_sigma_tau60_12min", {11}, adis16488a_noise().gyro.drift_sigma, Plan::thermal,
+       drift_term(0)},
+      {"correlated_drift/accel_x", "_sigma_tau60_12min", {11}, adis16488a_noise().accel.drift_sigma, Plan::thermal,
+       drift_term(1)},
       // Thermal lag on the up-and-down chamber plan (heating and cooling over the same range).
       {"temperature_rate/gyro_", "dph_per_K_min_updown", {4, 6, 10}, kDegPerHour * kPerKPerMin, Plan::updown,
        triad_term(E::temperature_rate, 0, 1, &TriadEffectTerms::temp_rate)},
