@@ -644,9 +644,8 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   // Backward check (stepwise): a term accepted in an early round can lose its evidence once later
   // terms or a larger drift (correlated_drift) are in the model — e.g. a g-sensitivity that only
   // half-fitted an effect outside the catalogue. Withdrawn terms are reported, not findings.
-  for (const auto& w : search.recheck_drift())
-    res.withdrawn.push_back({Term{EffectId::correlated_drift, -1 - w.step.term, -1}, w.step.dchi2, w.cost});
-  for (const auto& w : search.withdraw_weak()) res.withdrawn.push_back({D.terms[w.step.term], w.step.dchi2, w.cost});
+  for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w));
+  for (const auto& w : search.withdraw_weak()) res.withdrawn.push_back(search.withdrawn_report(w));
   const Model& model = search.model;
   const FitOut& cur = search.cur;
 
@@ -705,21 +704,10 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     }
     DiagFinding f = search.term_finding(acc, carried);
     const Term& t = D.terms[acc.term];
-    const std::size_t k = std::find(model.begin(), model.end(), acc.term) - model.begin();
     // Could another candidate in its place explain the recording as well? It must itself explain
-    // the residual (Δχ² ≥ min_delta_chi2 against the model without the finding: not a null term
-    // that leaves the residual alone) and fit within ambiguity_chi2 of the finding.
-    for (const auto& sw : search.swaps(k, opt.ambiguity_chi2, opt.min_delta_chi2)) {
-      DiagAlternative alt;
-      alt.term = D.terms[sw.term];
-      for (int p = 0; p < alt.term.nparams(); ++p)
-        alt.value.push_back(sw.fit.theta(sw.fit.offset[k] + p) + alt.term.get_param(carried, p));
-      alt.unit = term_unit(alt.term);
-      alt.chi2_worse = sw.worse;
-      f.alternatives.push_back(alt);
-    }
-    std::sort(f.alternatives.begin(), f.alternatives.end(),
-              [](const DiagAlternative& a, const DiagAlternative& b) { return a.chi2_worse < b.chi2_worse; });
+    // the residual (Δχ² ≥ min_delta_chi2 against the model without the finding) and fit within
+    // ambiguity_chi2 of the finding.
+    f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, carried);
     // Axis on which it shows: the touched axis whose residual it explains most.
     std::vector<int> touched;
     for (int a = 0; a < kAxes; ++a)

@@ -568,8 +568,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
   }
 
   search.run();
-  for (const auto& w : search.recheck_drift())
-    res.withdrawn.push_back({Term{EffectId::correlated_drift, -1 - w.step.term, -1}, w.step.dchi2, w.cost});
+  for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w));
   const std::vector<int>& model = search.model;
   const FitOut& cur = search.cur;
   const double* ds = search.ds;
@@ -627,18 +626,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
     const Term& t = D.terms[acc.term];
     // Another candidate in its place that fits within ambiguity_chi2 and itself explains the
     // residual (as on the bench): the drive does not tell them apart.
-    const std::size_t k = std::find(model.begin(), model.end(), acc.term) - model.begin();
-    for (const auto& sw : search.swaps(k, opt.ambiguity_chi2, opt.min_delta_chi2)) {
-      DiagAlternative alt;
-      alt.term = D.terms[sw.term];
-      for (int p = 0; p < alt.term.nparams(); ++p)
-        alt.value.push_back(sw.fit.theta(D.term_off[sw.term] + p) + alt.term.get_param(carried, p));
-      alt.unit = term_unit(alt.term);
-      alt.chi2_worse = sw.worse;
-      f.alternatives.push_back(alt);
-    }
-    std::sort(f.alternatives.begin(), f.alternatives.end(),
-              [](const DiagAlternative& a, const DiagAlternative& b) { return a.chi2_worse < b.chi2_worse; });
+    f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, carried);
     if (t.effect == EffectId::lever_arm) {
       // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
       // rolls or pitches, so the component along the yaw axis is poorly determined).

@@ -1,14 +1,16 @@
 // The catalogue search shared by the bench (diagnose.cpp) and the drive (drive_diagnose.cpp)
 // diagnosis: greedy addition of catalogue terms by Δχ² with a BIC-type penalty and a held-out
-// check, and the noise-side candidate correlated_drift (a larger first-order Gauss–Markov drift
-// σ, τ chosen by Δ(χ² + log det R)). docs/diagnosis.md step 3.
+// check, and the noise-side candidate correlated_drift (a larger first-order Gauss–Markov drift,
+// detected on a grid by Δ(χ² + log det R), σ and τ then estimated by the restricted likelihood);
+// after the search, the drift recheck, the backward check and the indistinguishable alternatives.
+// docs/diagnosis.md step 3.
 //
 // The engine is written over a "problem" type that owns the data and the linear algebra:
 //
 //   struct Problem {
 //     using Dataset = ...;  // one axis' data under one noise model; members `int axis`, `double logdet`
 //     using Fit = ...;      // members `double chi2`, `double chi2_axis[6]`, `Eigen::VectorXd theta`,
-//                           // `Eigen::MatrixXd cov`
+//                           // `Eigen::MatrixXd cov`, `double logdet_info` (ln det Xᵀ R⁻¹ X)
 //     int n_terms() const;                          // linear candidates 0..n_terms−1
 //     const Term& term(int t) const;
 //     Dataset build(int axis, int subset, double drift_sigma, double drift_tau) const;  // subset: GreedySubset
@@ -21,7 +23,8 @@
 //   };
 //
 // What differs between bench and drive is in the problem and in GreedyPolicy; the rest (the loop,
-// the held-out check, the drift grid, the assembly of the fitted terms) is here once.
+// the held-out check, the drift grid and profile, the rechecks, the alternatives, the assembly of
+// the fitted terms) is here once.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -86,13 +89,6 @@ class GreedySearch {
   using Fit = typename Problem::Fit;
   static constexpr int kAxes = 6;  // gyro x..z, accel x..z; a triad is axes 3·triad..3·triad+2
 
-  // A candidate that, put in place of the k-th model term, fits within a given Δχ² of the model.
-  struct Swap {
-    int term;
-    Fit fit;
-    double worse;  // χ² of that model minus the current one's
-  };
-
   // Builds the datasets under the prior drift (σ, τ per triad) and fits the model without terms.
   GreedySearch(const Problem& problem, const GreedyPolicy& policy, const double (&drift_sigma)[2],
                const double (&drift_tau)[2])
@@ -128,8 +124,7 @@ class GreedySearch {
       rebuild(fine.triad);
       cur = P_.fit(model, ptrs(all));
       cur_held = heldout(model);
-      const double penalty = greedy_drift_penalty(P_.drift_rows(all[fine.triad * 3]), pol_.penalty_per_param);
-      steps.push_back({-1 - fine.triad, fine.gain + penalty, fine.gain, 0});
+      steps.push_back({-1 - fine.triad, fine.gain + fine.penalty, fine.gain, 0});
     }
   }
 
@@ -170,23 +165,34 @@ class GreedySearch {
       greedy_add_term(P_.term(model[k]), P_.param_index(cur, k, model[k]), cur.theta, cur.cov, value, sigma);
   }
 
-  // Terms not in the model that, in place of the k-th model term, fit within `below` of it and
-  // (min_explain > 0) themselves explain at least min_explain of χ² against the model without it.
-  std::vector<Swap> swaps(std::size_t k, double below, double min_explain = 0) const {
-    std::vector<Swap> out;
+  // Terms not in the model that, in place of model term `term`, fit within `below` of the model
+  // and themselves explain at least min_explain of χ² against the model without it (not a null
+  // term that leaves the residual alone): what the recording does not tell apart from the finding.
+  // Values relative to `carried` as for findings; best (lowest χ²) first.
+  std::vector<DiagAlternative> alternatives(int term, double below, double min_explain,
+                                            const EffectTerms& carried) const {
+    const std::size_t k = std::find(model.begin(), model.end(), term) - model.begin();
     std::vector<int> without = model;
     without.erase(without.begin() + static_cast<std::ptrdiff_t>(k));
-    const double chi2_without = min_explain > 0 ? P_.fit(without, ptrs(all)).chi2 : 0.0;
+    const double chi2_without = P_.fit(without, ptrs(all)).chi2;
+    std::vector<DiagAlternative> out;
     for (int t = 0; t < P_.n_terms(); ++t) {
       if (in_model(t)) continue;
       std::vector<int> m = model;
       m[k] = t;
-      Fit g = P_.fit(m, ptrs(all));
+      const Fit g = P_.fit(m, ptrs(all));
       const double worse = g.chi2 - cur.chi2;
-      if (worse >= below) continue;
-      if (min_explain > 0 && chi2_without - g.chi2 < min_explain) continue;
-      out.push_back({t, std::move(g), worse});
+      if (worse >= below || chi2_without - g.chi2 < min_explain) continue;
+      DiagAlternative alt;
+      alt.term = P_.term(t);
+      const int first = P_.param_index(g, k, t);
+      for (int p = 0; p < alt.term.nparams(); ++p) alt.value.push_back(g.theta(first + p) + alt.term.get_param(carried, p));
+      alt.unit = term_unit(alt.term);
+      alt.chi2_worse = worse;
+      out.push_back(std::move(alt));
     }
+    std::sort(out.begin(), out.end(),
+              [](const DiagAlternative& a, const DiagAlternative& b) { return a.chi2_worse < b.chi2_worse; });
     return out;
   }
 
@@ -226,21 +232,30 @@ class GreedySearch {
   // model the effect no longer passes. So for each triad whose drift was enlarged the search is run
   // again with that triad's drift held at the prior, and the model with the better total_score()
   // is kept. Returns the drift steps given up, with what giving each up changed (negative: better).
+  // A drift given up stays given up when the other triad's is rechecked.
   std::vector<Withdrawn> recheck_drift() {
     std::vector<Withdrawn> out;
+    bool given_up[2] = {false, false};
     for (int triad = 0; triad < 2; ++triad) {
       auto it = std::find_if(steps.begin(), steps.end(), [&](const GreedyStep& s) { return s.term == -1 - triad; });
       if (it == steps.end()) continue;
-      const GreedyStep given_up = *it;
+      const GreedyStep step = *it;
       GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
-      alt.drift_done_[triad] = true;
+      for (int k = 0; k < 2; ++k) alt.drift_done_[k] = k == triad || given_up[k];
       alt.run();
       const double change = alt.total_score() - total_score();
       if (change >= 0) continue;
-      out.push_back({given_up, change});
+      out.push_back({step, change});
+      given_up[triad] = true;
       adopt(std::move(alt));
     }
     return out;
+  }
+
+  // A withdrawn step (withdraw_weak, recheck_drift) as reported.
+  DiagWithdrawn withdrawn_report(const Withdrawn& w) const {
+    const Term t = w.step.term >= 0 ? P_.term(w.step.term) : Term{EffectId::correlated_drift, -1 - w.step.term, -1};
+    return {t, w.step.dchi2, w.cost};
   }
 
   static std::vector<const Dataset*> ptrs(const std::vector<Dataset>& v) {
@@ -268,7 +283,8 @@ class GreedySearch {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   struct Drift {
     int triad = -1;
-    double gain = 0, sigma = 0, tau = 0;
+    double gain = 0, sigma = 0, tau = 0;  // gain: Δ(χ² + log det R) − penalty
+    double penalty = 0;
     DriftInterval interval;
   };
 
@@ -340,8 +356,6 @@ class GreedySearch {
     steps.push_back({lin.term, lin.dchi2, lin.dchi2 - lin.penalty, lin.held});
   }
 
-  // Is the drift of a triad larger or slower than the current noise model? Best penalised gain in
-  // χ² + log det R of the triad's axes over the grid (each triad at most once).
   // −2 ln L of a triad's axes with its drift σ, τ, the other triad as it is: χ² + ln det R of the
   // triad's axes; restricted (REML): plus ln det(Xᵀ R⁻¹ X) of the fit. The plain likelihood
   // decides whether the drift is in the model (it compares with linear terms, and restricted
@@ -362,18 +376,20 @@ class GreedySearch {
     return v;
   }
 
+  // Is the drift of a triad larger or slower than the current noise model? Best penalised gain in
+  // χ² + log det R of the triad's axes over the grid (each triad at most once).
   Drift best_drift() const {
     Drift best;
     for (int triad = 0; triad < 2; ++triad) {
       if (drift_done_[triad]) continue;
-      auto score = [&](double s, double t) { return drift_score(triad, s, t); };
-      const double base = score(ds[triad], tau[triad]);
+      const double base = drift_score(triad, ds[triad], tau[triad]);
+      const double penalty = greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param);
       for (double mult : greedy_drift_multipliers())
         for (double t : greedy_drift_taus()) {
-          const double gain = base - score(ds[triad] * mult, t);
-          const double penalty = greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param);
+          const double gain = base - drift_score(triad, ds[triad] * mult, t);
           if (gain - penalty > best.gain && gain > pol_.min_delta_chi2) {
             best.gain = gain - penalty;
+            best.penalty = penalty;
             best.triad = triad;
             best.sigma = ds[triad] * mult;
             best.tau = t;
@@ -467,8 +483,7 @@ class GreedySearch {
     // maximise the plain likelihood; the grid cell is what passed the test).
     out.sigma = std::exp(b.u);
     out.tau = std::exp(b.v);
-    out.gain = std::max(grid.gain, base - drift_score(triad, out.sigma, out.tau) -
-                                       greedy_drift_penalty(P_.drift_rows(all[triad * 3]), pol_.penalty_per_param));
+    out.gain = std::max(grid.gain, base - drift_score(triad, out.sigma, out.tau) - grid.penalty);
     // Profile-likelihood intervals, scanning ln τ in small steps between the profile points.
     const double limit = b.D + 1;
     double tlo = kNaN, thi = kNaN, slo = kNaN, shi = kNaN;
