@@ -4,6 +4,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include "calibration/units.hpp"
+
 namespace calbench {
 namespace {
 
@@ -21,15 +23,30 @@ std::string drift_tau_text(const DiagFinding& f) {
   const DriftInterval& i = f.noise_interval;
   const std::string lo = std::isfinite(i.tau_lo) ? fmt(i.tau_lo) + " s" : "not bounded by this record";
   const std::string hi = std::isfinite(i.tau_hi) ? fmt(i.tau_hi) + " s" : "not bounded by this record";
-  return fmt(f.noise_tau_s) + " s (1σ " + lo + " – " + hi + ")";
+  std::string out = fmt(f.noise_tau_s) + " s (1σ " + lo + " – " + hi + ")";
+  // The random-walk density, in °/h/√h or mg/√h (per √s × √3600 s/√h).
+  if (!f.value.empty() && f.noise_tau_s > 0) {
+    const double to_unit = (f.term.sensor == 0 ? 1.0 / units::kDegPerHour : 1.0 / units::kMilliG) * 60.0;
+    const std::string unit = f.term.sensor == 0 ? " °/h/√h" : " mg/√h";
+    const double k = f.value[0] * std::sqrt(2.0 / f.noise_tau_s) * to_unit;
+    const std::string khi = std::isfinite(i.rw_hi) ? fmt(i.rw_hi * to_unit) : "not bounded";
+    out += "; random-walk density σ·√(2/τ) " + fmt(k) + unit + " (1σ " +
+           (std::isfinite(i.rw_lo) ? fmt(i.rw_lo * to_unit) : "not bounded") + " – " + khi + ")";
+  }
+  return out;
 }
 
 void add_drift_tau_evidence(const DiagFinding& f, nlohmann::json& evidence) {
   const DriftInterval& i = f.noise_interval;
+  auto pair = [](double lo, double hi) { return nlohmann::json::array({bound(lo), bound(hi)}); };
   evidence["tau_s"] = f.noise_tau_s;
-  evidence["tau_s_1sigma"] = nlohmann::json::array({bound(i.tau_lo), bound(i.tau_hi)});
-  evidence["sigma_1sigma"] = nlohmann::json::array({bound(i.sigma_lo), bound(i.sigma_hi)});
+  evidence["tau_s_1sigma"] = pair(i.tau_lo, i.tau_hi);
+  evidence["tau_s_2sigma"] = pair(i.tau_lo2, i.tau_hi2);
+  evidence["sigma_1sigma"] = pair(i.sigma_lo, i.sigma_hi);
+  evidence["sigma_2sigma"] = pair(i.sigma_lo2, i.sigma_hi2);
   if (!f.value.empty() && f.noise_tau_s > 0) evidence["random_walk_density"] = f.value[0] * std::sqrt(2.0 / f.noise_tau_s);
+  evidence["random_walk_density_1sigma"] = pair(i.rw_lo, i.rw_hi);
+  evidence["random_walk_density_2sigma"] = pair(i.rw_lo2, i.rw_hi2);
 }
 
 nlohmann::json alternatives_json(const DiagFinding& f) {

@@ -12,10 +12,12 @@
 
 namespace calbench {
 
-// "60 s (1σ 45–80 s)", "1200 s (1σ 300 s – not bounded by this record)".
+// "60 s (1σ 45–80 s); random-walk density σ·√(2/τ) 12 °/h/√h (1σ 11 – 13)", an open side
+// "not bounded by this record".
 std::string drift_tau_text(const DiagFinding& f);
-// evidence.tau_s; evidence.tau_s_1sigma and evidence.sigma_1sigma = [lo, hi] (null for an open
-// side); evidence.random_walk_density = σ·√(2/τ) (unit/√s: what a record short against τ determines).
+// evidence.tau_s; evidence.tau_s_1sigma/_2sigma and evidence.sigma_1sigma/_2sigma = [lo, hi] (null
+// for an open side); evidence.random_walk_density = σ·√(2/τ) (unit/√s: what a record short against
+// τ determines) with random_walk_density_1sigma/_2sigma.
 void add_drift_tau_evidence(const DiagFinding& f, nlohmann::json& evidence);
 
 // evidence.indistinguishable_from: [{effect, label, value, unit, chi2_worse}], best first.

@@ -42,6 +42,7 @@ struct AxisStats {
   double ljung_box_q = 0, ljung_box_p = 1;
   double systematic_rms = 0; // RMS of per-step means and within-step low-passed residual, noise removed
   double step_rms = 0, within_rms = 0;
+  double systematic_floor = 0; // drives: noise level of systematic_rms (below it, not told from zero)
   double bic = 0;
 };
 
@@ -59,11 +60,16 @@ struct DiagAlternative {
   double chi2_worse = 0;      // χ² of that model minus the chosen one's (< ambiguity_chi2)
 };
 
-// 1σ intervals of a correlated_drift finding's σ and τ from the profile likelihood (−2 ln L within
-// 1 of its minimum). NaN: the record leaves that side open (τ, and with it σ, not resolved).
+// Profile-likelihood intervals of a correlated_drift finding: σ, τ and the random-walk density
+// K = σ·√(2/τ) with −2 ln L within 1 (1σ) and within 4 (2σ) of its minimum. NaN: the record
+// leaves that side open (τ, and with it σ, not resolved). K is what a record only a few τ long
+// determines (the drift's spectrum above 1/τ is K²/ω²); it stays bounded when τ is open towards
+// long correlation times and is open above only when τ is open towards short ones.
 struct DriftInterval {
-  double sigma_lo = std::numeric_limits<double>::quiet_NaN(), sigma_hi = std::numeric_limits<double>::quiet_NaN();
-  double tau_lo = std::numeric_limits<double>::quiet_NaN(), tau_hi = std::numeric_limits<double>::quiet_NaN();
+  static constexpr double kOpen = std::numeric_limits<double>::quiet_NaN();
+  double sigma_lo = kOpen, sigma_hi = kOpen, tau_lo = kOpen, tau_hi = kOpen;         // 1σ
+  double sigma_lo2 = kOpen, sigma_hi2 = kOpen, tau_lo2 = kOpen, tau_hi2 = kOpen;     // 2σ
+  double rw_lo = kOpen, rw_hi = kOpen, rw_lo2 = kOpen, rw_hi2 = kOpen;               // K, 1σ and 2σ
 };
 
 struct DiagFinding {

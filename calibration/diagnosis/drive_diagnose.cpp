@@ -458,7 +458,7 @@ AxisStats axis_stats(const DriveDiagData& d, const Design& D, const Dataset& S, 
   std::vector<double> rv(rw.data(), rw.data() + rw.size());
   ljung_box(rv, std::min(10, std::max(1, N / 5)), st.ljung_box_q, st.ljung_box_p);
   r_nodrift = r - smoothed_drift(d, S, r);
-  st.systematic_rms = grouped_systematic(D, S.axis, r_nodrift, time_groups(N, 10));
+  st.systematic_rms = grouped_systematic(D, S.axis, r_nodrift, time_groups(N, 10), &st.systematic_floor);
   st.step_rms = st.systematic_rms;
   return st;
 }
@@ -614,7 +614,10 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data, const SensorErrors
       const int triad = -1 - acc.term;
       const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], search.drift_interval[triad],
                                                      acc.dchi2, acc.dbic, res.before, res.after);
-      out.rms_floor.push_back(0.0);
+      // Noise level of the triad's figure (RMS over its axes of the 10 s window figure's floor).
+      double floor2 = 0;
+      for (int a = triad * 3; a < triad * 3 + 3; ++a) floor2 += std::pow(res.after[a].systematic_floor, 2) / 3;
+      out.rms_floor.push_back(std::sqrt(floor2));
       out.shown_on.push_back(triad * 3);
       TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
       te.drift_sigma = ds[triad];

@@ -484,33 +484,46 @@ class GreedySearch {
     out.sigma = std::exp(b.u);
     out.tau = std::exp(b.v);
     out.gain = std::max(grid.gain, base - drift_score(triad, out.sigma, out.tau) - grid.penalty);
-    // Profile-likelihood intervals, scanning ln τ in small steps between the profile points.
-    const double limit = b.D + 1;
-    double tlo = kNaN, thi = kNaN, slo = kNaN, shi = kNaN;
-    bool open_lo = false, open_hi = false;
-    for (std::size_t k = 0; k + 1 < prof.size(); ++k) {
-      const Best &p0 = prof[k], &p1 = prof[k + 1];
-      const int n = std::max(1, static_cast<int>(std::ceil((p1.v - p0.v) / 0.02)));
-      for (int j = 0; j <= n; ++j) {
-        const double w = static_cast<double>(j) / n;
-        const double D = p0.D + w * (p1.D - p0.D);
-        if (D > limit) continue;
-        const double v = p0.v + w * (p1.v - p0.v), u = p0.u + w * (p1.u - p0.u), c = p0.c + w * (p1.c - p0.c);
-        open_lo = open_lo || (k == 0 && j == 0);
-        open_hi = open_hi || (k + 2 == prof.size() && j == n);
-        tlo = std::isnan(tlo) ? v : std::min(tlo, v);
-        thi = std::isnan(thi) ? v : std::max(thi, v);
-        const double half = c > 0 ? std::sqrt(2 * (limit - D) / c) : kNaN;
-        slo = std::isnan(slo) ? u - half : std::min(slo, u - half);
-        shi = std::isnan(shi) ? u + half : std::max(shi, u + half);
+    // Profile-likelihood intervals (−2 ln L within `rise` of the minimum), scanning ln τ in small
+    // steps between the profile points; at each τ the σ range from the parabola in ln σ. A
+    // long-τ end left open leaves σ unbounded above (σ grows along the ridge), a short-τ end σ
+    // unbounded below; K = σ·√(2/τ) (ln K = ln σ − ln τ/2 + ln √2) is open above only then.
+    struct Range {
+      double tlo, thi, slo, shi, klo, khi;
+    };
+    auto interval = [&](double rise) {
+      const double limit = b.D + rise;
+      double tlo = kNaN, thi = kNaN, slo = kNaN, shi = kNaN, klo = kNaN, khi = kNaN;
+      bool open_lo = false, open_hi = false;
+      for (std::size_t k = 0; k + 1 < prof.size(); ++k) {
+        const Best &p0 = prof[k], &p1 = prof[k + 1];
+        const int n = std::max(1, static_cast<int>(std::ceil((p1.v - p0.v) / 0.02)));
+        for (int j = 0; j <= n; ++j) {
+          const double w = static_cast<double>(j) / n;
+          const double D = p0.D + w * (p1.D - p0.D);
+          if (D > limit) continue;
+          const double v = p0.v + w * (p1.v - p0.v), u = p0.u + w * (p1.u - p0.u), c = p0.c + w * (p1.c - p0.c);
+          open_lo = open_lo || (k == 0 && j == 0);
+          open_hi = open_hi || (k + 2 == prof.size() && j == n);
+          tlo = std::isnan(tlo) ? v : std::min(tlo, v);
+          thi = std::isnan(thi) ? v : std::max(thi, v);
+          const double half = c > 0 ? std::sqrt(2 * (limit - D) / c) : kNaN;
+          slo = std::isnan(slo) ? u - half : std::min(slo, u - half);
+          shi = std::isnan(shi) ? u + half : std::max(shi, u + half);
+          klo = std::isnan(klo) ? u - half - v / 2 : std::min(klo, u - half - v / 2);
+          khi = std::isnan(khi) ? u + half - v / 2 : std::max(khi, u + half - v / 2);
+        }
       }
-    }
-    // A long-τ end left open leaves σ unbounded above (σ grows along the ridge), a short-τ end σ
-    // unbounded below.
-    out.interval.tau_lo = open_lo ? kNaN : std::exp(tlo);
-    out.interval.tau_hi = open_hi ? kNaN : std::exp(thi);
-    out.interval.sigma_lo = open_lo ? kNaN : std::exp(slo);
-    out.interval.sigma_hi = open_hi ? kNaN : std::exp(shi);
+      const double ln_sqrt2 = 0.5 * std::log(2.0);
+      return Range{open_lo ? kNaN : std::exp(tlo), open_hi ? kNaN : std::exp(thi),
+                   open_lo ? kNaN : std::exp(slo), open_hi ? kNaN : std::exp(shi),
+                   std::exp(klo + ln_sqrt2),       open_lo ? kNaN : std::exp(khi + ln_sqrt2)};
+    };
+    const Range r1 = interval(1), r2 = interval(4);
+    DriftInterval& I = out.interval;
+    I.tau_lo = r1.tlo, I.tau_hi = r1.thi, I.sigma_lo = r1.slo, I.sigma_hi = r1.shi, I.rw_lo = r1.klo, I.rw_hi = r1.khi;
+    I.tau_lo2 = r2.tlo, I.tau_hi2 = r2.thi, I.sigma_lo2 = r2.slo, I.sigma_hi2 = r2.shi, I.rw_lo2 = r2.klo,
+    I.rw_hi2 = r2.khi;
     return out;
   }
 };

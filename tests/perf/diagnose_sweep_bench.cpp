@@ -84,7 +84,7 @@ void sweep_effect(benchmark::State& state, const std::string& name, const Maker&
   const int seeds = env_int("DIAGNOSE_SWEEP_SEEDS", 3);
   for (auto _ : state) {
     int detected = 0, right_place = 0, value_ok = 0, cut_ok = 0, cut_na = 0, all_ok = 0, other = 0;
-    int as_alternative = 0, ambiguous = 0, within_2sigma = 0;
+    int as_alternative = 0, ambiguous = 0, within_2sigma = 0, rw_values = 0, rw_ok = 0;
     std::vector<double> rel_err, cut;
     for (int k = 0; k < seeds; ++k) {
       const Expect x = make(k);
@@ -123,7 +123,20 @@ void sweep_effect(benchmark::State& state, const std::string& name, const Maker&
       value_ok += e <= 0.2;
       // Does the finding's own σ cover the truth (2σ)? Where 20 % is below what the recording can
       // tell (e.g. σ of a drift only a few correlation times long), this says whether it says so.
-      within_2sigma += std::abs(f->value[x.param] - x.value) <= 2 * f->sigma[x.param];
+      // A drift's σ: its 2σ profile-likelihood interval (asymmetric; an open side unbounded), and
+      // the random-walk density σ·√(2/τ) against the injected one.
+      if (x.effect == EffectId::correlated_drift) {
+        const DriftInterval& iv = f->noise_interval;
+        within_2sigma += !(x.value < iv.sigma_lo2) && !(x.value > iv.sigma_hi2);
+        const double tau = (x.sensor ? x.fx.accel : x.fx.gyro).drift_tau_s;
+        if (tau > 0 && f->noise_tau_s > 0) {
+          const double k_true = x.value * std::sqrt(2 / tau), k = f->value[0] * std::sqrt(2 / f->noise_tau_s);
+          ++rw_values;
+          rw_ok += std::abs(k - k_true) <= 0.2 * k_true;
+        }
+      } else {
+        within_2sigma += std::abs(f->value[x.param] - x.value) <= 2 * f->sigma[x.param];
+      }
       // A systematic RMS of 0 before means the noise-debiased figure saw nothing beyond the noise
       // model (e.g. a slow ramp the drift model absorbs): the cut is then not measurable.
       const bool measurable = f->rms_before > 0;
@@ -147,6 +160,7 @@ void sweep_effect(benchmark::State& state, const std::string& name, const Maker&
     state.counters["value_within20_pct"] = 100.0 * value_ok / seeds;
     state.counters["value_err_median_pct"] = 100.0 * median(rel_err);
     state.counters["value_within_2sigma_pct"] = detected ? 100.0 * within_2sigma / detected : std::nan("");
+    state.counters["random_walk_within20_pct"] = rw_values ? 100.0 * rw_ok / rw_values : std::nan("");
     state.counters["value_err_max_pct"] = rel_err.empty() ? std::nan("") : 100.0 * *std::max_element(rel_err.begin(), rel_err.end());
     state.counters["cut_ge80_pct"] = detected - cut_na > 0 ? 100.0 * cut_ok / (detected - cut_na) : std::nan("");
     state.counters["cut_not_measurable_runs"] = cut_na;
