@@ -136,6 +136,9 @@ DriveDiagData DriveDiagBuilder::finish() {
   double dur = 0;
   d.subs.resize(N);
   d.sub_speed.resize(N);
+  d.sub_w_body.resize(N);
+  d.sub_f_body.resize(N);
+  d.C_mb = C_mb_;
   for (int j = 0; j < N; ++j) {
     const Raw& x = raw_[j];
     SubBlock& s = d.subs[j];
@@ -145,8 +148,10 @@ DriveDiagData DriveDiagBuilder::finish() {
     s.gyro = x.gyro;
     s.accel = x.accel;
     const Vec3 wdot_b = deriv(j, [&](int k) { return raw_[k].w_b; });
-    s.w = C_bm * x.w_b;
-    s.f = C_bm * (x.f_b + wdot_b.cross(lever_) + x.w_b.cross(x.w_b.cross(lever_)));
+    d.sub_w_body[j] = x.w_b;
+    d.sub_f_body[j] = x.f_b + wdot_b.cross(lever_) + x.w_b.cross(x.w_b.cross(lever_));
+    s.w = C_bm * d.sub_w_body[j];
+    s.f = C_bm * d.sub_f_body[j];
     s.dw = deriv(j, [&](int k) { return raw_[k].gyro; });
     s.df = deriv(j, [&](int k) { return raw_[k].accel; });
     s.temp_c = x.temp;
@@ -203,6 +208,27 @@ DriveDiagData DriveDiagBuilder::finish() {
     j = k + 1;
   }
   return d;
+}
+
+void remount(DriveDiagData& d, const Mat3& C_mb) {
+  const Mat3 C_bm = C_mb.transpose();
+  for (std::size_t j = 0; j < d.subs.size(); ++j) {
+    d.subs[j].w = C_bm * d.sub_w_body[j];
+    d.subs[j].f = C_bm * d.sub_f_body[j];
+  }
+  for (ParentBlock& p : d.parents) {
+    Vec3 w = Vec3::Zero(), f = Vec3::Zero();
+    double tw = 0;
+    for (int i = p.first; i < p.first + p.count; ++i) {
+      const SubBlock& s = d.subs[i];
+      w += s.duration * s.w;
+      f += s.duration * s.f;
+      tw += s.duration;
+    }
+    p.w = w / tw;
+    p.f = f / tw;
+  }
+  d.C_mb = C_mb;
 }
 
 }  // namespace calbench

@@ -67,7 +67,15 @@ struct DriveDiagData {
   double sample_white_var[6] = {0, 0, 0, 0, 0, 0};
   bool has_temperature = false;
   long skipped_intervals = 0;  // reference intervals without complete IMU coverage
+  // The prediction in reference body axes (ω_b; f_b with the lever-arm terms), per sub-block, and
+  // the MEMS → body rotation C_mb it was moved to the MEMS with (SubBlock::w = C_mbᵀ ω_b, …).
+  std::vector<Vec3> sub_w_body, sub_f_body;
+  Mat3 C_mb = Mat3::Identity();
 };
+
+// The same data with the prediction moved to the MEMS through another mounting C_mb (sub-block
+// and parent w, f); the measured side is untouched.
+void remount(DriveDiagData& d, const Mat3& C_mb);
 
 class DriveDiagBuilder {
  public:

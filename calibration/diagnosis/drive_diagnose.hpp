@@ -9,14 +9,18 @@
 //   data-sheet first-order Gauss–Markov drift is part of the noise covariance (as on the bench).
 // * Without given coefficients M is fitted too (the drive then *is* the "fit first"); with given
 //   coefficients M stays fixed and only the mounting rotation δ (3 angles, MEMS axes, shared by
-//   both triads) is estimated with the bias: the mounting is installation, not sensor.
+//   both triads) is estimated with the bias: the mounting is installation, not sensor. δ enters
+//   linearised, so the base model's δ is first applied exactly (the prediction re-rotated, remount
+//   in drive_data.hpp) until it is negligible: a fixed M cannot absorb the 1 − cos θ of a mounting
+//   ~1° off the nominal one.
 // * Short-range noise: IMU white noise plus the reference's own noise, which enters through the
 //   differences of its attitudes and velocities at the ends of each interval (adjacent blocks
 //   anti-correlated). Its autocovariance up to 3 intervals is estimated from the data (high-pass
 //   residuals at the reference interval), floored by the IMU's sample-to-sample white noise.
 // Candidates are added greedily by Δχ² with a BIC penalty (k·ln N) and a held-out check (fit on
 // even 20 s windows, predict odd ones and vice versa); correlated_drift is a noise-side candidate
-// (drift σ ×2…×32, τ 60/300/1200 s by maximum likelihood), as on the bench.
+// (detected on a grid of σ ×2…×32, τ 60/300/1200 s, then σ, τ by the restricted likelihood), as
+// on the bench.
 #pragma once
 #include <string>
 #include <vector>

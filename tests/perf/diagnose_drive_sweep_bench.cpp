@@ -23,12 +23,17 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
+#include "bench/io/plan_toml.hpp"
+#include "calibration/bench_blocks.hpp"
+#include "calibration/bench_fit.hpp"
+#include "calibration/bench_sim.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/imu_error_sim.hpp"
 
@@ -49,6 +54,37 @@ bool skip_unless_enabled(benchmark::State& state) {
   if (std::getenv("DIAGNOSE_DRIVE_SWEEP")) return false;
   state.SkipWithError("set DIAGNOSE_DRIVE_SWEEP=1 (bench/diagnose/drive_sweep.sh) to run the drive diagnosis sweep (minutes)");
   return true;
+}
+
+// DIAGNOSE_DRIVE_COEFFS=bench: the workflow the docs recommend instead of a drive alone — the same
+// unit first calibrated on the factory plan (bench/plans/factory.toml simulated with the unit's
+// sensor-side catalogue effects present there too, since they belong to the sensor; the drive's
+// time offset and lever arm do not; fit by least squares without catalogue terms), the drive then
+// diagnosed with those coefficients (--coeffs: M fixed, bias and mounting re-estimated).
+bool with_bench_coeffs() {
+  const char* e = std::getenv("DIAGNOSE_DRIVE_COEFFS");
+  return e && std::string(e) == "bench";
+}
+
+std::optional<DriveCoeffs> bench_coeffs(std::uint64_t seed, const EffectTerms& fx) {
+  if (!with_bench_coeffs()) return std::nullopt;
+  static const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
+  BenchSimOptions so;
+  so.seed = seed + 900000;  // not the drive's noise
+  so.effects = fx;
+  so.effects.time_offset_s = 0;
+  so.effects.lever_arm_m.setZero();
+  BenchBlockBuilder bb(1.0);
+  const double dt = 1.0 / so.noise.output_rate_hz;
+  simulate_bench(plan, plan.site, draw_random_unit(seed), so, [&](const BenchSample& x) {
+    bb.add(x.t, dt, x.gyro, x.accel, x.w_ref, x.f_ref, x.step, x.temp_c, x.saturated);
+  });
+  BenchFitOptions o;
+  o.table = plan.table;
+  DriveCoeffs c;
+  c.set.errors = fit_bench(bb.finish(), o).estimate;
+  c.file = "factory plan (simulated)";
+  return c;
 }
 
 // One catalogue effect as the sweep injects and expects it.
@@ -220,7 +256,8 @@ void run_one(const std::string& row, const std::vector<Component>& parts, int k,
     injects += " --inject " + xs.back().inject;
   }
   const DriveDiagInput in = simulate_drive_diag_input(route(), seed, fx);
-  const DriveDiagRun run = run_drive_diagnosis(in, nullptr);
+  const std::optional<DriveCoeffs> coeffs = bench_coeffs(seed, fx);
+  const DriveDiagRun run = run_drive_diagnosis(in, coeffs ? &*coeffs : nullptr);
   const auto& fs = run.result.core.findings;
   ++t.runs;
   bool all_det = true, all_place = true, all_val = true, all_cut = true;
@@ -343,7 +380,9 @@ void BM_DiagnoseDrive_SweepClean(benchmark::State& state) {
     std::vector<double> chi2;
     for (int k = 0; k < seeds; ++k) {
       const std::uint64_t seed = 5000 + k;
-      const DriveDiagRun run = run_drive_diagnosis(simulate_drive_diag_input(route(), seed, EffectTerms{}), nullptr);
+      const std::optional<DriveCoeffs> coeffs = bench_coeffs(seed, EffectTerms{});
+      const DriveDiagRun run =
+          run_drive_diagnosis(simulate_drive_diag_input(route(), seed, EffectTerms{}), coeffs ? &*coeffs : nullptr);
       const auto& R = run.result.core;
       with += !R.findings.empty();
       findings += static_cast<int>(R.findings.size());
@@ -384,21 +423,24 @@ void BM_DiagnoseDrive_Repro(benchmark::State& state) {
   for (std::size_t i = 1; i < parts.size(); ++i) apply_inject_option(parts[i], fx);
   for (auto _ : state) {
     const DriveDiagInput in = simulate_drive_diag_input(route(), seed, fx);
-    const DriveDiagRun run = run_drive_diagnosis(in, nullptr);
+    const std::optional<DriveCoeffs> coeffs = bench_coeffs(seed, fx);
+    const DriveDiagRun run = run_drive_diagnosis(in, coeffs ? &*coeffs : nullptr);
     const auto& R = run.result.core;
     std::fprintf(stderr, "repro seed %llu: %s\n", static_cast<unsigned long long>(seed), describe(run).c_str());
     std::fprintf(stderr, "  %zu IMU rows, %zu reference rows, %zu intervals, %zu blocks, mean interval %.4f s\n", in.imu_rows,
                  in.ref_rows, in.data.subs.size(), in.data.parents.size(), in.data.mean_sub_s);
     for (const auto& f : R.findings)
-      std::fprintf(stderr, "  finding %s: dchi2 %.1f, dbic %.1f, held-out %.1f, condition %s, tau %.3g s [%.3g, %.3g]\n",
+      std::fprintf(stderr, "  finding %s: dchi2 %.1f, dbic %.1f, held-out %.1f, condition %s, tau %.3g s [%.3g, %.3g], "
+                   "systematic %.3g -> %.3g\n",
                    f.term.label().c_str(), f.delta_chi2, f.delta_bic, f.heldout_delta_chi2, f.condition.c_str(),
-                   f.noise_tau_s, f.noise_interval.tau_lo, f.noise_interval.tau_hi);
+                   f.noise_tau_s, f.noise_interval.tau_lo, f.noise_interval.tau_hi, f.rms_before, f.rms_after);
     const char* names[6] = {"gyro x", "gyro y", "gyro z", "accel x", "accel y", "accel z"};
     for (int a = 0; a < 6; ++a)
       std::fprintf(stderr,
-                   "  %s: chi2/dof %.3f -> %.3f, Ljung-Box p %.2g -> %.2g, white scale %.2f, sample white var %.3g, "
-                   "block noise %.3g, gamma %.3g %.3g %.3g %.3g\n",
+                   "  %s: chi2/dof %.3f -> %.3f, Ljung-Box p %.2g -> %.2g, systematic %.3g -> %.3g, white scale %.2f, "
+                   "sample white var %.3g, block noise %.3g, gamma %.3g %.3g %.3g %.3g\n",
                    names[a], R.before[a].chi2_dof, R.after[a].chi2_dof, R.before[a].ljung_box_p, R.after[a].ljung_box_p,
+                   R.before[a].systematic_rms, R.after[a].systematic_rms,
                    run.result.white_scale[a], in.data.sample_white_var[a], run.result.block_noise_sigma[a],
                    run.result.gamma[a][0], run.result.gamma[a][1], run.result.gamma[a][2], run.result.gamma[a][3]);
     for (const auto& u : R.unexplained) {
