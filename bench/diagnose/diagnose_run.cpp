@@ -173,12 +173,6 @@ DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const T
 
 namespace {
 
-std::string fmt(double v, int prec = 3) {
-  std::ostringstream o;
-  o << std::setprecision(prec) << v;
-  return o.str();
-}
-
 // Value in the units people use, for sentences.
 std::string human_value(const DiagFinding& f, double v) {
   using namespace units;

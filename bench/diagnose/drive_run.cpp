@@ -26,12 +26,6 @@ const char* kSensor[] = {"gyro", "accel", "reference"};
 const char* kAxis[] = {"x", "y", "z"};
 const char* kAxisName[] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
 
-std::string fmt(double v, int prec = 3) {
-  std::ostringstream o;
-  o << std::setprecision(prec) << v;
-  return o.str();
-}
-
 // Display units: gyro °/h, accel mg.
 double disp(double v, int sensor) { return sensor == 0 ? v / units::kDegPerHour : v / units::kMilliG; }
 const char* disp_unit(int sensor) { return sensor == 0 ? "°/h" : "mg"; }

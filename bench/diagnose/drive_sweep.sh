@@ -7,6 +7,8 @@
 # right sensor/axis, value error, cut of the systematic residual, other findings, unexplained.
 # Prints one row per benchmark with its counters, then (with jq) the same as a markdown table;
 # runs that miss a criterion are listed on stderr with seed and --inject options.
+# DIAGNOSE_DRIVE_COEFFS=bench: each unit first fitted on the simulated factory plan, the drive
+# diagnosed with those coefficients (--coeffs; docs/diagnosis.md "With the factory coefficients").
 # Usage: bench/diagnose/drive_sweep.sh [BUILD_DIR] [extra benchmark args, e.g. --benchmark_filter=lever_arm]
 set -euo pipefail
 BUILD=${1:-build}

@@ -9,15 +9,15 @@
 namespace calbench {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream o;
-  o << std::setprecision(3) << v;
-  return o.str();
-}
-
 nlohmann::json bound(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 }  // namespace
+
+std::string fmt(double v, int prec) {
+  std::ostringstream o;
+  o << std::setprecision(prec) << v;
+  return o.str();
+}
 
 std::string drift_tau_text(const DiagFinding& f) {
   const DriftInterval& i = f.noise_interval;

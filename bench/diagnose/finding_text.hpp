@@ -12,6 +12,9 @@
 
 namespace calbench {
 
+// A number with `prec` significant digits, as the sentences and tables print it.
+std::string fmt(double v, int prec = 3);
+
 // "60 s (1σ 45–80 s); random-walk density σ·√(2/τ) 12 °/h/√h (1σ 11 – 13)", an open side
 // "not bounded by this record".
 std::string drift_tau_text(const DiagFinding& f);
