@@ -117,6 +117,9 @@ void TableEmulator::run() {
     timeval tv{0, 2000};
     const int n = select(maxfd + 1, &rd, nullptr, nullptr, &tv);
     if (n <= 0) continue;
+    // A stall begun while select waited: a request sent after stall_for() returned must go
+    // unanswered too (checked before select only, a loaded machine answered it).
+    if (wall_now() < stall_until_.load()) continue;
     if (FD_ISSET(listen_fd_, &rd)) {
       const int s = ::accept(listen_fd_, nullptr, nullptr);
       if (s >= 0) clients.push_back(s);
