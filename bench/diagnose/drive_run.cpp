@@ -13,8 +13,12 @@
 #include "bench/drive/qc_drive.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/plan_toml.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/report/gnuplot.hpp"
+#include "calibration/bench_blocks.hpp"
+#include "calibration/bench_fit.hpp"
+#include "calibration/bench_sim.hpp"
 #include "calibration/imu_error_sim.hpp"
 #include "calibration/ins/strapdown.hpp"
 #include "calibration/units.hpp"
@@ -141,6 +145,27 @@ DriveDiagInput load_drive_diag_input(const std::filesystem::path& dir, const std
   if (in.data.parents.size() < 20)
     throw InputError(dir.string(), 0, "", "too little overlapping IMU and reference data for a diagnosis (< 20 s)");
   return in;
+}
+
+DriveCoeffs simulate_factory_coeffs(const std::string& plan_file, std::uint64_t seed, const EffectTerms& effects,
+                                    std::uint64_t bench_seed) {
+  const BenchPlan plan = load_plan(plan_file);
+  BenchSimOptions so;
+  so.seed = bench_seed;
+  so.effects = effects;
+  so.effects.time_offset_s = 0;
+  so.effects.lever_arm_m.setZero();
+  BenchBlockBuilder bb(1.0);
+  const double dt = 1.0 / so.noise.output_rate_hz;
+  simulate_bench(plan, plan.site, draw_random_unit(seed), so, [&](const BenchSample& x) {
+    bb.add(x.t, dt, x.gyro, x.accel, x.w_ref, x.f_ref, x.step, x.temp_c, x.saturated);
+  });
+  BenchFitOptions o;
+  o.table = plan.table;
+  DriveCoeffs c;
+  c.set.errors = fit_bench(bb.finish(), o).estimate;
+  c.file = plan_file + " (simulated, fitted)";
+  return c;
 }
 
 DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uint64_t seed, const EffectTerms& effects,

@@ -43,6 +43,12 @@ DriveDiagInput load_drive_diag_input(const std::filesystem::path& dir, const std
 // uses the route's nominal mounting.
 DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uint64_t seed, const EffectTerms& effects,
                                          double until_s = 0);
+// In memory (tests): the factory coefficients of that drive's unit — the unit of seed simulated on
+// a bench plan (e.g. bench/plans/factory.toml) with the sensor-side catalogue effects of `effects`
+// present (not the drive's time offset or lever arm), noise seed `bench_seed`, fitted by least
+// squares without catalogue terms, as `calbench fit bench` does.
+DriveCoeffs simulate_factory_coeffs(const std::string& plan_file, std::uint64_t seed, const EffectTerms& effects,
+                                    std::uint64_t bench_seed);
 
 // The in-motion filter (as `fit drive --coeffs` runs it, default observations pos,vel,att) over the
 // drive, once with the improved b and M and only the catalogue terms that were tested (those the

@@ -30,10 +30,6 @@
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
-#include "bench/io/plan_toml.hpp"
-#include "calibration/bench_blocks.hpp"
-#include "calibration/bench_fit.hpp"
-#include "calibration/bench_sim.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/imu_error_sim.hpp"
 
@@ -68,23 +64,8 @@ bool with_bench_coeffs() {
 
 std::optional<DriveCoeffs> bench_coeffs(std::uint64_t seed, const EffectTerms& fx) {
   if (!with_bench_coeffs()) return std::nullopt;
-  static const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
-  BenchSimOptions so;
-  so.seed = seed + 900000;  // not the drive's noise
-  so.effects = fx;
-  so.effects.time_offset_s = 0;
-  so.effects.lever_arm_m.setZero();
-  BenchBlockBuilder bb(1.0);
-  const double dt = 1.0 / so.noise.output_rate_hz;
-  simulate_bench(plan, plan.site, draw_random_unit(seed), so, [&](const BenchSample& x) {
-    bb.add(x.t, dt, x.gyro, x.accel, x.w_ref, x.f_ref, x.step, x.temp_c, x.saturated);
-  });
-  BenchFitOptions o;
-  o.table = plan.table;
-  DriveCoeffs c;
-  c.set.errors = fit_bench(bb.finish(), o).estimate;
-  c.file = "factory plan (simulated)";
-  return c;
+  return simulate_factory_coeffs(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml", seed, fx,
+                                 seed + 900000);  // not the drive's noise
 }
 
 // One catalogue effect as the sweep injects and expects it.

@@ -8,11 +8,6 @@
 
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
-#include "bench/io/plan_toml.hpp"
-#include "calibration/bench_blocks.hpp"
-#include "calibration/bench_fit.hpp"
-#include "calibration/bench_sim.hpp"
-#include "calibration/imu_error_sim.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {
@@ -160,20 +155,10 @@ TEST(DiagnoseDriveEffects, ImprovedCoefficientsExplainTheDrive) {
 // scale error of 1 − cos θ (≈ 1e-4) that a scale-like catalogue term takes (a clean drive was
 // named a gyro z nonlinearity of −4e-4/(rad/s) in 17 of 100 sweep seeds before).
 TEST(DiagnoseDriveEffects, CleanDrivesWithBenchCoefficientsAndAMountingOffByADegree) {
-  const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
   for (std::uint64_t seed : {57, 66}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    BenchSimOptions so;
-    so.seed = seed + 900000;
-    BenchBlockBuilder bb(1.0);
-    const double dt = 1.0 / so.noise.output_rate_hz;
-    simulate_bench(plan, plan.site, draw_random_unit(seed), so, [&](const BenchSample& x) {
-      bb.add(x.t, dt, x.gyro, x.accel, x.w_ref, x.f_ref, x.step, x.temp_c, x.saturated);
-    });
-    BenchFitOptions o;
-    o.table = plan.table;
-    DriveCoeffs c;
-    c.set.errors = fit_bench(bb.finish(), o).estimate;
+    const DriveCoeffs c = simulate_factory_coeffs(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml", seed,
+                                                  EffectTerms{}, seed + 900000);
     const DriveDiagRun run = run_drive_diagnosis(simulate_drive_diag_input(kRoute, seed, EffectTerms{}), &c);
     EXPECT_TRUE(run.result.core.findings.empty()) << describe(run);
     EXPECT_TRUE(run.result.core.unexplained.empty());
