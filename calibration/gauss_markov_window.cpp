@@ -43,4 +43,17 @@ double gm_window_correlation(double c1, double d1, double c2, double d2, double 
   return (H(b2 - a1, tau) + H(a2 - b1, tau) - H(b2 - b1, tau) - H(a2 - a1, tau)) / (d1 * d2);
 }
 
+Eigen::VectorXd gm_window_smoothed(const std::vector<double>& centre, const std::vector<double>& duration,
+                                   double sigma, double tau, const Eigen::VectorXd& v) {
+  const int N = static_cast<int>(centre.size());
+  Eigen::VectorXd drift(N);
+  for (int k = 0; k < N; ++k) {
+    double s = 0;
+    for (int l = 0; l < N; ++l)
+      s += sigma * sigma * gm_window_correlation(centre[k], duration[k], centre[l], duration[l], tau) * v(l);
+    drift(k) = s;
+  }
+  return drift;
+}
+
 }  // namespace calbench

@@ -12,11 +12,25 @@
 //   the same window (x = d/τ):          σ² · 2(x − 1 + e^{−x})/x².
 // A window of length 0 is a point value, so the point model is the d → 0 limit.
 #pragma once
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Dense>
 
 namespace calbench {
 
 // Correlation (Cov/σ²) of the means over [c1 − d1/2, c1 + d1/2] and [c2 − d2/2, c2 + d2/2] of a
 // stationary first-order Gauss–Markov process with correlation time tau (> 0). d1, d2 ≥ 0.
 double gm_window_correlation(double c1, double d1, double c2, double d2, double tau);
+
+// The drift the noise model attributes to a residual, given v = Σ⁻¹·r (Σ the whole block
+// covariance): E[drift | r] = σ²·ρ·v, ρ the window-mean correlation of the blocks (centre,
+// duration) as above. The GLS smoother of the bench and the drive diagnosis.
+Eigen::VectorXd gm_window_smoothed(const std::vector<double>& centre, const std::vector<double>& duration,
+                                   double sigma, double tau, const Eigen::VectorXd& v);
+
+// Random-walk density K = σ·√(2/τ) (unit/√s) of a first-order Gauss–Markov process: its spectrum
+// above 1/τ is K²/ω², which is what a record only a few τ long determines.
+inline double gm_random_walk_density(double sigma, double tau) { return sigma * std::sqrt(2.0 / tau); }
 
 }  // namespace calbench

@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "calibration/gauss_markov_window.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {
@@ -28,7 +29,7 @@ std::string drift_tau_text(const DiagFinding& f) {
   if (!f.value.empty() && f.noise_tau_s > 0) {
     const double to_unit = (f.term.sensor == 0 ? 1.0 / units::kDegPerHour : 1.0 / units::kMilliG) * 60.0;
     const std::string unit = f.term.sensor == 0 ? " °/h/√h" : " mg/√h";
-    const double k = f.value[0] * std::sqrt(2.0 / f.noise_tau_s) * to_unit;
+    const double k = gm_random_walk_density(f.value[0], f.noise_tau_s) * to_unit;
     const std::string khi = std::isfinite(i.rw_hi) ? fmt(i.rw_hi * to_unit) : "not bounded";
     out += "; random-walk density σ·√(2/τ) " + fmt(k) + unit + " (1σ " +
            (std::isfinite(i.rw_lo) ? fmt(i.rw_lo * to_unit) : "not bounded") + " – " + khi + ")";
@@ -44,7 +45,7 @@ void add_drift_tau_evidence(const DiagFinding& f, nlohmann::json& evidence) {
   evidence["tau_s_2sigma"] = pair(i.tau_lo2, i.tau_hi2);
   evidence["sigma_1sigma"] = pair(i.sigma_lo, i.sigma_hi);
   evidence["sigma_2sigma"] = pair(i.sigma_lo2, i.sigma_hi2);
-  if (!f.value.empty() && f.noise_tau_s > 0) evidence["random_walk_density"] = f.value[0] * std::sqrt(2.0 / f.noise_tau_s);
+  if (!f.value.empty() && f.noise_tau_s > 0) evidence["random_walk_density"] = gm_random_walk_density(f.value[0], f.noise_tau_s);
   evidence["random_walk_density_1sigma"] = pair(i.rw_lo, i.rw_hi);
   evidence["random_walk_density_2sigma"] = pair(i.rw_lo2, i.rw_hi2);
 }

@@ -351,17 +351,12 @@ Eigen::VectorXd smoothed_drift(const DiagData& d, const Dataset& S, const Eigen:
   const int N = static_cast<int>(S.parents.size());
   const Eigen::VectorXd rw = S.L.triangularView<Eigen::Lower>().solve(parent_means(d, S, r));
   const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(rw);
-  Eigen::VectorXd drift(N);
+  std::vector<double> centre(N), duration(N);
   for (int k = 0; k < N; ++k) {
-    const ParentBlock& pk = d.parents[S.parents[k]];
-    double s = 0;
-    for (int l = 0; l < N; ++l) {
-      const ParentBlock& pl = d.parents[S.parents[l]];
-      s += S.drift_sigma * S.drift_sigma * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, S.drift_tau) * v(l);
-    }
-    drift(k) = s;
+    centre[k] = d.parents[S.parents[k]].t_mid;
+    duration[k] = d.parents[S.parents[k]].duration;
   }
-  return drift;
+  return gm_window_smoothed(centre, duration, S.drift_sigma, S.drift_tau, v);
 }
 
 // Statistics of a residual series on one axis (dataset gives the noise model). The systematic

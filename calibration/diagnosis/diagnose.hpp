@@ -70,6 +70,8 @@ struct DriftInterval {
   double sigma_lo = kOpen, sigma_hi = kOpen, tau_lo = kOpen, tau_hi = kOpen;         // 1σ
   double sigma_lo2 = kOpen, sigma_hi2 = kOpen, tau_lo2 = kOpen, tau_hi2 = kOpen;     // 2σ
   double rw_lo = kOpen, rw_hi = kOpen, rw_lo2 = kOpen, rw_hi2 = kOpen;               // K, 1σ and 2σ
+  // Is σ = s inside the 2σ interval (an open side unbounded)?
+  bool sigma_within_2sigma(double s) const { return !(s < sigma_lo2) && !(s > sigma_hi2); }
 };
 
 struct DiagFinding {
@@ -83,7 +85,7 @@ struct DiagFinding {
   double condition_r = 0;
   double rms_before = 0, rms_after = 0;  // systematic residual of the reported sensor axis (or all touched)
   double noise_tau_s = 0;                // correlated_drift only
-  DriftInterval noise_interval;          // correlated_drift only: 1σ intervals of σ and τ
+  DriftInterval noise_interval;          // correlated_drift only: profile intervals of σ, τ and K
   std::vector<DiagAlternative> alternatives;  // best first; empty = the effect is told apart
 };
 
@@ -136,8 +138,8 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
 // Value of a condition for a sub-block (used for correlations and plots). Names:
 // "rate", "w_x".."w_z", "f_x".."f_z", "temperature", "dT/dt", "time", "angle".
 // The finding of a drift larger or slower than the prior on one triad (0 gyro, 1 accel):
-// first-order σ and τ with their 1σ intervals (the finding's σ is half the σ interval, NaN when
-// it is open), systematic residual as the RMS over the triad's axes.
+// first-order σ and τ with their profile intervals (the finding's σ is half the 1σ interval of σ,
+// NaN when it is open), systematic residual as the RMS over the triad's axes.
 DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, const DriftInterval& interval,
                                      double delta_chi2, double delta_bic, const AxisStats (&before)[6],
                                      const AxisStats (&after)[6]);

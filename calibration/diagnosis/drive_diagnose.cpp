@@ -388,17 +388,12 @@ Eigen::VectorXd smoothed_drift(const DriveDiagData& d, const Dataset& S, const E
   const int N = S.n;
   const Eigen::VectorXd w = S.L.triangularView<Eigen::Lower>().solve(r);
   const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(w);
-  Eigen::VectorXd drift(N);
+  std::vector<double> centre(N), duration(N);
   for (int k = 0; k < N; ++k) {
-    const ParentBlock& pk = d.parents[S.parents[k]];
-    double s = 0;
-    for (int l = 0; l < N; ++l) {
-      const ParentBlock& pl = d.parents[S.parents[l]];
-      s += S.ds * S.ds * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, S.tau) * v(l);
-    }
-    drift(k) = s;
+    centre[k] = d.parents[S.parents[k]].t_mid;
+    duration[k] = d.parents[S.parents[k]].duration;
   }
-  return drift;
+  return gm_window_smoothed(centre, duration, S.ds, S.tau, v);
 }
 
 // Systematic RMS of residual r (drift removed) over groups of parents: each group's mean squared

@@ -266,7 +266,7 @@ class GreedySearch {
 
   // State: the noise model per triad, the datasets under it, the model and its fit.
   double ds[2] = {0, 0}, tau[2] = {1, 1};
-  // After a correlated_drift step: the 1σ intervals of the triad's drift σ and τ.
+  // After a correlated_drift step: the profile intervals of the triad's drift σ, τ and K.
   DriftInterval drift_interval[2];
   std::vector<Dataset> all, even, odd;
   std::vector<int> model;  // linear terms, in the order accepted
@@ -404,11 +404,11 @@ class GreedySearch {
   // ridge (on a record a few τ long the data see mostly σ²/τ, the random-walk density), so the
   // search is a profile: for each τ on a log grid (factor √2, from a quarter of the smallest grid
   // τ to twice the largest) the best ln σ by parabolic steps, started on the grid cell's σ²/τ;
-  // then a parabola through the best three τ and the best σ there. The 1σ intervals are those of
-  // the profile likelihood (−2 ln L within 1 of its minimum): for τ where the profile is within 1,
-  // for σ the union over those τ of the conditional intervals (from each τ's curvature in ln σ),
-  // the profile interpolated linearly in ln τ. A bound the τ range's end reaches is left open (NaN):
-  // the record does not tell τ (and σ) apart beyond it.
+  // then a parabola through the best three τ and the best σ there. The intervals are those of
+  // the profile likelihood (−2 ln L within 1 of its minimum for 1σ, within 4 for 2σ): for τ where
+  // the profile is within the limit, for σ (and K) the union over those τ of the conditional
+  // intervals (from each τ's curvature in ln σ), the profile interpolated linearly in ln τ. A bound
+  // the τ range's end reaches is left open (NaN): the record does not tell τ (and σ) apart beyond it.
   Drift refine_drift(const Drift& grid) const {
     Drift out = grid;
     const int triad = grid.triad;

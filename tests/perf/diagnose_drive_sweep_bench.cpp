@@ -31,6 +31,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
+#include "calibration/gauss_markov_window.hpp"
 #include "calibration/imu_error_sim.hpp"
 
 namespace calbench {
@@ -268,11 +269,11 @@ void run_one(const std::string& row, const std::vector<Component>& parts, int k,
       ++t.values;
       if (x.effect == EffectId::correlated_drift) {
         const DriftInterval& iv = f.noise_interval;
-        t.within_2sigma += !(x.value < iv.sigma_lo2) && !(x.value > iv.sigma_hi2);
+        t.within_2sigma += iv.sigma_within_2sigma(x.value);
         const std::size_t p = x.inject.find("tau=");
         const double tau = p == std::string::npos ? 0.0 : std::atof(x.inject.c_str() + p + 4);
         if (tau > 0 && f.noise_tau_s > 0) {
-          const double k_true = x.value * std::sqrt(2 / tau), k = f.value[0] * std::sqrt(2 / f.noise_tau_s);
+          const double k_true = gm_random_walk_density(x.value, tau), k = gm_random_walk_density(f.value[0], f.noise_tau_s);
           ++t.rw_values;
           t.rw_ok += std::abs(k - k_true) <= 0.2 * k_true;
         }

@@ -22,6 +22,7 @@
 
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/io/plan_toml.hpp"
+#include "calibration/gauss_markov_window.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {
@@ -127,10 +128,10 @@ void sweep_effect(benchmark::State& state, const std::string& name, const Maker&
       // the random-walk density σ·√(2/τ) against the injected one.
       if (x.effect == EffectId::correlated_drift) {
         const DriftInterval& iv = f->noise_interval;
-        within_2sigma += !(x.value < iv.sigma_lo2) && !(x.value > iv.sigma_hi2);
+        within_2sigma += iv.sigma_within_2sigma(x.value);
         const double tau = (x.sensor ? x.fx.accel : x.fx.gyro).drift_tau_s;
         if (tau > 0 && f->noise_tau_s > 0) {
-          const double k_true = x.value * std::sqrt(2 / tau), k = f->value[0] * std::sqrt(2 / f->noise_tau_s);
+          const double k_true = gm_random_walk_density(x.value, tau), k = gm_random_walk_density(f->value[0], f->noise_tau_s);
           ++rw_values;
           rw_ok += std::abs(k - k_true) <= 0.2 * k_true;
         }
