@@ -543,15 +543,18 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   // bench coefficients were named a gyro z nonlinearity of −4e-4/(rad/s)). So the base model's δ is
   // applied exactly — the prediction re-rotated to the MEMS (remount) — until it is below 1e-7 rad;
   // the search then runs on that data, and the reported δ is the total.
-  DriveDiagData data = data_in;
+  DriveDiagData remounted;
   Mat3 C_pre = Mat3::Identity();
-  if (opt.fixed_scale)
+  if (opt.fixed_scale) {
+    remounted = data_in;
     for (int it = 0; it < 5; ++it) {
-      const Vec3 d = base_mounting_delta(data, current, carried, opt);
+      const Vec3 d = base_mounting_delta(remounted, current, carried, opt);
       if (d.norm() < 1e-7) break;
       C_pre = C_pre * ins::quat_from_rotvec(d).toRotationMatrix();
-      remount(data, data_in.C_mb * C_pre);
+      remount(remounted, data_in.C_mb * C_pre);
     }
+  }
+  const DriveDiagData& data = opt.fixed_scale ? remounted : data_in;
   const Design D = build_design(data, current, carried, opt.fixed_scale);
   const int NP = static_cast<int>(data.parents.size());
   res.parents = NP;
