@@ -22,9 +22,6 @@ namespace calbench {
 namespace {
 const char* kSensor[] = {"gyro", "accel", "reference"};
 const char* kAxis[] = {"x", "y", "z"};
-const char* kCatalogueKeys[] = {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
-                                "scale_asymmetry",  "time_offset",       "lever_arm",     "misalignment",
-                                "table_wobble",     "correlated_drift",  "temperature_rate"};
 
 // Parent blocks kept by the diagnosis (dense covariance per axis): longer parents beyond this.
 constexpr int kMaxParents = 1000;
@@ -161,7 +158,7 @@ DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const T
   limit(c.errors.gyro, 0.05 * kDeg, 1e-3);
   limit(c.errors.accel, 5 * kMilliG, 2e-3);
   c.extra = run.current.extra.is_object() ? run.current.extra : nlohmann::json::object();
-  for (const char* k : kCatalogueKeys) c.extra.erase(k);
+  for (const auto& k : effect_json_keys()) c.extra.erase(k);
   effects_to_json(run.result.improved_terms, run.result.terms_sigma, c.extra);
   nlohmann::json eff = nlohmann::json::array();
   for (const auto& f : run.result.findings) eff.push_back(effect_name(f.term.effect));
@@ -184,7 +181,8 @@ std::string human_value(const DiagFinding& f, double v) {
       return g ? fmt(v / kDegPerHour / 60.0) + " °/h per K/min" : fmt(v / kMilliG / 60.0) + " mg per K/min";
     case EffectId::g_sensitivity: return fmt(v * kG0 / kDeg) + " °/s/g";
     case EffectId::scale_nonlinearity: return g ? fmt(v * kDeg / kPpm) + " ppm/(°/s)" : fmt(v * kG0 / kPpm) + " ppm/g";
-    case EffectId::scale_asymmetry: return fmt(v / kPpm) + " ppm";
+    case EffectId::scale_asymmetry:
+    case EffectId::scale_factor: return fmt(v / kPpm) + " ppm";
     case EffectId::time_offset: return fmt(v * 1e3) + " ms";
     case EffectId::lever_arm: return fmt(v * 1e3) + " mm";
     case EffectId::misalignment:
@@ -240,6 +238,7 @@ std::string finding_sentence(const DiagFinding& f) {
     case EffectId::g_sensitivity: o << who << " error grows with " << condition_phrase(f.condition) << ": g-sensitivity, "; break;
     case EffectId::scale_nonlinearity: o << who << " scale error grows with |input|: quadratic scale-factor nonlinearity, "; break;
     case EffectId::scale_asymmetry: o << who << " scale differs between positive and negative inputs: scale asymmetry, "; break;
+    case EffectId::scale_factor: o << who << " scale differs from the given coefficients: scale factor, "; break;  // drives only
     case EffectId::time_offset: o << "IMU and reference are offset in time (errors follow the rate of change of the input): time offset, "; break;
     case EffectId::lever_arm: o << "accelerometer error grows with the square of the table rate: IMU off the rotation centre (lever arm), "; break;
     case EffectId::misalignment: o << "accelerometer error depends on the table orientation beyond any sensor model: table base tilted (misalignment), "; break;

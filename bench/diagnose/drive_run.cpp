@@ -47,7 +47,8 @@ std::string value_text(const DiagFinding& f) {
   switch (t.effect) {
     case EffectId::g_sensitivity: return list(1.0 / kDeg * kG0, "°/s/g");
     case EffectId::scale_nonlinearity: return t.sensor == 0 ? list(1e6 * kDeg, "ppm/(°/s)") : list(1e6 * kG0, "ppm/g");
-    case EffectId::scale_asymmetry: return list(1e6, "ppm");
+    case EffectId::scale_asymmetry:
+    case EffectId::scale_factor: return list(1e6, "ppm");
     case EffectId::time_offset: return list(1e3, "ms");
     case EffectId::lever_arm: return list(1e3, "mm (IMU axes)");
     case EffectId::temperature_bias:
@@ -155,6 +156,9 @@ DriveCoeffs simulate_factory_coeffs(const std::string& plan_file, std::uint64_t 
   so.effects = effects;
   so.effects.time_offset_s = 0;
   so.effects.lever_arm_m.setZero();
+  // An injected scale_factor is a shift since the calibration: the factory saw the unit without it.
+  so.effects.gyro.scale.setZero();
+  so.effects.accel.scale.setZero();
   BenchBlockBuilder bb(1.0);
   const double dt = 1.0 / so.noise.output_rate_hz;
   simulate_bench(plan, plan.site, draw_random_unit(seed), so, [&](const BenchSample& x) {
@@ -267,9 +271,8 @@ DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* co
   run.improved = run.current;
   run.improved.device = run.current.device.serial.empty() ? in.meta.device : run.current.device;
   run.improved.errors = r.improved;
-  for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity", "scale_asymmetry",
-                        "time_offset", "lever_arm", "misalignment", "table_wobble", "correlated_drift", "temperature_rate", "diagnosis"})
-    run.improved.extra.erase(k);
+  for (const auto& k : effect_json_keys()) run.improved.extra.erase(k);
+  run.improved.extra.erase("diagnosis");
   effects_to_json(r.improved_terms, r.terms_sigma, run.improved.extra);
   nlohmann::json added = nlohmann::json::array();
   for (const auto& f : r.findings) added.push_back(f.term.label());
@@ -385,6 +388,10 @@ std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
     case EffectId::g_sensitivity: what = "g-sensitivity"; break;
     case EffectId::scale_nonlinearity: what = "scale-factor nonlinearity"; break;
     case EffectId::scale_asymmetry: what = "scale-factor asymmetry"; break;
+    case EffectId::scale_factor:
+      what = "scale factor differs from the given coefficients (changed since the calibration, or a scale that depends "
+             "on the input range — nonlinearity, asymmetry — set there at other rates; folded into M)";
+      break;
     case EffectId::time_offset: what = "time offset between IMU and reference (IMU late by τ)"; break;
     case EffectId::lever_arm: what = "lever arm: the MEMS sits elsewhere than meta.json says"; break;
     case EffectId::temperature_bias: what = "temperature-dependent bias"; break;

@@ -45,7 +45,8 @@ DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uin
                                          double until_s = 0);
 // In memory (tests): the factory coefficients of that drive's unit — the unit of seed simulated on
 // a bench plan (e.g. bench/plans/factory.toml) with the sensor-side catalogue effects of `effects`
-// present (not the drive's time offset or lever arm), noise seed `bench_seed`, fitted by least
+// present (not the drive's time offset or lever arm, nor a scale_factor: a shift since the
+// calibration), noise seed `bench_seed`, fitted by least
 // squares without catalogue terms, as `calbench fit bench` does.
 DriveCoeffs simulate_factory_coeffs(const std::string& plan_file, std::uint64_t seed, const EffectTerms& effects,
                                     std::uint64_t bench_seed);

@@ -27,10 +27,10 @@ jq -r '
     "**Clean drives: \(.runs) seeds, no finding in \(.no_finding_pct | pct) %, \(.false_findings) false findings, \(.runs_with_unexplained) with something unexplained; χ²/dof before \(.chi2_dof_min * 100 | round / 100)–\(.chi2_dof_max * 100 | round / 100) (median \(.chi2_dof_median * 100 | round / 100)).**"
 ' "$json"
 echo
-echo "| effect / magnitude | runs | detected | right sensor, axis | value within 20 % | value within its 2σ | drift σ·√(2/τ) within 20 % | value error median / max | cut ≥ 80 % or to floor (measurable) | cut not measurable | runs with another finding | runs with unexplained | all criteria |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| effect / magnitude | runs | detected | right sensor, axis | value within 20 % | value within its 2σ | drift σ·√(2/τ) within 20 % | value error median / max | cut ≥ 80 % or to floor (measurable) | cut not measurable | runs with another finding | scale_factor beside a nonlinearity | runs with unexplained | all criteria |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 jq -r '
   def pct: if . == null or (type == "number" and isnan) then "–" else (. * 10 | round / 10 | tostring) end;
   .benchmarks[] | select(.name | test("SweepClean") | not) | select(.runs != null) |
-    "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "") | sub("/iterations:1$"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_within_2sigma_pct | pct) % | \(.random_walk_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
+    "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "") | sub("/iterations:1$"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_within_2sigma_pct | pct) % | \(.random_walk_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.scale_factor_companion_runs // 0) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
 ' "$json"

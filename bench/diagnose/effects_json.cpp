@@ -38,9 +38,19 @@ constexpr TriadKey kTriadKeys[] = {
     {"temperature_rate", "gyro_rad_s_per_K_per_s", "accel_m_s2_per_K_per_s", false, &TriadEffectTerms::temp_rate},
     {"scale_nonlinearity", "gyro_per_rad_s", "accel_per_m_s2", false, &TriadEffectTerms::nonlinearity},
     {"scale_asymmetry", "gyro", "accel", false, &TriadEffectTerms::asymmetry},
+    // A change of M_ii (a simulation's injected shift since the calibration, or terms handed over
+    // by hand); the diagnosis folds what it finds into M instead.
+    {"scale_factor", "gyro", "accel", false, &TriadEffectTerms::scale},
 };
 
 }  // namespace
+
+const std::vector<std::string>& effect_json_keys() {
+  static const std::vector<std::string> k = {"temperature_bias",   "temperature_scale", "g_sensitivity", "scale_nonlinearity",
+                                             "scale_asymmetry",    "time_offset",       "lever_arm",     "misalignment",
+                                             "table_wobble",       "correlated_drift",  "temperature_rate", "scale_factor"};
+  return k;
+}
 
 EffectTerms effects_from_json(const nlohmann::json& j, const std::string& f, EffectTerms* sigma) {
   EffectTerms e, s;
@@ -185,6 +195,9 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
   } else if (name == "scale_asymmetry") {
     auto& t = triad();
     t.asymmetry(axis("axis")) += num("value");
+  } else if (name == "scale_factor") {
+    auto& t = triad();
+    t.scale(axis("axis")) += num("value");
   } else if (name == "g_sensitivity") {
     const int i = axis("axis"), k = axis("f");
     e.g_sensitivity(i, k) += num("value");
@@ -205,7 +218,7 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
     throw InputError(where, 0, "effect",
                      "unknown effect '" + name +
                          "' (temperature_bias, temperature_scale, temperature_rate, g_sensitivity, scale_nonlinearity, scale_asymmetry, "
-                         "time_offset, lever_arm, misalignment, table_wobble, correlated_drift)");
+                         "time_offset, lever_arm, misalignment, table_wobble, correlated_drift, scale_factor)");
   }
   for (const auto& [k, v] : kv)
     if (!used.count(k)) throw InputError(where, 0, k, "unknown key for " + name);
@@ -226,9 +239,7 @@ EffectTerms simulation_effects(const nlohmann::json& truth_extra, const std::str
 }
 
 void replace_effect_keys(const EffectTerms& e, nlohmann::json& j) {
-  for (const char* k : {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity", "scale_asymmetry",
-                        "time_offset", "lever_arm", "misalignment", "table_wobble", "correlated_drift", "temperature_rate"})
-    j.erase(k);
+  for (const auto& k : effect_json_keys()) j.erase(k);
   effects_to_json(e, EffectTerms{}, j);
 }
 

@@ -9,6 +9,9 @@
 
 namespace calbench {
 
+// Every catalogue key a coefficients.json can carry (docs/diagnosis.md).
+const std::vector<std::string>& effect_json_keys();
+
 // Read the catalogue keys present in a coefficients.json document (top level); others ignored.
 // sigma: the 1σ values found (same layout), zero where absent.
 EffectTerms effects_from_json(const nlohmann::json& j, const std::string& file, EffectTerms* sigma = nullptr);

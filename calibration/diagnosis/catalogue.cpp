@@ -8,7 +8,7 @@ namespace calbench {
 namespace {
 constexpr const char* kNames[] = {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
                                   "scale_asymmetry",  "time_offset",       "lever_arm",     "misalignment",
-                                  "table_wobble",     "correlated_drift",  "temperature_rate"};
+                                  "table_wobble",     "correlated_drift",  "temperature_rate", "scale_factor"};
 TriadEffectTerms& triad(EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
 const TriadEffectTerms& triad(const EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
 }  // namespace
@@ -60,6 +60,7 @@ void Term::add_param(EffectTerms& e, int p, double v) const {
     case EffectId::temperature_rate: triad(e, sensor).temp_rate(axis) += v; break;
     case EffectId::scale_nonlinearity: triad(e, sensor).nonlinearity(axis) += v; break;
     case EffectId::scale_asymmetry: triad(e, sensor).asymmetry(axis) += v; break;
+    case EffectId::scale_factor: triad(e, sensor).scale(axis) += v; break;
     case EffectId::g_sensitivity: e.g_sensitivity(axis, p) += v; break;
     case EffectId::time_offset: e.time_offset_s += v; break;
     case EffectId::lever_arm: e.lever_arm_m(p) += v; break;
@@ -76,6 +77,7 @@ double Term::get_param(const EffectTerms& e, int p) const {
     case EffectId::temperature_rate: return triad(e, sensor).temp_rate(axis);
     case EffectId::scale_nonlinearity: return triad(e, sensor).nonlinearity(axis);
     case EffectId::scale_asymmetry: return triad(e, sensor).asymmetry(axis);
+    case EffectId::scale_factor: return triad(e, sensor).scale(axis);
     case EffectId::g_sensitivity: return e.g_sensitivity(axis, p);
     case EffectId::time_offset: return e.time_offset_s;
     case EffectId::lever_arm: return e.lever_arm_m(p);
@@ -91,7 +93,7 @@ std::vector<Term> candidate_terms() {
   for (int s = 0; s < 2; ++s)
     for (int a = 0; a < 3; ++a)
       for (EffectId e : {EffectId::temperature_bias, EffectId::temperature_scale, EffectId::temperature_rate, EffectId::scale_nonlinearity,
-                         EffectId::scale_asymmetry})
+                         EffectId::scale_asymmetry, EffectId::scale_factor})
         out.push_back({e, s, a});
   for (int a = 0; a < 3; ++a) out.push_back({EffectId::g_sensitivity, 0, a});
   out.push_back({EffectId::time_offset, 2, -1});
@@ -195,6 +197,7 @@ std::string term_unit(const Term& t) {
     case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
     case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
     case EffectId::scale_asymmetry: return "1";
+    case EffectId::scale_factor: return "1";
     case EffectId::time_offset: return "s";
     case EffectId::lever_arm: return "m";
     case EffectId::misalignment: return "rad";

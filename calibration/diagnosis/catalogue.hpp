@@ -23,6 +23,7 @@ enum class EffectId {
   table_wobble,
   correlated_drift,
   temperature_rate,  // thermal lag: bias ∝ dT/dt (appended: the IDs above keep their indices)
+  scale_factor,      // scale differs from the given coefficients (drives with --coeffs only)
 };
 
 const char* effect_name(EffectId e);
@@ -41,7 +42,8 @@ struct Term {
   double get_param(const EffectTerms& e, int p) const;
 };
 
-// Every linear candidate (correlated_drift is handled by the noise model, not here).
+// Every linear candidate (correlated_drift is handled by the noise model, not here). scale_factor
+// is one only where M is not refitted (a drive with given coefficients): the caller filters.
 std::vector<Term> candidate_terms();
 // SI unit of a term's parameters (as reported in findings and IMPROVED.json).
 std::string term_unit(const Term& t);

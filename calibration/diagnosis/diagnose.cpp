@@ -75,7 +75,9 @@ double sensor_ref(const SubBlock& s, int a, int c) {
 
 Design build_design(const DiagData& d, const EffectTerms& carried) {
   Design D;
-  D.terms = candidate_terms();
+  // The bench refits M: a scale_factor term would be M_ii again.
+  for (const Term& t : candidate_terms())
+    if (t.effect != EffectId::scale_factor) D.terms.push_back(t);
   for (int a = 0; a < kAxes; ++a) {
     D.col_of[a].assign(D.terms.size(), -1);
     int c = kBase;
@@ -522,6 +524,7 @@ const char* revealing_condition(EffectId e) {
     case EffectId::g_sensitivity: return "f";
     case EffectId::scale_nonlinearity: return "rate";
     case EffectId::scale_asymmetry: return "rate";
+    case EffectId::scale_factor: return "rate";
     case EffectId::time_offset: return "angle";
     case EffectId::lever_arm: return "rate";
     case EffectId::misalignment: return "f";

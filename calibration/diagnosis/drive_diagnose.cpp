@@ -23,8 +23,9 @@ bool in_subset(const ParentBlock& p, int subset) {
   return even == (subset == kSubsetEven);
 }
 
-bool drive_term(const Term& t, bool temperature) {
+bool drive_term(const Term& t, bool temperature, bool fixed_scale) {
   switch (t.effect) {
+    case EffectId::scale_factor: return fixed_scale;  // M free: it is M_ii
     case EffectId::temperature_bias:
     case EffectId::temperature_scale: return temperature;
     case EffectId::temperature_rate:  // not applicable on drives: no dT/dt is derived from a drive (simulated drives have no temperature)
@@ -62,7 +63,7 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
   D.fixed = fixed;
   D.n_base = 6 + (fixed ? 3 : 18);
   for (const Term& t : candidate_terms())
-    if (drive_term(t, d.has_temperature)) D.terms.push_back(t);
+    if (drive_term(t, d.has_temperature, fixed)) D.terms.push_back(t);
   D.P = D.n_base;
   for (const Term& t : D.terms) {
     D.term_off.push_back(D.P);
@@ -72,6 +73,7 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
       case EffectId::g_sensitivity: ps = 2e-4; break;                       // ~0.1 °/s/g
       case EffectId::scale_nonlinearity: ps = t.sensor == 0 ? 1e-2 : 1e-3; break;
       case EffectId::scale_asymmetry: ps = 1e-2; break;
+      case EffectId::scale_factor: ps = 1e-2; break;  // the data sheet's initial scale tolerance, ±1 %
       case EffectId::time_offset: ps = 0.05; break;
       case EffectId::lever_arm: ps = 0.3; break;
       case EffectId::temperature_bias: ps = t.sensor == 0 ? 1e-4 : 1e-2; break;
@@ -448,6 +450,7 @@ bool own_input_term(const Term& t) {
   switch (t.effect) {
     case EffectId::scale_nonlinearity:
     case EffectId::scale_asymmetry:
+    case EffectId::scale_factor:
     case EffectId::temperature_scale:
     case EffectId::time_offset: return true;
     default: return false;
@@ -657,6 +660,18 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     for (int c = 0; c < 3; ++c) out.mounting_sigma(c) = std::sqrt(std::max(cur.cov(6 + c, 6 + c), 0.0));
   }
   search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
+  // A scale_factor finding is a change of the spec's coefficient M_ii: IMPROVED.json carries it there.
+  for (int triad = 0; triad < 2; ++triad) {
+    TriadErrors& te = triad == 0 ? res.improved.gyro : res.improved.accel;
+    TriadEffectTerms& v = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
+    const TriadEffectTerms& sg = triad == 0 ? res.terms_sigma.gyro : res.terms_sigma.accel;
+    for (int i = 0; i < 3; ++i)
+      if (v.scale(i) != 0) {
+        te.M(i, i) += v.scale(i);
+        if (sg.scale(i) > 0) te.sigma_M(i, i) = sg.scale(i);
+      }
+    v.scale.setZero();
+  }
   for (int triad = 0; triad < 2; ++triad) {
     res.drift_sigma[triad] = ds[triad];
     res.drift_tau[triad] = tau[triad];

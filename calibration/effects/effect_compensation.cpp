@@ -22,6 +22,7 @@ EffectUse drive_effect_use(const EffectTerms& e, bool has_temperature) {
   if (!e.g_sensitivity.isZero(0)) u.applied.push_back("g_sensitivity");
   if (triad_any(&TriadEffectTerms::nonlinearity)) u.applied.push_back("scale_nonlinearity");
   if (triad_any(&TriadEffectTerms::asymmetry)) u.applied.push_back("scale_asymmetry");
+  if (triad_any(&TriadEffectTerms::scale)) u.applied.push_back("scale_factor");
   if (nz3(e.lever_arm_m)) u.applied.push_back("lever_arm");
   if (e.time_offset_s != 0) u.applied.push_back("time_offset");
   if (!e.table_tilt_rad.isZero(0)) u.ignored.push_back({"misalignment", "a rate-table term (bench only)"});

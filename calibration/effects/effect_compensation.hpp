@@ -8,7 +8,7 @@
 //   x̂₀ = (I+M)⁻¹(y − b),  x̂ₖ₊₁ = (I+M)⁻¹(y − b − d(x̂ₖ)),
 // so that the usual correction (I+M)⁻¹(y' − b) afterwards gives x; and the corrected stamp t − τ.
 // Terms used on a stream (drive): temperature_bias/_scale (only on samples with a temperature),
-// g_sensitivity, scale_nonlinearity, scale_asymmetry, lever_arm (size effect: ω×(ω×r) + ω̇×r
+// g_sensitivity, scale_nonlinearity, scale_asymmetry, scale_factor, lever_arm (size effect: ω×(ω×r) + ω̇×r
 // with ω̇ from successive samples — integrated over a sample it is (ω_k − ω_k−1)×r, which
 // telescopes, so sample noise in ω̇ does not accumulate in velocity), time_offset.
 // Not applicable to a stream: temperature_rate (needs dT/dt), the table terms (misalignment,

@@ -6,7 +6,8 @@ namespace calbench {
 
 namespace {
 bool nz(const TriadEffectTerms& t) {
-  return !t.temp_bias.isZero(0) || !t.temp_scale.isZero(0) || !t.temp_rate.isZero(0) || !t.nonlinearity.isZero(0) || !t.asymmetry.isZero(0);
+  return !t.temp_bias.isZero(0) || !t.temp_scale.isZero(0) || !t.temp_rate.isZero(0) || !t.nonlinearity.isZero(0) || !t.asymmetry.isZero(0) ||
+         !t.scale.isZero(0);
 }
 }  // namespace
 
@@ -25,7 +26,7 @@ void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro
     Vec3 d;
     for (int i = 0; i < 3; ++i)
       d(i) = t.temp_bias(i) * dT + t.temp_scale(i) * dT * x(i) + t.temp_rate(i) * c.dtemp_k_s + t.nonlinearity(i) * x(i) * std::abs(x(i)) +
-             t.asymmetry(i) * std::abs(x(i));
+             t.asymmetry(i) * std::abs(x(i)) + t.scale(i) * x(i);
     return d;
   };
   dgyro = triad(e.gyro, c.w) + e.g_sensitivity * c.f;

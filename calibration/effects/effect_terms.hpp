@@ -10,6 +10,9 @@
 //   g_sensitivity       G·f   (gyro only, 3×3)               rad/s per m/s²
 //   scale_nonlinearity  k_i·x_i·|x_i|                        1/(rad/s), 1/(m/s²)
 //   scale_asymmetry     a_i·|x_i|  (scale M_ii + a_i for x_i > 0, M_ii − a_i for x_i < 0)
+//   scale_factor        s_i·x_i: the scale differs from the coefficients' M_ii (changed since the
+//                       calibration, or set at other rates); a drive with given coefficients
+//                       finds it, IMPROVED.json folds it into M_ii                   dimensionless
 //   lever_arm           accel: ω×(ω×r) + ω̇×r                 r in m, IMU axes
 // Reference-side terms (the bench is not what its nominal model says):
 //   time_offset         IMU sample stamped t saw the truth at t − τ:  Δx ≈ −τ·ẋ          s
@@ -32,6 +35,7 @@ struct TriadEffectTerms {
   Vec3 temp_rate = Vec3::Zero();    // per K/s (bias ∝ dT/dt)
   Vec3 nonlinearity = Vec3::Zero(); // 1/(input unit)
   Vec3 asymmetry = Vec3::Zero();    // dimensionless
+  Vec3 scale = Vec3::Zero();        // scale_factor: ΔM_ii, dimensionless
   double drift_sigma = 0;           // correlated_drift (0 = the data-sheet prior applies)
   double drift_tau_s = 0;
 };

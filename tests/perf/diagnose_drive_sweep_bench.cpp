@@ -123,6 +123,11 @@ const std::vector<Spec>& specs() {
        {P{-1, -1}}, '0', false, "rad_s_tau60s", 1},
       {"correlated_drift/accel", "correlated_drift:sensor=accel,sigma={v},tau=60", EffectId::correlated_drift, 1,
        {P{-1, -1}}, '0', false, "m_s2_tau60s", 1},
+      // A scale changed since the factory calibration (the factory plan sees the unit without it).
+      {"scale_factor/gyro", "scale_factor:sensor=gyro,axis={a},value={v}", EffectId::scale_factor, 0, {P{2, 2}}, '0',
+       true, "ppm", 1e6},
+      {"scale_factor/accel", "scale_factor:sensor=accel,axis={a},value={v}", EffectId::scale_factor, 1,
+       {P{0, 0}, P{1, 1}}, '0', true, "ppm", 1e6},
   };
   return s;
 }
@@ -137,6 +142,7 @@ const Spec& spec(const char* name) {
 struct Row {
   const char* spec;
   std::vector<double> magnitudes;
+  bool coeffs_only = false;  // a candidate only when the coefficients are given (DIAGNOSE_DRIVE_COEFFS=bench)
 };
 const std::vector<Row>& rows() {
   const double gs = 5.1 * M_PI / 180 / 3600;  // data-sheet gyro drift σ, rad/s
@@ -151,6 +157,9 @@ const std::vector<Row>& rows() {
       {"scale_nonlinearity/accel", {3e-4, 6e-4, 1e-3}},
       {"correlated_drift/gyro", {4 * gs, 8 * gs, 16 * gs}},
       {"correlated_drift/accel", {4 * as, 8 * as, 16 * as}},
+      // Limits seen in single runs: gyro z 3e-4 found, Δχ² ≈ 120; accel x 1e-3 Δχ² ≈ 440, y ≈ 100.
+      {"scale_factor/gyro", {3e-4, 5e-4, 1e-3}, true},
+      {"scale_factor/accel", {5e-4, 1e-3, 2e-3}, true},
   };
   return r;
 }
@@ -223,7 +232,7 @@ std::string describe(const DriveDiagRun& run) {
 
 struct Tally {
   int runs = 0, detected = 0, right_place = 0, value_ok = 0, cut_ok = 0, cut_na = 0, other = 0, unexplained = 0,
-      all_ok = 0, values = 0, within_2sigma = 0, rw_values = 0, rw_ok = 0;
+      all_ok = 0, values = 0, within_2sigma = 0, rw_values = 0, rw_ok = 0, companion = 0;
   std::vector<double> rel_err, cut;
 };
 
@@ -296,6 +305,19 @@ void run_one(const std::string& row, const std::vector<Component>& parts, int k,
     all_cut = all_cut && cut;
     t.cut_ok += measurable && cut;
   }
+  // With factory coefficients an injected nonlinearity also shows as a scale_factor on its axis:
+  // the factory fit (no nonlinearity term) put its mean slope over the plan's rates into M_ii,
+  // and at a drive's rates the scale differs from that M. Expected, counted apart.
+  bool companion = false;
+  if (with_bench_coeffs())
+    for (const auto& x : xs)
+      for (const auto& f : fs)
+        if (x.effect == EffectId::scale_nonlinearity && f.term.effect == EffectId::scale_factor &&
+            f.term.sensor == x.sensor && f.term.axis == x.axis) {
+          companion = true;
+          ++matched;
+        }
+  t.companion += companion;
   const bool other = fs.size() > matched;
   const bool unexp = !run.result.core.unexplained.empty();
   if (other) why.push_back("another finding");
@@ -339,6 +361,7 @@ void report(benchmark::State& state, const Tally& t, double magnitude) {
   state.counters["cut_not_measurable"] = t.cut_na;
   state.counters["cut_median_pct"] = 100.0 * median(t.cut);
   state.counters["other_findings_runs"] = t.other;
+  state.counters["scale_factor_companion_runs"] = t.companion;
   state.counters["unexplained_runs"] = t.unexplained;
   state.counters["all_criteria_pct"] = 100.0 * t.all_ok / n;
 }
@@ -480,6 +503,7 @@ void register_sweeps() {
         ->Iterations(1);
   };
   for (std::size_t i = 0; i < rows().size(); ++i) {
+    if (rows()[i].coeffs_only && !with_bench_coeffs()) continue;
     const Spec& s = spec(rows()[i].spec);
     for (double m : rows()[i].magnitudes)
       add(std::string(s.name) + "/" + fmt(m * s.label_scale, "%.4g") + s.unit, {{&s, m}}, 1000 + 50 * i);
