@@ -93,12 +93,40 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
   D.touched.assign(D.terms.size(), {});
   std::vector<std::vector<char>> touch(D.terms.size(), std::vector<char>(kAxes, 0));
   const bool carry = carried.any();
+  for (int j = 1; j < N; ++j) {
+    const SubBlock &p = d.subs[j - 1], &s = d.subs[j];
+    D.contig[j] = std::abs((p.t_mid + 0.5 * p.duration) - (s.t_mid - 0.5 * s.duration)) < 1e-6;
+  }
+  // Input of the terms nonlinear in it (|x|, x·|x|): the reference over ~0.2 s. A reference
+  // interval's own rate or force carries the reference's error of its ends divided by its length
+  // (a 50 Hz reference: ≈ 0.4 m/s² on a simulated drive's specific force), and |x + e| is not
+  // |x| — near x = 0 it is ≈ 0.8σ_e, so the regressor's variation is compressed and the fitted
+  // asymmetry inflated (accelerometer: ≈ +7 %, outside its own 2σ with factory coefficients). The
+  // error telescopes, so the mean over W intervals has 1/W of it. Linear terms take the interval's
+  // own input (their block means are the same either way).
+  const int Wnl = std::max(1, static_cast<int>(std::round(0.1 / std::max(d.mean_sub_s, 1e-4))));
+  std::vector<Vec3> w_nl(N), f_nl(N);
+  for (int j = 0; j < N; ++j) {
+    Vec3 sw = d.subs[j].w * d.subs[j].duration, sf = d.subs[j].f * d.subs[j].duration;
+    double st = d.subs[j].duration;
+    for (int l = j - 1; l >= std::max(0, j - Wnl) && D.contig[l + 1]; --l) {
+      sw += d.subs[l].w * d.subs[l].duration;
+      sf += d.subs[l].f * d.subs[l].duration;
+      st += d.subs[l].duration;
+    }
+    for (int l = j + 1; l < std::min(N, j + Wnl + 1) && D.contig[l]; ++l) {
+      sw += d.subs[l].w * d.subs[l].duration;
+      sf += d.subs[l].f * d.subs[l].duration;
+      st += d.subs[l].duration;
+    }
+    w_nl[j] = sw / st;
+    f_nl[j] = sf / st;
+  }
   for (int j = 0; j < N; ++j) {
     const SubBlock& s = d.subs[j];
-    if (j > 0) {
-      const SubBlock& p = d.subs[j - 1];
-      D.contig[j] = std::abs((p.t_mid + 0.5 * p.duration) - (s.t_mid - 0.5 * s.duration)) < 1e-6;
-    }
+    SubBlock s_nl = s;
+    s_nl.w = w_nl[j];
+    s_nl.f = f_nl[j];
     Vec3 cg = Vec3::Zero(), ca = Vec3::Zero();
     if (carry) predict_extra(carried, s, cg, ca);
     const Vec3 pg = cur.gyro.measure(s.w), pa = cur.accel.measure(s.f);
@@ -123,7 +151,8 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
         unit.t0_c = carried.t0_c;
         term.add_param(unit, p, 1.0);
         Vec3 dg, da;
-        predict_extra(unit, s, dg, da);
+        const bool nonlinear = term.effect == EffectId::scale_nonlinearity || term.effect == EffectId::scale_asymmetry;
+        predict_extra(unit, nonlinear ? s_nl : s, dg, da);
         for (int a = 0; a < kAxes; ++a) {
           const double v = a < 3 ? dg(a) : da(a - 3);
           if (v != 0) {
