@@ -108,6 +108,7 @@ std::vector<std::string> effect_ids_present(const EffectTerms& e) {
   if (!e.g_sensitivity.isZero(0)) out.push_back(effect_name(EffectId::g_sensitivity));
   if (nz(e.gyro.nonlinearity) || nz(e.accel.nonlinearity)) out.push_back(effect_name(EffectId::scale_nonlinearity));
   if (nz(e.gyro.asymmetry) || nz(e.accel.asymmetry)) out.push_back(effect_name(EffectId::scale_asymmetry));
+  if (nz(e.gyro.scale) || nz(e.accel.scale)) out.push_back(effect_name(EffectId::scale_factor));
   if (e.time_offset_s != 0) out.push_back(effect_name(EffectId::time_offset));
   if (nz(e.lever_arm_m)) out.push_back(effect_name(EffectId::lever_arm));
   if (!e.table_tilt_rad.isZero(0)) out.push_back(effect_name(EffectId::misalignment));

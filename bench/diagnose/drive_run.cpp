@@ -436,6 +436,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     ev["indistinguishable_from"] = alternatives_json(f);
     if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
     if (fi < R.shown_on.size() && f.term.effect != EffectId::correlated_drift) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
+    if (fi < R.rms_lowpass.size() && f.term.effect != EffectId::correlated_drift)
+      ev["rms_of"] = R.rms_lowpass[fi] ? "three-block means" : "blocks";
     if (f.report_sensor < 2 && f.report_axis >= 0) {
       const int a = f.report_sensor * 3 + f.report_axis;
       ev["ljung_box_p_before"] = r.before[a].ljung_box_p;

@@ -447,22 +447,38 @@ Eigen::VectorXd smoothed_drift(const DriveDiagData& d, const Dataset& S, const E
 // minus the short-range noise variance of that mean.
 // floor: the noise level of this estimate (√(2·sd of the estimated mean square)): a systematic
 // RMS below it cannot be told from zero.
+// lowpass (d given): the groups average the residual's three-block means (block and contiguous
+// neighbours) instead of the blocks themselves — the reference's telescoping error, which
+// dominates a block, has 1/9 of its variance in a three-block mean, while an effect that lasts
+// seconds keeps most of its size ("low-passed residuals").
 double grouped_systematic(const Design& D, int a, const Eigen::VectorXd& r, const std::vector<std::vector<int>>& groups,
-                          double* floor = nullptr) {
+                          double* floor = nullptr, const DriveDiagData* lowpass = nullptr) {
   double num = 0, den = 0, var_ms = 0;
+  const int N = static_cast<int>(r.size());
   for (const auto& gr : groups) {
     if (gr.empty()) continue;
-    double m = 0, v = 0;
-    for (int k : gr) m += r(k);
     const double n = static_cast<double>(gr.size());
-    m /= n;
-    std::vector<int> sorted = gr;
-    std::sort(sorted.begin(), sorted.end());
-    for (std::size_t i = 0; i < sorted.size(); ++i) {
-      v += D.pvar[a][sorted[i]];
-      if (i + 1 < sorted.size() && sorted[i + 1] == sorted[i] + 1) v += 2 * D.pcov[a][sorted[i]];
+    // The group's mean as weights on the blocks.
+    std::map<int, double> w;
+    for (int k : gr) {
+      if (!lowpass) {
+        w[k] += 1.0 / n;
+        continue;
+      }
+      const bool lo = k > 0 && D.contig[lowpass->parents[k].first];
+      const bool hi = k + 1 < N && D.contig[lowpass->parents[k + 1].first];
+      const double wk = 1.0 / (n * (1 + lo + hi));
+      w[k] += wk;
+      if (lo) w[k - 1] += wk;
+      if (hi) w[k + 1] += wk;
     }
-    v /= n * n;
+    double m = 0, v = 0;
+    for (auto it = w.begin(); it != w.end(); ++it) {
+      m += it->second * r(it->first);
+      v += it->second * it->second * D.pvar[a][it->first];
+      const auto nx = std::next(it);
+      if (nx != w.end() && nx->first == it->first + 1) v += 2 * it->second * nx->second * D.pcov[a][it->first];
+    }
     num += n * (m * m - v);
     den += n;
     var_ms += n * n * 2 * v * v;
@@ -502,8 +518,8 @@ bool own_input_term(const Term& t) {
   }
 }
 
-Eigen::VectorXd bin_key(const DriveDiagData& d, const Design& D, const Term& t, const Eigen::VectorXd& c) {
-  if (!own_input_term(t)) return c;
+// Mean of c over each block and its contiguous neighbours.
+Eigen::VectorXd neighbour_mean(const DriveDiagData& d, const Design& D, const Eigen::VectorXd& c) {
   const int N = static_cast<int>(c.size());
   Eigen::VectorXd k = c;
   for (int i = 0; i < N; ++i) {
@@ -513,6 +529,10 @@ Eigen::VectorXd bin_key(const DriveDiagData& d, const Design& D, const Term& t, 
     k(i) = s / n;
   }
   return k;
+}
+
+Eigen::VectorXd bin_key(const DriveDiagData& d, const Design& D, const Term& t, const Eigen::VectorXd& c) {
+  return own_input_term(t) ? neighbour_mean(d, D, c) : c;
 }
 
 std::vector<std::vector<int>> quantile_groups(const Eigen::VectorXd& key, int bins) {
@@ -741,6 +761,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       double floor2 = 0;
       for (int a = triad * 3; a < triad * 3 + 3; ++a) floor2 += std::pow(res.after[a].systematic_floor, 2) / 3;
       out.rms_floor.push_back(std::sqrt(floor2));
+      out.rms_lowpass.push_back(false);
       out.shown_on.push_back(triad * 3);
       TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
       te.drift_sigma = ds[triad];
@@ -769,9 +790,12 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     // parents binned by the term's fitted contribution c; before = the final residual with the
     // term taken out (residual + c: what this drive shows without the term, other parameters as
     // fitted; the base-model residual would hide part of it in M), after = the final residual.
-    // Reported on the axis where it stands out most from that axis's block noise.
+    // Two views: the blocks, and (terms driven by the other sensor's input, whose key carries no
+    // noise of the residual) the three-block means, binned by the three-block mean of c. Reported
+    // on the axis and view where it stands out most from the figure's noise floor.
     int show = D.touched[acc.term].front();
     double best_rel = -1, floor = 0;
+    bool lowpass_show = false;
     Eigen::VectorXd contrib_show;
     for (int a : D.touched[acc.term]) {
       Eigen::VectorXd c = Eigen::VectorXd::Zero(NP);
@@ -780,16 +804,23 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
         c += D.Xp[a].col(idx) * cur.theta(idx);
       }
       if ((c.array() - c.mean()).abs().maxCoeff() <= 0) continue;
-      const auto groups = quantile_groups(bin_key(data, D, t, c), 10);
       const Eigen::VectorXd without = rn_after[a] + (c.array() - c.mean()).matrix();
-      const double rb = grouped_systematic(D, a, without, groups);
-      const double rel = rb / out.block_noise_sigma[a];
-      if (rel > best_rel) {
-        best_rel = rel;
-        show = a;
-        contrib_show = c;
-        f.rms_before = rb;
-        f.rms_after = grouped_systematic(D, a, rn_after[a], groups, &floor);
+      for (const bool lp : {false, true}) {
+        if (lp && own_input_term(t)) continue;
+        const auto groups = quantile_groups(lp ? neighbour_mean(data, D, c) : bin_key(data, D, t, c), 10);
+        const DriveDiagData* lpd = lp ? &data : nullptr;
+        double fl = 0;
+        const double rb = grouped_systematic(D, a, without, groups, &fl, lpd);
+        const double rel = fl > 0 ? rb / fl : 0.0;
+        if (rel > best_rel) {
+          best_rel = rel;
+          show = a;
+          contrib_show = c;
+          lowpass_show = lp;
+          floor = fl;
+          f.rms_before = rb;
+          f.rms_after = grouped_systematic(D, a, rn_after[a], groups, nullptr, lpd);
+        }
       }
     }
     if (contrib_show.size() == 0) contrib_show = Eigen::VectorXd::Zero(NP);
@@ -812,6 +843,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       if (c.condition == f.condition) f.condition_r = c.r;
     res.findings.push_back(f);
     out.rms_floor.push_back(floor);
+    out.rms_lowpass.push_back(lowpass_show);
     out.shown_on.push_back(show);
   }
 

@@ -64,6 +64,9 @@ struct DriveDiagnoseResult {
   // Per finding: noise level of its systematic RMS figure (binned by the term's contribution);
   // rms_after below it cannot be told from zero.
   std::vector<double> rms_floor;
+  // Per finding: its RMS figures are of three-block means (the reference's telescoping error
+  // averaged down), not of blocks.
+  std::vector<char> rms_lowpass;
   std::vector<int> shown_on;  // per finding: axis (gyro x..accel z) its RMS figures are given for
 };
 
