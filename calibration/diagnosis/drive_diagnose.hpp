@@ -12,7 +12,8 @@
 //   both triads) is estimated with the bias: the mounting is installation, not sensor. δ enters
 //   linearised, so the base model's δ is first applied exactly (the prediction re-rotated, remount
 //   in drive_data.hpp) until it is negligible: a fixed M cannot absorb the 1 − cos θ of a mounting
-//   ~1° off the nominal one.
+//   ~1° off the nominal one. Whether the scale itself differs from the given M_ii is then a
+//   catalogue candidate (scale_factor), found by evidence like the others and folded into M.
 // * Short-range noise: IMU white noise plus the reference's own noise, which enters through the
 //   differences of its attitudes and velocities at the ends of each interval (adjacent blocks
 //   anti-correlated). Its autocovariance up to 3 intervals is estimated from the data (high-pass
