@@ -5,6 +5,7 @@
 
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
+#include "calibration/diagnosis/catalogue.hpp"
 
 namespace calbench {
 
@@ -46,9 +47,12 @@ constexpr TriadKey kTriadKeys[] = {
 }  // namespace
 
 const std::vector<std::string>& effect_json_keys() {
-  static const std::vector<std::string> k = {"temperature_bias",   "temperature_scale", "g_sensitivity", "scale_nonlinearity",
-                                             "scale_asymmetry",    "time_offset",       "lever_arm",     "misalignment",
-                                             "table_wobble",       "correlated_drift",  "temperature_rate", "scale_factor"};
+  // Each catalogue effect's key is its ID.
+  static const std::vector<std::string> k = [] {
+    std::vector<std::string> v;
+    for (int e = 0; e < effect_count(); ++e) v.push_back(effect_name(static_cast<EffectId>(e)));
+    return v;
+  }();
   return k;
 }
 

@@ -9,7 +9,7 @@
 
 namespace calbench {
 
-// Every catalogue key a coefficients.json can carry (docs/diagnosis.md).
+// Every catalogue key a coefficients.json can carry (docs/diagnosis.md): the effect IDs.
 const std::vector<std::string>& effect_json_keys();
 
 // Read the catalogue keys present in a coefficients.json document (top level); others ignored.

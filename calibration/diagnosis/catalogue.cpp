@@ -13,10 +13,13 @@ TriadEffectTerms& triad(EffectTerms& e, int sensor) { return sensor == 0 ? e.gyr
 const TriadEffectTerms& triad(const EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
 }  // namespace
 
+static_assert(std::size(kNames) == static_cast<std::size_t>(EffectId::scale_factor) + 1, "a name per EffectId");
+
 const char* effect_name(EffectId e) { return kNames[static_cast<int>(e)]; }
+int effect_count() { return static_cast<int>(std::size(kNames)); }
 
 bool effect_from_name(const std::string& s, EffectId& e) {
-  for (int k = 0; k < static_cast<int>(std::size(kNames)); ++k)
+  for (int k = 0; k < effect_count(); ++k)
     if (s == kNames[k]) {
       e = static_cast<EffectId>(k);
       return true;

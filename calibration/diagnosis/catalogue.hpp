@@ -27,6 +27,7 @@ enum class EffectId {
 };
 
 const char* effect_name(EffectId e);
+int effect_count();  // EffectId values are 0 … effect_count() − 1
 bool effect_from_name(const std::string& s, EffectId& e);
 
 // sensor: 0 = gyro, 1 = accel, 2 = reference (the bench); axis 0..2 or −1 = all.

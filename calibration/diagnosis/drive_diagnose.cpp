@@ -36,6 +36,24 @@ bool drive_term(const Term& t, bool temperature, bool fixed_scale) {
   }
 }
 
+// Weighted mean of x over element i and up to h neighbours on each side within i's contiguous
+// run (adjacent(l): elements l − 1 and l are contiguous); summed centre first, then backwards,
+// then forwards.
+template <class T, class X, class Wt, class Adj>
+T run_window_mean(int N, int i, int h, X x, Wt wt, Adj adjacent) {
+  T s = x(i) * wt(i);
+  double sw = wt(i);
+  for (int l = i - 1; l >= std::max(0, i - h) && adjacent(l + 1); --l) {
+    s += x(l) * wt(l);
+    sw += wt(l);
+  }
+  for (int l = i + 1; l < std::min(N, i + h + 1) && adjacent(l); ++l) {
+    s += x(l) * wt(l);
+    sw += wt(l);
+  }
+  return s / sw;
+}
+
 // Global parameters: 6 biases, then 18 ΔM (M free) or 3 mounting angles (M fixed), then the
 // candidate terms' parameters.
 struct Design {
@@ -106,21 +124,13 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
   // own input (their block means are the same either way).
   const int Wnl = std::max(1, static_cast<int>(std::round(0.1 / std::max(d.mean_sub_s, 1e-4))));
   std::vector<Vec3> w_nl(N), f_nl(N);
-  for (int j = 0; j < N; ++j) {
-    Vec3 sw = d.subs[j].w * d.subs[j].duration, sf = d.subs[j].f * d.subs[j].duration;
-    double st = d.subs[j].duration;
-    for (int l = j - 1; l >= std::max(0, j - Wnl) && D.contig[l + 1]; --l) {
-      sw += d.subs[l].w * d.subs[l].duration;
-      sf += d.subs[l].f * d.subs[l].duration;
-      st += d.subs[l].duration;
+  {
+    auto dur = [&](int l) { return d.subs[l].duration; };
+    auto adjacent = [&](int l) { return D.contig[l] != 0; };
+    for (int j = 0; j < N; ++j) {
+      w_nl[j] = run_window_mean<Vec3>(N, j, Wnl, [&](int l) { return d.subs[l].w; }, dur, adjacent);
+      f_nl[j] = run_window_mean<Vec3>(N, j, Wnl, [&](int l) { return d.subs[l].f; }, dur, adjacent);
     }
-    for (int l = j + 1; l < std::min(N, j + Wnl + 1) && D.contig[l]; ++l) {
-      sw += d.subs[l].w * d.subs[l].duration;
-      sf += d.subs[l].f * d.subs[l].duration;
-      st += d.subs[l].duration;
-    }
-    w_nl[j] = sw / st;
-    f_nl[j] = sf / st;
   }
   for (int j = 0; j < N; ++j) {
     const SubBlock& s = d.subs[j];
@@ -497,8 +507,9 @@ std::vector<std::vector<int>> time_groups(int N, int size) {
   return g;
 }
 
-// Sort key for binning a residual by a term's contribution c. When c is built from the same
-// sensor's reference input as the residual (a scale-type term, a time offset), that input carries
+// Sort key for binning a residual by a term's contribution c (the finding's figures below). When
+// c is built from the same sensor's reference input as the residual (a scale-type term, a time
+// offset), that input carries
 // the reference's own error of the block, which the residual carries with the opposite sign:
 // binned by it, blocks of a still or cruising car sort by that error and the bins show a
 // "systematic" residual that is selection (clean drives: ≈ 5 mg on accel x binned by f_x, 3.5×
@@ -521,18 +532,12 @@ bool own_input_term(const Term& t) {
 // Mean of c over each block and its contiguous neighbours.
 Eigen::VectorXd neighbour_mean(const DriveDiagData& d, const Design& D, const Eigen::VectorXd& c) {
   const int N = static_cast<int>(c.size());
-  Eigen::VectorXd k = c;
-  for (int i = 0; i < N; ++i) {
-    double s = c(i), n = 1;
-    if (i > 0 && D.contig[d.parents[i].first]) s += c(i - 1), n += 1;
-    if (i + 1 < N && D.contig[d.parents[i + 1].first]) s += c(i + 1), n += 1;
-    k(i) = s / n;
-  }
+  Eigen::VectorXd k(N);
+  for (int i = 0; i < N; ++i)
+    k(i) = run_window_mean<double>(
+        N, i, 1, [&](int l) { return c(l); }, [](int) { return 1.0; },
+        [&](int l) { return D.contig[d.parents[l].first] != 0; });
   return k;
-}
-
-Eigen::VectorXd bin_key(const DriveDiagData& d, const Design& D, const Term& t, const Eigen::VectorXd& c) {
-  return own_input_term(t) ? neighbour_mean(d, D, c) : c;
 }
 
 std::vector<std::vector<int>> quantile_groups(const Eigen::VectorXd& key, int bins) {
@@ -807,7 +812,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       const Eigen::VectorXd without = rn_after[a] + (c.array() - c.mean()).matrix();
       for (const bool lp : {false, true}) {
         if (lp && own_input_term(t)) continue;
-        const auto groups = quantile_groups(lp ? neighbour_mean(data, D, c) : bin_key(data, D, t, c), 10);
+        const auto groups = quantile_groups(lp || own_input_term(t) ? neighbour_mean(data, D, c) : c, 10);
         const DriveDiagData* lpd = lp ? &data : nullptr;
         double fl = 0;
         const double rb = grouped_systematic(D, a, without, groups, &fl, lpd);
