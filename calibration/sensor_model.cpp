@@ -35,4 +35,24 @@ SensorErrors compose(const SensorErrors& first, const SensorErrors& second) {
   return {compose(first.gyro, second.gyro), compose(first.accel, second.accel)};
 }
 
+TriadErrors compose_fused(const TriadErrors& a, const TriadErrors& b) {
+  TriadErrors out = compose(a, b);
+  const Mat3 A = Mat3::Identity() + a.M;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      double v = 0;
+      for (int k = 0; k < 3; ++k) v += std::pow(A(i, k) * b.sigma_M(k, j), 2);
+      out.sigma_M(i, j) = std::sqrt(v);
+    }
+    double v = 0;
+    for (int k = 0; k < 3; ++k) v += std::pow(A(i, k) * b.sigma_bias(k), 2);
+    out.sigma_bias(i) = std::sqrt(v);
+  }
+  return out;
+}
+
+SensorErrors compose_fused(const SensorErrors& first, const SensorErrors& second) {
+  return {compose_fused(first.gyro, second.gyro), compose_fused(first.accel, second.accel)};
+}
+
 }  // namespace calbench

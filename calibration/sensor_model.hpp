@@ -60,4 +60,13 @@ struct SensorErrors {
 TriadErrors compose(const TriadErrors& first, const TriadErrors& second);
 SensorErrors compose(const SensorErrors& first, const SensorErrors& second);
 
+// The same composition for a `second` estimated with priors that already hold `first`'s
+// uncertainty (the in-motion filter with priors from the set, calibration/inmotion/priors.hpp):
+// the result is the fused estimate, and its σ are `second`'s posterior σ carried through (I + M1)
+// — `first`'s σ are in them already and are not added again:
+//   σ(M_ij)² = Σ_k ((δ_ik + a_ik)·σb_kj)²,  σ(b_i)² = Σ_k ((δ_ik + a_ik)·σb_k)².
+// Values are those of compose().
+TriadErrors compose_fused(const TriadErrors& first, const TriadErrors& second);
+SensorErrors compose_fused(const SensorErrors& first, const SensorErrors& second);
+
 }  // namespace calbench

@@ -1,9 +1,11 @@
 // calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
 //                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
+#include <cmath>
 #include <iostream>
 
 #include "bench/cli/registry.hpp"
 #include "bench/drive/fit_drive.hpp"
+#include "calibration/inmotion/priors.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench::cli {
@@ -54,7 +56,14 @@ void print_summary(const nlohmann::json& j) {
   std::cout << std::flush;
 }
 
+std::string fmt_default(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
 const bool registered = add_command(31, [](CLI::App& app) {
+  using namespace units;
   CLI::App* fit = app.get_subcommand("fit");
   auto a = std::make_shared<FitDriveArgs>();
   auto json = std::make_shared<bool>(false);
@@ -62,7 +71,9 @@ const bool registered = add_command(31, [](CLI::App& app) {
                                          "(EKF, paper eqs 13-15)");
   d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
   d->add_option("--coeffs", a->coeffs,
-                 "bench coefficients applied to the data first (result = composition); catalogue keys it carries "
+                 "coefficient set applied to the data first (coefficients.json, or an earlier RESULT.json whose "
+                 "mounting estimate then starts this fit); the filter's priors are the set's sigma combined with the "
+                 "device class's stability allowance, and the result is the fused set; catalogue keys it carries "
                  "(diagnose --out IMPROVED.json: time_offset, lever_arm, g_sensitivity, scale_*, temperature_*, "
                  "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note")
       ->check(CLI::ExistingFile);
@@ -72,13 +83,47 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
   d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
   d->add_option("--prior-gyro-bias", a->prior_gyro_bias_dps,
-                 "prior 1-sigma of the gyro drift, deg/s (default 0.5 for raw data; with --coeffs the set's sigma "
-                 "combined with a 0.1 deg/s turn-on allowance)")
+                 "prior 1-sigma of the gyro drift, deg/s, overriding the default (0.5 for raw data; with --coeffs the "
+                 "set's sigma combined with the allowance)")
       ->check(CLI::PositiveNumber);
   d->add_option("--prior-accel-bias", a->prior_accel_bias_mg,
-                 "prior 1-sigma of the accelerometer bias, mg (default 30 for raw data; with --coeffs the set's sigma "
-                 "combined with a 5 mg turn-on allowance)")
+                 "prior 1-sigma of the accelerometer bias, mg, overriding the default (30 for raw data; with --coeffs "
+                 "the set's sigma combined with the allowance)")
       ->check(CLI::PositiveNumber);
+  // Stability allowances (docs/in-motion.md, "Priors"): finite and >= 0; NaN and negatives are bad input (exit 2).
+  const CLI::Validator finite_nonneg(
+      [](const std::string& v) -> std::string {
+        try {
+          std::size_t pos = 0;
+          const double x = std::stod(v, &pos);
+          if (pos == v.size() && std::isfinite(x) && x >= 0) return {};
+        } catch (const std::exception&) {
+        }
+        return "expected a finite number >= 0, got '" + v + "'";
+      },
+      "NUMBER>=0");
+  const inmotion::StabilityAllowance& def = inmotion::stability_allowance_table().front();
+  const struct {
+    const char* name;
+    double* field;
+    const char* what;
+    double deflt;
+  } allowances[] = {
+      {"--allowance-gyro-bias-dph", &a->allowance.gyro_bias_dph, "gyro bias, deg/h", def.gyro_bias / kDegPerHour},
+      {"--allowance-accel-bias-mg", &a->allowance.accel_bias_mg, "accelerometer bias, mg", def.accel_bias / kMilliG},
+      {"--allowance-gyro-scale-ppm", &a->allowance.gyro_scale_ppm, "gyro scale factor, ppm", def.gyro_scale / kPpm},
+      {"--allowance-gyro-skew-ppm", &a->allowance.gyro_skew_ppm, "gyro skew, ppm", def.gyro_skew / kPpm},
+      {"--allowance-accel-scale-ppm", &a->allowance.accel_scale_ppm, "accelerometer scale factor, ppm", def.accel_scale / kPpm},
+      {"--allowance-accel-skew-ppm", &a->allowance.accel_skew_ppm, "accelerometer skew, ppm", def.accel_skew / kPpm},
+      {"--allowance-mount-deg", &a->allowance.mount_deg, "mounting per axis when --coeffs is a RESULT.json, deg", def.mount / kDeg},
+  };
+  for (const auto& al : allowances)
+    d->add_option(al.name, *al.field,
+                  std::string("with --coeffs: stability allowance (1-sigma, how far it can move between the set's "
+                              "calibration and the drive) of the ") + al.what + " (" + def.device_class + " default " +
+                      fmt_default(al.deflt) + ")")
+        ->check(finite_nonneg)
+        ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(CLI::PositiveNumber);
   d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(CLI::PositiveNumber);
   d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)");

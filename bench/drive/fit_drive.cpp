@@ -1,5 +1,6 @@
 #include "bench/drive/fit_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -91,17 +92,177 @@ struct InputEffects {
   nlohmann::json drift;                              // correlated_drift as the filter's drift prior
 };
 
+// --coeffs: a coefficients.json, or an in-motion RESULT.json (its "coefficients" and its mounting
+// estimate with σ: a second drive refines the first).
+struct InputSet {
+  CoefficientSet set;
+  std::optional<std::pair<Vec3, Vec3>> mounting_deg;
+};
+
+InputSet read_input_set(const std::string& file) {
+  const nlohmann::json j = read_json_file(file);
+  InputSet in;
+  if (!(j.is_object() && j.contains("format") && j["format"] == "calbench-inmotion-result/1")) {
+    in.set = coefficients_from_json(j, file);
+    return in;
+  }
+  try {
+    in.set = coefficients_from_json(jreq(j, "coefficients", file, ""), file);
+  } catch (const InputError& e) {
+    throw InputError(file, e.line(), e.field().empty() ? "coefficients" : "coefficients." + e.field(), e.message());
+  }
+  if (j.contains("mounting_rpy_deg") && !j["mounting_rpy_deg"].is_null()) {
+    const auto& m = j["mounting_rpy_deg"];
+    const Vec3 v = jvec3(jreq(m, "value", file, "mounting_rpy_deg"), file, "mounting_rpy_deg.value");
+    const Vec3 sg = jsigma3(jreq(m, "sigma", file, "mounting_rpy_deg"), file, "mounting_rpy_deg.sigma");
+    in.mounting_deg = std::make_pair(v, sg);
+  }
+  return in;
+}
+
+// Priors of the constant parameters (calibration/inmotion/priors.hpp) and how RESULT.json states them.
+struct PriorChoice {
+  inmotion::PriorReport report;
+  nlohmann::json json;
+  std::optional<Mat3> C_mb_start;  // a mounting carried by the input set
+};
+
+PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<CoefficientSet>& bench) {
+  using namespace units;
+  PriorChoice pc;
+  nlohmann::json j;
+  if (bench) {
+    const inmotion::StabilityAllowance* row = inmotion::stability_allowance(bench->device.model);
+    inmotion::StabilityAllowance al = row ? *row : inmotion::stability_allowance_table().front();
+    j["device_class"] = al.device_class;
+    if (!row)
+      j["device_class_note"] = "no allowance row for model '" + bench->device.model + "': the " + al.device_class +
+                               " class is used (override with --allowance-*)";
+    nlohmann::json over = nlohmann::json::array();
+    const FitDriveArgs::Allowances& o = a.allowance;
+    const struct {
+      double given;
+      double* field;
+      double unit;
+      const char* option;
+    } rows[] = {{o.gyro_bias_dph, &al.gyro_bias, kDegPerHour, "--allowance-gyro-bias-dph"},
+                {o.accel_bias_mg, &al.accel_bias, kMilliG, "--allowance-accel-bias-mg"},
+                {o.gyro_scale_ppm, &al.gyro_scale, kPpm, "--allowance-gyro-scale-ppm"},
+                {o.gyro_skew_ppm, &al.gyro_skew, kPpm, "--allowance-gyro-skew-ppm"},
+                {o.accel_scale_ppm, &al.accel_scale, kPpm, "--allowance-accel-scale-ppm"},
+                {o.accel_skew_ppm, &al.accel_skew, kPpm, "--allowance-accel-skew-ppm"},
+                {o.mount_deg, &al.mount, kDeg, "--allowance-mount-deg"}};
+    for (const auto& r : rows) {
+      if (std::isnan(r.given)) continue;
+      if (!std::isfinite(r.given) || r.given < 0) throw InputError(r.option, 0, "", "expected a finite number >= 0");
+      *r.field = r.given * r.unit;
+      over.push_back(r.option);
+    }
+    j["allowance"] = {{"gyro_bias_dph", al.gyro_bias / kDegPerHour}, {"accel_bias_mg", al.accel_bias / kMilliG},
+                      {"gyro_scale_ppm", al.gyro_scale / kPpm},     {"gyro_skew_ppm", al.gyro_skew / kPpm},
+                      {"accel_scale_ppm", al.accel_scale / kPpm},   {"accel_skew_ppm", al.accel_skew / kPpm},
+                      {"mount_deg", al.mount / kDeg},               {"overridden", over}};
+    Vec3 mount_sigma = Vec3::Constant(kUnknownSigma);
+    if (a.coeffs_mounting_deg) {
+      mount_sigma = a.coeffs_mounting_deg->second * kDeg;
+      pc.C_mb_start = ins::dcm_from_rpy(a.coeffs_mounting_deg->first * kDeg);
+      j["mounting_from_input_deg"] = {{"value", to_json(a.coeffs_mounting_deg->first)},
+                                      {"sigma", sigma_json(a.coeffs_mounting_deg->second)}};
+    }
+    pc.report = inmotion::priors_from_set(bench->errors, al, mount_sigma);
+    j["mode"] = "input set";
+    j["input"] = a.coeffs.empty() ? nlohmann::json("in memory") : nlohmann::json(a.coeffs);
+  } else {
+    pc.report = inmotion::priors_datasheet();
+    j["mode"] = "data-sheet";
+    j["input"] = nullptr;
+  }
+  // --prior-gyro-bias / --prior-accel-bias override the bias priors whatever their source.
+  for (int s = 0; s < 2; ++s) {
+    const double v = s == 0 ? a.prior_gyro_bias_dps * kDeg : a.prior_accel_bias_mg * kMilliG;
+    if (!(v > 0)) continue;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t idx = (s == 0 ? 0 : 12) + k;
+      inmotion::set_prior_value(pc.report.sigma, idx, v);
+      pc.report.source[idx] = inmotion::PriorSource::option;
+    }
+  }
+  nlohmann::json params = nlohmann::json::object();
+  const auto& names = inmotion::prior_parameter_names();
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const bool bias = names[k].find(".bias.") != std::string::npos, mount = k >= 24;
+    const char* unit = mount ? "rad" : !bias ? "1" : k < 12 ? "rad/s" : "m/s^2";
+    std::string src;
+    switch (pc.report.source[k]) {
+      case inmotion::PriorSource::datasheet:
+        src = bench ? (mount ? "data-sheet class (the input carries no mounting)" : "data-sheet class (the input set's sigma is unknown)")
+                    : "data-sheet class (raw data)";
+        break;
+      case inmotion::PriorSource::set_and_allowance: src = "input sigma combined with the stability allowance"; break;
+      case inmotion::PriorSource::option: src = k < 12 ? "--prior-gyro-bias" : "--prior-accel-bias"; break;
+    }
+    params[names[k]] = {{"prior_sigma", inmotion::prior_value(pc.report.sigma, k)},
+                        {"input_sigma", num(pc.report.set_sigma[k])},
+                        {"allowance", num(pc.report.allowance[k])},
+                        {"unit", unit},
+                        {"source", src}};
+  }
+  j["parameters"] = params;
+  pc.json = j;
+  return pc;
+}
+
+// Which stage determined each coefficient of the result: the drive's share of the information
+// about it, 1 − (σ_posterior/σ_prior)², in the frame of the data the filter saw.
+nlohmann::json determined_by(const inmotion::ParameterPriors& prior, const inmotion::ParameterPriors& post,
+                             const std::optional<CoefficientSet>& bench) {
+  nlohmann::json c = nlohmann::json::object(), m = nlohmann::json::object();
+  const auto& names = inmotion::prior_parameter_names();
+  inmotion::ParameterPriors parent;
+  if (bench) {
+    parent.gyro_bias = bench->errors.gyro.sigma_bias;
+    parent.accel_bias = bench->errors.accel.sigma_bias;
+    parent.gyro_M = bench->errors.gyro.sigma_M;
+    parent.accel_M = bench->errors.accel.sigma_M;
+  }
+  nlohmann::json count = {{"bench", 0}, {"drive", 0}, {"both", 0}, {"prior", 0}};
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const double p = inmotion::prior_value(prior, k), q = inmotion::prior_value(post, k);
+    const double ratio = q / p, share = std::clamp(1.0 - ratio * ratio, 0.0, 1.0);
+    const char* stage = share > 0.8 ? "drive" : share >= 0.2 ? "both" : bench ? "bench" : "prior";
+    const double ps = bench && k < 24 ? inmotion::prior_value(parent, k) : kUnknownSigma;
+    (k < 24 ? c : m)[names[k]] = {{"parent_sigma", std::isfinite(ps) ? nlohmann::json(ps) : nlohmann::json(nullptr)},
+                   {"prior_sigma", p},
+                   {"posterior_sigma", q},
+                   {"ratio", ratio},
+                   {"drive_share", share},
+                   {"stage", stage}};
+    if (k < 24) count[stage] = count[stage].get<int>() + 1;
+  }
+  return {{"rule", "drive share of the information 1-(sigma_post/sigma_prior)^2: < 0.2 bench (prior when there is no "
+                   "input set), > 0.8 drive, else both"},
+          {"count", count},
+          {"coefficients", c},
+          {"mounting", m}};
+}
+
 template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
-                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx);
+                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc);
 
 }  // namespace
 
 nlohmann::json fit_drive(const FitDriveArgs& a) {
   using namespace units;
   const auto [t0, t1] = parse_window(a.window);
+  FitDriveArgs args = a;  // the input set and its mounting, read once
   std::optional<CoefficientSet> bench = a.coeffs_set;
-  if (!bench && !a.coeffs.empty()) bench = read_coefficients(a.coeffs);
+  if (!bench && !a.coeffs.empty()) {
+    InputSet in = read_input_set(a.coeffs);
+    bench = std::move(in.set);
+    if (in.mounting_deg) args.coeffs_mounting_deg = in.mounting_deg;
+  }
   InputEffects fx;
   if (bench) {
     fx.terms = effects_from_json(bench->extra, a.coeffs.empty() ? "--coeffs" : a.coeffs, &fx.sigma);
@@ -120,11 +281,10 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     }
     if (!cfg.obs_pos && !cfg.obs_vel && !cfg.obs_att) throw InputError("--obs", 0, "", "no observation selected");
   }
-  // Bias priors: data corrected by a bench set deviate from it only by the set's σ and the
-  // turn-on shift since; raw data by the data-sheet initial bias. --prior-* override both.
-  if (bench) inmotion::bench_corrected_bias_priors(cfg, bench->errors.gyro.sigma_bias, bench->errors.accel.sigma_bias);
-  if (a.prior_gyro_bias_dps > 0) cfg.sigma_gyro_bias = a.prior_gyro_bias_dps * kDeg;
-  if (a.prior_accel_bias_mg > 0) cfg.sigma_accel_bias = a.prior_accel_bias_mg * kMilliG;
+  // Priors of the constant parameters: the input set's σ combined with the device class's
+  // stability allowance, or the data-sheet class for raw data; --prior-* override the biases.
+  const PriorChoice pc = choose_priors(args, bench);
+  cfg.prior = pc.report.sigma;
   cfg.obs_rate_hz = a.obs_rate_hz;
   cfg.cov_dt = a.cov_dt;
   cfg.store_for_smoother = a.smooth;
@@ -145,15 +305,15 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
     fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
   }
-  if (inmotion::needs_augmented_layout(cfg)) return run_fit<inmotion::InMotionFilterAug>(a, cfg, bench, t0, t1, models, fx);
-  return run_fit<inmotion::InMotionFilter>(a, cfg, bench, t0, t1, models, fx);
+  if (inmotion::needs_augmented_layout(cfg)) return run_fit<inmotion::InMotionFilterAug>(args, cfg, bench, t0, t1, models, fx, pc);
+  return run_fit<inmotion::InMotionFilter>(args, cfg, bench, t0, t1, models, fx, pc);
 }
 
 namespace {
 
 template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
-                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx) {
+                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc) {
   using namespace units;
   constexpr int N = Filter::kN;
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr);
@@ -192,7 +352,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     if (e.is_ref) {
       override_sigma(e.ref);
       if (!f) {
-        f = std::make_unique<Filter>(cfg, st.nominal_mounting(), st.lever_arm(), e.ref);
+        f = std::make_unique<Filter>(cfg, pc.C_mb_start.value_or(st.nominal_mounting()), st.lever_arm(), e.ref);
         t_first = e.t;
         continue;
       }
@@ -259,7 +419,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   }
 
   const SensorErrors corr = f->estimate();
-  const SensorErrors total = bench ? compose(bench->errors, corr) : corr;
+  // The fused estimate: the filter's priors already hold the input set's σ (choose_priors), so the
+  // combined set's σ are the posterior σ, never more than hypot(input σ, allowance).
+  const SensorErrors total = bench ? compose_fused(bench->errors, corr) : corr;
   const RecordingMeta& meta = st.meta();
   DeviceId dev = bench ? bench->device : meta.device;
   if (dev.serial.empty()) dev.serial = meta.device.serial;
@@ -278,6 +440,16 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   j["coefficients"] = set_json(dev, total);
   j["correction"] = set_json(dev, corr);
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
+  j["priors"] = pc.json;
+  {
+    inmotion::ParameterPriors post;
+    post.gyro_bias = corr.gyro.sigma_bias;
+    post.accel_bias = corr.accel.sigma_bias;
+    post.gyro_M = corr.gyro.sigma_M;
+    post.accel_M = corr.accel.sigma_M;
+    for (int i = 0; i < 3; ++i) post.mount(i) = std::sqrt(f->P()(inmotion::kMount + i, inmotion::kMount + i));
+    j["determined_by"] = determined_by(cfg.prior, post, bench);
+  }
   if (fx.present) {
     // The catalogue terms are part of the sensor model of the result too (qc applies them).
     effects_to_json(fx.terms, fx.sigma, j["coefficients"]);
@@ -322,7 +494,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   if (a.qc) {
     const bool oos = t_data_end > t_last + 10.0;
     const double from = oos ? t_last : t_first;
-    QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, std::nullopt, std::nullopt, fx.terms};
+    std::optional<Vec3> before_mount;
+    if (a.coeffs_mounting_deg) before_mount = a.coeffs_mounting_deg->first;
+    QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, before_mount, std::nullopt, fx.terms};
     QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms};
     const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s);
     qj = qc_json(q);

@@ -13,16 +13,25 @@
 namespace calbench {
 
 struct FitDriveArgs {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   std::string dir, coeffs, out, obs = "pos,vel,att", series, window;
   std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
   double obs_rate_hz = 10, cov_dt = 0.1;
   double prior_gyro_bias_dps = 0, prior_accel_bias_mg = 0;  // > 0: override the bias priors
+  // Stability allowances (how far a parameter may move between the input set's calibration and
+  // the drive, 1σ; calibration/inmotion/priors.hpp); NaN: the device class's default.
+  struct Allowances {
+    double gyro_bias_dph = kNaN, accel_bias_mg = kNaN, gyro_scale_ppm = kNaN, gyro_skew_ppm = kNaN,
+           accel_scale_ppm = kNaN, accel_skew_ppm = kNaN, mount_deg = kNaN;
+  } allowance;
   double sigma_pos = 0, sigma_vel = 0, sigma_att_deg = 0;  // 0: from reference.csv or defaults
   bool qc = true;             // out-of-sample ΔS after the window, when data remain
   double qc_horizon_s = 600;
   // In memory instead of --coeffs (a.coeffs then only names it): the set and its extra keys.
   std::optional<CoefficientSet> coeffs_set;
+  // A mounting carried by the input (an earlier in-motion RESULT.json): roll, pitch, yaw and 1σ, deg.
+  std::optional<std::pair<Vec3, Vec3>> coeffs_mounting_deg;
   // Called after every reference epoch the filter took, per observation type (0 pos, 1 vel, 2 att).
   std::function<void(int type, const inmotion::InnovationRecord&)> on_innovation;
   bool write_out = true;      // false: return RESULT.json without writing a.out

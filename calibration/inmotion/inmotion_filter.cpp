@@ -22,13 +22,6 @@ DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, co
 }
 }  // namespace
 
-void bench_corrected_bias_priors(InMotionConfig& cfg, const Vec3& set_sigma_gyro_bias, const Vec3& set_sigma_accel_bias) {
-  const double g = set_sigma_gyro_bias.allFinite() ? set_sigma_gyro_bias.maxCoeff() : 0.0;
-  const double a = set_sigma_accel_bias.allFinite() ? set_sigma_accel_bias.maxCoeff() : 0.0;
-  cfg.sigma_gyro_bias = std::hypot(g, kTurnOnGyroBiasAllowance);
-  cfg.sigma_accel_bias = std::hypot(a, kTurnOnAccelBiasAllowance);
-}
-
 bool needs_augmented_layout(const InMotionConfig& cfg) {
   for (int i = 0; i < 3; ++i)
     if ((cfg.gyro_drift && (*cfg.gyro_drift)[i].exp_cosine) || (cfg.accel_drift && (*cfg.accel_drift)[i].exp_cosine))
@@ -73,14 +66,15 @@ InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb,
   const double sa = first.sigma_att > 0 ? first.sigma_att : cfg_.ref_sigma_att;
   set_diag<3>(P_, kPos, std::hypot(sp, 0.05));
   set_diag<3>(P_, kVel, std::hypot(sv, cfg_.sigma_vel0));
-  set_diag<3>(P_, kBg, cfg_.sigma_gyro_bias);
-  set_diag<3>(P_, kBa, cfg_.sigma_accel_bias);
-  for (int i = 0; i < 3; ++i)
+  const ParameterPriors& pr = cfg_.prior;
+  for (int i = 0; i < 3; ++i) {
+    P_(kBg + i, kBg + i) = pr.gyro_bias(i) * pr.gyro_bias(i);
+    P_(kBa + i, kBa + i) = pr.accel_bias(i) * pr.accel_bias(i);
     for (int j = 0; j < 3; ++j) {
-      const double s2 = i == j ? cfg_.sigma_scale : cfg_.sigma_skew;
-      P_(kMg + 3 * i + j, kMg + 3 * i + j) = s2 * s2;
-      P_(kMa + 3 * i + j, kMa + 3 * i + j) = s2 * s2;
+      P_(kMg + 3 * i + j, kMg + 3 * i + j) = pr.gyro_M(i, j) * pr.gyro_M(i, j);
+      P_(kMa + 3 * i + j, kMa + 3 * i + j) = pr.accel_M(i, j) * pr.accel_M(i, j);
     }
+  }
   for (int i = 0; i < 3; ++i) {
     P_(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i);
     P_(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i);
@@ -96,7 +90,7 @@ InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb,
   }
   // The initial MEMS attitude error is the mounting error seen in NED plus the reference's own:
   // φ₀ = C_nb·δμ + ε_ref, so the two blocks start correlated.
-  const Mat3 Pm = Mat3::Identity() * (cfg_.sigma_mount * cfg_.sigma_mount);
+  const Mat3 Pm = pr.mount.cwiseProduct(pr.mount).asDiagonal();
   P_.template block<3, 3>(kMount, kMount) = Pm;
   P_.template block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
   P_.template block<3, 3>(kAtt, kMount) = C_nb * Pm;

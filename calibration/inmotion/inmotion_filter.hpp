@@ -12,6 +12,7 @@
 
 #include "calibration/inmotion/error_model.hpp"
 #include "calibration/inmotion/observation.hpp"
+#include "calibration/inmotion/priors.hpp"
 #include "calibration/noise_spec.hpp"
 #include "calibration/sensor_model.hpp"
 
@@ -35,14 +36,10 @@ struct InMotionConfig {
   // prediction). Always done for exponential-cosine axes (whose first state only acts through
   // the dynamics); for first-order axes only when set, so that the default filter is unchanged.
   bool propagate_drift = false;
-  // Prior 1σ of the constant parameters (relative to the data the filter sees). The bias
-  // defaults are the data-sheet class of a raw ADIS16488A (initial bias error); for data already
-  // corrected by a bench set use bench_corrected_bias_priors().
-  double sigma_gyro_bias = 0.5 * units::kDeg;     // rad/s
-  double sigma_accel_bias = 30 * units::kMilliG;  // m/s²
-  double sigma_scale = 1e-2;
-  double sigma_skew = 2e-3;
-  double sigma_mount = 1.0 * units::kDeg;         // rad, per axis
+  // Prior 1σ of the constant parameters, relative to the data the filter sees (priors.hpp): the
+  // data-sheet class of a raw unit by default; for data corrected by a coefficient set,
+  // priors_from_set() (the set's σ combined with the device class's stability allowance).
+  ParameterPriors prior = datasheet_priors();
   double sigma_vel0 = 0.1;                        // m/s, initial velocity beyond the reference's
   // Observations.
   bool obs_pos = true, obs_vel = true, obs_att = true;
@@ -59,13 +56,6 @@ struct InMotionConfig {
   double gate_recover_s = 10;
   bool store_for_smoother = false;
 };
-
-// Bias priors for data corrected by a bench set whose bias σ are given (rad/s, m/s²): the set's
-// σ combined with a turn-on repeatability allowance (the bias moves between power-ups and since
-// the factory: 0.1 °/s and 5 mg, five times the shifts seen in practice for this class).
-inline constexpr double kTurnOnGyroBiasAllowance = 0.1 * units::kDeg;
-inline constexpr double kTurnOnAccelBiasAllowance = 5 * units::kMilliG;
-void bench_corrected_bias_priors(InMotionConfig& cfg, const Vec3& set_sigma_gyro_bias, const Vec3& set_sigma_accel_bias);
 
 struct ConsistencyStats {
   long used = 0, rejected = 0, within95 = 0, forced = 0;

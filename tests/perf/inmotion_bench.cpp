@@ -163,8 +163,8 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
   inmotion::InMotionConfig fc;
   fc.obs_att = att;
   // The data are bench-corrected: priors as `fit drive --coeffs` sets them (set σ unknown here).
-  inmotion::bench_corrected_bias_priors(fc, Vec3::Zero(), Vec3::Zero());
-  if (const char* e = std::getenv("INMOTION_PRIOR_GYRO_DPS")) fc.sigma_gyro_bias = std::atof(e) * kDeg;
+  fc.prior = inmotion::priors_from_set(bench, inmotion::stability_allowance_table().front(), Vec3::Constant(kUnknownSigma)).sigma;
+  if (const char* e = std::getenv("INMOTION_PRIOR_GYRO_DPS")) fc.prior.gyro_bias.setConstant(std::atof(e) * kDeg);
   std::unique_ptr<inmotion::InMotionFilter> f;
   std::unique_ptr<qc::InertialRun> qb, qi, qbn, qo;
   SensorErrors total;

@@ -1,0 +1,117 @@
+#include "calibration/inmotion/priors.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "calibration/units.hpp"
+
+namespace calbench::inmotion {
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+ParameterPriors datasheet_priors() {
+  using namespace units;
+  ParameterPriors p;
+  p.gyro_bias.setConstant(0.5 * kDeg);
+  p.accel_bias.setConstant(30 * kMilliG);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p.gyro_M(i, j) = p.accel_M(i, j) = i == j ? 1e-2 : 2e-3;
+  p.mount.setConstant(1.0 * kDeg);
+  return p;
+}
+
+const std::vector<StabilityAllowance>& stability_allowance_table() {
+  using namespace units;
+  // Sources (docs/in-motion.md, "Priors"): bias — half the data sheet's initial bias error
+  // (±0.2 °/s, ±16 mg is the spread of uncalibrated parts; a calibrated part moves between
+  // power-ups and with age by less); scale — a residual sensitivity temperature coefficient of
+  // ≈ 20 ppm/°C of the factory-compensated part over a 15 °C difference between bench and vehicle;
+  // skew — axis-to-axis alignment is fixed by die and package and moves only with mounting stress
+  // (≈ 10″); mounting — an installation left in place between two drives (bracket flex, thermal).
+  static const std::vector<StabilityAllowance> t = {
+      {"ADIS16488A", 0.1 * kDeg, 5 * kMilliG, 300 * kPpm, 50 * kPpm, 300 * kPpm, 50 * kPpm, 0.1 * kDeg},
+  };
+  return t;
+}
+
+const StabilityAllowance* stability_allowance(const std::string& model) {
+  for (const auto& a : stability_allowance_table())
+    if (a.device_class == model) return &a;
+  return nullptr;
+}
+
+const std::vector<std::string>& prior_parameter_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    const char* ax = "xyz";
+    for (const char* s : {"gyro", "accel"}) {
+      for (int i = 0; i < 3; ++i) n.push_back(std::string(s) + ".bias." + ax[i]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) n.push_back(std::string(s) + ".M." + ax[i] + ax[j]);
+    }
+    for (int i = 0; i < 3; ++i) n.push_back(std::string("mount.") + ax[i]);
+    return n;
+  }();
+  return names;
+}
+
+namespace {
+// k → (block, i, j): block 0 gyro bias, 1 gyro M, 2 accel bias, 3 accel M, 4 mount.
+template <class P, class F>
+auto visit(P& p, std::size_t k, F f) {
+  if (k >= 24) return f(p.mount(static_cast<int>(k - 24)));
+  auto& bias = k < 12 ? p.gyro_bias : p.accel_bias;
+  auto& M = k < 12 ? p.gyro_M : p.accel_M;
+  const int r = static_cast<int>(k % 12);
+  return r < 3 ? f(bias(r)) : f(M((r - 3) / 3, (r - 3) % 3));
+}
+}  // namespace
+
+double prior_value(const ParameterPriors& p, std::size_t k) {
+  return visit(p, k, [](double v) { return v; });
+}
+
+void set_prior_value(ParameterPriors& p, std::size_t k, double sigma) {
+  visit(p, k, [sigma](double& v) { v = sigma; });
+}
+
+PriorReport priors_datasheet(const ParameterPriors& datasheet) {
+  const std::size_t n = prior_parameter_names().size();
+  PriorReport r;
+  r.sigma = datasheet;
+  r.source.assign(n, PriorSource::datasheet);
+  r.set_sigma.assign(n, kNaN);
+  r.allowance.assign(n, kNaN);
+  return r;
+}
+
+PriorReport priors_from_set(const SensorErrors& set, const StabilityAllowance& a, const Vec3& mount_sigma,
+                            const ParameterPriors& datasheet) {
+  PriorReport r = priors_datasheet(datasheet);
+  ParameterPriors given, allow;
+  given.gyro_bias = set.gyro.sigma_bias;
+  given.accel_bias = set.accel.sigma_bias;
+  given.gyro_M = set.gyro.sigma_M;
+  given.accel_M = set.accel.sigma_M;
+  given.mount = mount_sigma;
+  allow.gyro_bias.setConstant(a.gyro_bias);
+  allow.accel_bias.setConstant(a.accel_bias);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      allow.gyro_M(i, j) = i == j ? a.gyro_scale : a.gyro_skew;
+      allow.accel_M(i, j) = i == j ? a.accel_scale : a.accel_skew;
+    }
+  allow.mount.setConstant(a.mount);
+  for (std::size_t k = 0; k < r.source.size(); ++k) {
+    const double s = prior_value(given, k), al = prior_value(allow, k);
+    if (!std::isfinite(s) || s < 0) continue;  // unknown (or no mounting given): data-sheet class
+    set_prior_value(r.sigma, k, std::hypot(s, al));
+    r.source[k] = PriorSource::set_and_allowance;
+    r.set_sigma[k] = s;
+    r.allowance[k] = al;
+  }
+  return r;
+}
+
+}  // namespace calbench::inmotion

@@ -1,0 +1,80 @@
+// Prior 1σ of the constant parameters of the in-motion filter — the sensor blocks of the state
+// (bias, scale and skew of both triads, state_layout.hpp) and the mounting — and where they come
+// from (issue 16):
+//   * raw data (no coefficient set): the data-sheet class of the device, datasheet_priors();
+//   * data corrected by a coefficient set: per parameter, the set's σ combined with the stability
+//     allowance of the device class — how far that parameter can move between the calibration that
+//     produced the set and the drive (turn-on repeatability, ageing, mounting stress, temperature):
+//       σ_prior = hypot(σ_set, allowance).
+//     The filter then estimates the correction to the set; its posterior σ is the σ of the fused
+//     (combined) set, and can never exceed σ_prior (a Kalman update only removes variance from
+//     constant states). A parameter the drive does not inform keeps the set's value with σ_prior.
+// The device-class table and the source of each figure: docs/in-motion.md, "Priors".
+#pragma once
+#include <string>
+#include <vector>
+
+#include "calibration/sensor_model.hpp"
+
+namespace calbench::inmotion {
+
+struct ParameterPriors {
+  Vec3 gyro_bias = Vec3::Zero();   // rad/s
+  Vec3 accel_bias = Vec3::Zero();  // m/s²
+  Mat3 gyro_M = Mat3::Zero();      // dimensionless (scale on the diagonal, skews off it)
+  Mat3 accel_M = Mat3::Zero();
+  Vec3 mount = Vec3::Zero();       // rad, per axis of the mounting misalignment δμ
+};
+
+// Data-sheet class of a raw ADIS16488A (no calibration applied): initial bias 0.5 °/s and 30 mg
+// (2.5× and 1.9× the data sheet's ±0.2 °/s and ±16 mg initial bias error), scale 1 %, skew 0.2 %,
+// mounting 1° per axis (the installation tolerance of a vehicle bracket).
+ParameterPriors datasheet_priors();
+
+// How far each constant parameter can move between a calibration and a drive, 1σ.
+struct StabilityAllowance {
+  std::string device_class;
+  double gyro_bias = 0;    // rad/s
+  double accel_bias = 0;   // m/s²
+  double gyro_scale = 0;   // dimensionless
+  double gyro_skew = 0;
+  double accel_scale = 0;
+  double accel_skew = 0;
+  double mount = 0;        // rad per axis (only where the input carries a mounting estimate)
+};
+
+// One row per device class (ADIS16488A first).
+const std::vector<StabilityAllowance>& stability_allowance_table();
+// The row of `model`; nullptr when the table has none.
+const StabilityAllowance* stability_allowance(const std::string& model);
+
+// Where a prior came from, per parameter.
+enum class PriorSource {
+  datasheet,    // no set, or the set's σ is unknown (null): data-sheet class
+  set_and_allowance,  // hypot(set σ, allowance)
+  option,       // overridden by a command-line option
+};
+
+struct PriorReport {
+  ParameterPriors sigma;
+  // Per parameter in the order of prior_parameter_names(): source, the set's σ (NaN: none/unknown)
+  // and the allowance (NaN: none).
+  std::vector<PriorSource> source;
+  std::vector<double> set_sigma, allowance;
+};
+
+// Names of the 27 constant parameters in a fixed order: gyro.bias.x … gyro.M.zz (12), accel.bias.x …
+// accel.M.zz (12) — the coefficient names of the store — then mount.x, mount.y, mount.z.
+const std::vector<std::string>& prior_parameter_names();
+double prior_value(const ParameterPriors& p, std::size_t k);  // the k-th σ in that order
+void set_prior_value(ParameterPriors& p, std::size_t k, double sigma);
+
+// Priors for raw data: the data-sheet class everywhere.
+PriorReport priors_datasheet(const ParameterPriors& datasheet = datasheet_priors());
+// Priors for data corrected by `set`: hypot(set σ, allowance) where the set's σ is finite, the
+// data-sheet class where it is unknown (+inf). `mount_sigma` is the σ of a mounting the input
+// carries (rad; +inf or NaN: none — then the data-sheet mounting prior).
+PriorReport priors_from_set(const SensorErrors& set, const StabilityAllowance& a, const Vec3& mount_sigma,
+                            const ParameterPriors& datasheet = datasheet_priors());
+
+}  // namespace calbench::inmotion
