@@ -26,6 +26,25 @@ void print_summary(const nlohmann::json& j) {
             << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
+  if (j.contains("priors")) {
+    const auto& p = j["priors"];
+    if (p["mode"] == "input set")
+      std::cout << "  priors           the input set's sigma combined with the " << p["device_class"].get<std::string>()
+                << " stability allowance (gyro scale " << p["allowance"]["gyro_scale_ppm"].get<double>() << " ppm, skew "
+                << p["allowance"]["gyro_skew_ppm"].get<double>() << " ppm, ...; RESULT.json priors)\n";
+    else
+      std::cout << "  priors           data-sheet class (raw data)\n";
+    const auto& c = j["determined_by"]["count"];
+    std::cout << "  determined by    ";
+    bool first = true;
+    for (const char* k : {"drive", "both", "bench", "prior"})
+      if (c[k].get<int>() > 0) {
+        std::cout << (first ? "" : ", ") << k << " " << c[k].get<int>();
+        first = false;
+      }
+    std::cout << " of 24 coefficients (drive share of the information: > 80 % drive, < 20 % "
+              << (p["mode"] == "input set" ? "bench" : "prior") << ")\n";
+  }
   if (j.contains("drift_models"))
     for (const auto& m : j["drift_models"]["axes"]) {
       std::cout << "  drift model " << m["sensor"].get<std::string>() << ' ' << m["axis"].get<std::string>() << ": "

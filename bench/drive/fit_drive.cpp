@@ -184,6 +184,7 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t idx = (s == 0 ? 0 : 12) + k;
       inmotion::set_prior_value(pc.report.sigma, idx, v);
+      inmotion::set_prior_value(pc.report.sigma_raw, idx, v);
       pc.report.source[idx] = inmotion::PriorSource::option;
     }
   }
@@ -202,7 +203,7 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
       case inmotion::PriorSource::set_and_allowance: src = "input sigma combined with the stability allowance"; break;
       case inmotion::PriorSource::option: src = k < 12 ? "--prior-gyro-bias" : "--prior-accel-bias"; break;
     }
-    params[names[k]] = {{"prior_sigma", inmotion::prior_value(pc.report.sigma, k)},
+    params[names[k]] = {{"prior_sigma", inmotion::prior_value(pc.report.sigma_raw, k)},
                         {"input_sigma", num(pc.report.set_sigma[k])},
                         {"allowance", num(pc.report.allowance[k])},
                         {"unit", unit},
@@ -442,13 +443,14 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
   j["priors"] = pc.json;
   {
+    // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
     inmotion::ParameterPriors post;
-    post.gyro_bias = corr.gyro.sigma_bias;
-    post.accel_bias = corr.accel.sigma_bias;
-    post.gyro_M = corr.gyro.sigma_M;
-    post.accel_M = corr.accel.sigma_M;
+    post.gyro_bias = total.gyro.sigma_bias;
+    post.accel_bias = total.accel.sigma_bias;
+    post.gyro_M = total.gyro.sigma_M;
+    post.accel_M = total.accel.sigma_M;
     for (int i = 0; i < 3; ++i) post.mount(i) = std::sqrt(f->P()(inmotion::kMount + i, inmotion::kMount + i));
-    j["determined_by"] = determined_by(cfg.prior, post, bench);
+    j["determined_by"] = determined_by(pc.report.sigma_raw, post, bench);
   }
   if (fx.present) {
     // The catalogue terms are part of the sensor model of the result too (qc applies them).

@@ -79,7 +79,7 @@ void set_prior_value(ParameterPriors& p, std::size_t k, double sigma) {
 PriorReport priors_datasheet(const ParameterPriors& datasheet) {
   const std::size_t n = prior_parameter_names().size();
   PriorReport r;
-  r.sigma = datasheet;
+  r.sigma = r.sigma_raw = datasheet;
   r.source.assign(n, PriorSource::datasheet);
   r.set_sigma.assign(n, kNaN);
   r.allowance.assign(n, kNaN);
@@ -106,7 +106,17 @@ PriorReport priors_from_set(const SensorErrors& set, const StabilityAllowance& a
   for (std::size_t k = 0; k < r.source.size(); ++k) {
     const double s = prior_value(given, k), al = prior_value(allow, k);
     if (!std::isfinite(s) || s < 0) continue;  // unknown (or no mounting given): data-sheet class
-    set_prior_value(r.sigma, k, std::hypot(s, al));
+    const double raw = std::hypot(s, al);
+    set_prior_value(r.sigma_raw, k, raw);
+    // Into the frame of the corrected data: b = b_set + (I + M_set)·δb, M = (I + M_set)(I + δM) − I,
+    // whose diagonal of I + M_set scales row i (the off-diagonal part, ≤ 0.1 %, mixes rows at 1e-6).
+    double scale = 1;
+    if (k < 24) {
+      const std::size_t r12 = k % 12;
+      const int row = static_cast<int>(r12 < 3 ? r12 : (r12 - 3) / 3);
+      scale = 1.0 + (k < 12 ? set.gyro.M(row, row) : set.accel.M(row, row));
+    }
+    set_prior_value(r.sigma, k, raw / std::abs(scale));
     r.source[k] = PriorSource::set_and_allowance;
     r.set_sigma[k] = s;
     r.allowance[k] = al;

@@ -56,7 +56,11 @@ enum class PriorSource {
 };
 
 struct PriorReport {
+  // The filter's priors, in the frame of the data it sees (corrected by the set: the correction δ
+  // with (I + M_set)(I + δ) = I + M, so row i of δ and b is the raw-frame spread over (1 + M_set,ii)).
   ParameterPriors sigma;
+  // The same in raw-data coefficients, hypot(set σ, allowance): what the combined set's σ is bounded by.
+  ParameterPriors sigma_raw;
   // Per parameter in the order of prior_parameter_names(): source, the set's σ (NaN: none/unknown)
   // and the allowance (NaN: none).
   std::vector<PriorSource> source;
