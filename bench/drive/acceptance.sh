@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue-5 acceptance measurement of the in-motion calibration (slow: ~10 simulated 35-minute
+# Acceptance measurement of the two-stage calibration (issues 5, 16; ~10 simulated 35-minute
 # drives at 2460 Hz, in memory): 3σ coverage of gyro drift, accelerometer bias, scale and skew
 # estimates and of the mounting; out-of-sample inertial-only ΔS over 10 minutes, bench-only vs
 # bench + in-motion; gyro drift with --obs pos,vel vs pos,vel,att; and the fit throughput.
