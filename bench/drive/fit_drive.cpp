@@ -164,7 +164,7 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
                       {"mount_deg", al.mount / kDeg},               {"overridden", over}};
     Vec3 mount_sigma = Vec3::Constant(kUnknownSigma);
     if (a.coeffs_mounting_deg) {
-      mount_sigma = a.coeffs_mounting_deg->second * kDeg;
+      mount_sigma = inmotion::mounting_sigma_from_rpy(a.coeffs_mounting_deg->first * kDeg, a.coeffs_mounting_deg->second * kDeg);
       pc.C_mb_start = ins::dcm_from_rpy(a.coeffs_mounting_deg->first * kDeg);
       j["mounting_from_input_deg"] = {{"value", to_json(a.coeffs_mounting_deg->first)},
                                       {"sigma", sigma_json(a.coeffs_mounting_deg->second)}};

@@ -342,18 +342,7 @@ Vec3 InMotionFilterT<N>::gyro_total_drift_sigma() const {
 template <int N>
 void InMotionFilterT<N>::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
   rpy = ins::rpy_from_dcm(C_mb_);
-  // J = ∂rpy/∂δμ for C_mb ← (I + δμ×)C_mb, by central differences.
-  Mat3 J;
-  const double h = 1e-7;
-  for (int k = 0; k < 3; ++k) {
-    Vec3 e = Vec3::Zero();
-    e(k) = h;
-    Vec3 a = ins::rpy_from_dcm(ins::quat_from_rotvec(e).toRotationMatrix() * C_mb_);
-    Vec3 b = ins::rpy_from_dcm(ins::quat_from_rotvec(-e).toRotationMatrix() * C_mb_);
-    Vec3 d = a - b;
-    for (int i = 0; i < 3; ++i) d(i) = std::remainder(d(i), 2 * units::kPi);
-    J.col(k) = d / (2 * h);
-  }
+  const Mat3 J = ins::rpy_jacobian_left(C_mb_);  // ∂rpy/∂δμ for C_mb ← (I + δμ×)C_mb
   const Mat3 S = J * P_.template block<3, 3>(kMount, kMount) * J.transpose();
   sigma = S.diagonal().cwiseMax(0.0).cwiseSqrt();
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "calibration/ins/nav_math.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench::inmotion {
@@ -74,6 +75,12 @@ double prior_value(const ParameterPriors& p, std::size_t k) {
 
 void set_prior_value(ParameterPriors& p, std::size_t k, double sigma) {
   visit(p, k, [sigma](double& v) { v = sigma; });
+}
+
+Vec3 mounting_sigma_from_rpy(const Vec3& rpy, const Vec3& sigma_rpy) {
+  const Mat3 Ji = ins::rpy_jacobian_left(ins::dcm_from_rpy(rpy)).inverse();
+  const Mat3 S = Ji * sigma_rpy.cwiseProduct(sigma_rpy).asDiagonal() * Ji.transpose();
+  return S.diagonal().cwiseMax(0.0).cwiseSqrt();
 }
 
 PriorReport priors_datasheet(const ParameterPriors& datasheet) {

@@ -73,6 +73,11 @@ const std::vector<std::string>& prior_parameter_names();
 double prior_value(const ParameterPriors& p, std::size_t k);  // the k-th σ in that order
 void set_prior_value(ParameterPriors& p, std::size_t k, double sigma);
 
+// The 1σ per axis of the mounting misalignment δμ (reference body axes, Ĉ = (I − δμ×)C) for a
+// mounting given as roll, pitch, yaw (rad) with 1σ per angle: Σ_δμ = J⁻¹ diag(σ²) J⁻ᵀ with
+// J = ∂rpy/∂δμ at that mounting (for a yawed mounting the axes of roll/pitch and δμ differ).
+Vec3 mounting_sigma_from_rpy(const Vec3& rpy, const Vec3& sigma_rpy);
+
 // Priors for raw data: the data-sheet class everywhere.
 PriorReport priors_datasheet(const ParameterPriors& datasheet = datasheet_priors());
 // Priors for data corrected by `set`: hypot(set σ, allowance) where the set's σ is finite, the

@@ -88,3 +88,18 @@ void geodetic_add_ned(double& lat, double& lon, double& h, const Vec3& d) {
 }
 
 }  // namespace calbench::ins
+
+namespace calbench::ins {
+Mat3 rpy_jacobian_left(const Mat3& C) {
+  Mat3 J;
+  const double h = 1e-7;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e = Vec3::Zero();
+    e(k) = h;
+    Vec3 d = rpy_from_dcm(quat_from_rotvec(e).toRotationMatrix() * C) - rpy_from_dcm(quat_from_rotvec(-e).toRotationMatrix() * C);
+    for (int i = 0; i < 3; ++i) d(i) = std::remainder(d(i), 2 * units::kPi);
+    J.col(k) = d / (2 * h);
+  }
+  return J;
+}
+}  // namespace calbench::ins

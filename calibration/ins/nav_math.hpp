@@ -33,6 +33,9 @@ Vec3 earth_rate_ned_at(double lat_rad);
 Mat3 dcm_from_rpy(const Vec3& rpy_rad);
 // Inverse of dcm_from_rpy (roll, pitch, yaw), yaw in (−π, π].
 Vec3 rpy_from_dcm(const Mat3& C);
+// J = ∂rpy/∂δ of rpy_from_dcm((I + δ×)·C) at δ = 0 (a small rotation applied on the left, in the
+// axes C maps into), by central differences; angle differences wrapped to (−π, π].
+Mat3 rpy_jacobian_left(const Mat3& C);
 // Skew-symmetric matrix: skew(a)·b = a × b.
 Mat3 skew(const Vec3& a);
 // Quaternion of the rotation vector phi (exact, with small-angle series near zero).

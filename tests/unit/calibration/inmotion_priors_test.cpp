@@ -194,3 +194,16 @@ TEST(InmotionPriors, CombinedSetRefinesTheBenchSetAndNeverWidensIt) {
   // The yaw gyro's scale is informed by the turns: well below its prior.
   EXPECT_LT(corr.gyro.sigma_M(2, 2), 0.5 * fc.prior.gyro_M(2, 2));
 }
+
+// A mounting carried as roll, pitch, yaw with σ becomes σ of δμ in reference body axes: with the MEMS
+// yawed 90°, the MEMS roll is a rotation about the vehicle's y axis.
+TEST(InmotionPriors, MountingSigmaFromRollPitchYaw) {
+  const Vec3 s = mounting_sigma_from_rpy(Vec3(0, 0, 90 * kDeg), Vec3(0.01, 0.02, 0.03));
+  EXPECT_NEAR(s(0), 0.02, 1e-6);
+  EXPECT_NEAR(s(1), 0.01, 1e-6);
+  EXPECT_NEAR(s(2), 0.03, 1e-6);
+  const Vec3 z = mounting_sigma_from_rpy(Vec3::Zero(), Vec3(0.01, 0.02, 0.03));
+  EXPECT_NEAR(z(0), 0.01, 1e-6);
+  EXPECT_NEAR(z(1), 0.02, 1e-6);
+  EXPECT_NEAR(z(2), 0.03, 1e-6);
+}
