@@ -117,16 +117,24 @@ Thresholds load_thresholds(const std::string& path) {
 }
 
 ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t) {
-  ApprovalCheck r;
+  ApprovalCheck r = check_thresholds(set, qc, t);
   if (set.status != SetStatus::draft)
-    r.reasons.push_back("set " + std::to_string(set.id) + " is " + to_string(set.status) + ", only draft sets can be approved");
+    r.reasons.insert(r.reasons.begin(), "set " + std::to_string(set.id) + " is " + to_string(set.status) +
+                                            ", only draft sets can be approved");
+  r.ok = r.reasons.empty();
+  return r;
+}
+
+ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t) {
+  ApprovalCheck r;
   check_triad("gyro", set.errors.gyro, t.gyro, kDegPerHour, "°/h", t.allow_unknown_sigma, r.reasons);
   check_triad("accel", set.errors.accel, t.accel, kMilliG, "mg", t.allow_unknown_sigma, r.reasons);
   if (t.require_qc && qc.empty()) r.reasons.push_back("no QC results recorded for this set's run");
   for (const auto& q : qc)
     if (!q.pass)
       r.reasons.push_back("QC " + q.metric + " = " + fmt(q.value) + (q.unit.empty() ? "" : " " + q.unit) + " failed" +
-                          (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : ""));
+                          (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : "") +
+                          (q.criterion.empty() ? "" : ": " + q.criterion) + (q.sample.empty() ? "" : ", " + q.sample));
   for (const auto& m : t.required_qc_metrics) {
     bool found = false;
     for (const auto& q : qc) found = found || q.metric == m;
@@ -134,6 +142,32 @@ ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<
   }
   r.ok = r.reasons.empty();
   return r;
+}
+
+std::vector<std::string> describe_thresholds(const Thresholds& t) {
+  std::vector<std::string> out;
+  const auto f = [](double v) {
+    std::ostringstream s;
+    s.precision(6);
+    s << v;
+    return s.str();
+  };
+  const auto triad = [&](const char* name, const TriadLimits& L, double unit, const char* un) {
+    out.push_back(std::string(name) + ": |bias| ≤ " + f(L.max_abs_bias / unit) + " " + un + ", |scale| ≤ " +
+                  f(L.max_abs_scale / kPpm) + " ppm, |skew| ≤ " + f(L.max_abs_skew / kPpm) + " ppm, σ bias ≤ " +
+                  f(L.max_sigma_bias / unit) + " " + un + ", σ M ≤ " + f(L.max_sigma_M / kPpm) + " ppm");
+  };
+  triad("gyro", t.gyro, kDegPerHour, "°/h");
+  triad("accel", t.accel, kMilliG, "mg");
+  out.push_back(t.allow_unknown_sigma ? "unknown σ (not estimated) allowed" : "every σ known (a null σ refuses approval)");
+  out.push_back(t.require_qc ? "QC: at least one result recorded with the set's run; every check passes"
+                             : "QC: every recorded check passes (none required)");
+  if (!t.required_qc_metrics.empty()) {
+    std::string m;
+    for (const auto& x : t.required_qc_metrics) m += (m.empty() ? "" : ", ") + x;
+    out.push_back("required QC metrics: " + m);
+  }
+  return out;
 }
 
 ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t) {

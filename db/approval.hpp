@@ -40,6 +40,11 @@ struct ApprovalCheck {
   std::vector<std::string> reasons;  // why not (empty when ok)
 };
 ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);
+// Every check of check_approval() except the status (that only a draft can be approved): whether
+// a set, approved or not, meets the thresholds `t` (the device report's verdict).
+ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);
+// The thresholds as readable lines in display units ("gyro |bias| <= 3600 °/h", ...).
+std::vector<std::string> describe_thresholds(const Thresholds& t);
 
 // Check and, when every check passes, approve (draft → approved), in one transaction. A refusal is
 // recorded in the audit log with its reasons; the set stays draft.

@@ -1,5 +1,6 @@
 #include "db/inmotion_import.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -68,25 +69,67 @@ ParsedCoefficients coeff_block(const json& j, const DeviceInfo& dev, const std::
   return p;
 }
 
-QcResult metric_from_object(const std::string& name, const json& o, const std::string& f, const std::string& key) {
+// Which data the figures of a "qc" block were computed on, from its "sample" text
+// ("out-of-sample (after the fit window)", "in-sample (no data after the fit window)", "not run").
+std::string sample_of(const json& o, const std::string& f, const std::string& key, const std::string& dflt) {
+  if (!o.is_object() || !o.contains("sample")) return dflt;
+  if (!o["sample"].is_string()) throw InputError(f, 0, key + ".sample", "expected a string");
+  const std::string t = o["sample"].get<std::string>();
+  for (const char* s : {kOutOfSample, kInSample, kSampleNotApplicable})
+    if (t.rfind(s, 0) == 0) return s;
+  return "";
+}
+
+QcResult metric_from_object(const std::string& name, const json& o, const std::string& f, const std::string& key,
+                            const std::string& sample) {
   QcResult q;
   q.metric = name;
   q.value = finite(o["value"], f, key + ".value");
+  q.sample = sample_of(o, f, key, sample);
   if (o.contains("threshold") && !o["threshold"].is_null()) q.threshold = finite(o["threshold"], f, key + ".threshold");
   const char* pk = o.contains("pass") ? "pass" : o.contains("passed") ? "passed" : nullptr;
   if (pk) {
     if (!o[pk].is_boolean()) throw InputError(f, 0, key + "." + pk, "expected true or false");
     q.pass = o[pk].get<bool>();
+    q.criterion = "pass as stated in the result";
   } else if (q.threshold) {
     q.pass = std::abs(q.value) <= *q.threshold;
+    q.criterion = "|value| ≤ threshold";
   }
   if (o.contains("unit") && o["unit"].is_string()) q.unit = o["unit"].get<std::string>();
   return q;
 }
 
+// Names of the QC sets of `fit drive` (docs/in-motion.md): the set the fit started from and the result.
+constexpr const char* kQcBaselines[] = {"input", "none"};
+constexpr const char* kQcResultSet = "in-motion";
+
+// A set is never worse than the one it started from: the result's final ΔS gets the baseline's
+// final ΔS as its threshold. Everything else stays informative.
+void never_worse_than_baseline(std::vector<QcResult>& out, std::size_t first, const std::string& prefix) {
+  const QcResult* base = nullptr;
+  const char* base_name = nullptr;
+  QcResult* result = nullptr;
+  for (std::size_t i = first; i < out.size(); ++i) {
+    for (const char* b : kQcBaselines)
+      if (out[i].metric == prefix + b + ".final_cpe_m") {
+        base = &out[i];
+        base_name = b;
+      }
+    if (out[i].metric == prefix + kQcResultSet + ".final_cpe_m") result = &out[i];
+  }
+  if (!base || !result) return;
+  result->threshold = base->value;
+  result->pass = result->value <= base->value;
+  result->criterion = std::string("never worse than the set the fit started from: value ≤ final ΔS of set '") +
+                      base_name + "'";
+}
+
 std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
   std::vector<QcResult> out;
+  const std::string sample = sample_of(qc, f, "qc", "");
   auto from_array = [&](const json& arr, const std::string& key, const std::string& prefix) {
+    const std::size_t first = out.size();
     for (std::size_t i = 0; i < arr.size(); ++i) {
       const json& e = arr[i];
       const std::string k = key + "[" + std::to_string(i) + "]";
@@ -96,13 +139,19 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
         if (e.contains(nk) && e[nk].is_string()) name = e[nk].get<std::string>();
       if (name.empty()) throw InputError(f, 0, k, "missing \"metric\" or \"name\"");
       if (e.contains("value")) {
-        out.push_back(metric_from_object(prefix + name, e, f, k));
-      } else {  // e.g. {"name": "bench", "final_cpe_m": 12.3, "max_cpe_m": 20.1}: informative figures
-        for (auto it = e.begin(); it != e.end(); ++it)
-          if (it->is_number()) out.push_back(QcResult{prefix + name + "." + it.key(), finite(*it, f, k + "." + it.key()),
-                                                      std::nullopt, true, ""});
+        out.push_back(metric_from_object(prefix + name, e, f, k, sample));
+      } else {  // e.g. {"name": "input", "final_cpe_m": 12.3, "max_cpe_m": 20.1}: figures of one set
+        const std::string set_sample = sample_of(e, f, k, sample);
+        for (auto it = e.begin(); it != e.end(); ++it) {
+          if (!it->is_number()) continue;
+          const std::string& fk = it.key();
+          const bool metres = fk.size() > 2 && fk.compare(fk.size() - 2, 2, "_m") == 0;
+          out.push_back(QcResult{prefix + name + "." + fk, finite(*it, f, k + "." + fk), std::nullopt, true,
+                                 metres ? "m" : "", set_sample, ""});
+        }
       }
     }
+    never_worse_than_baseline(out, first, prefix);
   };
   if (qc.is_array()) {
     from_array(qc, "qc", "");
@@ -111,15 +160,58 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
   if (!qc.is_object()) throw InputError(f, 0, "qc", "expected an object or an array");
   for (auto it = qc.begin(); it != qc.end(); ++it) {
     const std::string key = "qc." + it.key();
+    if (it.key() == "from_s" || it.key() == "horizon_s") continue;  // when and how long: context, not figures
     if (it->is_number()) {
-      out.push_back(QcResult{it.key(), finite(*it, f, key), std::nullopt, true, ""});
+      out.push_back(QcResult{it.key(), finite(*it, f, key), std::nullopt, true, "", sample, ""});
     } else if (it->is_boolean()) {
-      out.push_back(QcResult{it.key(), it->get<bool>() ? 1.0 : 0.0, std::nullopt, it->get<bool>(), ""});
+      out.push_back(QcResult{it.key(), it->get<bool>() ? 1.0 : 0.0, std::nullopt, it->get<bool>(), "", sample,
+                             "pass as stated in the result"});
     } else if (it->is_object() && it->contains("value")) {
-      out.push_back(metric_from_object(it.key(), *it, f, key));
+      out.push_back(metric_from_object(it.key(), *it, f, key, sample));
     } else if (it->is_array() && !it->empty() && (*it)[0].is_object()) {
       from_array(*it, key, it.key() + ".");
     }
+  }
+  return out;
+}
+
+std::optional<double> opt_number(const json& o, const char* k, const std::string& f, const std::string& key) {
+  if (!o.contains(k) || o[k].is_null()) return std::nullopt;
+  const double v = finite(o[k], f, key + "." + k);
+  if (v < 0) throw InputError(f, 0, key + "." + k, "cannot be negative");
+  return v;
+}
+
+std::optional<DeterminedBy> determined_by_of(const json& j, const std::string& f) {
+  if (!j.is_object() || !j.contains("determined_by") || j["determined_by"].is_null()) return std::nullopt;
+  const json& d = j["determined_by"];
+  if (!d.is_object()) throw InputError(f, 0, "determined_by", "expected an object {\"rule\", \"coefficients\"}");
+  DeterminedBy out;
+  if (d.contains("rule")) {
+    if (!d["rule"].is_string()) throw InputError(f, 0, "determined_by.rule", "expected a string");
+    out.rule = d["rule"].get<std::string>();
+  }
+  if (!d.contains("coefficients") || !d["coefficients"].is_object())
+    throw InputError(f, 0, "determined_by.coefficients", "expected an object keyed by coefficient name");
+  const auto& names = coefficient_names();
+  for (auto it = d["coefficients"].begin(); it != d["coefficients"].end(); ++it) {
+    const std::string key = "determined_by.coefficients." + it.key();
+    if (std::find(names.begin(), names.end(), it.key()) == names.end())
+      throw InputError(f, 0, key, "unknown coefficient (expected gyro.bias.x … accel.M.zz)");
+    const json& c = *it;
+    if (!c.is_object()) throw InputError(f, 0, key, "expected an object");
+    CoefficientStage st;
+    if (!c.contains("stage") || !c["stage"].is_string()) throw InputError(f, 0, key + ".stage", "expected a string");
+    st.stage = c["stage"].get<std::string>();
+    if (st.stage != "bench" && st.stage != "drive" && st.stage != "both" && st.stage != "prior")
+      throw InputError(f, 0, key + ".stage", "'" + st.stage + "' is not bench, drive, both or prior");
+    st.parent_sigma = opt_number(c, "parent_sigma", f, key);
+    st.prior_sigma = opt_number(c, "prior_sigma", f, key);
+    st.posterior_sigma = opt_number(c, "posterior_sigma", f, key);
+    st.ratio = opt_number(c, "ratio", f, key);
+    st.drive_share = opt_number(c, "drive_share", f, key);
+    if (st.drive_share && *st.drive_share > 1 + 1e-9) throw InputError(f, 0, key + ".drive_share", "expected 0 … 1");
+    out.coefficients[it.key()] = st;
   }
   return out;
 }
@@ -188,8 +280,15 @@ InMotionResult parse_inmotion_result(const std::string& text, const std::string&
     r.qc = qc_metrics(j["qc"], f);
     r.qc_json = j["qc"].dump();
   }
+  r.determined_by = determined_by_of(j, f);
+  if (j.contains("priors") && !j["priors"].is_null() && !j["priors"].is_object())
+    throw InputError(f, 0, "priors", "expected an object");
   r.result_json = j.dump();
   return r;
+}
+
+std::optional<DeterminedBy> parse_determined_by(const std::string& result_json, const std::string& file) {
+  return determined_by_of(parse_json_text(result_json, file), file);
 }
 
 double max_difference(const SensorErrors& a, const SensorErrors& b) {

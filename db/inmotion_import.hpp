@@ -3,7 +3,12 @@
 //    "coefficients": {spec schema with σ: total errors relative to the raw sensor output},
 //    "correction":   {spec schema: the in-motion estimate relative to the input set} (optional),
 //    "mounting_rpy_deg": [r, p, y] or {"value": [...], "sigma": [...]}  (+ "mounting_rpy_sigma_deg"),
-//    "consistency": {...}, "qc": {...}, "reference_system"/"reference": "..." (optional)}
+//    "consistency": {...}, "qc": {...}, "reference_system"/"reference": "..." (optional),
+//    "determined_by": {...} (optional, below), "priors": {...} (optional, kept in result_json)}
+// QC metrics from "qc": numbers, {"value", "threshold", "pass"} objects, and the numeric figures of
+// "sets" entries (sets.NAME.final_cpe_m, unit m), each marked with qc.sample (in-/out-of-sample).
+// The figures are informative (no threshold) except the result set's final ΔS ("in-motion"), which
+// must not exceed that of the set the fit started from ("input", or "none" on raw data).
 // The result is stored against the device named in it (which must already be in the database) as
 // one in-motion run, its QC results and one coefficient set:
 //  - source "combined" with the bench (or other) parent set P when "coefficients" equals
@@ -13,12 +18,30 @@
 // Any problem (malformed file, unknown device, mismatched serials, a parent that does not compose
 // to the stated coefficients) throws InputError and writes nothing.
 #pragma once
+#include <map>
 #include <optional>
 #include <string>
 
 #include "db/store.hpp"
 
 namespace calbench::db {
+
+// RESULT.json "determined_by" (fit drive, issue 16): which calibration stage determined each of the
+// 24 coefficients, from the drive's share of the information 1 − (σ_post/σ_prior)².
+//   {"rule": "...", "coefficients": {"gyro.bias.x": {"parent_sigma", "prior_sigma", "posterior_sigma",
+//                                                    "ratio", "drive_share", "stage"}, ...}}
+// σ in SI (rad/s, m/s², dimensionless M); null = not stated (e.g. parent_sigma without a parent set).
+struct CoefficientStage {
+  std::string stage;  // "bench" | "drive" | "both" | "prior"
+  std::optional<double> parent_sigma, prior_sigma, posterior_sigma, ratio, drive_share;
+};
+struct DeterminedBy {
+  std::string rule;
+  std::map<std::string, CoefficientStage> coefficients;  // names of coefficient_names(); may be partial
+};
+// nullopt when the result has no "determined_by" (results before issue 16); InputError naming the
+// key when it is malformed.
+std::optional<DeterminedBy> parse_determined_by(const std::string& result_json, const std::string& file);
 
 struct InMotionResult {
   DeviceInfo device;
@@ -29,6 +52,7 @@ struct InMotionResult {
   bool has_mounting = false;
   std::string consistency_json = "{}", qc_json = "{}", result_json;
   std::vector<QcResult> qc;  // metrics extracted from "qc"
+  std::optional<DeterminedBy> determined_by;
 };
 
 // Parse and validate RESULT.json text; `file` names it in errors.

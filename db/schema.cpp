@@ -133,6 +133,12 @@ BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
 CREATE TRIGGER audit_log_no_delete BEFORE DELETE ON audit_log
 BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
 )SQL",
+      // ---- 2: QC results say which data they were computed on and how pass was decided ----
+      R"SQL(
+ALTER TABLE qc_results ADD COLUMN sample TEXT NOT NULL DEFAULT ''
+  CHECK (sample IN ('', 'in-sample', 'out-of-sample', 'not applicable'));
+ALTER TABLE qc_results ADD COLUMN criterion TEXT NOT NULL DEFAULT '';
+)SQL",
   };
   return m;
 }

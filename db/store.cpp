@@ -229,16 +229,20 @@ std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, 
 
 void Store::insert_qc_locked(const std::vector<QcResult>& qc, std::optional<std::int64_t> bench_run,
                              std::optional<std::int64_t> inmotion_run) {
-  auto st = conn_->prepare("INSERT INTO qc_results(bench_run_id, inmotion_run_id, metric, value, threshold, pass, unit) "
-                           "VALUES (?, ?, ?, ?, ?, ?, ?)");
+  auto st = conn_->prepare("INSERT INTO qc_results(bench_run_id, inmotion_run_id, metric, value, threshold, pass, unit, "
+                           "sample, criterion) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
   for (const auto& q : qc) {
     check_text(q.metric, "qc.metric", true);
+    check_text(q.unit, "qc.unit", false);
+    check_text(q.criterion, "qc.criterion", false);
+    if (!q.sample.empty() && q.sample != kInSample && q.sample != kOutOfSample && q.sample != kSampleNotApplicable)
+      throw arg_error("qc." + q.metric + ".sample", "'" + q.sample + "' is not in-sample, out-of-sample or not applicable");
     if (!std::isfinite(q.value)) throw arg_error("qc." + q.metric, "NaN or infinity is not allowed");
     if (q.threshold && !std::isfinite(*q.threshold))
       throw arg_error("qc." + q.metric + ".threshold", "NaN or infinity is not allowed");
     st.reset();
     st.bind(1, bench_run).bind(2, inmotion_run).bind(3, q.metric).bind(4, q.value).bind(5, q.threshold)
-        .bind(6, q.pass ? 1 : 0).bind(7, q.unit);
+        .bind(6, q.pass ? 1 : 0).bind(7, q.unit).bind(8, q.sample).bind(9, q.criterion);
     st.run();
   }
 }
@@ -487,18 +491,18 @@ std::optional<InMotionRun> Store::inmotion_run(std::int64_t id) {
 static std::vector<QcResult> read_qc(Statement& st) {
   std::vector<QcResult> out;
   while (st.step())
-    out.push_back(QcResult{st.text(0), st.real(1), st.opt_real(2), st.int64(3) != 0, st.text(4)});
+    out.push_back(QcResult{st.text(0), st.real(1), st.opt_real(2), st.int64(3) != 0, st.text(4), st.text(5), st.text(6)});
   return out;
 }
 
 std::vector<QcResult> Store::qc_of_bench_run(std::int64_t id) {
-  auto st = conn_->prepare("SELECT metric, value, threshold, pass, unit FROM qc_results WHERE bench_run_id = ? ORDER BY id");
+  auto st = conn_->prepare("SELECT metric, value, threshold, pass, unit, sample, criterion FROM qc_results WHERE bench_run_id = ? ORDER BY id");
   st.bind(1, id);
   return read_qc(st);
 }
 
 std::vector<QcResult> Store::qc_of_inmotion_run(std::int64_t id) {
-  auto st = conn_->prepare("SELECT metric, value, threshold, pass, unit FROM qc_results WHERE inmotion_run_id = ? ORDER BY id");
+  auto st = conn_->prepare("SELECT metric, value, threshold, pass, unit, sample, criterion FROM qc_results WHERE inmotion_run_id = ? ORDER BY id");
   st.bind(1, id);
   return read_qc(st);
 }

@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -53,12 +53,21 @@ struct Device {
   std::string model, serial, firmware, created_at;
 };
 
+// Which data a QC figure was computed on, relative to the data the set was fitted on.
+inline constexpr const char* kInSample = "in-sample";
+inline constexpr const char* kOutOfSample = "out-of-sample";
+inline constexpr const char* kSampleNotApplicable = "not applicable";  // e.g. samples lost while recording
+
 struct QcResult {
   std::string metric;
   double value = 0;
-  std::optional<double> threshold;  // absent: informative only
+  std::optional<double> threshold;  // absent: informative only (pass is then true and means nothing)
   bool pass = true;
   std::string unit;
+  std::string sample;     // kInSample, kOutOfSample, kSampleNotApplicable, or "" (not recorded)
+  std::string criterion;  // how pass follows from value and threshold, e.g. "|value| ≤ threshold"
+  // A figure to read, not a check: no threshold and no criterion (and so nothing that can fail).
+  bool informative() const { return pass && !threshold && criterion.empty(); }
 };
 
 struct BenchRunInput {

@@ -75,7 +75,7 @@ json qc_json(const std::vector<QcResult>& qc) {
   json a = json::array();
   for (const auto& q : qc)
     a.push_back({{"metric", q.metric}, {"value", q.value}, {"threshold", q.threshold ? json(*q.threshold) : json(nullptr)},
-                 {"pass", q.pass}, {"unit", q.unit}});
+                 {"pass", q.pass}, {"unit", q.unit}, {"sample", q.sample}, {"criterion", q.criterion}});
   return a;
 }
 
@@ -167,7 +167,8 @@ void cmd_show(const DbArgs& a) {
     print_set_summary(x);
     for (const auto& q : s->qc_of_set(x))
       std::cout << "    QC " << q.metric << " = " << fmt(q.value) << (q.unit.empty() ? "" : " " + q.unit)
-                << (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : std::string()) << (q.pass ? " pass" : " FAIL")
+                << (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : std::string())
+                << (q.informative() ? " informative" : q.pass ? " pass" : " FAIL") << (q.sample.empty() ? "" : ", " + q.sample)
                 << "\n";
   }
   if (sets.empty()) std::cout << "  (none)\n";
@@ -279,10 +280,12 @@ void cmd_import_inmotion(const DbArgs& a) {
   if (!o.note.empty()) std::cout << "note: " << o.note << "\n";
 }
 
-// --qc NAME=VALUE[:THRESHOLD][:UNIT]  (pass = |value| ≤ threshold when a threshold is given)
+// --qc NAME=VALUE[:THRESHOLD[:UNIT[:SAMPLE]]]  (pass = |value| ≤ threshold when a threshold is given;
+// SAMPLE in-sample, out-of-sample or "not applicable")
 QcResult parse_qc_option(const std::string& s) {
   const auto eq = s.find('=');
-  if (eq == std::string::npos || eq == 0) throw arg_error("--qc", "expected NAME=VALUE[:THRESHOLD[:UNIT]], got '" + s + "'");
+  if (eq == std::string::npos || eq == 0)
+    throw arg_error("--qc", "expected NAME=VALUE[:THRESHOLD[:UNIT[:SAMPLE]]], got '" + s + "'");
   QcResult q;
   q.metric = s.substr(0, eq);
   std::vector<std::string> parts;
@@ -303,8 +306,15 @@ QcResult parse_qc_option(const std::string& s) {
   if (parts.size() > 1 && !parts[1].empty()) {
     q.threshold = num(parts[1]);
     q.pass = std::abs(q.value) <= *q.threshold;
+    q.criterion = "|value| ≤ threshold";
   }
   if (parts.size() > 2) q.unit = parts[2];
+  if (parts.size() > 3) {
+    q.sample = parts[3];
+    if (q.sample != kInSample && q.sample != kOutOfSample && q.sample != kSampleNotApplicable)
+      throw arg_error("--qc " + q.metric, "sample '" + q.sample + "' is not in-sample, out-of-sample or \"not applicable\"");
+  }
+  if (parts.size() > 4) throw arg_error("--qc " + q.metric, "expected NAME=VALUE[:THRESHOLD[:UNIT[:SAMPLE]]]");
   return q;
 }
 
@@ -384,7 +394,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   sb->add_option("--ended", a->ended, "end time, ISO 8601 UTC");
   sb->add_option("--outcome", a->outcome, "pass | fail | aborted")->check(CLI::IsMember({"pass", "fail", "aborted"}));
   sb->add_option("--firmware", a->firmware, "device firmware revision");
-  sb->add_option("--qc", a->qc, "QC result NAME=VALUE[:THRESHOLD[:UNIT]] (repeatable)");
+  sb->add_option("--qc", a->qc, "QC result NAME=VALUE[:THRESHOLD[:UNIT[:SAMPLE]]] (repeatable; SAMPLE in-sample, out-of-sample or \"not applicable\")");
   sb->add_flag("--json", a->json, "machine-readable output");
 });
 

@@ -1,4 +1,4 @@
-// calbench report SERIAL --html OUT.html | calbench report fleet --html OUT.html
+// calbench report SERIAL --html OUT.html [--thresholds FILE] | calbench report fleet --html OUT.html
 #include <iostream>
 #include <memory>
 
@@ -11,7 +11,7 @@ namespace calbench::cli {
 namespace {
 
 struct ReportArgs {
-  std::string target, html, db;
+  std::string target, html, db, thresholds;
 };
 
 const bool registered = add_command(90, [](CLI::App& app) {
@@ -20,11 +20,14 @@ const bool registered = add_command(90, [](CLI::App& app) {
   sub->add_option("SERIAL", a->target, "device serial number, or `fleet` for the fleet report")->required();
   sub->add_option("--html", a->html, "output HTML file (self-contained, plots embedded)")->required();
   sub->add_option("--db", a->db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
+  sub->add_option("--thresholds", a->thresholds,
+                  "approval thresholds (JSON, as for `db approve`) for the verdict; default: built-in ADIS16488A limits");
   sub->callback([a] {
+    const db::Thresholds t = a->thresholds.empty() ? db::default_thresholds() : db::load_thresholds(a->thresholds);
     db::OpenOptions o;
     o.read_only = true;
     db::Store s(a->db.empty() ? db::Store::default_path() : a->db, o);
-    const std::string html = a->target == "fleet" ? report::fleet_report_html(s) : report::device_report_html(s, a->target);
+    const std::string html = a->target == "fleet" ? report::fleet_report_html(s) : report::device_report_html(s, a->target, t);
     write_text_atomic(a->html, html);
     std::cout << "report written to " << a->html << "\n";
   });

@@ -7,6 +7,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/drive/qc_drive.hpp"
+#include "bench/drive/reference_info.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
@@ -435,6 +436,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
                     {"sha256", sha256_file(dir / "imu.csv")},
                     {"sha256_reference", sha256_file(dir / "reference.csv")},
                     {"sha256_meta", sha256_file(dir / "meta.json")}};
+  j["reference_system"] = describe_reference(dir, meta, a, cfg);
   j["window_s"] = {t_first, t_last};
   j["observations"] = a.obs;
   j["smoothed"] = a.smooth;

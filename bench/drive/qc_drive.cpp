@@ -1,5 +1,6 @@
 #include "bench/drive/qc_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -111,6 +112,26 @@ QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optio
   return q;
 }
 
+namespace {
+// ΔS(t) for plotting: the first epoch at or after every multiple of the step (1 s, or longer so
+// that no curve exceeds kMaxSeriesPoints), and always the last epoch; t to 1 ms, ΔS to 0.1 mm.
+nlohmann::json cpe_series(const QcCurve& c) {
+  constexpr double kMaxSeriesPoints = 3600;
+  nlohmann::json t = nlohmann::json::array(), v = nlohmann::json::array();
+  if (!c.t.empty()) {
+    const double step = std::max(1.0, c.t.back() / kMaxSeriesPoints);
+    double next = 0;
+    for (std::size_t k = 0; k < c.t.size(); ++k) {
+      if (c.t[k] < next - 1e-9 && k + 1 < c.t.size()) continue;
+      t.push_back(std::round(c.t[k] * 1e3) / 1e3);
+      v.push_back(std::round(c.cpe[k] * 1e4) / 1e4);
+      next = (std::floor(c.t[k] / step + 1e-9) + 1) * step;
+    }
+  }
+  return {{"t_s", t}, {"cpe_m", v}};
+}
+}  // namespace
+
 nlohmann::json qc_json(const QcOutcome& q) {
   nlohmann::json j;
   j["from_s"] = q.from_s;
@@ -136,6 +157,7 @@ nlohmann::json qc_json(const QcOutcome& q) {
         }
     }
     s["cpe_m_at"] = at;
+    s["cpe_series"] = cpe_series(c);
     j["sets"].push_back(s);
   }
   return j;

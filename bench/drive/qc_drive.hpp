@@ -37,7 +37,9 @@ struct QcOutcome {
 // time offset); bench-only terms are ignored.
 QcOutcome run_qc(const std::filesystem::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s,
                  double horizon_s);
-// The JSON: {"from_s", "horizon_s", "sets": [{"name", "final_cpe_m", "max_cpe_m", "cpe_m_at": {...}}]}.
+// The JSON: {"from_s", "horizon_s", "sets": [{"name", "final_cpe_m", "max_cpe_m", "cpe_m_at": {...},
+// "cpe_series": {"t_s": [...], "cpe_m": [...]}}]}; cpe_series is ΔS(t) over the whole horizon at 1 s
+// spacing (wider beyond a 1 h horizon: at most 3600 points plus the last epoch).
 nlohmann::json qc_json(const QcOutcome& q);
 // gnuplot PNG with one curve per set.
 void qc_plot(const QcOutcome& q, const std::filesystem::path& png, const std::string& title);

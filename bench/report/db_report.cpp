@@ -4,28 +4,19 @@
 #include <cmath>
 #include <ctime>
 #include <iomanip>
-#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "bench/io/input_error.hpp"
-#include "db/input_errors.hpp"
 #include "bench/report/gnuplot.hpp"
+#include "bench/report/html_parts.hpp"
+#include "bench/report/inmotion_section.hpp"
 #include "db/fleet.hpp"
+#include "db/input_errors.hpp"
 
 namespace calbench::report {
 namespace {
-using nlohmann::json;
 using namespace calbench::db;
 
-std::string num(double v, int prec = 4) {
-  if (!std::isfinite(v)) return "–";
-  std::ostringstream s;
-  s << std::setprecision(prec) << v;
-  return s.str();
-}
-std::string pm(double v, double sigma, double k, int prec = 4) {
-  return num(v * k, prec) + " ± " + (std::isfinite(sigma) ? num(sigma * k, 2) : std::string("?"));
-}
 std::string now_utc() {
   std::time_t t = std::time(nullptr);
   char b[32];
@@ -35,23 +26,47 @@ std::string now_utc() {
 const char* kAxes[] = {"x", "y", "z"};
 
 const char* kStyle = R"CSS(
-body{font-family:DejaVu Sans,Arial,sans-serif;font-size:11px;margin:16px;color:#111}
+body{font-family:DejaVu Sans,Arial,sans-serif;font-size:11px;margin:16px;color:#111;max-width:1400px}
 h1{font-size:18px;margin:0 0 4px} h2{font-size:14px;border-bottom:1px solid #999;margin:14px 0 6px}
-h3{font-size:12px;margin:8px 0 4px}
-table{border-collapse:collapse;margin:4px 0 8px} td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}
-th{background:#eee} td.l,th.l{text-align:left}
-.pass{color:#070;font-weight:bold} .fail{color:#b00;font-weight:bold} .muted{color:#666}
+h3{font-size:12px;margin:10px 0 4px} h4{font-size:11px;margin:8px 0 3px}
+table{border-collapse:collapse;margin:4px 0 8px;max-width:100%} td,th{border:1px solid #bbb;padding:2px 6px;text-align:right;vertical-align:top}
+th{background:#eee} td.l,th.l{text-align:left} td.t{white-space:nowrap}
+.pass{color:#070;font-weight:bold} .fail{color:#b00;font-weight:bold} .warn{color:#a60;font-weight:bold} .muted{color:#666}
 .verdict{font-size:16px;padding:4px 10px;border:2px solid;display:inline-block;margin:6px 0}
+.verdict.draft{color:#a60}
+.why{margin:2px 0 8px} .why li{margin:1px 0} .note{color:#333;margin:3px 0;max-width:1150px}
+.digest{font-family:DejaVu Sans Mono,monospace;font-size:10px;word-break:break-all}
+.plots svg{margin:0 8px 4px 0;page-break-inside:avoid} td.stage-drive{color:#1b6ac9} td.stage-bench{color:#555}
+td.stage-both{color:#7570b3} td.stage-prior{color:#a60}
 img{max-width:100%;page-break-inside:avoid} pre{font-size:10px;background:#f6f6f6;padding:4px;white-space:pre-wrap}
-@media print{body{margin:0} h2{page-break-after:avoid}}
+@media print{body{margin:0} h2,h3,h4{page-break-after:avoid}}
 )CSS";
 
+// After load, the page marks <body> with what the browser made of it (for the headless test):
+// data-images="DECODED/TOTAL"; for the ΔS plots data-cpe-curves (polylines), data-cpe-min-points
+// (fewest points the browser parsed in one of them) and data-cpe-min-span (smallest width of a
+// curve as a fraction of its plot area: 1 = over the whole horizon); data-scroll-width, the page's
+// width as laid out (wider than the window: something would be cut).
 const char* kImageCheck = R"JS(
 <script>
 window.addEventListener('load', function () {
   var imgs = document.images, ok = 0;
   for (var i = 0; i < imgs.length; ++i) if (imgs[i].complete && imgs[i].naturalWidth > 0) ++ok;
   document.body.setAttribute('data-images', ok + '/' + imgs.length);
+  var lines = document.querySelectorAll('svg.cpe polyline[data-curve]'), minPts = Infinity, minSpan = Infinity;
+  for (var k = 0; k < lines.length; ++k) {
+    var pl = lines[k], n = pl.points.numberOfItems, area = pl.ownerSVGElement.querySelector('rect.area');
+    var span = n > 0 && area ? pl.getBBox().width / area.getBBox().width : 0;
+    pl.setAttribute('data-plotted-points', n);
+    minPts = Math.min(minPts, n);
+    minSpan = Math.min(minSpan, span);
+  }
+  document.body.setAttribute('data-scroll-width', document.documentElement.scrollWidth);
+  document.body.setAttribute('data-cpe-curves', lines.length);
+  if (lines.length) {
+    document.body.setAttribute('data-cpe-min-points', minPts);
+    document.body.setAttribute('data-cpe-min-span', minSpan.toFixed(3));
+  }
 });
 </script>
 )JS";
@@ -73,16 +88,6 @@ std::string plot_or_note(const std::string& script, const std::map<std::string, 
   }
 }
 
-std::string qc_table(const std::vector<QcResult>& qc) {
-  if (qc.empty()) return "<p class=\"muted\">no QC results recorded</p>\n";
-  std::string h = "<table><tr><th class=\"l\">metric</th><th>value</th><th>threshold</th><th>unit</th><th>result</th></tr>\n";
-  for (const auto& q : qc)
-    h += "<tr><td class=\"l\">" + html_escape(q.metric) + "</td><td>" + num(q.value, 6) + "</td><td>" +
-         (q.threshold ? num(*q.threshold, 6) : std::string("–")) + "</td><td>" + html_escape(q.unit) + "</td><td class=\"" +
-         (q.pass ? "pass\">pass" : "fail\">FAIL") + "</td></tr>\n";
-  return h + "</table>\n";
-}
-
 // One coefficient set as a table: per triad bias and the rows of M, value ± σ in display units.
 std::string set_table(const SensorErrors& e) {
   std::string h = "<table><tr><th class=\"l\">triad</th><th class=\"l\">term</th><th>x</th><th>y</th><th>z</th><th class=\"l\">unit</th></tr>\n";
@@ -90,7 +95,7 @@ std::string set_table(const SensorErrors& e) {
     const TriadErrors& t = std::string(triad) == "gyro" ? e.gyro : e.accel;
     std::string unit;
     double k;
-    display_unit(std::string(triad) + ".bias.x", unit, k);
+    coefficient_unit(std::string(triad) + ".bias.x", unit, k);
     h += std::string("<tr><td class=\"l\">") + triad + "</td><td class=\"l\">bias</td>";
     for (int i = 0; i < 3; ++i) h += "<td>" + pm(t.bias(i), t.sigma_bias(i), k) + "</td>";
     h += "<td class=\"l\">" + unit + "</td></tr>\n";
@@ -134,7 +139,9 @@ std::string history_plot(const std::vector<CoefficientSetRecord>& sets) {
     g << "set title '" << titles[p] << "'\nplot ";
     for (int i = 0; i < 3; ++i) {
       const int col = 2 + (p * 3 + i) * 2;
-      g << (i ? ", " : "") << "'h.dat' using 1:" << col << ":" << col + 1 << " with yerrorlines title '" << kAxes[i] << "'";
+      // x, y and z side by side (±0.06) so that no error bar hides another
+      g << (i ? ", " : "") << "'h.dat' using ($1" << (i == 0 ? "-0.06" : i == 1 ? "" : "+0.06") << "):" << col << ":" << col + 1
+        << " with yerrorlines title '" << kAxes[i] << "'";
     }
     g << "\n";
   }
@@ -142,84 +149,70 @@ std::string history_plot(const std::vector<CoefficientSetRecord>& sets) {
   return plot_or_note(g.str(), files, "coefficient history");
 }
 
-// Circular position error curves from an in-motion run's "qc" (issue 5 `qc --json` form:
-// {"sets": [{"name", "cpe_m_at": {"60": m, ...}} ...]}, or "series": {"t_s": [...], NAME: [...]}).
-std::string cpe_plot(const json& qc) {
-  std::map<std::string, std::string> files;
-  std::vector<std::pair<std::string, std::string>> curves;  // title, file
-  auto add_curve = [&](const std::string& name, const std::vector<std::pair<double, double>>& pts) {
-    if (pts.size() < 2) return;
-    std::ostringstream d;
-    d << std::setprecision(10);
-    for (const auto& [t, v] : pts) d << t << " " << v << "\n";
-    const std::string f = std::string("c").append(std::to_string(curves.size())).append(".dat");
-    files[f] = d.str();
-    curves.emplace_back(name, f);
-  };
-  if (qc.is_object() && qc.contains("sets") && qc["sets"].is_array()) {
-    for (const auto& s : qc["sets"]) {
-      if (!s.is_object() || !s.contains("cpe_m_at") || !s["cpe_m_at"].is_object()) continue;
-      std::vector<std::pair<double, double>> pts;
-      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
-        char* end = nullptr;
-        const double t = std::strtod(it.key().c_str(), &end);
-        if (end && *end == 0 && it->is_number()) pts.emplace_back(t, it->get<double>());
-      }
-      std::sort(pts.begin(), pts.end());
-      add_curve(s.value("name", std::string("set")), pts);
+// The verdict on the device's current set (the newest that is not revoked), with the reasons
+// when it fails the thresholds in force and the approval history of that set.
+std::string verdict_block(Store& store, const Device& dev, const std::vector<CoefficientSetRecord>& sets, const Thresholds& t) {
+  const CoefficientSetRecord* current = nullptr;
+  for (const auto& s : sets)
+    if (s.status != SetStatus::revoked) current = &s;
+  std::ostringstream b;
+  std::vector<std::string> reasons;
+  std::string word = "FAIL", cls = "fail", said;
+  if (!current) {
+    reasons.push_back(sets.empty() ? "the device has no coefficient set" : "every coefficient set of the device is revoked");
+  } else {
+    const ApprovalCheck chk = check_thresholds(*current, store.qc_of_set(*current), t);
+    const bool approved = current->status == SetStatus::approved || current->status == SetStatus::provisioned;
+    reasons = chk.reasons;
+    const std::string set = "Set " + std::to_string(current->id);
+    if (chk.ok && approved) {
+      word = "PASS";
+      cls = "pass";
+      said = set + " is " + to_string(current->status) + " and meets every threshold in force.";
+    } else if (chk.ok) {
+      word = "NOT APPROVED";
+      cls = "draft";
+      said = set + " is a draft: it meets every threshold in force but has not been approved (calbench db approve " +
+             std::to_string(current->id) + ").";
+    } else {
+      said = approved ? set + " is " + to_string(current->status) + " but does not meet the thresholds in force:"
+                      : set + " is a draft and would be refused approval:";
     }
   }
-  if (qc.is_object() && qc.contains("series") && qc["series"].is_object() && qc["series"].contains("t_s")) {
-    const json& ser = qc["series"];
-    for (auto it = ser.begin(); it != ser.end(); ++it) {
-      if (it.key() == "t_s" || !it->is_array() || it->size() != ser["t_s"].size()) continue;
-      std::vector<std::pair<double, double>> pts;
-      for (std::size_t i = 0; i < it->size(); ++i)
-        if ((*it)[i].is_number() && ser["t_s"][i].is_number()) pts.emplace_back(ser["t_s"][i].get<double>(), (*it)[i].get<double>());
-      add_curve(it.key(), pts);
-    }
+  b << "<div id=\"verdict\" class=\"verdict " << cls << "\" data-verdict=\"" << word << "\">" << word << "</div> ";
+  if (current)
+    b << "current set " << current->id << " (v" << current->version << ", " << to_string(current->source) << ", "
+      << to_string(current->status) << ")\n";
+  b << "<div class=\"why\">" << (said.empty() ? "" : "<p>" + html_escape(said) + "</p>") << "\n";
+  if (!reasons.empty()) {
+    b << "<ul id=\"verdict-reasons\" class=\"fail\">\n";
+    for (const auto& r : reasons) b << "<li>" << html_escape(r) << "</li>\n";
+    b << "</ul>\n";
   }
-  if (curves.empty()) return "<p class=\"muted\">no circular-position-error series in this run's QC</p>\n";
-  std::ostringstream g;
-  g << "set terminal pngcairo size 900,380 font 'DejaVu Sans,9'\nset output 'plot.png'\n"
-       "set title 'Circular position error, inertial-only navigation (eq. 39)'\nset xlabel 'time since T0 [s]'\n"
-       "set ylabel 'ΔS [m]'\nset grid\nset key top left\nplot ";
-  for (std::size_t i = 0; i < curves.size(); ++i) {
-    std::string title = curves[i].first;
-    std::replace(title.begin(), title.end(), '\'', ' ');
-    g << (i ? ", " : "") << "'" << curves[i].second << "' using 1:2 with linespoints title '" << title << "'";
-  }
-  g << "\n";
-  return plot_or_note(g.str(), files, "circular position error");
+  if (current)  // what happened to this set at approval
+    for (const auto& a : store.audit_of_device(dev.id))
+      if (a.entity == "coefficient_set" && a.entity_id == current->id &&
+          (a.action == "approve-refused" || (a.action == "status" && a.detail.rfind("draft -> approved", 0) == 0)))
+        b << "<p class=\"note\">" << html_escape(a.action == "status" ? "Approved" : "Approval refused") << " " << html_escape(a.at)
+          << " by " << html_escape(a.user + "@" + a.station) << ": " << html_escape(a.detail) << "</p>\n";
+  b << "<p class=\"note\">Thresholds in force for this verdict: " << html_escape(t.source) << "</p>\n<ul id=\"thresholds\" class=\"note\">";
+  for (const auto& line : describe_thresholds(t)) b << "<li>" << html_escape(line) << "</li>";
+  b << "</ul></div>\n";
+  return b.str();
 }
 
-bool set_passes(Store& s, const CoefficientSetRecord& set) {
-  for (const auto& q : s.qc_of_set(set))
-    if (!q.pass) return false;
-  return set.status == SetStatus::approved || set.status == SetStatus::provisioned;
-}
 }  // namespace
 
-std::string device_report_html(Store& store, const std::string& serial) {
+std::string device_report_html(Store& store, const std::string& serial, const Thresholds& thresholds) {
   const auto dev = store.find_device(serial);
   if (!dev) throw arg_error("SERIAL", "unknown device '" + serial + "' in " + store.connection().path());
   const auto sets = store.sets_of(dev->id);
   std::ostringstream b;
-  // Verdict: the newest non-revoked set is approved or provisioned and its QC passes.
-  const CoefficientSetRecord* current = nullptr;
-  for (const auto& s : sets)
-    if (s.status != SetStatus::revoked) current = &s;
-  const bool pass = current && set_passes(store, *current);
   b << "<h1>" << html_escape(dev->model) << " &nbsp;serial " << html_escape(dev->serial) << "</h1>\n";
   b << "<div class=\"muted\">firmware " << html_escape(dev->firmware.empty() ? "unknown" : dev->firmware)
     << " · in database since " << html_escape(dev->created_at) << " · report generated " << now_utc() << " from "
-    << html_escape(store.connection().path()) << "</div>\n";
-  b << "<div class=\"verdict " << (pass ? "pass\">PASS" : "fail\">FAIL") << "</div> ";
-  if (current)
-    b << "current set " << current->id << " (v" << current->version << ", " << to_string(current->source) << ", "
-      << to_string(current->status) << ")\n";
-  else
-    b << "no coefficient set\n";
+    << html_escape(store.connection().path()) << "</div>\n"
+    << verdict_block(store, *dev, sets, thresholds);
 
   b << "<h2>Coefficient history</h2>\n";
   if (!sets.empty()) {
@@ -228,7 +221,7 @@ std::string device_report_html(Store& store, const std::string& serial) {
     for (const auto& s : sets)
       b << "<tr><td>" << s.id << "</td><td>" << s.version << "</td><td class=\"l\">" << to_string(s.source)
         << "</td><td class=\"l " << (s.status == SetStatus::revoked ? "fail" : "") << "\">" << to_string(s.status)
-        << "</td><td>" << (s.parent_id ? std::to_string(*s.parent_id) : "–") << "</td><td class=\"l\">"
+        << "</td><td>" << (s.parent_id ? std::to_string(*s.parent_id) : "–") << "</td><td class=\"l t\">"
         << html_escape(s.created_at) << "</td><td class=\"l\">" << html_escape(s.created_by) << "</td></tr>\n";
     b << "</table>\n" << history_plot(sets);
     for (const auto& s : sets) {
@@ -250,12 +243,12 @@ std::string device_report_html(Store& store, const std::string& serial) {
     b << "<h3>Bench run " << r->id << " → set " << s.id << "</h3>\n<table>"
       << "<tr><th class=\"l\">station</th><td class=\"l\">" << html_escape(r->station) << "</td></tr>"
       << "<tr><th class=\"l\">plan</th><td class=\"l\">" << html_escape(r->plan) << "</td></tr>"
-      << "<tr><th class=\"l\">recording</th><td class=\"l\">" << html_escape(r->recording_path) << "<br><span class=\"muted\">SHA-256 "
-      << html_escape(r->recording_sha256) << "</span></td></tr>"
+      << "<tr><th class=\"l\">recording</th><td class=\"l\">" << html_escape(r->recording_path) << "<br>SHA-256 of imu.csv "
+      << digest(r->recording_sha256) << "</td></tr>"
       << "<tr><th class=\"l\">time</th><td class=\"l\">" << html_escape(r->started_at) << " – " << html_escape(r->ended_at) << "</td></tr>"
       << "<tr><th class=\"l\">outcome</th><td class=\"l " << (r->outcome == "pass" ? "pass" : "fail") << "\">"
       << html_escape(r->outcome) << "</td></tr></table>\n"
-      << qc_table(store.qc_of_bench_run(r->id));
+      << qc_table(store.qc_of_bench_run(r->id), "qc-bench-" + std::to_string(r->id));
   }
   if (!any_bench) b << "<p class=\"muted\">no bench runs</p>\n";
 
@@ -266,23 +259,7 @@ std::string device_report_html(Store& store, const std::string& serial) {
     const auto r = store.inmotion_run(*s.inmotion_run_id);
     if (!r) continue;
     any_motion = true;
-    b << "<h3>In-motion run " << r->id << " → set " << s.id << " (" << to_string(s.source)
-      << (s.parent_id ? ", parent set " + std::to_string(*s.parent_id) : std::string()) << ")</h3>\n<table>"
-      << "<tr><th class=\"l\">drive recording</th><td class=\"l\">" << html_escape(r->recording_path)
-      << "<br><span class=\"muted\">SHA-256 " << html_escape(r->recording_sha256) << "</span></td></tr>"
-      << "<tr><th class=\"l\">reference system</th><td class=\"l\">" << html_escape(r->reference_system.empty() ? "–" : r->reference_system)
-      << "</td></tr><tr><th class=\"l\">mounting roll / pitch / yaw [°]</th><td class=\"l\">";
-    for (int i = 0; i < 3; ++i)
-      b << (i ? " / " : "") << pm(r->mounting_rpy_deg[static_cast<std::size_t>(i)], r->mounting_sigma_deg[static_cast<std::size_t>(i)], 1.0);
-    b << "</td></tr></table>\n";
-    json qc = json::object(), cons = json::object();
-    try {
-      qc = json::parse(r->qc_json);
-      cons = json::parse(r->consistency_json);
-    } catch (...) {
-    }
-    b << cpe_plot(qc) << qc_table(store.qc_of_inmotion_run(r->id));
-    b << "<div class=\"muted\">consistency (normalised innovations)</div><pre>" << html_escape(cons.dump(1)) << "</pre>\n";
+    b << inmotion_section(store, *r, s, sets);
   }
   if (!any_motion) b << "<p class=\"muted\">no in-motion runs</p>\n";
 
@@ -292,7 +269,7 @@ std::string device_report_html(Store& store, const std::string& serial) {
   else {
     b << "<table><tr><th class=\"l\">when</th><th>set</th><th class=\"l\">kind</th><th class=\"l\">target</th><th class=\"l\">result</th><th class=\"l\">by</th><th class=\"l\">message</th></tr>\n";
     for (const auto& p : prov)
-      b << "<tr><td class=\"l\">" << html_escape(p.at) << "</td><td>" << p.set_id << "</td><td class=\"l\">" << html_escape(p.kind)
+      b << "<tr><td class=\"l t\">" << html_escape(p.at) << "</td><td>" << p.set_id << "</td><td class=\"l\">" << html_escape(p.kind)
         << "</td><td class=\"l\">" << html_escape(p.target) << "</td><td class=\"l " << (p.ok ? "pass\">ok" : "fail\">FAILED")
         << "</td><td class=\"l\">" << html_escape(p.actor) << "</td><td class=\"l\">" << html_escape(p.message) << "</td></tr>\n";
     b << "</table>\n";
@@ -300,7 +277,7 @@ std::string device_report_html(Store& store, const std::string& serial) {
 
   b << "<h2>History (audit log)</h2>\n<table><tr><th class=\"l\">when</th><th class=\"l\">who</th><th class=\"l\">what</th><th class=\"l\">detail</th></tr>\n";
   for (const auto& a : store.audit_of_device(dev->id))
-    b << "<tr><td class=\"l\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(a.user + "@" + a.station)
+    b << "<tr><td class=\"l t\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(a.user + "@" + a.station)
       << "</td><td class=\"l\">" << html_escape(a.entity + " " + std::to_string(a.entity_id) + " " + a.action) << "</td><td class=\"l\">"
       << html_escape(a.detail) << "</td></tr>\n";
   b << "</table>\n";

@@ -5,12 +5,15 @@
 #pragma once
 #include <string>
 
+#include "db/approval.hpp"
 #include "db/store.hpp"
 
 namespace calbench::report {
 
-// Throws InputError for an unknown serial.
-std::string device_report_html(db::Store& store, const std::string& serial);
+// Throws InputError for an unknown serial. The verdict on the current set is checked against
+// `thresholds` (those of `db approve`; default_thresholds() unless a file is given).
+std::string device_report_html(db::Store& store, const std::string& serial,
+                               const db::Thresholds& thresholds = db::default_thresholds());
 std::string fleet_report_html(db::Store& store);
 
 }  // namespace calbench::report

@@ -393,8 +393,9 @@ Result Station::run() {
       run.started_at = started_;
       run.ended_at = iso_utc(std::chrono::system_clock::now());
       run.outcome = "pass";
-      run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples"});
-      run.qc.push_back({"step_repeats", static_cast<double>(repeats_), std::nullopt, true, ""});
+      run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples", db::kSampleNotApplicable,
+                        "no IMU sample lost while recording: value ≤ 0"});
+      run.qc.push_back({"step_repeats", static_cast<double>(repeats_), std::nullopt, true, "", db::kSampleNotApplicable, ""});
       const auto& id = imu_->identity();
       const db::StoredSet st = store.store_bench({"ADIS16488A", id.serial_string(), id.firmware()}, run,
                                                  coefficients_to_json(cs).dump(2));

@@ -8,6 +8,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "calibration/qc/nis_test.hpp"
+
 namespace calbench::identification {
 
 double avar_quantisation(double Q, double tau) { return 3.0 * Q * Q / (tau * tau); }
@@ -40,13 +42,6 @@ double edf_overlapping(double M, double m, double slope) {
   // Guard: the slope of a noisy curve can pick a formula outside its range (white PM at long τ
   // would claim ~M/2 degrees of freedom); never more than twice the number of disjoint clusters.
   return std::clamp(e, 1.0, std::max(1.0, 2.0 * (M - 1.0) / m));
-}
-
-// χ²_p(ν) quantile by Wilson–Hilferty with z the standard normal quantile of p.
-double chi2_quantile(double nu, double z) {
-  const double a = 2.0 / (9.0 * nu);
-  const double c = 1.0 - a + z * std::sqrt(a);
-  return nu * std::max(c, 1e-3) * std::max(c, 1e-3) * std::max(c, 1e-3);
 }
 
 }  // namespace
@@ -91,8 +86,8 @@ std::vector<AllanPoint> allan_deviation(std::span<const double> y, double dt, st
     auto& pt = pts[i];
     pt.edf = edf_overlapping(static_cast<double>(M), static_cast<double>(pt.m), slope);
     const double avar = pt.adev * pt.adev;
-    pt.lo = std::sqrt(avar * pt.edf / chi2_quantile(pt.edf, 1.0));
-    pt.hi = std::sqrt(avar * pt.edf / chi2_quantile(pt.edf, -1.0));
+    pt.lo = std::sqrt(avar * pt.edf / qc::chi2_quantile(pt.edf, 1.0));
+    pt.hi = std::sqrt(avar * pt.edf / qc::chi2_quantile(pt.edf, -1.0));
   }
   return pts;
 }

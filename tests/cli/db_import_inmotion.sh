@@ -36,9 +36,9 @@ res = {"device": {"model": "ADIS16488A", "serial": "IM1"},
        "correction": {"gyro": corr["gyro"], "accel": corr["accel"]},
        "mounting_rpy_deg": {"value": [0.1, -0.2, 0.3], "sigma": [0.01, 0.01, 0.05]},
        "consistency": {"pos": {"nis_mean": 1.1}},
-       "qc": {"from_s": 300, "horizon_s": 600,
-              "sets": [{"name": "bench", "final_cpe_m": 900.0, "cpe_m_at": {"60": 20.0, "300": 300.0, "600": 900.0}},
-                       {"name": "bench+in-motion", "final_cpe_m": 40.0, "cpe_m_at": {"60": 2.0, "300": 12.0, "600": 40.0}}]}}
+       "qc": {"from_s": 300, "horizon_s": 600, "sample": "out-of-sample (after the fit window)",
+              "sets": [{"name": "input", "final_cpe_m": 900.0, "cpe_m_at": {"60": 20.0, "300": 300.0, "600": 900.0}},
+                       {"name": "in-motion", "final_cpe_m": 40.0, "cpe_m_at": {"60": 2.0, "300": 12.0, "600": 40.0}}]}}
 json.dump(res, open("result.json", "w"), indent=1)
 bad = json.loads(json.dumps(res)); bad["device"]["serial"] = bad["coefficients"]["device"]["serial"] = "NOPE"; json.dump(bad, open("unknown.json", "w"))
 bad = json.loads(json.dumps(res)); bad["coefficients"]["device"]["serial"] = "IM2"; json.dump(bad, open("mismatch.json", "w"))
@@ -67,8 +67,12 @@ python3 - <<'PY' || fail "import result"
 import json
 o = json.load(open("out.json"))
 assert o["source"] == "combined" and o["parent"] == 1 and o["version"] == 2, o
-assert o["qc_metrics"] == 4, o   # final_cpe_m of two sets + from_s + horizon_s
+assert o["qc_metrics"] == 2, o   # final_cpe_m of the two sets (from_s, horizon_s are context)
 PY
+# The result's out-of-sample ΔS is checked against that of the set the fit started from; the
+# input's is informative.
+[ "$(sqlite3 "$CALBENCH_DB" "SELECT metric||'|'||IFNULL(threshold,'-')||'|'||pass||'|'||sample||'|'||unit FROM qc_results WHERE inmotion_run_id = 1 ORDER BY metric")" = \
+  "$(printf 'sets.in-motion.final_cpe_m|900.0|1|out-of-sample|m\nsets.input.final_cpe_m|-|1|out-of-sample|m')" ] || fail "QC thresholds"
 # Without a stored parent that composes (fit on raw data elsewhere): stored as in-motion, with a note.
 "$CALBENCH" db import-inmotion notcomposed.json | grep -q "note: the fit started from a coefficient set that is not in the database" || fail "no-parent note"
 [ "$(sqlite3 "$CALBENCH_DB" "SELECT source||','||IFNULL(parent_id,'-') FROM coefficient_sets WHERE id = 3")" = "in-motion,-" ] || fail "no-parent source"

@@ -31,6 +31,17 @@ for i in range(3):
 for k, v in r["consistency"].items():
     assert 0.2 < v["mean_nis"] < 15, (k, v)
 assert r["qc"]["sample"].startswith("out-of-sample")
+# The reference named from the recording: its description, rate, σ per observation and their source.
+ref = r["reference_system"]
+for k in ("reference inertial-satellite system", "Hz", "position (eq 13), σ 0.02 m (sigma_pos_m of reference.csv)",
+          "velocity (eq 14)", "attitude (eq 15)", "recording notes: simulated by calbench"):
+    assert k in ref, (k, ref)
+# ΔS(t) of each QC set over the whole horizon, about one point a second.
+for s in r["qc"]["sets"]:
+    t, v = s["cpe_series"]["t_s"], s["cpe_series"]["cpe_m"]
+    assert len(t) == len(v) and len(t) > r["qc"]["horizon_s"] - 2, (s["name"], len(t))
+    assert abs(t[-1] - r["qc"]["horizon_s"]) < 1e-3 and abs(v[-1] - s["final_cpe_m"]) < 1e-3, s["name"]
+    assert all(0 < b - a <= 1.0 + 1e-6 for a, b in zip(t, t[1:])), s["name"]
 PY
 head -1 "$T/series.csv" | grep -q '^# ' || true
 grep -q 't_s,lat_deg,lon_deg,h_m' "$T/series.csv"
@@ -44,6 +55,7 @@ assert q["sample"].startswith("out-of-sample"), q["sample"]
 assert abs(q["from_s"] - 150) < 1, q["from_s"]
 s = {x["name"]: x for x in q["sets"]}
 assert "60" in s["result"]["cpe_m_at"]
+assert len(s["result"]["cpe_series"]["t_s"]) > 50, s["result"]["cpe_series"]
 assert s["result"]["final_cpe_m"] * 5 < s["none"]["final_cpe_m"], s
 PY
 

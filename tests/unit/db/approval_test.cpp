@@ -56,7 +56,7 @@ TEST(DbApproval, ConfigLoosensOrTightensAndRejectsTypos) {
   e.gyro.sigma_M(2, 0) = kUnknownSigma;
   CoefficientSetRecord set;
   set.errors = e;
-  const std::vector<QcResult> qc = {QcResult{"cpe_600s", 10, 100, true, "m"}};
+  const std::vector<QcResult> qc = {QcResult{"cpe_600s", 10, 100, true, "m", kOutOfSample, "|value| ≤ threshold"}};
   EXPECT_FALSE(check_approval(set, qc, default_thresholds()).ok);
   Thresholds loose = parse_thresholds(R"({"allow_unknown_sigma": true})", "t.json");
   EXPECT_TRUE(check_approval(set, qc, loose).ok);
@@ -72,6 +72,29 @@ TEST(DbApproval, ConfigLoosensOrTightensAndRejectsTypos) {
   EXPECT_THROW(parse_thresholds(R"({"gyro": {"max_sigma_bias_dph": -1}})", "t.json"), InputError);
   EXPECT_THROW(parse_thresholds(R"({"require_qc": "yes"})", "t.json"), InputError);
   EXPECT_THROW(parse_thresholds(R"({"gyro": )", "t.json"), InputError);
+}
+
+// The report's verdict: every threshold of approval, whatever the status; the QC reason says why.
+TEST(DbApproval, ThresholdCheckIgnoresStatusAndQcReasonSaysWhy) {
+  CoefficientSetRecord set;
+  set.id = 7;
+  set.errors = test::random_errors(4);
+  set.status = SetStatus::approved;
+  const QcResult worse{"sets.in-motion.final_cpe_m", 250, 206.2, false, "m", kOutOfSample,
+                       "never worse than the set the fit started from"};
+  EXPECT_TRUE(check_thresholds(set, {QcResult{"x", 1, 2, true, "m", kInSample, "|value| ≤ threshold"}}, default_thresholds()).ok);
+  EXPECT_FALSE(check_approval(set, {QcResult{"x", 1, 2, true, "m", kInSample, "|value| ≤ threshold"}}, default_thresholds()).ok);
+  const auto r = check_thresholds(set, {worse}, default_thresholds());
+  ASSERT_EQ(r.reasons.size(), 1u);
+  EXPECT_TRUE(has_reason(r, "never worse than the set the fit started from"));
+  EXPECT_TRUE(has_reason(r, "out-of-sample"));
+  const auto lines = describe_thresholds(parse_thresholds(R"({"gyro": {"max_sigma_bias_dph": 7}, "required_qc_metrics": ["m1"]})", "t"));
+  bool sigma = false, required = false;
+  for (const auto& l : lines) {
+    sigma = sigma || l.find("σ bias ≤ 7 °/h") != std::string::npos;
+    required = required || l.find("m1") != std::string::npos;
+  }
+  EXPECT_TRUE(sigma && required);
 }
 
 }  // namespace

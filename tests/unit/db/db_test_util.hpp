@@ -66,7 +66,7 @@ inline BenchRunInput bench_run(bool qc_pass = true) {
   r.recording_sha256 = std::string(64, 'a');
   r.started_at = "2026-11-22T01:00:00Z";
   r.ended_at = "2026-11-22T01:40:00Z";
-  r.qc = {QcResult{"gyro.residual_rms", 1e-5, 1e-4, qc_pass, "rad/s"}};
+  r.qc = {QcResult{"gyro.residual_rms", 1e-5, 1e-4, qc_pass, "rad/s", kInSample, "|value| ≤ threshold"}};
   return r;
 }
 

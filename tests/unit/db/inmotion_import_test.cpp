@@ -113,5 +113,98 @@ TEST_F(ImportFixture, UnknownDeviceMismatchedSerialsAndMalformedFilesAreRefused)
   EXPECT_EQ(written(), before);
 }
 
+// The qc block of `fit drive` (sets "input" and "in-motion"): the figures carry qc.sample; the
+// result's final ΔS is checked against the input set's, everything else is informative; from_s and
+// horizon_s are context, not metrics.
+TEST_F(ImportFixture, FitDriveQcChecksTheResultAgainstTheSetItStartedFrom) {
+  const SensorErrors total = compose(bench, corr);
+  const auto qc_of = [&](double input_m, double result_m, const char* sample) {
+    json r = result("M1", total, corr);
+    r["qc"] = {{"from_s", 200.0}, {"horizon_s", 81.2}, {"sample", sample},
+               {"sets", json::array({{{"name", "input"}, {"final_cpe_m", input_m}, {"max_cpe_m", input_m}},
+                                     {{"name", "in-motion"}, {"final_cpe_m", result_m}, {"max_cpe_m", result_m}}})}};
+    return parse_inmotion_result(r.dump(), "RESULT.json").qc;
+  };
+  const auto find = [](const std::vector<QcResult>& qc, const std::string& m) {
+    for (const auto& q : qc)
+      if (q.metric == m) return q;
+    ADD_FAILURE() << "no metric " << m;
+    return QcResult{};
+  };
+  const auto better = qc_of(206.2, 10.1, "out-of-sample (after the fit window)");
+  ASSERT_EQ(better.size(), 4u);  // final and largest ΔS of both sets
+  const QcResult res = find(better, "sets.in-motion.final_cpe_m");
+  ASSERT_TRUE(res.threshold);
+  EXPECT_DOUBLE_EQ(*res.threshold, 206.2);
+  EXPECT_TRUE(res.pass);
+  EXPECT_FALSE(res.informative());
+  EXPECT_NE(res.criterion.find("'input'"), std::string::npos) << res.criterion;
+  for (const auto& q : better) {
+    EXPECT_EQ(q.sample, kOutOfSample) << q.metric;
+    EXPECT_EQ(q.unit, "m") << q.metric;
+    if (q.metric != "sets.in-motion.final_cpe_m") {
+      EXPECT_TRUE(q.informative()) << q.metric;
+    }
+  }
+  const auto worse = qc_of(206.2, 250.0, "in-sample (no data after the fit window)");
+  EXPECT_FALSE(find(worse, "sets.in-motion.final_cpe_m").pass);
+  EXPECT_EQ(find(worse, "sets.in-motion.final_cpe_m").sample, kInSample);
+  // Stored and read back with sample and criterion.
+  json r = result("M1", total, corr);
+  r["qc"] = {{"sample", "out-of-sample (after the fit window)"},
+             {"sets", json::array({{{"name", "none"}, {"final_cpe_m", 900.0}}, {{"name", "in-motion"}, {"final_cpe_m", 40.0}}})}};
+  const auto o = import_inmotion(s, parse_inmotion_result(r.dump(), "R"), "R");
+  const auto stored = s.qc_of_set(s.get_set(o.set_id));
+  const QcResult back = find(stored, "sets.in-motion.final_cpe_m");
+  EXPECT_EQ(back.sample, kOutOfSample);
+  EXPECT_DOUBLE_EQ(back.threshold.value_or(0), 900.0);
+  EXPECT_NE(back.criterion.find("'none'"), std::string::npos) << back.criterion;
+}
+
+TEST_F(ImportFixture, DeterminedByIsReadAndValidated) {
+  const SensorErrors total = compose(bench, corr);
+  json r = result("M1", total, corr);
+  EXPECT_FALSE(parse_inmotion_result(r.dump(), "R").determined_by);  // older results have none
+  json c = json::object();
+  for (const auto& n : coefficient_names())
+    c[n] = {{"parent_sigma", 1.7e-5}, {"prior_sigma", 4.9e-4}, {"posterior_sigma", 2.8e-5}, {"ratio", 0.057},
+            {"drive_share", 0.997}, {"stage", "drive"}};
+  c["gyro.M.xy"]["stage"] = "bench";
+  c["gyro.M.xy"]["parent_sigma"] = nullptr;
+  r["determined_by"] = {{"rule", "drive share"}, {"coefficients", c}};
+  const auto d = parse_inmotion_result(r.dump(), "R").determined_by;
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->coefficients.size(), 24u);
+  EXPECT_EQ(d->coefficients.at("gyro.M.xy").stage, "bench");
+  EXPECT_FALSE(d->coefficients.at("gyro.M.xy").parent_sigma);
+  EXPECT_DOUBLE_EQ(*d->coefficients.at("gyro.bias.x").posterior_sigma, 2.8e-5);
+  // The report reads it back from the stored result.
+  const auto o = import_inmotion(s, parse_inmotion_result(r.dump(), "R"), "R");
+  const auto run = s.inmotion_run(*s.get_set(o.set_id).inmotion_run_id);
+  EXPECT_EQ(parse_determined_by(run->result_json, "run")->coefficients.at("accel.M.zz").stage, "drive");
+  const auto before = written();
+  const auto expect_error = [&](json bad, const std::string& needle) {
+    try {
+      parse_inmotion_result(bad.dump(), "RESULT.json");
+      ADD_FAILURE() << "accepted " << needle;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  json bad = r;
+  bad["determined_by"]["coefficients"]["gyro.bias.x"]["stage"] = "factory";
+  expect_error(bad, "determined_by.coefficients.gyro.bias.x.stage");
+  bad = r;
+  bad["determined_by"]["coefficients"]["gyro.bias.w"] = c["gyro.bias.x"];
+  expect_error(bad, "determined_by.coefficients.gyro.bias.w");
+  bad = r;
+  bad["determined_by"]["coefficients"]["accel.M.zz"]["posterior_sigma"] = -1.0;
+  expect_error(bad, "determined_by.coefficients.accel.M.zz.posterior_sigma");
+  bad = r;
+  bad["determined_by"] = "bench";
+  expect_error(bad, "determined_by");
+  EXPECT_EQ(written(), before);
+}
+
 }  // namespace
 }  // namespace calbench::db

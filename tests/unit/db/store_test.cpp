@@ -5,6 +5,7 @@
 
 #include "bench/io/input_error.hpp"
 #include "db/approval.hpp"
+#include "db/schema.hpp"
 #include "db_test_util.hpp"
 
 namespace calbench::db {
@@ -26,6 +27,36 @@ TEST(DbStore, CreatesSchemaWithWalForeignKeysAndVersion) {
   // Reopening does not migrate again (one migrate entry in the audit log).
   { Store again(t.db(), {}, test::test_actor()); }
   EXPECT_EQ(s.count("audit_log"), 1);
+}
+
+// A database of schema 1 (before QC results recorded their sample and criterion) is migrated when
+// opened read-write; its QC rows read back with both empty (not recorded). Read-only opens of it
+// are refused with the advice to migrate.
+TEST(DbStore, MigratesSchema1QcResults) {
+  TempDir t;
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(t.db().c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, migrations()[0], nullptr, nullptr, nullptr), SQLITE_OK);
+    const char* rows =
+        "INSERT INTO devices VALUES (1, 'ADIS16488A', 'OLD1', '', '2026-01-01T00:00:00.000Z');"
+        "INSERT INTO bench_runs(id, device_id, outcome, created_at) VALUES (1, 1, 'pass', '2026-01-01T00:00:00.000Z');"
+        "INSERT INTO qc_results(bench_run_id, metric, value, threshold, pass, unit) VALUES (1, 'r', 1, 2, 1, 'm');"
+        "PRAGMA user_version = 1;";
+    ASSERT_EQ(sqlite3_exec(raw, rows, nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(raw);
+  }
+  OpenOptions ro;
+  ro.read_only = true;
+  EXPECT_THROW(Store(t.db(), ro, test::test_actor()), DbError);
+  Store s(t.db(), {}, test::test_actor());
+  EXPECT_EQ(s.schema_version(), kSchemaVersion);
+  const auto qc = s.qc_of_bench_run(1);
+  ASSERT_EQ(qc.size(), 1u);
+  EXPECT_EQ(qc[0].sample, "");
+  EXPECT_EQ(qc[0].criterion, "");
+  EXPECT_FALSE(qc[0].informative());  // it has a threshold
+  EXPECT_THROW(s.connection().exec("UPDATE qc_results SET sample = 'half-sample'"), DbError);
 }
 
 TEST(DbStore, RefusesMissingFileWithoutCreateAndNewerSchema) {

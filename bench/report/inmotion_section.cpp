@@ -1,0 +1,320 @@
+#include "bench/report/inmotion_section.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bench/report/gnuplot.hpp"
+#include "bench/report/html_parts.hpp"
+#include "bench/report/svg_plot.hpp"
+#include "calibration/qc/nis_test.hpp"
+#include "db/inmotion_import.hpp"
+
+namespace calbench::report {
+namespace {
+using nlohmann::json;
+using namespace calbench::db;
+
+json parse_or_empty(const std::string& text) {
+  try {
+    return json::parse(text);
+  } catch (...) {
+    return json::object();
+  }
+}
+double number_or_nan(const json& o, const char* k) {
+  return o.is_object() && o.contains(k) && o[k].is_number() ? o[k].get<double>() : std::nan("");
+}
+std::string string_or(const json& o, const char* k, const std::string& dflt) {
+  return o.is_object() && o.contains(k) && o[k].is_string() ? o[k].get<std::string>() : dflt;
+}
+std::string row(const std::string& head, const std::string& cell) {
+  return "<tr><th class=\"l\">" + head + "</th><td class=\"l\">" + cell + "</td></tr>";
+}
+
+// ---- the run: recording, digests, reference, window, mounting ----
+std::string run_table(const InMotionRun& r, const json& res) {
+  const json rec = res.is_object() && res.contains("recording") ? res["recording"] : json::object();
+  std::string dig = "imu.csv " + digest(r.recording_sha256);
+  for (const auto& [k, file] : {std::pair{"sha256_reference", "reference.csv"}, std::pair{"sha256_meta", "meta.json"}})
+    if (rec.is_object() && rec.contains(k) && rec[k].is_string())
+      dig += "<br>" + std::string(file) + " " + digest(rec[k].get<std::string>());
+  std::string window = "not recorded";
+  if (res.contains("window_s") && res["window_s"].is_array() && res["window_s"].size() == 2 && res["window_s"][0].is_number() &&
+      res["window_s"][1].is_number())
+    window = num(res["window_s"][0].get<double>()) + " – " + num(res["window_s"][1].get<double>()) + " s";
+  std::string mount;
+  for (std::size_t i = 0; i < 3; ++i)
+    mount += (i ? " / " : "") + pm(r.mounting_rpy_deg[i], r.mounting_sigma_deg[i], 1.0);
+  return "<table class=\"run\">" + row("drive recording", html_escape(r.recording_path)) +
+         row("SHA-256 of the files", dig) +
+         row("reference system",
+             r.reference_system.empty()
+                 ? "<span class=\"muted\">not recorded in this result (calbench fit drive writes \"reference_system\" "
+                   "since issue 16)</span>"
+                 : html_escape(r.reference_system)) +
+         row("fit window", window + " · observations " + html_escape(string_or(res, "observations", "not recorded")) +
+                               (res.contains("smoothed") && res["smoothed"] == true ? " · RTS-smoothed" : "")) +
+         row("mounting roll / pitch / yaw [°]", mount) + "</table>\n";
+}
+
+// ---- which stage determined each coefficient ----
+std::string stage_table(const InMotionRun& r, const CoefficientSetRecord& set, const std::vector<CoefficientSetRecord>& sets,
+                        const json& res) {
+  const CoefficientSetRecord* parent = nullptr;
+  for (const auto& s : sets)
+    if (set.parent_id && s.id == *set.parent_id) parent = &s;
+  std::optional<DeterminedBy> det;
+  std::string note;
+  try {
+    det = parse_determined_by(r.result_json, "in-motion run " + std::to_string(r.id));
+    if (!det)
+      note = "Stage not recorded: this in-motion result has no \"determined_by\" (results of calbench fit drive before "
+             "issue 16 do not say which stage determined each coefficient).";
+  } catch (const std::exception& e) {
+    note = std::string("Stage not shown: \"determined_by\" of this result is malformed: ") + e.what();
+  }
+  std::ostringstream h;
+  h << "<h4>Coefficients: " << (parent ? "bench (set " + std::to_string(parent->id) + ") → " : std::string())
+    << to_string(set.source) << " (set " << set.id << "), value ± 1σ, and the stage that determined each</h4>\n";
+  if (det && !det->rule.empty()) h << "<p class=\"note\">Rule: " << html_escape(det->rule) << "</p>\n";
+  if (res.contains("priors") && res["priors"].is_object()) {
+    const json& pr = res["priors"];
+    h << "<p class=\"note\">Drive-filter priors: " << html_escape(string_or(pr, "mode", "mode not stated")) << ", device class "
+      << html_escape(string_or(pr, "device_class", "not stated")) << ".</p>\n";
+  }
+  if (!note.empty()) h << "<p class=\"note\">" << html_escape(note) << "</p>\n";
+  if (!parent)
+    h << "<p class=\"note\">No parent set: the fit ran on raw data (or on a set that is not in the database); the bench "
+         "column is empty.</p>\n";
+  h << "<table class=\"stages\" id=\"stages-" << r.id << "\"><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>bench"
+    << (parent ? " (set " + std::to_string(parent->id) + ")" : std::string()) << "</th><th>" << to_string(set.source) << " (set "
+    << set.id << ")</th><th>change</th><th>drive prior σ</th><th>drive posterior σ</th><th>drive share</th>"
+       "<th class=\"l\">stage</th></tr>\n";
+  for (const auto& name : coefficient_names()) {
+    std::string unit;
+    double k;
+    coefficient_unit(name, unit, k);
+    const double v = coefficient_value(set.errors, name), sg = coefficient_sigma(set.errors, name);
+    h << "<tr><td class=\"l\">" << name << "</td><td class=\"l\">" << unit << "</td><td>";
+    if (parent) {
+      const double pv = coefficient_value(parent->errors, name);
+      h << pm(pv, coefficient_sigma(parent->errors, name), k) << "</td><td>" << pm(v, sg, k) << "</td><td>" << num((v - pv) * k, 3);
+    } else {
+      h << "–</td><td>" << pm(v, sg, k) << "</td><td>–";
+    }
+    const CoefficientStage* st = nullptr;
+    if (det) {
+      auto it = det->coefficients.find(name);
+      if (it != det->coefficients.end()) st = &it->second;
+    }
+    const auto opt = [&](const std::optional<double>& x, double scale) { return x ? num(*x * scale, 2) : std::string("–"); };
+    const std::string stage = st ? st->stage : "–";
+    h << "</td><td>" << (st ? opt(st->prior_sigma, k) : "–") << "</td><td>" << (st ? opt(st->posterior_sigma, k) : "–")
+      << "</td><td>" << (st && st->drive_share ? num(*st->drive_share * 100, 3) + " %" : std::string("–"))
+      << "</td><td class=\"l stage-" << (st ? stage : "none") << "\" data-stage=\"" << html_escape(stage) << "\">"
+      << html_escape(st ? stage : det ? "not stated in determined_by" : "–") << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  return h.str();
+}
+
+// ---- ΔS(t) ----
+struct CpeData {
+  std::vector<PlotCurve> curves;
+  bool from_marks = false;
+};
+
+CpeData cpe_curves(const json& qc) {
+  CpeData d;
+  if (!qc.is_object()) return d;
+  const auto numbers = [](const json& a, std::vector<double>& out) {
+    if (!a.is_array()) return false;
+    for (const auto& v : a) out.push_back(v.is_number() ? v.get<double>() : std::nan(""));
+    return true;
+  };
+  if (qc.contains("sets") && qc["sets"].is_array()) {
+    for (const auto& s : qc["sets"]) {  // the series of issue 16
+      if (!s.is_object() || !s.contains("cpe_series") || !s["cpe_series"].is_object()) continue;
+      PlotCurve c{string_or(s, "name", "set"), {}, {}};
+      if (numbers(s["cpe_series"].value("t_s", json()), c.x) && numbers(s["cpe_series"].value("cpe_m", json()), c.y) &&
+          c.x.size() == c.y.size() && c.x.size() >= 2)
+        d.curves.push_back(std::move(c));
+    }
+  }
+  if (d.curves.empty() && qc.contains("series") && qc["series"].is_object() && qc["series"].contains("t_s")) {
+    const json& ser = qc["series"];  // {"t_s": [...], NAME: [...]}
+    for (auto it = ser.begin(); it != ser.end(); ++it) {
+      PlotCurve c{it.key(), {}, {}};
+      if (it.key() == "t_s" || !numbers(ser["t_s"], c.x) || !numbers(*it, c.y) || c.x.size() != c.y.size() || c.x.size() < 2)
+        continue;
+      d.curves.push_back(std::move(c));
+    }
+  }
+  if (d.curves.empty() && qc.contains("sets") && qc["sets"].is_array()) {  // older results: the marks only
+    d.from_marks = true;
+    const double horizon = number_or_nan(qc, "horizon_s");
+    for (const auto& s : qc["sets"]) {
+      if (!s.is_object() || !s.contains("cpe_m_at") || !s["cpe_m_at"].is_object()) continue;
+      std::vector<std::pair<double, double>> pts;
+      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
+        char* end = nullptr;
+        const double t = std::strtod(it.key().c_str(), &end);
+        if (end && *end == 0 && it->is_number()) pts.emplace_back(t, it->get<double>());
+      }
+      const double fin = number_or_nan(s, "final_cpe_m");
+      if (std::isfinite(horizon) && std::isfinite(fin)) pts.emplace_back(horizon, fin);
+      std::sort(pts.begin(), pts.end());
+      PlotCurve c{string_or(s, "name", "set"), {}, {}};
+      for (const auto& [t, v] : pts) {
+        c.x.push_back(t);
+        c.y.push_back(v);
+      }
+      if (c.x.size() >= 2) d.curves.push_back(std::move(c));
+    }
+  }
+  return d;
+}
+
+// ΔS at the marks of each set, its final and largest value.
+std::string cpe_marks_table(const json& qc, const InMotionRun& r) {
+  if (!qc.contains("sets") || !qc["sets"].is_array() || qc["sets"].empty()) return "";
+  std::map<double, std::string> marks;  // t → key
+  for (const auto& s : qc["sets"])
+    if (s.is_object() && s.contains("cpe_m_at") && s["cpe_m_at"].is_object())
+      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
+        char* end = nullptr;
+        const double t = std::strtod(it.key().c_str(), &end);
+        if (end && *end == 0) marks[t] = it.key();
+      }
+  std::ostringstream h;
+  h << "<table class=\"cpe-marks\" id=\"cpe-marks-" << r.id << "\"><tr><th class=\"l\">set</th>";
+  for (const auto& [t, key] : marks) h << "<th>ΔS at " << num(t) << " s [m]</th>";
+  h << "<th>final ΔS (at " << num(number_or_nan(qc, "horizon_s")) << " s) [m]</th><th>largest ΔS [m]</th></tr>\n";
+  for (const auto& s : qc["sets"]) {
+    if (!s.is_object()) continue;
+    h << "<tr><td class=\"l\">" << html_escape(string_or(s, "name", "set")) << "</td>";
+    for (const auto& [t, key] : marks)
+      h << "<td>" << num(s.contains("cpe_m_at") ? number_or_nan(s["cpe_m_at"], key.c_str()) : std::nan("")) << "</td>";
+    h << "<td>" << num(number_or_nan(s, "final_cpe_m")) << "</td><td>" << num(number_or_nan(s, "max_cpe_m")) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  return h.str();
+}
+
+std::string cpe_part(const json& qc, const json& res, const InMotionRun& r) {
+  std::ostringstream h;
+  h << "<h4>Circular position error ΔS(t), inertial-only navigation (eq 39)</h4>\n";
+  const double from = number_or_nan(qc, "from_s"), horizon = number_or_nan(qc, "horizon_s");
+  std::string ctx = "Inertial-only navigation with each set";
+  if (std::isfinite(from)) ctx += " from T0 = " + num(from) + " s";
+  if (std::isfinite(horizon)) ctx += " for " + num(horizon) + " s";
+  ctx += "; data: " + string_or(qc, "sample", "not stated whether in- or out-of-sample");
+  if (res.contains("window_s") && res["window_s"].is_array() && res["window_s"].size() == 2 && res["window_s"][1].is_number())
+    ctx += "; the fit used " + num(res["window_s"][0].get<double>()) + " – " + num(res["window_s"][1].get<double>()) + " s";
+  h << "<p class=\"note\">" << html_escape(ctx) << ".</p>\n";
+  const CpeData d = cpe_curves(qc);
+  if (d.curves.empty()) return h.str() + "<p class=\"muted\">no ΔS data in this run's QC</p>\n";
+  if (d.from_marks)
+    h << "<p class=\"note\">This result carries ΔS only at a few marks and at the horizon (written before issue 16): "
+         "the points are joined by straight lines, not the curve.</p>\n";
+  PlotSpec p;
+  p.x_label = "time since T0" + (std::isfinite(from) ? " = " + num(from) + " s" : std::string()) + " [s]";
+  p.y_label = "ΔS [m]";
+  p.x_min = 0;
+  p.x_max = std::isfinite(horizon) ? horizon : 0;
+  for (const auto& c : d.curves)
+    for (double x : c.x)
+      if (std::isfinite(x)) p.x_max = std::max(p.x_max, x);
+  p.css_class = "cpe";
+  p.title = "ΔS, linear scale";
+  h << "<div class=\"plots\">" << svg_line_plot(d.curves, p);
+  p.log_y = true;
+  p.title = "ΔS, logarithmic scale";
+  h << svg_line_plot(d.curves, p) << "</div>\n" << cpe_marks_table(qc, r);
+  return h.str();
+}
+
+// ---- innovation consistency ----
+struct NisWords {
+  const char *tag, *cls, *text;
+};
+NisWords nis_words(qc::NisVerdict v) {
+  switch (v) {
+    case qc::NisVerdict::consistent: return {"consistent", "pass", "consistent: mean NIS inside the region"};
+    case qc::NisVerdict::too_large:
+      return {"too-large", "warn",
+              "NIS too large: the innovations exceed the filter's predicted covariance (assumed noise too small, or an "
+              "error the model lacks)"};
+    case qc::NisVerdict::too_small:
+      return {"too-small", "warn",
+              "NIS too small: the assumed noise (reference σ or process noise) is too large; the filter is pessimistic "
+              "and its σ overstate the uncertainty"};
+    case qc::NisVerdict::no_data: break;
+  }
+  return {"untested", "muted", "no epochs used"};
+}
+
+std::string consistency_table(const json& cons, const InMotionRun& r) {
+  std::ostringstream h;
+  h << "<h4>Innovation consistency (normalised innovation squared, NIS)</h4>\n";
+  if (!cons.is_object() || cons.empty()) return h.str() + "<p class=\"muted\">not recorded</p>\n";
+  constexpr double kLevel = 0.95;
+  h << "<table class=\"consistency\" id=\"consistency-" << r.id
+    << "\"><tr><th class=\"l\">observation</th><th>eq</th><th>epochs used</th><th>rejected (NIS &gt; gate)</th><th>forced</th>"
+       "<th>mean NIS</th><th>expected</th><th>95 % region of the mean</th><th>within the 95 % bound</th>"
+       "<th>95 % region of the fraction</th><th class=\"l\">verdict (two-sided, 95 %)</th></tr>\n";
+  for (auto it = cons.begin(); it != cons.end(); ++it) {
+    const json& c = *it;
+    const double epochs = number_or_nan(c, "epochs"), mean = number_or_nan(c, "mean_nis"),
+                 frac = number_or_nan(c, "fraction_within_95pct"), rejected = number_or_nan(c, "rejected"),
+                 forced = number_or_nan(c, "forced");
+    double expected = number_or_nan(c, "expected_nis");
+    if (!std::isfinite(expected)) expected = 3;  // eqs 13–15: three components each
+    const int dof = static_cast<int>(std::lround(expected));
+    std::string verdict = "not testable: epochs or mean NIS not recorded", cls = "muted", tag = "untested";
+    qc::NisTest t;
+    if (std::isfinite(epochs) && std::isfinite(mean) && dof > 0) {
+      t = qc::nis_test(static_cast<long>(epochs), dof, mean, std::isfinite(frac) ? frac : 0.95, kLevel);
+      const NisWords w = nis_words(t.mean);
+      verdict = w.text;
+      cls = w.cls;
+      tag = w.tag;
+      if (t.mean != qc::NisVerdict::no_data && std::isfinite(frac) && t.fraction != qc::NisVerdict::consistent)
+        verdict += std::string("; the fraction within the bound is ") +
+                   (t.fraction == qc::NisVerdict::too_large ? "below" : "above") + " its region";
+    }
+    if (std::isfinite(rejected) && rejected > 0) verdict += "; " + num(rejected) + " epoch(s) rejected, not in the mean";
+    if (std::isfinite(forced) && forced > 0) verdict += "; the filter lost track " + num(forced) + " time(s)";
+    const bool tested = t.mean != qc::NisVerdict::no_data;
+    h << "<tr data-verdict=\"" << tag << "\"><td class=\"l\">" << html_escape(it.key()) << "</td><td>"
+      << html_escape(string_or(c, "equation", "–")) << "</td><td>" << num(epochs, 6) << "</td><td>" << num(rejected, 6)
+      << "</td><td>" << num(forced, 6) << "</td><td>" << num(mean, 4) << "</td><td>" << num(expected, 3) << "</td><td>"
+      << (tested ? num(t.mean_lo, 4) + " – " + num(t.mean_hi, 4) : "–") << "</td><td>" << num(frac, 4) << "</td><td>"
+      << (tested ? num(t.frac_lo, 3) + " – " + num(t.frac_hi, 3) : "–") << "</td><td class=\"l " << cls << "\">"
+      << html_escape(verdict) << "</td></tr>\n";
+  }
+  h << "</table>\n<p class=\"note\">Test: time-average NIS (Bar-Shalom, Li &amp; Kirubarajan 2001, §5.4). For a consistent "
+       "filter N·(mean NIS) is χ² with N·3 degrees of freedom; the region is its two-sided 95 % interval divided by N "
+       "(Wilson–Hilferty). The fraction of epochs with NIS under the 3-dof 95 % bound (7.81) is tested against 0.95 "
+       "(binomial). Both assume independent innovations: with time-correlated reference errors the true regions are "
+       "wider, so a value just outside is weak evidence.</p>\n";
+  return h.str();
+}
+
+}  // namespace
+
+std::string inmotion_section(Store& store, const InMotionRun& r, const CoefficientSetRecord& set,
+                             const std::vector<CoefficientSetRecord>& sets) {
+  const json res = parse_or_empty(r.result_json), qc = parse_or_empty(r.qc_json), cons = parse_or_empty(r.consistency_json);
+  std::ostringstream h;
+  h << "<h3>In-motion run " << r.id << " → set " << set.id << " (" << to_string(set.source)
+    << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
+    << run_table(r, res) << stage_table(r, set, sets, res) << cpe_part(qc, res, r) << "<h4>QC metrics</h4>\n"
+    << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(cons, r);
+  return h.str();
+}
+
+}  // namespace calbench::report
