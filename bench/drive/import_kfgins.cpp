@@ -1,5 +1,7 @@
 #include "bench/drive/import_kfgins.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -57,17 +59,28 @@ class TextRows {
   std::size_t line_ = 0;
 };
 
+// Range checks before a value reaches the recording (a latitude of 1e308 is a number, not a place).
+void check_range(const TextRows& r, std::size_t col, double v, double lo, double hi, const char* what) {
+  if (!(v >= lo && v <= hi))
+    throw InputError(r.path(), r.line(), "column " + std::to_string(col + 1),
+                     std::string(what) + " " + std::to_string(v) + " outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
 void check_time(const TextRows& r, double t, double& last, bool& first) {
   if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
   first = false;
   last = t;
 }
 
+void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const fs::path& out, ImportSummary& sum,
+                     std::vector<double>& v);
+
 }  // namespace
 
 ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   ImportSummary sum;
-  const fs::path out(a.out);
+  fs::path out(a.out);
+  if (out.filename().empty()) out = out.parent_path();  // "rec/"
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
   std::vector<double> v;
@@ -94,7 +107,32 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   meta.mounting = Mounting{a.mounting_rpy_deg, a.lever_arm_m};
   meta.notes = "imported from KF-GINS text files: IMU " + a.imu + ", reference " + a.truth +
                (a.gnss.empty() ? std::string() : ", GNSS " + a.gnss);
-  fs::create_directories(out);
+  // Written into a folder beside --out and renamed into place at the end: an import that fails
+  // (bad input, a full disk) or is killed leaves no half-written recording under --out.
+  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  fs::create_directories(parent);
+  const fs::path tmp = parent / ("." + out.filename().string() + ".importing-" + std::to_string(::getpid()));
+  fs::remove_all(tmp);
+  try {
+    write_recording(a, meta, tmp, sum, v);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  if (!fs::exists(out)) {
+    fs::rename(tmp, out);
+  } else {  // --force into an existing folder: replace the recording's files, meta.json last; keep the rest
+    for (const char* f : {"imu.csv", "reference.csv", "gnss.csv", "meta.json"})
+      if (fs::exists(tmp / f)) fs::rename(tmp / f, out / f);
+    fs::remove_all(tmp);
+  }
+  return sum;
+}
+
+namespace {
+void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const fs::path& out, ImportSummary& sum,
+                     std::vector<double>& v) {
   RecordingWriter w(out, meta, ImuForm::increments, false, false, !a.gnss.empty());
   {
     TextRows r(a.imu, 7);
@@ -102,6 +140,7 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
     bool first = true;
     while (r.next(v)) {
       check_time(r, v[0], last, first);
+      for (std::size_t k = 1; k < 7; ++k) check_range(r, k, v[k], -1e6, 1e6, "increment");
       ImuRecord rec;
       rec.t = v[0];
       rec.gyro = Vec3(v[1], v[2], v[3]);
@@ -116,6 +155,11 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
     bool first = true;
     while (r.next(v)) {
       check_time(r, v[1], last, first);
+      check_range(r, 2, v[2], -90, 90, "latitude (deg)");
+      check_range(r, 3, v[3], -360, 360, "longitude (deg)");
+      check_range(r, 4, v[4], -1e5, 1e7, "height (m)");
+      for (std::size_t k = 5; k < 8; ++k) check_range(r, k, v[k], -1e4, 1e4, "velocity (m/s)");
+      for (std::size_t k = 8; k < 11; ++k) check_range(r, k, v[k], -720, 720, "attitude angle (deg)");
       DriveRefRow row;
       row.t = v[1];
       row.lat_deg = v[2];
@@ -136,6 +180,10 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
     bool first = true;
     while (r.next(v)) {
       check_time(r, v[0], last, first);
+      check_range(r, 1, v[1], -90, 90, "latitude (deg)");
+      check_range(r, 2, v[2], -360, 360, "longitude (deg)");
+      check_range(r, 3, v[3], -1e5, 1e7, "height (m)");
+      for (std::size_t k = 4; k < 7; ++k) check_range(r, k, v[k], 0, 1e6, "standard deviation (m)");
       GnssRow g;
       g.t = v[0];
       g.lat_deg = v[1];
@@ -151,7 +199,7 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
     }
   }
   w.finish();
-  return sum;
 }
+}  // namespace
 
 }  // namespace calbench

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <toml++/toml.h>
 
+#include "bench/io/toml_text.hpp"
 #include "bench/io/input_error.hpp"
 #include "calibration/units.hpp"
 
@@ -56,7 +57,7 @@ RouteFile load_route(const std::filesystem::path& file) {
   Ctx c{file.string()};
   toml::table root;
   try {
-    root = toml::parse_file(file.string());
+    root = toml::parse(read_toml_text(file), file.string());
   } catch (const toml::parse_error& e) {
     throw InputError(file.string(), e.source().begin.line, "", std::string(e.description()));
   }

@@ -2,12 +2,14 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/input_warning.hpp"
 
 namespace calbench {
 namespace {
@@ -21,7 +23,7 @@ std::string_view trim(std::string_view s) {
 }  // namespace
 
 CsvReader::CsvReader(std::string path) : path_(std::move(path)), buf_(kBufSize) {
-  file_ = std::fopen(path_.c_str(), "rb");
+  file_.reset(std::fopen(path_.c_str(), "rb"));
   if (!file_) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
   std::string_view line;
   while (read_line(line)) {
@@ -40,9 +42,7 @@ CsvReader::CsvReader(std::string path) : path_(std::move(path)), buf_(kBufSize) 
   fail("", "empty file: no header line");
 }
 
-CsvReader::~CsvReader() {
-  if (file_) std::fclose(file_);
-}
+CsvReader::~CsvReader() = default;
 
 bool CsvReader::has(std::string_view name) const {
   for (const auto& h : header_)
@@ -98,16 +98,23 @@ bool CsvReader::read_line(std::string_view& out) {
     carry_.append(b, end_ - beg_);
     beg_ = end_ = 0;
     if (eof_) break;
-    end_ = std::fread(buf_.data(), 1, buf_.size(), file_);
+    end_ = std::fread(buf_.data(), 1, buf_.size(), file_.get());
     if (end_ < buf_.size()) {
-      if (std::ferror(file_)) fail("", std::string("read error: ") + std::strerror(errno));
+      if (std::ferror(file_.get())) fail("", std::string("read error: ") + std::strerror(errno));
       eof_ = true;
     }
   }
-  if (carry_.empty()) return false;
-  ++line_no_;
-  out = carry_;
-  return true;
+  // A last line without its line end was cut while being written (an interrupted logger, a copy
+  // that stopped): its last field may be a cut number. It is dropped, with a warning, never used.
+  if (!trim(carry_).empty()) {
+    const std::string_view t = trim(carry_);
+    if (t.front() != '#')
+      input_warning(path_, line_no_ + 1,
+                    "last line has no line end: treated as truncated and not used ('" +
+                        std::string(t.substr(0, std::min<std::size_t>(t.size(), 40))) + "')");
+  }
+  carry_.clear();
+  return false;
 }
 
 bool CsvReader::next() {
@@ -167,7 +174,7 @@ std::size_t format_double(char* buf, double v) {
 
 CsvWriter::CsvWriter(std::string path, const std::vector<std::string>& columns, const std::string& comment)
     : path_(std::move(path)), ncol_(columns.size()) {
-  file_ = std::fopen(path_.c_str(), "wb");
+  file_.reset(std::fopen(path_.c_str(), "wb"));
   if (!file_) throw std::runtime_error(path_ + ": cannot create: " + std::strerror(errno));
   if (!comment.empty()) out_ += "# " + comment + "\n";
   for (std::size_t i = 0; i < columns.size(); ++i) {
@@ -203,19 +210,18 @@ void CsvWriter::row(const double* v, std::size_t n) {
 void CsvWriter::flush() {
   if (!file_) return;
   if (!out_.empty()) {
-    if (std::fwrite(out_.data(), 1, out_.size(), file_) != out_.size())
+    if (std::fwrite(out_.data(), 1, out_.size(), file_.get()) != out_.size())
       throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
     out_.clear();
   }
-  if (std::fflush(file_) != 0) throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
+  if (std::fflush(file_.get()) != 0) throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
 }
 
 void CsvWriter::close() {
   if (!file_) return;
   flush();
-  ::fsync(fileno(file_));
-  const int rc = std::fclose(file_);
-  file_ = nullptr;
+  ::fsync(fileno(file_.get()));
+  const int rc = std::fclose(file_.release());
   if (rc != 0) throw std::runtime_error(path_ + ": close failed: " + std::strerror(errno));
 }
 

@@ -11,6 +11,11 @@
 
 namespace calbench {
 
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
+
 class CsvReader {
  public:
   explicit CsvReader(std::string path);
@@ -38,7 +43,7 @@ class CsvReader {
   [[noreturn]] void fail(const std::string& column, const std::string& msg) const;
 
   std::string path_;
-  std::FILE* file_ = nullptr;
+  FilePtr file_;  // closed by its destructor, also when the constructor throws after opening
   std::vector<char> buf_;
   std::size_t beg_ = 0, end_ = 0;
   bool eof_ = false;
@@ -71,7 +76,7 @@ class CsvWriter {
 
  private:
   std::string path_;
-  std::FILE* file_ = nullptr;
+  FilePtr file_;
   std::string out_;
   std::size_t ncol_;
 };

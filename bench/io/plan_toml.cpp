@@ -3,6 +3,7 @@
 #include <cmath>
 #include <toml++/toml.h>
 
+#include "bench/io/toml_text.hpp"
 #include "bench/io/input_error.hpp"
 #include "calibration/units.hpp"
 
@@ -71,7 +72,7 @@ BenchPlan load_plan(const std::filesystem::path& file) {
   Ctx c{file.string()};
   toml::table root;
   try {
-    root = toml::parse_file(file.string());
+    root = toml::parse(read_toml_text(file), file.string());
   } catch (const toml::parse_error& e) {
     if (!std::filesystem::exists(file)) throw InputError(c.file, 0, "", "cannot open: no such file");
     throw InputError(c.file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));

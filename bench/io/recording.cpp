@@ -127,7 +127,8 @@ bool BenchRefReader::next(BenchRefRow& r) {
     r.f(i) = csv_.value(f_[i]);
   }
   const double s = csv_.value(step_);
-  if (s != std::floor(s) || s < -1) throw InputError(csv_.path(), csv_.line(), "step", "must be an integer ≥ −1");
+  if (s != std::floor(s) || s < -1 || s > 1e6)
+    throw InputError(csv_.path(), csv_.line(), "step", "must be an integer from −1 to 1000000 (a plan step index)");
   r.step = static_cast<int>(s);
   r.angle_deg = angle_ >= 0 ? csv_.value(angle_) : std::numeric_limits<double>::quiet_NaN();
   return true;
