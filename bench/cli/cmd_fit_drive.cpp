@@ -59,7 +59,7 @@ void print_summary(const nlohmann::json& j) {
       std::cout << "reference attitude at the start";
     }
     std::cout << "; " << al["realignments"] << " heading re-alignment(s), " << al["covariance_widenings"]
-              << " forced covariance widening(s)\n";
+              << " forced covariance widening(s), " << al["course_updates"]["used"] << " course update(s)\n";
     for (const auto& r : j["recoveries"])
       std::cout << "    t " << r["t_s"].get<double>() << " s: " << r["reason"].get<std::string>() << " -> "
                 << r["action"].get<std::string>() << "\n";

@@ -464,7 +464,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   if (gnss) j["aiding"] = "gnss";
   // How the heading was found and kept (GNSS-only start, re-alignments, forced recoveries):
   // always with GNSS aiding, otherwise only when something happened.
-  if (gnss || !f->recoveries().empty()) {
+  if (gnss || !f->recoveries().empty() || f->alignment().course_updates + f->alignment().course_rejected > 0) {
     const inmotion::AlignmentReport& al = f->alignment();
     nlohmann::json aj = {{"mode", al.mode}};
     if (al.mode == "gnss") {
@@ -488,6 +488,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     }
     aj["realignments"] = realigned;
     aj["covariance_widenings"] = widened;
+    aj["course_updates"] = {{"used", f->alignment().course_updates}, {"rejected", f->alignment().course_rejected}};
     j["alignment"] = aj;
     j["recoveries"] = rj;
   }

@@ -328,6 +328,34 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
     P_ -= K * PHt.transpose();
     P_ = 0.5 * (P_ + P_.transpose()).eval();
   }
+  // The course over ground as a heading observation while the heading is poorly known.
+  if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && cfg_.course_update_s > 0 &&
+      r.t - last_course_t_ >= cfg_.course_update_s && P_(kAtt + 2, kAtt + 2) > cfg_.course_update_sigma * cfg_.course_update_sigma &&
+      moving()) {
+    double cog = 0, sc = 0;
+    std::string how;
+    if (course(cog, sc, how)) {
+      last_course_t_ = r.t;
+      // Heading of the reference body: z = ψ_course − ψ̂ = e_Dᵀ(φ − C_nb·δμ) (the down row of eq 15).
+      const Mat3 C_nb = predicted_body_attitude(c);
+      Eigen::Matrix<double, 1, N> H = Eigen::Matrix<double, 1, N>::Zero();
+      H(kAtt + 2) = 1;
+      H.template segment<3>(kMount) = -C_nb.row(2);
+      const double z = std::remainder(cog - ins::rpy_from_dcm(C_nb)(2), 2 * units::kPi);
+      const double nu = z - (H * dx)(0);
+      const Vec PHt = P_ * H.transpose();
+      const double S = (H * PHt)(0) + sc * sc;
+      if (nu * nu / S <= cfg_.gate_nis / 3) {  // the gate per degree of freedom
+        const Vec K = PHt / S;
+        dx += K * nu;
+        P_ -= K * PHt.transpose();
+        P_ = 0.5 * (P_ + P_.transpose()).eval();
+        ++align_.course_updates;
+      } else {
+        ++align_.course_rejected;
+      }
+    }
+  }
   feedback(dx);
   if (cfg_.store_for_smoother) pending_dx_ += dx;
   return true;

@@ -79,6 +79,12 @@ struct InMotionConfig {
   double align_max_turn = 10 * units::kDeg;   // largest heading change (INS) along the chord
   double align_sideslip = 1.0 * units::kDeg;  // 1σ of the body's course-heading difference
   double align_heading_sigma = 5 * units::kDeg;
+  // Course updates: while the heading σ exceeds course_update_sigma (the yaw-gyro drift not yet
+  // learnt, typically the first minutes of a GNSS-only drive on raw data), the course over ground
+  // is also a heading observation (forward motion, sideslip as above), at most every
+  // course_update_s (a chord of fix positions is then mostly new fixes). 0 s: off.
+  double course_update_s = 10;
+  double course_update_sigma = 1.0 * units::kDeg;
 };
 
 // How the filter got (and kept) its heading: for RESULT.json and the summary.
@@ -90,6 +96,7 @@ struct AlignmentReport {
   double level_gyro_mean = 0;      // rad/s, |mean rate| over the window (turn-on bias + Earth rate at rest)
   double heading_t = -1;           // first heading from the course (−1: none)
   long skipped_unaligned = 0;      // epochs skipped while moving before the heading was known
+  long course_updates = 0, course_rejected = 0;  // course over ground used as a heading observation
 };
 
 struct Recovery {
@@ -219,6 +226,7 @@ class InMotionFilterT {
   std::deque<Fix> fixes_;
   double last_realign_t_ = -1e300;
   bool motion_check_ = true;  // the heading σ is checked at the next start of motion
+  double last_course_t_ = -1e300;
   AlignmentReport align_;
   std::vector<Recovery> recoveries_;
 
