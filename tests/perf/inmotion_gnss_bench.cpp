@@ -76,11 +76,7 @@ std::vector<RunResult> run_drive(const RouteFile& rf, std::uint64_t seed, double
   cfg.route = rf.route;
   cfg.mems = unit;
   cfg.imu_rate_hz = rate_hz;
-  std::mt19937_64 mrng(seed ^ 0x6d6f756e74ULL);
-  std::normal_distribution<double> nm(0.0, rf.misalignment_sigma_deg);
-  Vec3 rpy = rf.mounting_rpy_deg;
-  for (int i = 0; i < 3; ++i) rpy(i) += nm(mrng);
-  cfg.mounting_rpy = rpy * kDeg;
+  cfg.mounting_rpy = draw_true_mounting_rpy_deg(rf, seed) * kDeg;  // as simulate drive --truth random
   cfg.lever_arm = rf.lever_arm_m;
   cfg.reference.rate_hz = 0;  // GNSS only
   cfg.gnss = rf.gnss;
