@@ -65,8 +65,29 @@ void print_summary(const nlohmann::json& j) {
     for (const auto& k : e["ignored"])
       std::cout << "  catalogue term ignored: " << k["key"].get<std::string>() << " (" << k["reason"].get<std::string>() << ")\n";
   }
-  for (const auto& [k, v] : j["consistency"].items())
-    std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected\n";
+  if (j.contains("alignment")) {
+    const auto& al = j["alignment"];
+    std::cout << "  alignment        ";
+    if (al["mode"] == "gnss") {
+      std::cout << "GNSS fixes, levelled " << al["level"]["t_s"][0].get<double>() << "–" << al["level"]["t_s"][1].get<double>()
+                << " s; heading ";
+      if (al["heading"]["t_s"].is_null()) std::cout << "never found (no straight stretch)";
+      else std::cout << "from the course over ground at " << al["heading"]["t_s"].get<double>() << " s";
+      std::cout << " (" << al["epochs_skipped_before_heading"] << " epochs skipped while moving without it)";
+    } else {
+      std::cout << "reference attitude at the start";
+    }
+    std::cout << "; " << al["realignments"] << " heading re-alignment(s), " << al["covariance_widenings"]
+              << " forced covariance widening(s), " << al["course_updates"]["used"] << " course update(s)\n";
+    for (const auto& r : j["recoveries"])
+      std::cout << "    t " << r["t_s"].get<double>() << " s: " << r["reason"].get<std::string>() << " -> "
+                << r["action"].get<std::string>() << "\n";
+  }
+  for (const auto& [k, v] : j["consistency"].items()) {
+    std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected";
+    if (v["forced"].get<long>() > 0) std::cout << ", " << v["forced"] << " forced after a run of rejections";
+    std::cout << "\n";
+  }
   if (j["qc"].contains("sets"))
     for (const auto& s : j["qc"]["sets"])
       std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"] << " s over "
@@ -97,7 +118,14 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note")
       ->check(CLI::ExistingFile);
   d->add_option("--out", a->out, "RESULT.json to write")->required();
-  d->add_option("--obs", a->obs, "observations to use: any of pos,vel,att (eqs 13, 14, 15)");
+  CLI::Option* obs = d->add_option("--obs", a->obs,
+                                   "observations to use: any of pos,vel,att (eqs 13, 14, 15); default pos,vel,att, with "
+                                   "GNSS aiding pos,vel (velocity where gnss.csv has it)");
+  d->add_option("--aiding", a->aiding,
+                 "aiding source: reference (reference.csv, a reference INS) or gnss (gnss.csv fixes of the antenna: "
+                 "position, velocity where given, no attitude; levelled at the opening standstill, heading from the "
+                 "course over ground); default reference.csv when present, else gnss.csv")
+      ->check(CLI::IsMember({"reference", "gnss"}));
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
   d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
   d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
@@ -154,7 +182,8 @@ const bool registered = add_command(31, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   d->add_option("--qc-horizon", a->qc_horizon_s, "horizon of the QC run in RESULT.json, s (default 600)");
   d->add_flag("--json", *json, "print RESULT.json to stdout");
-  d->callback([a, json] {
+  d->callback([a, json, obs] {
+    a->obs_given = obs->count() > 0;
     const nlohmann::json j = fit_drive(*a);
     if (*json) print_json(j.dump(2));
     else print_summary(j);

@@ -4,7 +4,6 @@
 #include <ctime>
 #include <fstream>
 #include <iomanip>
-#include <random>
 #include <sstream>
 
 #include "bench/diagnose/finding_text.hpp"
@@ -178,10 +177,7 @@ DriveDiagInput simulate_drive_diag_input(const std::string& route_file, std::uin
   drivesim::DriveSimConfig cfg;
   cfg.route = rf.route;
   cfg.mems = draw_random_unit(seed);
-  Vec3 rpy = rf.mounting_rpy_deg;
-  std::mt19937_64 rng(seed ^ 0x6d6f756e74ULL);
-  std::normal_distribution<double> n(0.0, rf.misalignment_sigma_deg);
-  for (int i = 0; i < 3; ++i) rpy(i) += n(rng);
+  const Vec3 rpy = draw_true_mounting_rpy_deg(rf, seed);
   cfg.imu_rate_hz = rf.imu_rate_hz;
   cfg.mounting_rpy = rpy * units::kDeg;
   cfg.lever_arm = rf.lever_arm_m;

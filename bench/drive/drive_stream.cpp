@@ -19,21 +19,42 @@ inmotion::RefObs to_ref_obs(const DriveRefRow& r) {
   return o;
 }
 
-DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre, const EffectTerms* effects) : dir_(dir) {
+inmotion::RefObs to_ref_obs(const GnssRow& r) {
+  const auto nz = [](double v) { return std::isfinite(v) ? v : 0.0; };
+  return inmotion::gnss_fix_obs(r.t, r.lat_deg * units::kDeg, r.lon_deg * units::kDeg, r.h_m, r.v_ned ? &*r.v_ned : nullptr,
+                                nz(r.sigma_h_m), nz(r.sigma_v_m), r.sigma_vel_m_s);
+}
+
+DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre, const EffectTerms* effects, Aiding aiding)
+    : dir_(dir) {
   meta_ = read_meta(dir);
   if (meta_.kind != RecordingKind::drive)
     throw InputError((dir / "meta.json").string(), 0, "kind", "expected a drive recording (kind \"drive\")");
   if (!meta_.mounting) throw InputError((dir / "meta.json").string(), 0, "mounting", "a drive recording needs a mounting");
   if (!(meta_.imu_rate_hz > 0)) throw InputError((dir / "meta.json").string(), 0, "imu_rate_hz", "must be > 0");
   imu_ = std::make_unique<ImuReader>(dir / "imu.csv", meta_.imu_rate_hz);
-  ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv");
+  if (aiding == Aiding::gnss) gnss_ = std::make_unique<GnssReader>(dir / "gnss.csv");
+  else ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv");
   if (pre) {
     cg_ = TriadCorrector(pre->gyro);
     ca_ = TriadCorrector(pre->accel);
   }
   if (effects && (effects->any_sensor_side() || effects->time_offset_s != 0))
     comp_.emplace(*effects, pre ? *pre : SensorErrors{});
-  have_ref_ = ref_->next(ref_row_);
+  have_ref_ = read_epoch();
+}
+
+bool DriveStream::read_epoch() {
+  if (gnss_) {
+    GnssRow g;
+    if (!gnss_->next(g)) return false;
+    pending_ = to_ref_obs(g);
+    return true;
+  }
+  DriveRefRow r;
+  if (!ref_->next(r)) return false;
+  pending_ = to_ref_obs(r);
+  return true;
 }
 
 Mat3 DriveStream::nominal_mounting() const { return ins::dcm_from_rpy(meta_.mounting->rpy_deg * units::kDeg); }
@@ -41,11 +62,11 @@ Vec3 DriveStream::lever_arm() const { return meta_.mounting->lever_arm_m; }
 
 bool DriveStream::next(Event& e) {
   // A pending reference epoch that the IMU has reached goes first.
-  if (have_ref_ && (ref_row_.t <= last_imu_t_ + 1e-9 || imu_done_)) {
+  if (have_ref_ && (pending_.t <= last_imu_t_ + 1e-9 || imu_done_)) {
     e.is_ref = true;
-    e.t = ref_row_.t;
-    e.ref = to_ref_obs(ref_row_);
-    have_ref_ = ref_->next(ref_row_);
+    e.t = pending_.t;
+    e.ref = pending_;
+    have_ref_ = read_epoch();
     return true;
   }
   if (have_rest_) {  // the remainder of a split interval
@@ -81,15 +102,15 @@ bool DriveStream::next(Event& e) {
   // Time stamps moved by a time offset no longer fall on the reference epochs (which they
   // typically do in a recording): split the interval that straddles the next epoch there,
   // increments in proportion, so that the epoch is compared at its own time as before.
-  if (comp_ && comp_->time_offset_s() != 0 && have_ref_ && e.dt > 0 && ref_row_.t > e.t - e.dt + 1e-9 &&
-      ref_row_.t < e.t - 1e-9) {
-    const double a = (ref_row_.t - (e.t - e.dt)) / e.dt;
+  if (comp_ && comp_->time_offset_s() != 0 && have_ref_ && e.dt > 0 && pending_.t > e.t - e.dt + 1e-9 &&
+      pending_.t < e.t - 1e-9) {
+    const double a = (pending_.t - (e.t - e.dt)) / e.dt;
     rest_ = e;
     rest_.dt = e.dt * (1 - a);
     rest_.dtheta = e.dtheta * (1 - a);
     rest_.dv = e.dv * (1 - a);
     have_rest_ = true;
-    e.t = ref_row_.t;
+    e.t = pending_.t;
     e.dt *= a;
     e.dtheta *= a;
     e.dv *= a;

@@ -17,11 +17,18 @@
 namespace calbench {
 
 inmotion::RefObs to_ref_obs(const DriveRefRow& r);
+// A gnss.csv row as an observation (antenna = reference body origin; no attitude; velocity where
+// the row has it with a usable σ).
+inmotion::RefObs to_ref_obs(const GnssRow& r);
+
+// Which file aids the filter: reference.csv (reference INS) or gnss.csv (GNSS fixes only).
+enum class Aiding { reference, gnss };
 
 class DriveStream {
  public:
   // effects: catalogue terms to compensate (with the set they belong to: pre_correction, or zero).
-  DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre_correction, const EffectTerms* effects = nullptr);
+  DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre_correction, const EffectTerms* effects = nullptr,
+              Aiding aiding = Aiding::reference);
   const RecordingMeta& meta() const { return meta_; }
   Mat3 nominal_mounting() const;  // C_mb from meta.json
   Vec3 lever_arm() const;
@@ -43,6 +50,7 @@ class DriveStream {
   RecordingMeta meta_;
   std::unique_ptr<ImuReader> imu_;
   std::unique_ptr<DriveRefReader> ref_;
+  std::unique_ptr<GnssReader> gnss_;
   std::optional<TriadCorrector> cg_, ca_;
   std::optional<ImuEffectCompensator> comp_;
   Event rest_;  // remainder of an IMU interval split at a reference epoch (time offset only)
@@ -50,7 +58,8 @@ class DriveStream {
   long rows_temp_ = 0;
   ins::RateIntegrator integ_;
   bool have_ref_ = false, imu_done_ = false;
-  DriveRefRow ref_row_;
+  inmotion::RefObs pending_;  // the next epoch of the aiding file
+  bool read_epoch();
   double last_imu_t_ = -1e300;
 };
 

@@ -251,7 +251,8 @@ nlohmann::json determined_by(const inmotion::ParameterPriors& prior, const inmot
 
 template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
-                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc);
+                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
+                       bool gnss);
 
 }  // namespace
 
@@ -270,10 +271,30 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     fx.terms = effects_from_json(bench->extra, a.coeffs.empty() ? "--coeffs" : a.coeffs, &fx.sigma);
     fx.present = fx.terms.any();
   }
+  // The aiding source (docs/in-motion.md, "GNSS-only drives").
+  const fs::path dir(a.dir);
+  if (!a.aiding.empty() && a.aiding != "reference" && a.aiding != "gnss")
+    throw InputError("--aiding", 0, "", "expected reference or gnss, got '" + a.aiding + "'");
+  const bool gnss = a.aiding == "gnss" || (a.aiding.empty() && !fs::exists(dir / "reference.csv") && fs::exists(dir / "gnss.csv"));
+  if (gnss && !fs::exists(dir / "gnss.csv"))
+    throw InputError((dir / "gnss.csv").string(), 0, "", "--aiding gnss needs gnss.csv in the recording (no such file)");
+  if (gnss) {
+    if (!a.obs_given) args.obs = "pos,vel";
+    std::stringstream ss(args.obs);
+    std::string tok;
+    while (std::getline(ss, tok, ','))
+      if (tok == "att")
+        throw InputError("--obs", 0, "att",
+                         "GNSS aiding (gnss.csv) has no attitude: use pos or pos,vel (att needs a reference INS, reference.csv)");
+  }
   inmotion::InMotionConfig cfg;
+  if (gnss) {  // GNSS defaults where gnss.csv has no sigma columns
+    cfg.ref_sigma_pos = 2.0;
+    cfg.ref_sigma_vel = 0.1;
+  }
   cfg.obs_pos = cfg.obs_vel = cfg.obs_att = false;
   {
-    std::stringstream ss(a.obs);
+    std::stringstream ss(args.obs);
     std::string tok;
     while (std::getline(ss, tok, ',')) {
       if (tok == "pos") cfg.obs_pos = true;
@@ -307,18 +328,21 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
     fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
   }
-  if (inmotion::needs_augmented_layout(cfg)) return run_fit<inmotion::InMotionFilterAug>(args, cfg, bench, t0, t1, models, fx, pc);
-  return run_fit<inmotion::InMotionFilter>(args, cfg, bench, t0, t1, models, fx, pc);
+  if (inmotion::needs_augmented_layout(cfg))
+    return run_fit<inmotion::InMotionFilterAug>(args, cfg, bench, t0, t1, models, fx, pc, gnss);
+  return run_fit<inmotion::InMotionFilter>(args, cfg, bench, t0, t1, models, fx, pc, gnss);
 }
 
 namespace {
 
 template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
-                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc) {
+                       double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
+                       bool gnss) {
   using namespace units;
   constexpr int N = Filter::kN;
-  DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr);
+  DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
+                 gnss ? Aiding::gnss : Aiding::reference);
   std::unique_ptr<Filter> f;
   std::unique_ptr<CsvWriter> series;
   // Series columns: t_s, every state (then the augmented ones), their sigma_, then the total
@@ -395,7 +419,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
       t_last = e.t;
     }
   }
-  if (!f) throw InputError(a.dir, 0, "reference.csv", "no reference epoch inside the fit window");
+  if (!f) throw InputError(a.dir, 0, gnss ? "gnss.csv" : "reference.csv", gnss ? "no GNSS fix inside the fit window" : "no reference epoch inside the fit window");
   if (n_imu < 10) throw InputError(a.dir, 0, "imu.csv", "too few IMU samples inside the fit window");
   if (series) series->close();
   if (a.smooth) {
@@ -434,11 +458,43 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   const fs::path dir(a.dir);
   j["recording"] = {{"path", fs::absolute(dir).lexically_normal().string()},
                     {"sha256", sha256_file(dir / "imu.csv")},
-                    {"sha256_reference", sha256_file(dir / "reference.csv")},
+                    {"sha256_reference", fs::exists(dir / "reference.csv") ? nlohmann::json(sha256_file(dir / "reference.csv")) : nlohmann::json(nullptr)},
                     {"sha256_meta", sha256_file(dir / "meta.json")}};
-  j["reference_system"] = describe_reference(dir, meta, a, cfg);
+  if (gnss) j["recording"]["sha256_gnss"] = sha256_file(dir / "gnss.csv");
+  j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss);
   j["window_s"] = {t_first, t_last};
   j["observations"] = a.obs;
+  if (gnss) j["aiding"] = "gnss";
+  // How the heading was found and kept (GNSS-only start, re-alignments, forced recoveries):
+  // always with GNSS aiding, otherwise only when something happened.
+  if (gnss || !f->recoveries().empty() || f->alignment().course_updates + f->alignment().course_rejected > 0) {
+    const inmotion::AlignmentReport& al = f->alignment();
+    nlohmann::json aj = {{"mode", al.mode}};
+    if (al.mode == "gnss") {
+      aj["level"] = {{"t_s", {al.level_t0, al.level_t1}},
+                     {"roll_pitch_deg", {al.level_rpy(0) / kDeg, al.level_rpy(1) / kDeg}},
+                     {"accel_std_m_s2", al.level_accel_std},
+                     {"gyro_mean_dps", al.level_gyro_mean / kDeg},
+                     {"assumes", "a standstill over the levelling window"}};
+      aj["heading"] = al.heading_t >= 0
+                          ? nlohmann::json{{"t_s", al.heading_t},
+                                           {"source", "course over ground of the fixes (forward motion, nominal mounting)"}}
+                          : nlohmann::json{{"t_s", nullptr}, {"source", "none: the vehicle never drove straight far enough"}};
+      aj["epochs_skipped_before_heading"] = al.skipped_unaligned;
+      aj["heading_known_at_end"] = f->heading_known();
+    }
+    nlohmann::json rj = nlohmann::json::array();
+    long realigned = 0, widened = 0;
+    for (const auto& r : f->recoveries()) {
+      rj.push_back({{"t_s", r.t}, {"reason", r.reason}, {"action", r.action}});
+      (r.action.rfind("heading", 0) == 0 ? realigned : widened) += 1;
+    }
+    aj["realignments"] = realigned;
+    aj["covariance_widenings"] = widened;
+    aj["course_updates"] = {{"used", f->alignment().course_updates}, {"rejected", f->alignment().course_rejected}};
+    j["alignment"] = aj;
+    j["recoveries"] = rj;
+  }
   j["smoothed"] = a.smooth;
   j["coefficients"] = set_json(dev, total);
   j["correction"] = set_json(dev, corr);
@@ -495,7 +551,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // QC: out-of-sample inertial-only navigation after the window, with the input set and with
   // the result, when the recording continues; otherwise in-sample from the window start.
   nlohmann::json qj;
-  if (a.qc) {
+  if (a.qc && !fs::exists(dir / "reference.csv")) {
+    qj = {{"sample", "not run (no reference.csv: a GNSS-only recording has no reference to navigate against)"}};
+  } else if (a.qc) {
     const bool oos = t_data_end > t_last + 10.0;
     const double from = oos ? t_last : t_first;
     std::optional<Vec3> before_mount;

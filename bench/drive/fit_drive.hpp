@@ -15,6 +15,10 @@ namespace calbench {
 struct FitDriveArgs {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   std::string dir, coeffs, out, obs = "pos,vel,att", series, window;
+  // The aiding source: "reference" (reference.csv), "gnss" (gnss.csv: position, velocity where
+  // given; no attitude), or "" = reference.csv when the recording has one, else gnss.csv.
+  std::string aiding;
+  bool obs_given = true;      // false: --obs not given (GNSS aiding then uses pos,vel)
   std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
   double obs_rate_hz = 10, cov_dt = 0.1;

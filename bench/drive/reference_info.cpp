@@ -54,8 +54,41 @@ std::string sigma_text(double override_v, const Range& column, const char* colum
 
 }  // namespace
 
+namespace {
+// GNSS-only aiding: the receiver's fixes are the reference (gnss.csv, antenna = reference origin).
+std::string describe_gnss(const fs::path& dir, const RecordingMeta& meta, const inmotion::InMotionConfig& cfg) {
+  const fs::path file = dir / "gnss.csv";
+  const std::string kind = leading_comment(file);
+  GnssReader rd(file);
+  GnssRow r;
+  long n = 0, with_vel = 0;
+  double t0 = 0, t1 = 0;
+  Range sh, sv;
+  while (rd.next(r)) {
+    if (n++ == 0) t0 = r.t;
+    t1 = r.t;
+    sh.add(r.sigma_h_m);
+    sv.add(r.sigma_v_m);
+    with_vel += r.v_ned && std::isfinite(r.sigma_vel_m_s) && r.sigma_vel_m_s < 1e3;
+  }
+  std::ostringstream s;
+  s << "GNSS receiver only, no reference INS" << (kind.empty() ? "" : " (" + kind + ")") << " (gnss.csv: " << n
+    << " fixes over " << g(t1 - t0) << " s";
+  if (n > 1 && t1 > t0) s << ", " << g(static_cast<double>(n - 1) / (t1 - t0)) << " Hz";
+  s << "; " << with_vel << " with a velocity)";
+  s << "; observations used: position (eq 13)";
+  auto range = [](const Range& r) { return r.lo == r.hi ? g(r.lo) : g(r.lo) + "–" + g(r.hi); };
+  if (sh.any()) s << ", σ horizontal " << range(sh) << " m";
+  if (sv.any()) s << ", vertical " << range(sv) << " m";
+  if (cfg.obs_vel) s << "; velocity (eq 14) where gnss.csv has it";
+  if (!meta.notes.empty()) s << "; recording notes: " << meta.notes;
+  return s.str();
+}
+}  // namespace
+
 std::string describe_reference(const fs::path& dir, const RecordingMeta& meta, const FitDriveArgs& a,
-                               const inmotion::InMotionConfig& cfg) {
+                               const inmotion::InMotionConfig& cfg, bool gnss) {
+  if (gnss) return describe_gnss(dir, meta, cfg);
   const fs::path file = dir / "reference.csv";
   const std::string kind = leading_comment(file);
   DriveRefReader rd(file);

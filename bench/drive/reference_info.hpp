@@ -12,6 +12,6 @@
 namespace calbench {
 
 std::string describe_reference(const std::filesystem::path& dir, const RecordingMeta& meta, const FitDriveArgs& a,
-                               const inmotion::InMotionConfig& cfg);
+                               const inmotion::InMotionConfig& cfg, bool gnss = false);
 
 }  // namespace calbench

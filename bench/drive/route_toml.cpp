@@ -1,6 +1,7 @@
 #include "bench/drive/route_toml.hpp"
 
 #include <cmath>
+#include <random>
 #include <toml++/toml.h>
 
 #include "bench/io/toml_text.hpp"
@@ -157,6 +158,14 @@ RouteFile load_route(const std::filesystem::path& file) {
     throw InputError(file.string(), 0, "segment", e.what());
   }
   return rf;
+}
+
+Vec3 draw_true_mounting_rpy_deg(const RouteFile& rf, std::uint64_t seed) {
+  std::mt19937_64 rng(seed ^ 0x6d6f756e74ULL);
+  std::normal_distribution<double> n(0.0, rf.misalignment_sigma_deg);
+  Vec3 rpy = rf.mounting_rpy_deg;
+  for (int i = 0; i < 3; ++i) rpy(i) += n(rng);
+  return rpy;
 }
 
 }  // namespace calbench

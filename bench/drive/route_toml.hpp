@@ -19,4 +19,7 @@ struct RouteFile {
 
 RouteFile load_route(const std::filesystem::path& file);
 
+// The true mounting `simulate drive --truth random --seed N` draws: nominal + N(0, σ²) per angle, deg.
+Vec3 draw_true_mounting_rpy_deg(const RouteFile& rf, std::uint64_t seed);
+
 }  // namespace calbench

@@ -1,6 +1,5 @@
 #include "bench/drive/simulate_drive.hpp"
 
-#include <random>
 
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
@@ -51,9 +50,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   if (a.truth == "random") {
     truth.errors = draw_random_unit(a.seed);
     truth.device.serial = a.serial.empty() ? "SIM-" + std::to_string(a.seed) : a.serial;
-    std::mt19937_64 rng(a.seed ^ 0x6d6f756e74ULL);
-    std::normal_distribution<double> n(0.0, rf.misalignment_sigma_deg);
-    for (int i = 0; i < 3; ++i) true_rpy_deg(i) += n(rng);
+    true_rpy_deg = draw_true_mounting_rpy_deg(rf, a.seed);
     truth.extra["truth"] = {{"drawn_by", "calbench simulate drive --truth random"}, {"seed", a.seed}};
   } else {
     truth = read_coefficients(a.truth);

@@ -175,6 +175,11 @@ GnssReader::GnssReader(const fs::path& file) : csv_(file.string()) {
   h_ = csv_.require("h_m");
   const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
   for (int i = 0; i < 3; ++i) v_[i] = csv_.optional(v[i]);
+  // Velocity is all three columns or none: a partial set is a broken file, not "no velocity".
+  if ((v_[0] >= 0 || v_[1] >= 0 || v_[2] >= 0) && !(v_[0] >= 0 && v_[1] >= 0 && v_[2] >= 0))
+    for (int i = 0; i < 3; ++i)
+      if (v_[i] < 0)
+        throw InputError(file.string(), 1, v[i], "missing column (a velocity needs vn_m_s, ve_m_s and vd_m_s)");
   sh_ = csv_.optional("sigma_h_m");
   sv_ = csv_.optional("sigma_v_m");
   svel_ = csv_.optional("sigma_vel_m_s");

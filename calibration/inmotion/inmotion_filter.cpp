@@ -1,6 +1,8 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "calibration/units.hpp"
@@ -92,9 +94,22 @@ InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb,
   // φ₀ = C_nb·δμ + ε_ref, so the two blocks start correlated.
   const Mat3 Pm = pr.mount.cwiseProduct(pr.mount).asDiagonal();
   P_.template block<3, 3>(kMount, kMount) = Pm;
-  P_.template block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
-  P_.template block<3, 3>(kAtt, kMount) = C_nb * Pm;
-  P_.template block<3, 3>(kMount, kAtt) = (C_nb * Pm).transpose();
+  if (first.has_att) {
+    P_.template block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
+    P_.template block<3, 3>(kAtt, kMount) = C_nb * Pm;
+    P_.template block<3, 3>(kMount, kAtt) = (C_nb * Pm).transpose();
+  } else {
+    // A GNSS fix: no attitude. The MEMS is levelled from its own specific force over the first
+    // align_level_s (tilt error = horizontal accelerometer bias / g, independent of the mounting);
+    // the heading is unknown (a placeholder 1 rad σ, re-initialised by the course over ground).
+    const double tilt = std::max(pr.accel_bias.maxCoeff(), 1e-3) / 9.8;
+    P_.template block<3, 3>(kAtt, kAtt) = Vec3(tilt * tilt, tilt * tilt, 1.0).asDiagonal();
+    nav_.state().v = first.has_vel ? first.v_ned : Vec3::Zero();
+    nav_.state().q_nb = ins::Quat::Identity();
+    phase_ = Phase::levelling;
+    align_.mode = "gnss";
+    align_.level_t0 = first.t;
+  }
   refresh_correctors();
 }
 
@@ -109,6 +124,14 @@ void InMotionFilterT<N>::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, 
   if (!(dt > 0) || t <= nav_.state().t) return;
   const Vec3 dth = Ag_ * (dth_raw - (bg_ + dg_) * dt);
   const Vec3 dv = Aa_ * (dv_raw - (ba_ + da_) * dt);
+  if (phase_ == Phase::levelling) {  // standing: accumulate for the levelling, no navigation yet
+    lvl_dth_ += dth;
+    lvl_dv_ += dv;
+    lvl_T_ += dt;
+    lvl_f2_ += dv.squaredNorm() / dt;
+    nav_.state().t = t;
+    return;
+  }
   const Mat3 C0 = nav_.state().C_nb();
   nav_.update(dth, dv, dt);
   w_last_ = dth / dt;
@@ -192,6 +215,47 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
   if (!(r.sigma_vel > 0)) r.sigma_vel = cfg_.ref_sigma_vel;
   if (!(r.sigma_att > 0)) r.sigma_att = cfg_.ref_sigma_att;
 
+  // Heading from the course over ground: the fixes of the last align_window_s with the INS yaw.
+  if (!cfg_.obs_att && cfg_.realign_heading) {
+    const double yaw = phase_ == Phase::levelling ? std::numeric_limits<double>::quiet_NaN() : ins::rpy_from_dcm(nav_.state().C_nb() * C_mb_.transpose())(2);
+    fixes_.push_back(Fix{r.t, r.lat, r.lon, r.h, yaw, r.v_ned, r.has_vel && cfg_.obs_vel, r.sigma_pos, r.sigma_vel});
+    while (!fixes_.empty() && fixes_.front().t < r.t - cfg_.align_window_s) fixes_.pop_front();
+  }
+  if (phase_ == Phase::levelling) {
+    if (lvl_T_ < cfg_.align_level_s) return false;
+    finish_levelling(r);
+  }
+  if (phase_ == Phase::heading_unknown || (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading)) {
+    double cog = 0, sc = 0;
+    std::string how;
+    const bool mv = moving();
+    if (phase_ == Phase::heading_unknown) {
+      if (mv) {
+        if (!course(cog, sc, how)) {  // moving without a heading: skip until the course gives one
+          ++align_.skipped_unaligned;
+          return false;
+        }
+        realign(r, cog, sc, "start of motion without a heading (GNSS-only start)", how);
+        align_.heading_t = r.t;
+        phase_ = Phase::aligned;
+      }
+    } else {
+      if (!mv) motion_check_ = true;  // standing: the next start of motion checks the heading
+      if (mv && course(cog, sc, how)) {
+        const double sp = std::sqrt(std::max(0.0, P_(kAtt + 2, kAtt + 2)));
+        double lost = 0;  // longest current run of gate rejections
+        for (const ConsistencyStats& st : stats_)
+          if (st.rejected_since >= 0) lost = std::max(lost, r.t - st.rejected_since);
+        if (lost >= cfg_.gate_recover_s && r.t - last_realign_t_ > 3 * cfg_.gate_recover_s)
+          realign(r, cog, sc, "lost track: observations rejected by the gate for " + std::to_string(static_cast<int>(lost)) + " s", how);
+        else if (motion_check_ && sp > cfg_.align_heading_sigma && sc < 0.5 * sp)
+          realign(r, cog, sc, "start of motion with a heading sigma of " + std::to_string(static_cast<int>(std::lround(sp / units::kDeg))) +
+                                  " deg (beyond the linear range)", how);
+        motion_check_ = false;
+      }
+    }
+  }
+
   ObsContext c;
   c.mems = &nav_.state();
   c.C_mb = C_mb_;
@@ -202,7 +266,7 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
   Vec dx = Vec::Zero();
   const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};
   for (int type = 0; type < 3; ++type) {
-    if (!use[type]) continue;
+    if (!use[type] || (type == 1 && !r.has_vel) || (type == 2 && !r.has_att)) continue;
     const Observation o = type == 0 ? position_observation(c, r) : type == 1 ? velocity_observation(c, r) : attitude_observation(c, r);
     Eigen::Matrix<double, 3, N> H;
     if constexpr (N == kStates) {
@@ -247,6 +311,10 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       const double d = std::sqrt(hi);
       P_.template middleRows<9>(kPos) *= d;
       P_.template middleCols<9>(kPos) *= d;
+      static const char* tn[3] = {"position", "velocity", "attitude"};
+      recoveries_.push_back({r.t, std::string("lost track: ") + tn[type] + " rejected by the gate for " +
+                                      std::to_string(static_cast<int>(cfg_.gate_recover_s)) + " s",
+                             "navigation covariance widened x" + std::to_string(hi) + " until NIS = gate, epoch used"});
       PHt = P_ * H.transpose();
       Sl.compute(H * PHt + o.R);
     } else {
@@ -260,9 +328,165 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
     P_ -= K * PHt.transpose();
     P_ = 0.5 * (P_ + P_.transpose()).eval();
   }
+  // The course over ground as a heading observation while the heading is poorly known.
+  if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && cfg_.course_update_s > 0 &&
+      r.t - last_course_t_ >= cfg_.course_update_s && P_(kAtt + 2, kAtt + 2) > cfg_.course_update_sigma * cfg_.course_update_sigma &&
+      moving()) {
+    double cog = 0, sc = 0;
+    std::string how;
+    if (course(cog, sc, how)) {
+      last_course_t_ = r.t;
+      // Heading of the reference body: z = ψ_course − ψ̂ = e_Dᵀ(φ − C_nb·δμ) (the down row of eq 15).
+      const Mat3 C_nb = predicted_body_attitude(c);
+      Eigen::Matrix<double, 1, N> H = Eigen::Matrix<double, 1, N>::Zero();
+      H(kAtt + 2) = 1;
+      H.template segment<3>(kMount) = -C_nb.row(2);
+      const double z = std::remainder(cog - ins::rpy_from_dcm(C_nb)(2), 2 * units::kPi);
+      const double nu = z - (H * dx)(0);
+      const Vec PHt = P_ * H.transpose();
+      const double S = (H * PHt)(0) + sc * sc;
+      if (nu * nu / S <= cfg_.gate_nis / 3) {  // the gate per degree of freedom
+        const Vec K = PHt / S;
+        dx += K * nu;
+        P_ -= K * PHt.transpose();
+        P_ = 0.5 * (P_ + P_.transpose()).eval();
+        ++align_.course_updates;
+      } else {
+        ++align_.course_rejected;
+      }
+    }
+  }
   feedback(dx);
   if (cfg_.store_for_smoother) pending_dx_ += dx;
   return true;
+}
+
+namespace {
+std::string fmt1(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f", v);
+  return b;
+}
+}  // namespace
+
+template <int N>
+void InMotionFilterT<N>::finish_levelling(const RefObs& r) {
+  // Mean specific force over the standstill in MEMS axes → roll and pitch of the MEMS frame
+  // (f = C_mn·(0, 0, −g)); the yaw is a placeholder until the course over ground.
+  const Vec3 f = lvl_dv_ / lvl_T_;
+  const double roll = std::atan2(-f(1), -f(2)), pitch = std::atan2(f(0), std::hypot(f(1), f(2)));
+  const Mat3 C_nm = ins::dcm_from_rpy(Vec3(roll, pitch, 0.0));
+  ins::NavState& s = nav_.state();
+  s.q_nb = ins::Quat(C_nm);
+  s.lat = r.lat;
+  s.lon = r.lon;
+  s.h = r.h;
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nm * C_mb_.transpose() * lever_);
+  s.v = r.has_vel ? r.v_ned : Vec3::Zero();
+  align_.level_t1 = r.t;
+  align_.level_rpy = Vec3(roll, pitch, 0.0);
+  align_.level_accel_std = std::sqrt(std::max(0.0, lvl_f2_ / lvl_T_ - f.squaredNorm()));
+  align_.level_gyro_mean = (lvl_dth_ / lvl_T_).norm();
+  phase_ = Phase::heading_unknown;
+}
+
+template <int N>
+bool InMotionFilterT<N>::moving() const {
+  if (fixes_.empty()) return false;
+  const Fix& n = fixes_.back();
+  if (n.has_vel && std::hypot(n.v(0), n.v(1)) >= 1.0) return true;
+  // The INS speed once it has a heading (before, its velocity is only held by the fixes).
+  if (phase_ == Phase::aligned && std::hypot(nav_.state().v(0), nav_.state().v(1)) >= 1.0) return true;
+  // The fixes alone: displacement over the last 5 s beyond what their noise makes.
+  for (const Fix& f : fixes_) {
+    if (f.t < n.t - 5.0) continue;
+    const Vec3 d = ins::geodetic_diff_ned(n.lat, n.lon, n.h, f.lat, f.lon, f.h);
+    return std::hypot(d(0), d(1)) >= std::max(5.0, 4.0 * std::sqrt(2.0) * n.sigma_h);
+  }
+  return false;
+}
+
+template <int N>
+bool InMotionFilterT<N>::course(double& cog, double& sigma, std::string& how) const {
+  if (fixes_.empty()) return false;
+  const Fix& n = fixes_.back();
+  if (n.has_vel) {
+    const double sp = std::hypot(n.v(0), n.v(1));
+    if (sp < cfg_.align_min_speed) return false;
+    cog = std::atan2(n.v(1), n.v(0));
+    sigma = std::hypot(n.sigma_vel / sp, cfg_.align_sideslip);
+    how = "fix velocity, " + fmt1(sp) + " m/s";
+    return true;
+  }
+  // The chord from the oldest fix of a straight stretch to this one; its direction is the heading
+  // at the middle of the stretch, moved to now by half the INS heading change along it.
+  for (const Fix& f : fixes_) {
+    const double turn = std::remainder(n.yaw_ins - f.yaw_ins, 2 * units::kPi);
+    if (!(std::abs(turn) <= cfg_.align_max_turn)) continue;
+    const Vec3 d = ins::geodetic_diff_ned(n.lat, n.lon, n.h, f.lat, f.lon, f.h);
+    const double L = std::hypot(d(0), d(1));
+    if (L < cfg_.align_min_baseline_m) break;  // later fixes give shorter chords
+    cog = std::atan2(d(1), d(0)) + 0.5 * turn;
+    sigma = std::hypot(std::hypot(std::sqrt(2.0) * n.sigma_h / L, cfg_.align_sideslip), 0.1 * turn);
+    how = "fix positions, " + fmt1(L) + " m chord over " + fmt1(n.t - f.t) + " s";
+    return true;
+  }
+  return false;
+}
+
+template <int N>
+void InMotionFilterT<N>::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {
+  ins::NavState& s = nav_.state();
+  const Mat3 C_nm = s.C_nb();
+  const double dpsi = std::remainder(cog - ins::rpy_from_dcm(C_nm * C_mb_.transpose())(2), 2 * units::kPi);
+  Mat3 R;
+  R << std::cos(dpsi), -std::sin(dpsi), 0, std::sin(dpsi), std::cos(dpsi), 0, 0, 0, 1;
+  s.q_nb = ins::Quat(R * C_nm);
+  s.q_nb.normalize();
+  const Mat3 C_nb = R * C_nm * C_mb_.transpose();
+  if (phase_ == Phase::heading_unknown) {
+    // Standing with a placeholder heading, the INS took the Earth rate off the gyros in the wrong
+    // axes, and the fixes made the gyro drift estimate take up the difference (the tilt stayed put):
+    // b̂ − b = (C_nm − Ĉ_nm)ᵀ·ω_ie. With the heading known, that part is given back.
+    const Vec3 w_ie = ins::earth_rate_ned_at(s.lat);
+    bg_ -= ((R * C_nm).transpose() - C_nm.transpose()) * w_ie;
+    refresh_correctors();
+  }
+  const bool fix_vel = !fixes_.empty() && fixes_.back().has_vel;
+  s.v = fix_vel ? r.v_ned : Vec3(R * s.v);
+  s.lat = r.lat;
+  s.lon = r.lon;
+  s.h = r.h;
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nb * lever_);
+  // The NED error blocks turn with the heading (the filter's world was rotated by the heading error).
+  for (int b : {kPos, kVel, kAtt}) P_.template middleRows<3>(b) = R * P_.template middleRows<3>(b);
+  for (int b : {kPos, kVel, kAtt}) P_.template middleCols<3>(b) = P_.template middleCols<3>(b) * R.transpose();
+  // Heading error of the MEMS = course error ⊕ mounting error seen about down: φ_D = ε + c·δμ,
+  // c = e_Dᵀ·C_nb, so it correlates with the mounting and with what the mounting correlates with.
+  const Eigen::Matrix<double, 1, 3> c = C_nb.row(2);
+  const Eigen::Matrix<double, 1, N> row = c * P_.template middleRows<3>(kMount);
+  const double var = sigma * sigma + (c * P_.template block<3, 3>(kMount, kMount) * c.transpose())(0, 0);
+  P_.row(kAtt + 2) = row;
+  P_.col(kAtt + 2) = row.transpose();
+  P_(kAtt + 2, kAtt + 2) = var;
+  // Position reset to the fix; velocity to the fix's, or rotated with a σ for the heading it had.
+  const double sp = std::hypot(s.v(0), s.v(1));
+  const double sv = fix_vel ? r.sigma_vel : std::hypot(0.5, sp * sigma);
+  const Vec3 sd(r.sigma_pos, r.sigma_pos, r.sigma_pos_v > 0 ? r.sigma_pos_v : r.sigma_pos);
+  for (int i = 0; i < 3; ++i) {
+    P_.row(kPos + i).setZero();
+    P_.col(kPos + i).setZero();
+    P_(kPos + i, kPos + i) = sd(i) * sd(i);
+    P_.row(kVel + i).setZero();
+    P_.col(kVel + i).setZero();
+    P_(kVel + i, kVel + i) = i < 2 ? sv * sv : (fix_vel ? sv * sv : 0.3 * 0.3);
+  }
+  for (ConsistencyStats& st : stats_) st.rejected_since = -1;
+  last_realign_t_ = r.t;
+  recoveries_.push_back({r.t, reason,
+                         "heading re-aligned from the course over ground (" + how + "): " + fmt1(dpsi / units::kDeg) +
+                             " deg, sigma " + fmt1(std::sqrt(var) / units::kDeg) + " deg; position reset to the fix, velocity " +
+                             (fix_vel ? "the fix's" : "turned with the heading")});
 }
 
 template <int N>

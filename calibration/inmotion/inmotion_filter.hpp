@@ -6,8 +6,10 @@
 // After each update the estimated errors are fed back into the INS and the sensor model and the
 // error state is reset to zero.
 #pragma once
+#include <deque>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "calibration/inmotion/error_model.hpp"
@@ -55,6 +57,51 @@ struct InMotionConfig {
   // gate (the parameters keep what they learnt), and counted as `forced`.
   double gate_recover_s = 10;
   bool store_for_smoother = false;
+  // Heading from the course over ground (docs/in-motion.md, "GNSS-only drives"). Without attitude
+  // observations the heading is observable only through the vehicle's accelerations; after a
+  // standstill, or without any reference attitude at the start, its error can lie far outside the
+  // linear range. The course over ground then gives the reference body's heading (forward motion,
+  // no sideslip beyond `align_sideslip`; MEMS heading through the current mounting estimate):
+  //   * GNSS fixes without attitude at the start: level from the mean specific force over the
+  //     first `align_level_s` (an opening standstill is assumed), heading unknown; epochs are used
+  //     while standing, skipped while moving until the course gives the heading;
+  //   * without attitude observations: at the start of motion (after a standstill, or the start of
+  //     the data) when the heading σ exceeds `align_heading_sigma` and the course is at least twice
+  //     as good, and when the gate has lost track (instead of only widening P) while moving;
+  // each is a re-alignment: heading replaced, horizontal navigation covariance rotated with it,
+  // heading row/column re-initialised (course σ ⊕ mounting), position reset to the fix, velocity
+  // rotated (or the fix's). Never with attitude observations (the default filter is unchanged).
+  bool realign_heading = true;
+  double align_level_s = 10;                  // s of data for levelling (GNSS-only start)
+  double align_min_speed = 3;                 // m/s: course from the fix velocity
+  double align_min_baseline_m = 30;           // m: course from the fix positions (chord)
+  double align_window_s = 20;                 // s of fixes kept for the chord
+  double align_max_turn = 10 * units::kDeg;   // largest heading change (INS) along the chord
+  double align_sideslip = 1.0 * units::kDeg;  // 1σ of the body's course-heading difference
+  double align_heading_sigma = 5 * units::kDeg;
+  // Course updates: while the heading σ exceeds course_update_sigma (the yaw-gyro drift not yet
+  // learnt, typically the first minutes of a GNSS-only drive on raw data), the course over ground
+  // is also a heading observation (forward motion, sideslip as above), at most every
+  // course_update_s (a chord of fix positions is then mostly new fixes). 0 s: off.
+  double course_update_s = 10;
+  double course_update_sigma = 1.0 * units::kDeg;
+};
+
+// How the filter got (and kept) its heading: for RESULT.json and the summary.
+struct AlignmentReport {
+  std::string mode = "reference";  // "reference": the first reference epoch's attitude; "gnss": levelled + course
+  double level_t0 = 0, level_t1 = 0;
+  Vec3 level_rpy = Vec3::Zero();   // MEMS roll, pitch (rad) from the levelling; yaw undefined
+  double level_accel_std = 0;      // m/s², std of the specific-force norm over the levelling window
+  double level_gyro_mean = 0;      // rad/s, |mean rate| over the window (turn-on bias + Earth rate at rest)
+  double heading_t = -1;           // first heading from the course (−1: none)
+  long skipped_unaligned = 0;      // epochs skipped while moving before the heading was known
+  long course_updates = 0, course_rejected = 0;  // course over ground used as a heading observation
+};
+
+struct Recovery {
+  double t = 0;
+  std::string reason, action;
 };
 
 struct ConsistencyStats {
@@ -114,6 +161,11 @@ class InMotionFilterT {
   void mounting_rpy(Vec3& rpy, Vec3& sigma) const;
   const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
   const InnovationRecord& last_innovation(int type) const { return innov_[type]; }
+  const AlignmentReport& alignment() const { return align_; }
+  // Re-alignments and forced recoveries, in time order.
+  const std::vector<Recovery>& recoveries() const { return recoveries_; }
+  // True while the filter has no heading yet (GNSS-only start before the first course).
+  bool heading_known() const { return phase_ == Phase::aligned; }
   // Totals of every state (series units, see state_names(), then aux_state_names()) and their 1σ.
   void totals(Vec& x, Vec& sigma) const;
   // Total drift per axis, constant part + in-run shaping-filter state (b + d; series units
@@ -135,6 +187,17 @@ class InMotionFilterT {
   void feedback(const Vec& dx);
   void propagate_drift_nominal(double T);
   void refresh_correctors();
+  // Heading from the course over ground (see InMotionConfig::realign_heading).
+  struct Fix {
+    double t, lat, lon, h, yaw_ins;  // yaw_ins: INS body yaw at the fix (its changes are what count)
+    Vec3 v;
+    bool has_vel;
+    double sigma_h, sigma_vel;
+  };
+  bool course(double& cog, double& sigma, std::string& how) const;
+  bool moving() const;
+  void realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how);
+  void finish_levelling(const RefObs& r);
 
   InMotionConfig cfg_;
   ins::Strapdown nav_;
@@ -156,6 +219,16 @@ class InMotionFilterT {
   double last_obs_t_ = -1e300;
   ConsistencyStats stats_[3];
   InnovationRecord innov_[3];
+  enum class Phase { levelling, heading_unknown, aligned };
+  Phase phase_ = Phase::aligned;
+  Vec3 lvl_dth_ = Vec3::Zero(), lvl_dv_ = Vec3::Zero();
+  double lvl_T_ = 0, lvl_f2_ = 0;  // levelling sums: time, Σ|f|²·dt
+  std::deque<Fix> fixes_;
+  double last_realign_t_ = -1e300;
+  bool motion_check_ = true;  // the heading σ is checked at the next start of motion
+  double last_course_t_ = -1e300;
+  AlignmentReport align_;
+  std::vector<Recovery> recoveries_;
 
   // Smoother storage (float to halve memory): per propagation step k → k+1.
   struct Stored {

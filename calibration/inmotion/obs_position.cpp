@@ -18,6 +18,7 @@ Observation position_observation(const ObsContext& c, const RefObs& r) {
   o.H.block<3, 3>(0, kAtt) = -ins::skew(Cr);
   o.H.block<3, 3>(0, kMount) = ins::skew(Cr) * C_nb;
   o.R = Mat3::Identity() * (r.sigma_pos * r.sigma_pos);
+  if (r.sigma_pos_v > 0) o.R(2, 2) = r.sigma_pos_v * r.sigma_pos_v;  // GNSS: vertical σ of its own
   return o;
 }
 

@@ -17,7 +17,17 @@ struct RefObs {
   Vec3 v_ned = Vec3::Zero();
   Vec3 rpy = Vec3::Zero();
   double sigma_pos = 0, sigma_vel = 0, sigma_att = 0;  // 1σ used for R
+  // A GNSS fix (gnss.csv) carries no attitude, a velocity only where the file has one with a
+  // finite σ, and a vertical position σ of its own (0: sigma_pos for all three axes).
+  bool has_att = true, has_vel = true;
+  double sigma_pos_v = 0;
 };
+
+// A GNSS fix of the antenna (taken as the reference body origin) as an observation: position with
+// horizontal and vertical σ, velocity only where given and its σ is not 1e3 m/s or more (an
+// importer's 1e6 means unknown), no attitude. σ ≤ 0 or NaN: the filter's defaults.
+RefObs gnss_fix_obs(double t, double lat, double lon, double h, const Vec3* v_ned, double sigma_h, double sigma_v,
+                    double sigma_vel);
 
 struct ObsContext {
   const ins::NavState* mems = nullptr;  // nominal MEMS INS state at the epoch
