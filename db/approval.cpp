@@ -174,7 +174,21 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
   ApprovalCheck r;
   store.connection().write_transaction([&] {
     const CoefficientSetRecord set = store.get_set(set_id);
+    if (set.status == SetStatus::approved || set.status == SetStatus::provisioned) {
+      r.already = true;  // approving again changes nothing, and is not a refusal
+      return;
+    }
     r = check_approval(set, store.qc_of_set(set), t);
+    // A combined set refines its parent: the parent must have passed approval itself.
+    if (set.parent_id) {
+      const auto p = store.find_set(*set.parent_id);
+      if (p && (p->status == SetStatus::draft || p->status == SetStatus::revoked)) {
+        r.reasons.push_back("parent set " + std::to_string(p->id) + " is " + to_string(p->status) +
+                            (p->status == SetStatus::draft ? ": approve the set it refines first"
+                                                           : ": a set refined from a revoked set cannot be approved"));
+        r.ok = false;
+      }
+    }
     if (r.ok) {
       store.set_status(set_id, SetStatus::approved, "thresholds: " + t.source);
     } else {

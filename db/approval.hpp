@@ -37,6 +37,7 @@ Thresholds load_thresholds(const std::string& path);  // reads the file; InputEr
 
 struct ApprovalCheck {
   bool ok = true;
+  bool already = false;              // the set was approved (or provisioned) before: nothing changed
   std::vector<std::string> reasons;  // why not (empty when ok)
 };
 ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);

@@ -210,7 +210,24 @@ std::optional<DeterminedBy> determined_by_of(const json& j, const std::string& f
     st.posterior_sigma = opt_number(c, "posterior_sigma", f, key);
     st.ratio = opt_number(c, "ratio", f, key);
     st.drive_share = opt_number(c, "drive_share", f, key);
-    if (st.drive_share && *st.drive_share > 1 + 1e-9) throw InputError(f, 0, key + ".drive_share", "expected 0 … 1");
+    if (st.drive_share && (*st.drive_share > 1 + 1e-9 || *st.drive_share < -1e-9))
+      throw InputError(f, 0, key + ".drive_share", "expected 0 … 1");
+    // The figures must agree with each other and with the stage (the rule fit drive applies): a
+    // hand-edited stage or σ would otherwise reach the report as the drive's finding.
+    if (st.prior_sigma && st.posterior_sigma) {
+      if (*st.posterior_sigma > *st.prior_sigma * (1 + 1e-3))
+        throw InputError(f, 0, key + ".posterior_sigma", "larger than prior_sigma: a Kalman update cannot widen a constant");
+      if (st.drive_share && *st.prior_sigma > 0) {
+        const double q = *st.posterior_sigma / *st.prior_sigma, share = 1 - q * q;
+        if (std::abs(share - *st.drive_share) > 1e-3)
+          throw InputError(f, 0, key + ".drive_share", "does not equal 1 - (posterior_sigma/prior_sigma)^2");
+      }
+    }
+    if (st.drive_share) {
+      const double sh = *st.drive_share;
+      const bool ok = st.stage == "drive" ? sh > 0.8 - 1e-9 : st.stage == "both" ? sh >= 0.2 - 1e-9 && sh <= 0.8 + 1e-9 : sh < 0.2 + 1e-9;
+      if (!ok) throw InputError(f, 0, key + ".stage", "'" + st.stage + "' does not follow from drive_share " + std::to_string(sh));
+    }
     out.coefficients[it.key()] = st;
   }
   return out;
@@ -315,9 +332,17 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
       throw InputError(f, 0, "device.model",
                        "device " + r.device.serial + " is a " + dev->model + ", the result says " + r.device.model);
     // Which stored set did the fit start from?
+    {  // The same result twice would store a second, identical set.
+      auto q = store.connection().prepare("SELECT id FROM inmotion_runs WHERE device_id = ? AND result_json = ?");
+      q.bind(1, dev->id).bind(2, r.result_json);
+      if (q.step())
+        throw std::runtime_error(f + ": already imported (in-motion run " + std::to_string(q.int64(0)) +
+                                 "): nothing stored");
+    }
     if (parent) {
       const auto p = store.find_set(*parent);
-      if (!p || p->device_id != dev->id)
+      if (!p) throw InputError(f, 0, "parent", "no coefficient set " + std::to_string(*parent) + " in the database");
+      if (p->device_id != dev->id)
         throw InputError(f, 0, "parent", "set " + std::to_string(*parent) + " is not a set of device " + r.device.serial);
       if (!r.correction)
         throw InputError(f, 0, "correction", "missing: needed to combine the result with parent set " +

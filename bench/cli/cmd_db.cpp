@@ -199,7 +199,13 @@ void cmd_approve(const DbArgs& a) {
   auto s = open_store(a);
   const Thresholds t = a.thresholds.empty() ? default_thresholds() : load_thresholds(a.thresholds);
   const ApprovalCheck r = approve_checked(*s, a.set, t);
-  if (a.json) print_json(json{{"set", a.set}, {"approved", r.ok}, {"reasons", r.reasons}, {"thresholds", t.source}}.dump(2));
+  if (a.json)
+    print_json(json{{"set", a.set}, {"approved", r.ok}, {"already_approved", r.already}, {"reasons", r.reasons}, {"thresholds", t.source}}
+                   .dump(2));
+  if (r.already) {
+    if (!a.json) std::cout << "set " << a.set << " is already " << to_string(s->get_set(a.set).status) << " (no change)\n";
+    return;
+  }
   if (r.ok) {
     if (!a.json) std::cout << "set " << a.set << " approved (thresholds: " << t.source << ")\n";
     return;

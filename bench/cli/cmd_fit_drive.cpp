@@ -1,5 +1,6 @@
 // calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
 //                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
+#include <charconv>
 #include <cmath>
 #include <iostream>
 
@@ -21,8 +22,8 @@ void print_summary(const nlohmann::json& j) {
     return o.str();
   };
   const auto& c = j["coefficients"];
-  std::cout << "in-motion fit of " << j["recording"]["path"].get<std::string>() << " (window " << j["window_s"][0] << " – "
-            << j["window_s"][1] << " s, observations " << j["observations"].get<std::string>() << ")\n"
+  std::cout << "in-motion fit of " << j["recording"]["path"].get<std::string>() << " (window " << j["window_s"][0].get<double>() << " – "
+            << j["window_s"][1].get<double>() << " s, observations " << j["observations"].get<std::string>() << ")\n"
             << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
@@ -90,8 +91,8 @@ void print_summary(const nlohmann::json& j) {
   }
   if (j["qc"].contains("sets"))
     for (const auto& s : j["qc"]["sets"])
-      std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"] << " s over "
-                << j["qc"]["horizon_s"] << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
+      std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"].get<double>() << " s over "
+                << j["qc"]["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
                 << s["final_cpe_m"].get<double>() << " m\n";
   std::cout << std::flush;
 }
@@ -109,6 +110,19 @@ const bool registered = add_command(31, [](CLI::App& app) {
   auto json = std::make_shared<bool>(false);
   auto* d = fit->add_subcommand("drive", "In-motion calibration against the reference INS/GNSS of a drive recording "
                                          "(EKF, paper eqs 13-15)");
+  // Numbers from the command line: decimal, finite; NaN, inf, hex and negatives are bad input (exit 2).
+  auto number = [](bool positive) {
+    return CLI::Validator(
+        [positive](const std::string& v) -> std::string {
+          double x = 0;
+          const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
+          if (r.ec == std::errc() && r.ptr == v.data() + v.size() && std::isfinite(x) && (positive ? x > 0 : x >= 0))
+            return {};
+          return std::string("expected a finite number ") + (positive ? "> 0" : ">= 0") + ", got '" + v + "'";
+        },
+        positive ? "NUMBER>0" : "NUMBER>=0");
+  };
+  const CLI::Validator finite_nonneg = number(false), finite_pos = number(true);
   d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
   d->add_option("--coeffs", a->coeffs,
                  "coefficient set applied to the data first (coefficients.json, or an earlier RESULT.json whose "
@@ -132,23 +146,12 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_option("--prior-gyro-bias", a->prior_gyro_bias_dps,
                  "prior 1-sigma of the gyro drift, deg/s, overriding the default (0.5 for raw data; with --coeffs the "
                  "set's sigma combined with the allowance)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_pos);
   d->add_option("--prior-accel-bias", a->prior_accel_bias_mg,
                  "prior 1-sigma of the accelerometer bias, mg, overriding the default (30 for raw data; with --coeffs "
                  "the set's sigma combined with the allowance)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_pos);
   // Stability allowances (docs/in-motion.md, "Priors"): finite and >= 0; NaN and negatives are bad input (exit 2).
-  const CLI::Validator finite_nonneg(
-      [](const std::string& v) -> std::string {
-        try {
-          std::size_t pos = 0;
-          const double x = std::stod(v, &pos);
-          if (pos == v.size() && std::isfinite(x) && x >= 0) return {};
-        } catch (const std::exception&) {
-        }
-        return "expected a finite number >= 0, got '" + v + "'";
-      },
-      "NUMBER>=0");
   const inmotion::StabilityAllowance& def = inmotion::stability_allowance_table().front();
   const struct {
     const char* name;
@@ -171,16 +174,16 @@ const bool registered = add_command(31, [](CLI::App& app) {
                       fmt_default(al.deflt) + ")")
         ->check(finite_nonneg)
         ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
-  d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(CLI::PositiveNumber);
-  d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(CLI::PositiveNumber);
-  d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)");
-  d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)");
-  d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)");
+  d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(finite_pos);
+  d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(finite_pos);
+  d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)")->check(finite_pos);
+  d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)")->check(finite_pos);
+  d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)")->check(finite_pos);
   d->add_option("--drift-models", a->drift_models,
                  "identified drift models (MODELS.json of `calbench identify --out`, or a coefficients.json with "
                  "drift_models): they replace the data-sheet shaping filters per axis (exp_cosine: 2 states, eqs 35-36)")
       ->check(CLI::ExistingFile);
-  d->add_option("--qc-horizon", a->qc_horizon_s, "horizon of the QC run in RESULT.json, s (default 600)");
+  d->add_option("--qc-horizon", a->qc_horizon_s, "horizon of the QC run in RESULT.json, s (default 600)")->check(finite_pos);
   d->add_flag("--json", *json, "print RESULT.json to stdout");
   d->callback([a, json, obs] {
     a->obs_given = obs->count() > 0;

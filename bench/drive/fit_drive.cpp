@@ -12,6 +12,8 @@
 #include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/input_warning.hpp"
+#include "bench/io/recording.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/units.hpp"
@@ -98,20 +100,30 @@ struct InputEffects {
 struct InputSet {
   CoefficientSet set;
   std::optional<std::pair<Vec3, Vec3>> mounting_deg;
+  std::string recording_sha256;  // of the drive a RESULT.json was fitted on
 };
 
 InputSet read_input_set(const std::string& file) {
   const nlohmann::json j = read_json_file(file);
   InputSet in;
-  if (!(j.is_object() && j.contains("format") && j["format"] == "calbench-inmotion-result/1")) {
+  const bool result = j.is_object() && j.contains("format") && j["format"].is_string() &&
+                      j["format"].get<std::string>().rfind("calbench-inmotion-result/", 0) == 0;
+  if (!result) {
     in.set = coefficients_from_json(j, file);
     return in;
   }
+  if (j["format"] != "calbench-inmotion-result/1")
+    throw InputError(file, 0, "format",
+                     "unsupported RESULT.json format '" + j["format"].get<std::string>() + "' (expected calbench-inmotion-result/1)");
+  const nlohmann::json& c = jreq(j, "coefficients", file, "");
   try {
-    in.set = coefficients_from_json(jreq(j, "coefficients", file, ""), file);
+    in.set = coefficients_from_json(c, file);
   } catch (const InputError& e) {
     throw InputError(file, e.line(), e.field().empty() ? "coefficients" : "coefficients." + e.field(), e.message());
   }
+  if (j.contains("recording") && j["recording"].is_object() && j["recording"].contains("sha256") &&
+      j["recording"]["sha256"].is_string())
+    in.recording_sha256 = j["recording"]["sha256"].get<std::string>();
   if (j.contains("mounting_rpy_deg") && !j["mounting_rpy_deg"].is_null()) {
     const auto& m = j["mounting_rpy_deg"];
     const Vec3 v = jvec3(jreq(m, "value", file, "mounting_rpy_deg"), file, "mounting_rpy_deg.value");
@@ -171,6 +183,27 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
                                       {"sigma", sigma_json(a.coeffs_mounting_deg->second)}};
     }
     pc.report = inmotion::priors_from_set(bench->errors, al, mount_sigma);
+    // A σ far beyond anything a calibration of this class produces is a broken file, not a prior:
+    // the filter would run with P of 1e300 and return nothing meaningful.
+    const inmotion::ParameterPriors ds = inmotion::datasheet_priors();
+    const auto& nm = inmotion::prior_parameter_names();
+    for (std::size_t k = 0; k < 24; ++k) {
+      const double sgm = pc.report.set_sigma[k], lim = 100 * inmotion::prior_value(ds, k);
+      if (std::isfinite(sgm) && sgm > lim) {
+        const std::string& n = nm[k];
+        const std::string tri = n.substr(0, n.find('.'));
+        const bool b = n.find(".bias.") != std::string::npos;
+        const char* ax = "xyz";
+        const int i = static_cast<int>(std::string(ax).find(n[n.size() - (b ? 1 : 2)]));
+        const std::string key = b ? tri + ".sigma_bias[" + std::to_string(i) + "]"
+                                  : tri + ".sigma_M[" + std::to_string(i) + "][" +
+                                        std::to_string(std::string(ax).find(n.back())) + "]";
+        std::ostringstream m;
+        m << "sigma " << sgm << " is implausible for a " << al.device_class << " (more than 100x the data-sheet class "
+          << inmotion::prior_value(ds, k) << "): not usable as a prior";
+        throw InputError(a.coeffs.empty() ? "--coeffs" : a.coeffs, 0, key, m.str());
+      }
+    }
     j["mode"] = "input set";
     j["input"] = a.coeffs.empty() ? nlohmann::json("in memory") : nlohmann::json(a.coeffs);
   } else {
@@ -178,6 +211,24 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
     j["mode"] = "data-sheet";
     j["input"] = nullptr;
   }
+  // Options that cannot act here are named, not silently dropped.
+  nlohmann::json without = nlohmann::json::array();
+  const FitDriveArgs::Allowances& ov = a.allowance;
+  for (const auto& [v, name] : {std::pair{ov.gyro_bias_dph, "--allowance-gyro-bias-dph"}, {ov.accel_bias_mg, "--allowance-accel-bias-mg"},
+                                {ov.gyro_scale_ppm, "--allowance-gyro-scale-ppm"}, {ov.gyro_skew_ppm, "--allowance-gyro-skew-ppm"},
+                                {ov.accel_scale_ppm, "--allowance-accel-scale-ppm"}, {ov.accel_skew_ppm, "--allowance-accel-skew-ppm"},
+                                {ov.mount_deg, "--allowance-mount-deg"}}) {
+    if (std::isnan(v)) continue;
+    std::string why;
+    if (!bench) why = "no --coeffs: raw data take the data-sheet priors";
+    else if (std::string(name) == "--allowance-mount-deg" && !a.coeffs_mounting_deg) why = "the input set carries no mounting";
+    else if (std::string(name) == "--allowance-gyro-bias-dph" && a.prior_gyro_bias_dps > 0) why = "--prior-gyro-bias sets the gyro bias prior";
+    else if (std::string(name) == "--allowance-accel-bias-mg" && a.prior_accel_bias_mg > 0) why = "--prior-accel-bias sets the accelerometer bias prior";
+    if (why.empty()) continue;
+    without.push_back({{"option", name}, {"reason", why}});
+    input_warning(name, 0, "has no effect here: " + why);
+  }
+  if (!without.empty()) j["options_without_effect"] = without;
   // --prior-gyro-bias / --prior-accel-bias override the bias priors whatever their source.
   for (int s = 0; s < 2; ++s) {
     const double v = s == 0 ? a.prior_gyro_bias_dps * kDeg : a.prior_accel_bias_mg * kMilliG;
@@ -265,6 +316,20 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     InputSet in = read_input_set(a.coeffs);
     bench = std::move(in.set);
     if (in.mounting_deg) args.coeffs_mounting_deg = in.mounting_deg;
+    args.coeffs_recording_sha256 = in.recording_sha256;
+  }
+  // A drive refines only its own unit's coefficients: the set and the recording name one device.
+  if (bench && !a.dir.empty() && fs::exists(fs::path(a.dir) / "meta.json")) {
+    const RecordingMeta rm = read_meta(fs::path(a.dir));
+    const std::string src = a.coeffs.empty() ? "--coeffs" : a.coeffs;
+    if (!rm.device.serial.empty() && !bench->device.serial.empty() && rm.device.serial != bench->device.serial)
+      throw InputError(src, 0, "device.serial",
+                       "the coefficient set is of unit '" + bench->device.serial + "', the recording " +
+                           (fs::path(a.dir) / "meta.json").string() + " of unit '" + rm.device.serial +
+                           "': a drive refines only its own unit's set");
+    if (!rm.device.model.empty() && !bench->device.model.empty() && rm.device.model != bench->device.model)
+      throw InputError(src, 0, "device.model",
+                       "the coefficient set is of a " + bench->device.model + ", the recording of a " + rm.device.model);
   }
   InputEffects fx;
   if (bench) {
@@ -445,6 +510,14 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   }
 
   const SensorErrors corr = f->estimate();
+  {
+    const auto finite = [](const TriadErrors& t) {
+      return t.bias.allFinite() && t.M.allFinite() && t.sigma_bias.allFinite() && t.sigma_M.allFinite();
+    };
+    if (!finite(corr.gyro) || !finite(corr.accel) || !f->P().allFinite())
+      throw std::runtime_error("the in-motion filter broke down numerically (a non-finite estimate or covariance): "
+                               "check the priors and the reference sigma; nothing written");
+  }
   // The fused estimate: the filter's priors already hold the input set's σ (choose_priors), so the
   // combined set's σ are the posterior σ, never more than hypot(input σ, allowance).
   const SensorErrors total = bench ? compose_fused(bench->errors, corr) : corr;
@@ -500,6 +573,12 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   j["correction"] = set_json(dev, corr);
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
   j["priors"] = pc.json;
+  if (!a.coeffs_recording_sha256.empty() && a.coeffs_recording_sha256 == j["recording"]["sha256"]) {
+    const std::string w = "the input set was fitted on this same recording (imu.csv SHA-256 equal): its information is "
+                          "counted twice, and the result's sigma are too small";
+    input_warning(a.coeffs, 0, w);
+    j["priors"]["warning"] = w;
+  }
   {
     // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
     inmotion::ParameterPriors post;

@@ -36,6 +36,7 @@ struct FitDriveArgs {
   std::optional<CoefficientSet> coeffs_set;
   // A mounting carried by the input (an earlier in-motion RESULT.json): roll, pitch, yaw and 1σ, deg.
   std::optional<std::pair<Vec3, Vec3>> coeffs_mounting_deg;
+  std::string coeffs_recording_sha256;  // of the drive a RESULT.json input was fitted on
   // Called after every reference epoch the filter took, per observation type (0 pos, 1 vel, 2 att).
   std::function<void(int type, const inmotion::InnovationRecord&)> on_innovation;
   bool write_out = true;      // false: return RESULT.json without writing a.out

@@ -183,6 +183,18 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
   if (current)
     b << "current set " << current->id << " (v" << current->version << ", " << to_string(current->source) << ", "
       << to_string(current->status) << ")\n";
+  // What the unit holds may be another set than the newest: say which, next to the verdict.
+  const CoefficientSetRecord* in_unit = nullptr;
+  for (const auto& s : sets)
+    if (s.status == SetStatus::provisioned) in_unit = &s;
+  if (in_unit && in_unit != current)
+    b << "<p id=\"in-unit\" class=\"note\"><b>The unit holds set " << in_unit->id << "</b> (v" << in_unit->version << ", "
+      << to_string(in_unit->source) << ", provisioned); the verdict above is on the newer set " << current->id
+      << ", which is not in the unit.</p>\n";
+  else if (in_unit)
+    b << "<p id=\"in-unit\" class=\"note\">The unit holds this set (provisioned).</p>\n";
+  else
+    b << "<p id=\"in-unit\" class=\"note\">No set has been provisioned into the unit.</p>\n";
   b << "<div class=\"why\">" << (said.empty() ? "" : "<p>" + html_escape(said) + "</p>") << "\n";
   if (!reasons.empty()) {
     b << "<ul id=\"verdict-reasons\" class=\"fail\">\n";

@@ -77,7 +77,9 @@ std::string stage_table(const InMotionRun& r, const CoefficientSetRecord& set, c
     note = std::string("Stage not shown: \"determined_by\" of this result is malformed: ") + e.what();
   }
   std::ostringstream h;
-  h << "<h4>Coefficients: " << (parent ? "bench (set " + std::to_string(parent->id) + ") → " : std::string())
+  // The parent is whatever set the fit started from: a bench set, or an earlier combined set.
+  const std::string parent_name = parent ? std::string(to_string(parent->source)) + " (set " + std::to_string(parent->id) + ")" : "";
+  h << "<h4>Coefficients: " << (parent ? parent_name + " → " : std::string())
     << to_string(set.source) << " (set " << set.id << "), value ± 1σ, and the stage that determined each</h4>\n";
   if (det && !det->rule.empty()) h << "<p class=\"note\">Rule: " << html_escape(det->rule) << "</p>\n";
   if (res.contains("priors") && res["priors"].is_object()) {
@@ -89,8 +91,8 @@ std::string stage_table(const InMotionRun& r, const CoefficientSetRecord& set, c
   if (!parent)
     h << "<p class=\"note\">No parent set: the fit ran on raw data (or on a set that is not in the database); the bench "
          "column is empty.</p>\n";
-  h << "<table class=\"stages\" id=\"stages-" << r.id << "\"><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>bench"
-    << (parent ? " (set " + std::to_string(parent->id) + ")" : std::string()) << "</th><th>" << to_string(set.source) << " (set "
+  h << "<table class=\"stages\" id=\"stages-" << r.id << "\"><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>"
+    << (parent ? parent_name : std::string("parent")) << "</th><th>" << to_string(set.source) << " (set "
     << set.id << ")</th><th>change</th><th>drive prior σ</th><th>drive posterior σ</th><th>drive share</th>"
        "<th class=\"l\">stage</th></tr>\n";
   for (const auto& name : coefficient_names()) {
@@ -293,7 +295,7 @@ std::string consistency_table(const json& cons, const InMotionRun& r) {
       << html_escape(string_or(c, "equation", "–")) << "</td><td>" << num(epochs, 6) << "</td><td>" << num(rejected, 6)
       << "</td><td>" << num(forced, 6) << "</td><td>" << num(mean, 4) << "</td><td>" << num(expected, 3) << "</td><td>"
       << (tested ? num(t.mean_lo, 4) + " – " + num(t.mean_hi, 4) : "–") << "</td><td>" << num(frac, 4) << "</td><td>"
-      << (tested ? num(t.frac_lo, 3) + " – " + num(t.frac_hi, 3) : "–") << "</td><td class=\"l " << cls << "\">"
+      << (tested ? num(t.frac_lo, 4) + " – " + num(t.frac_hi, 4) : "–") << "</td><td class=\"l " << cls << "\">"
       << html_escape(verdict) << "</td></tr>\n";
   }
   h << "</table>\n<p class=\"note\">Test: time-average NIS (Bar-Shalom, Li &amp; Kirubarajan 2001, §5.4). For a consistent "

@@ -72,9 +72,12 @@ def result(serial, corr_bias, series, worse=False):
     if series:  # what fit drive writes since issue 16
         j["reference_system"] = "FOG INS <ref> (reference.csv: 50 Hz); observations used: position (eq 13)"
         stages = ["drive", "bench", "both"]
+        share = {"drive": 0.99, "bench": 0.05, "both": 0.5}  # consistent with the rule (import checks it)
         j["determined_by"] = {"rule": "drive share of the information 1-(sigma_post/sigma_prior)^2: < 0.2 bench, > 0.8 drive, else both",
-                              "coefficients": {n: {"parent_sigma": 1e-5, "prior_sigma": 4.9e-4, "posterior_sigma": 2.8e-5,
-                                                   "ratio": 0.057, "drive_share": 0.5, "stage": stages[i % 3]}
+                              "coefficients": {n: {"parent_sigma": 1e-5, "prior_sigma": 4.9e-4,
+                                                   "posterior_sigma": 4.9e-4 * (1 - share[stages[i % 3]]) ** 0.5,
+                                                   "ratio": (1 - share[stages[i % 3]]) ** 0.5,
+                                                   "drive_share": share[stages[i % 3]], "stage": stages[i % 3]}
                                                for i, n in enumerate(names)}}
         j["priors"] = {"mode": "input set", "device_class": "ADIS16488A", "parameters": {}}
     return j

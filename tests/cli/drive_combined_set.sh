@@ -29,7 +29,6 @@ json.dump(out, open("bench.json", "w"), indent=1)
 PY
 "$CALBENCH" db init >/dev/null
 "$CALBENCH" db store-bench --coeffs bench.json --sha256 "$(printf 'b%.0s' {1..64})" --plan factory --qc samples_lost=0:0 >/dev/null
-"$CALBENCH" db approve 1 >/dev/null || fail "bench set not approved"
 
 "$CALBENCH" fit drive rec --coeffs bench.json --window 0:150 --out r.json > fit.txt
 python3 - <<'PY' || fail "priors / fused set"
@@ -68,7 +67,23 @@ PY
 "$CALBENCH" db import-inmotion r.json --json > imp.json
 python3 -c 'import json; j = json.load(open("imp.json")); assert j["source"] == "combined" and j["parent"] == 1, j' \
   || fail "not stored as combined with parent 1"
+# A combined set refines an approved set: with its parent still a draft it is refused, naming the parent.
+set +e; "$CALBENCH" db approve 2 > appr.txt 2> apperr.txt; rc=$?; set -e
+[ "$rc" = 1 ] && grep -q "parent set 1 is draft" apperr.txt || { cat apperr.txt; fail "combined set approved over a draft parent"; }
+"$CALBENCH" db approve 1 >/dev/null || fail "bench set not approved"
 "$CALBENCH" db approve 2 > appr.txt || { cat appr.txt; fail "combined set refused with the default thresholds"; }
+# Approving again changes nothing and is not a refusal.
+"$CALBENCH" db approve 2 > again.txt || fail "approving an approved set again failed"
+grep -q "already approved" again.txt || fail "second approval not reported as already approved"
+# The same result imported twice is refused (it would store a second identical set).
+set +e; "$CALBENCH" db import-inmotion r.json > /dev/null 2> imperr.txt; rc=$?; set -e
+[ "$rc" = 1 ] && grep -q "already imported" imperr.txt || { cat imperr.txt; fail "duplicate import"; }
+# determined_by must agree with itself: a hand-edited stage or sigma is refused.
+python3 -c '
+import json; r = json.load(open("r.json")); c = r["determined_by"]["coefficients"]["gyro.M.xy"]
+c["stage"] = "drive" if c["drive_share"] < 0.8 else "bench"; json.dump(r, open("tampered.json", "w"))'
+set +e; "$CALBENCH" db import-inmotion tampered.json > /dev/null 2> taerr.txt; rc=$?; set -e
+[ "$rc" = 2 ] && grep -q "gyro.M.xy.stage" taerr.txt || { cat taerr.txt; fail "tampered determined_by imported"; }
 "$CALBENCH" provision 4242 --set 2 --to-device emu://4242 --json > prov.json
 python3 -c '
 import json; p = json.load(open("prov.json"))
@@ -91,5 +106,22 @@ import json; b = json.load(open("bench.json")); b["gyro"]["sigma_bias"][1] = -1e
 b = json.load(open("bench.json")); b["accel"]["sigma_M"][2][0] = "NaN"; json.dump(b, open("nan.json", "w"))'
 expect2 "neg.json.*gyro.sigma_bias\[1\]" "$CALBENCH" fit drive rec --coeffs neg.json --out x.json
 expect2 "nan.json.*accel.sigma_M\[2\]\[0\]" "$CALBENCH" fit drive rec --coeffs nan.json --out x.json
+# A set of another unit, a QC horizon that switches the QC off, a sigma no calibration produces,
+# option values that are not decimal finite numbers: exit 2 naming the field or option.
+python3 -c '
+import json; b = json.load(open("bench.json")); b["device"]["serial"] = "2002"; json.dump(b, open("other.json", "w"))
+b = json.load(open("bench.json")); b["gyro"]["sigma_bias"][1] = 1e300; json.dump(b, open("huge.json", "w"))'
+expect2 "other.json.*device.serial.*unit .2002.*unit .4242" "$CALBENCH" fit drive rec --coeffs other.json --out x.json
+expect2 "huge.json.*gyro.sigma_bias\[1\].*implausible" "$CALBENCH" fit drive rec --coeffs huge.json --out x.json
+for v in 0 -5 nan; do expect2 "qc-horizon" "$CALBENCH" fit drive rec --coeffs bench.json --out x.json --qc-horizon "$v"; done
+for v in nan 0 0x10 1e999; do expect2 "prior-gyro-bias" "$CALBENCH" fit drive rec --out x.json --prior-gyro-bias "$v"; done
+for v in -1 nan inf; do expect2 "sigma-pos" "$CALBENCH" fit drive rec --out x.json --sigma-pos "$v"; done
+expect2 "allowance-gyro-bias-dph" "$CALBENCH" fit drive rec --coeffs bench.json --out x.json --allowance-gyro-bias-dph 0x10
 [ ! -e x.json ] || fail "an output was written for bad input"
+# Options that cannot act are named: an allowance without --coeffs; the same recording fitted twice.
+"$CALBENCH" fit drive rec --window 0:150 --out raw.json --allowance-gyro-scale-ppm 100 > /dev/null 2> w1.txt
+grep -q "allowance-gyro-scale-ppm.*no effect.*no --coeffs" w1.txt || { cat w1.txt; fail "ignored allowance not named"; }
+python3 -c 'import json; r = json.load(open("raw.json")); assert r["priors"]["options_without_effect"][0]["option"] == "--allowance-gyro-scale-ppm"'
+"$CALBENCH" fit drive rec --coeffs r.json --window 0:150 --out twice.json > /dev/null 2> w2.txt
+grep -q "fitted on this same recording" w2.txt || { cat w2.txt; fail "refitting the same recording not warned"; }
 echo "drive_combined_set: ok"

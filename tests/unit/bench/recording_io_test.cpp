@@ -184,16 +184,30 @@ TEST(RecordingIo, ReadsForeignLayoutCommentsReorderedAndUnknownColumns) {
   write_file(d.path() / "meta.json", kBenchMeta);
   write_file(d.path() / "imu.csv",
              "# written by another tool\r\nextra,az_m_s2,t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2\r\n"
-             "x,-9.8,0,1e-3,+2E-3,0.003,0,0\r\n# a comment in the middle\r\n\r\nx,-9.7,0.01,1,2,3,4,5");
+             "x,-9.8,0,1e-3,+2E-3,0.003,0,0\r\n# a comment in the middle\r\n\r\nx,-9.7,0.01,1,2,3,4,5\r\n");
   const auto meta = read_meta(d.path());
   ImuReader r(d.path() / "imu.csv", meta.imu_rate_hz);
   ImuRecord rec;
   ASSERT_TRUE(r.next(rec));
   EXPECT_EQ(rec.accel(2), -9.8);
   EXPECT_EQ(rec.gyro(1), 2e-3);
-  ASSERT_TRUE(r.next(rec));  // last line without newline
+  ASSERT_TRUE(r.next(rec));
   EXPECT_EQ(rec.accel(1), 5.0);
   EXPECT_FALSE(r.next(rec));
+}
+
+// A last line without its line end was cut while being written (its last number may be cut): it is
+// not used (the reader warns on standard error, naming the file and line).
+TEST(RecordingIo, LastLineWithoutLineEndIsTreatedAsTruncated) {
+  TempDir d;
+  write_file(d.path() / "meta.json", kBenchMeta);
+  write_file(d.path() / "imu.csv", "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\n0,1,2,3,4,5,6\n0.01,1,2,3,4,5,6.7");
+  const auto meta = read_meta(d.path());
+  ImuReader r(d.path() / "imu.csv", meta.imu_rate_hz);
+  ImuRecord rec;
+  ASSERT_TRUE(r.next(rec));
+  EXPECT_EQ(rec.accel(2), 6.0);
+  EXPECT_FALSE(r.next(rec));  // "6.7" may be the first digits of 6.75: not used
 }
 
 const char* kHeader = "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\n";

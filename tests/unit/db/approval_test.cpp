@@ -22,8 +22,34 @@ TEST(DbApproval, GoodSetIsApprovedAndAudited) {
   const auto r = approve_checked(s, id, default_thresholds());
   EXPECT_TRUE(r.ok);
   EXPECT_EQ(s.get_set(id).status, SetStatus::approved);
-  // Second approval is refused: it is no longer a draft.
-  EXPECT_FALSE(approve_checked(s, id, default_thresholds()).ok);
+  // A second approval changes nothing and is not a refusal (nothing in the audit log).
+  const auto audit = s.audit_of_device(s.get_set(id).device_id).size();
+  const auto again = approve_checked(s, id, default_thresholds());
+  EXPECT_TRUE(again.already);
+  EXPECT_TRUE(again.reasons.empty());
+  EXPECT_EQ(s.get_set(id).status, SetStatus::approved);
+  EXPECT_EQ(s.audit_of_device(s.get_set(id).device_id).size(), audit);
+}
+
+TEST(DbApproval, CombinedSetWaitsForItsParent) {
+  test::TempDir t;
+  Store s(t.db(), test::create_opts(), test::test_actor());
+  const auto parent = s.store_bench({"ADIS16488A", "P9", ""}, test::bench_run(), test::payload("P9", test::random_errors(9))).set_id;
+  const SensorErrors e = test::random_errors(10);
+  std::int64_t child = 0;
+  s.connection().write_transaction([&] {
+    child = s.insert_set_locked(s.get_set(parent).device_id, SetSource::combined, test::payload("P9", e), e, parent,
+                                std::nullopt, std::nullopt, nullptr);
+  });
+  Thresholds th = default_thresholds();
+  th.require_qc = false;  // this test is about the parent only
+  const auto r = approve_checked(s, child, th);
+  EXPECT_FALSE(r.ok);
+  bool named = false;
+  for (const auto& w : r.reasons) named = named || w.find("parent set " + std::to_string(parent) + " is draft") != std::string::npos;
+  EXPECT_TRUE(named);
+  EXPECT_TRUE(approve_checked(s, parent, default_thresholds()).ok);
+  EXPECT_TRUE(approve_checked(s, child, th).ok);
 }
 
 TEST(DbApproval, EachThresholdRefusesWithItsReason) {

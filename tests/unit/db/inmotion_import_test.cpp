@@ -54,8 +54,14 @@ TEST_F(ImportFixture, CombinedSetFindsItsBenchParentByComposition) {
   EXPECT_DOUBLE_EQ(run->mounting_rpy_deg[2], 0.3);
   EXPECT_DOUBLE_EQ(run->mounting_sigma_deg[2], 0.05);
   EXPECT_EQ(s.qc_of_set(set).size(), 3u);
-  // An explicit parent gives the same answer.
-  const auto o2 = import_inmotion(s, r, "RESULT.json", bench_id);
+  // The same result again is refused (it would store a second, identical set) and stores nothing.
+  const auto before = s.sets_of(set.device_id).size();
+  EXPECT_THROW(import_inmotion(s, r, "RESULT.json", bench_id), std::runtime_error);
+  EXPECT_EQ(s.sets_of(set.device_id).size(), before);
+  // An explicit parent gives the same answer (a result of another recording, same coefficients).
+  json other = result("M1", total, corr);
+  other["recording"]["path"] = "/drives/another";
+  const auto o2 = import_inmotion(s, parse_inmotion_result(other.dump(), "R2"), "R2", bench_id);
   EXPECT_EQ(*o2.parent_id, bench_id);
 }
 
@@ -169,8 +175,8 @@ TEST_F(ImportFixture, DeterminedByIsReadAndValidated) {
   for (const auto& n : coefficient_names())
     c[n] = {{"parent_sigma", 1.7e-5}, {"prior_sigma", 4.9e-4}, {"posterior_sigma", 2.8e-5}, {"ratio", 0.057},
             {"drive_share", 0.997}, {"stage", "drive"}};
-  c["gyro.M.xy"]["stage"] = "bench";
-  c["gyro.M.xy"]["parent_sigma"] = nullptr;
+  c["gyro.M.xy"] = {{"parent_sigma", nullptr}, {"prior_sigma", 5e-5}, {"posterior_sigma", 4.9e-5}, {"ratio", 0.98},
+                    {"drive_share", 1 - 0.98 * 0.98}, {"stage", "bench"}};
   r["determined_by"] = {{"rule", "drive share"}, {"coefficients", c}};
   const auto d = parse_inmotion_result(r.dump(), "R").determined_by;
   ASSERT_TRUE(d);
