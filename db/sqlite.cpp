@@ -52,11 +52,14 @@ Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(
   int flags = opt.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (opt.create && !opt.read_only) flags |= SQLITE_OPEN_CREATE;
   flags |= SQLITE_OPEN_NOMUTEX;
+  if (std::filesystem::is_directory(path))
+    throw InputError(path, 0, "", "is a folder, not a database file (give the database file with --db or CALBENCH_DB)");
   const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     std::string msg = path + ": cannot open database: " + (db_ ? sqlite3_errmsg(db_) : sqlite3_errstr(rc));
     sqlite3_close(db_);
     db_ = nullptr;
+    if ((rc & 0xff) == SQLITE_CANTOPEN) throw InputError(path, 0, "", std::string("cannot open the database: ") + sqlite3_errstr(rc));
     throw DbError(rc, msg);
   }
   sqlite3_extended_result_codes(db_, 1);
@@ -73,6 +76,14 @@ Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(
         exec("PRAGMA synchronous = FULL");
       }
     });
+  } catch (const DbError& e) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    // Another file given as the database (a recording's CSV, a JSON): bad input, named.
+    if ((e.code() & 0xff) == SQLITE_NOTADB)
+      throw InputError(path_, 0, "", "not a calbench database: the file is not an SQLite database (give the database with "
+                                     "--db or CALBENCH_DB; `calbench db init --db FILE` creates one)");
+    throw;
   } catch (...) {
     sqlite3_close(db_);
     db_ = nullptr;

@@ -123,14 +123,23 @@ CoefficientSetRecord choose_set(Store& s, const Device& d, std::int64_t set_id) 
   if (set_id) {
     CoefficientSetRecord r = s.get_set(set_id);
     if (r.device_id != d.id) throw arg_error("--set", "set " + std::to_string(set_id) + " belongs to device " + r.serial);
+    // Not eligible is a refusal (exit 1), not bad input.
     if (r.status != SetStatus::approved && r.status != SetStatus::provisioned)
-      throw arg_error("--set", "set " + std::to_string(set_id) + " is " + to_string(r.status) +
-                                           "; only approved sets are provisioned (calbench db approve)");
+      throw std::runtime_error("set " + std::to_string(set_id) + " is " + to_string(r.status) +
+                               ": only approved sets are provisioned" +
+                               (r.status == SetStatus::draft ? " (calbench db approve " + std::to_string(set_id) + ")" : ""));
     return r;
   }
-  auto r = s.latest_set(d.id, SetStatus::approved);
-  if (!r) throw arg_error("SERIAL", "device " + d.serial + " has no approved coefficient set (calbench db approve)");
-  return *r;
+  // The newest set that may go into a unit: approved, or provisioned before (writing the set a unit
+  // already holds again — a replaced or re-flashed unit — is allowed).
+  const auto sets = s.sets_of(d.id);
+  for (auto it = sets.rbegin(); it != sets.rend(); ++it)
+    if (it->status == SetStatus::approved || it->status == SetStatus::provisioned) return *it;
+  if (sets.empty()) throw std::runtime_error("device " + d.serial + " has no coefficient set (calbench station run, db store-bench)");
+  const auto& newest = sets.back();
+  throw std::runtime_error("device " + d.serial + " has no approved coefficient set: its newest, set " + std::to_string(newest.id) +
+                           ", is " + to_string(newest.status) +
+                           (newest.status == SetStatus::draft ? " (calbench db approve " + std::to_string(newest.id) + ")" : ""));
 }
 
 void run(const ProvisionArgs& a) {
@@ -205,7 +214,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   auto a = std::make_shared<ProvisionArgs>();
   auto* sub = app.add_subcommand("provision", "write an approved coefficient set to an IMU (or export it), recorded in the database");
   sub->add_option("SERIAL", a->serial, "device serial number")->required();
-  sub->add_option("--set", a->set, "coefficient set id (default: the newest approved set)");
+  sub->add_option("--set", a->set, "coefficient set id (default: the newest approved or provisioned set)");
   auto* to = sub->add_option("--to-device", a->uri, "IMU URI: emu://SERIAL_NUM, mcp2210://[USB-SERIAL], ft232h://[USB-SERIAL]");
   auto* ex = sub->add_option("--export", a->out, "write the set as coefficients.json instead");
   to->excludes(ex);

@@ -1,6 +1,8 @@
 // calbench: the MEMS IMU calibration station. One executable, subcommands in workflow order.
+#include <algorithm>
 #include <iostream>
 #include <map>
+#include <vector>
 
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
@@ -20,6 +22,56 @@ bool add_command(int order, CommandSetup setup) {
 
 void print_json(const std::string& text) { std::cout << text << std::endl; }
 
+namespace {
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> d(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) d[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t prev = d[0];
+    d[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cur = d[j];
+      d[j] = std::min({d[j] + 1, d[j - 1] + 1, prev + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      prev = cur;
+    }
+  }
+  return d[b.size()];
+}
+}  // namespace
+
+// Walks the command words of argv down the subcommand tree; a word where a subcommand is required
+// and none has that name is an unknown command: the message names it and suggests the nearest.
+std::string unknown_command(const CLI::App& root, int argc, char** argv) {
+  const CLI::App* app = &root;
+  std::string path = "calbench";
+  for (int i = 1; i < argc; ++i) {
+    const std::string w = argv[i];
+    if (w.empty() || w[0] == '-') return {};
+    const auto subs = const_cast<CLI::App*>(app)->get_subcommands([](CLI::App*) { return true; });
+    if (subs.empty()) return {};
+    const CLI::App* next = nullptr;
+    for (const CLI::App* c : subs)
+      if (c->get_name() == w) next = c;
+    if (next) {
+      app = next;
+      path += " " + w;
+      continue;
+    }
+    if (app->get_require_subcommand_min() == 0) return {};  // a positional argument (e.g. report SERIAL)
+    std::string best, all;
+    std::size_t bd = 99;
+    for (const CLI::App* c : subs) {
+      all += (all.empty() ? "" : ", ") + c->get_name();
+      const std::size_t d = edit_distance(w, c->get_name());
+      if (d < bd) bd = d, best = c->get_name();
+    }
+    std::string m = "unknown command '" + w + "' for '" + path + "'";
+    if (bd <= std::max<std::size_t>(2, w.size() / 3)) m += "; did you mean '" + best + "'?";
+    return m + " (commands: " + all + "; " + path + " --help)";
+  }
+  return {};
+}
+
 }  // namespace calbench::cli
 
 int main(int argc, char** argv) {
@@ -28,6 +80,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "calbench 0.1.0");
   for (auto& [order, setup] : calbench::cli::registry()) setup(app);
+  if (const std::string m = calbench::cli::unknown_command(app, argc, argv); !m.empty()) {
+    std::cerr << "calbench: error: " << m << std::endl;
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -310,6 +310,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
 nlohmann::json fit_drive(const FitDriveArgs& a) {
   using namespace units;
   const auto [t0, t1] = parse_window(a.window);
+  if (a.write_out) check_output_path(a.out);
+  if (!a.series.empty()) check_output_path(a.series);
   FitDriveArgs args = a;  // the input set and its mounting, read once
   std::optional<CoefficientSet> bench = a.coeffs_set;
   if (!bench && !a.coeffs.empty()) {

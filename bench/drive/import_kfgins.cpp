@@ -111,7 +111,9 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   // (bad input, a full disk) or is killed leaves no half-written recording under --out.
   const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
   fs::create_directories(parent);
-  const fs::path tmp = parent / ("." + out.filename().string() + ".importing-" + std::to_string(::getpid()));
+  std::string tmp_name(".");  // built with append(): GCC 12 warns falsely (-Wrestrict) on chained operator+
+  tmp_name.append(out.filename().string()).append(".importing-").append(std::to_string(::getpid()));
+  const fs::path tmp = parent / tmp_name;
   fs::remove_all(tmp);
   try {
     write_recording(a, meta, tmp, sum, v);

@@ -24,10 +24,19 @@ nlohmann::json read_json_file(const std::filesystem::path& file) {
   return parse_json_text(text, file.string());
 }
 
+void check_output_path(const std::filesystem::path& file) {
+  // Named by the path the user gave (the temporary file beside it is an implementation detail).
+  if (std::filesystem::is_directory(file)) throw InputError(file.string(), 0, "", "is a folder: give a file name to write");
+  const auto parent = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+  if (!std::filesystem::is_directory(parent))
+    throw InputError(file.string(), 0, "", "cannot write: the folder " + parent.string() + " does not exist");
+}
+
 void write_text_atomic(const std::filesystem::path& file, const std::string& text) {
+  check_output_path(file);
   const auto tmp = file.string() + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) throw std::runtime_error(tmp + ": cannot create: " + std::strerror(errno));
+  if (fd < 0) throw std::runtime_error(file.string() + ": cannot write: " + std::strerror(errno));
   std::size_t off = 0;
   while (off < text.size()) {
     const ssize_t n = ::write(fd, text.data() + off, text.size() - off);
@@ -35,7 +44,7 @@ void write_text_atomic(const std::filesystem::path& file, const std::string& tex
       if (errno == EINTR) continue;
       ::close(fd);
       ::unlink(tmp.c_str());
-      throw std::runtime_error(tmp + ": write failed: " + std::strerror(errno));
+      throw std::runtime_error(file.string() + ": write failed: " + std::strerror(errno));
     }
     off += static_cast<std::size_t>(n);
   }

@@ -11,6 +11,9 @@ namespace calbench {
 // Parse a JSON file; syntax errors become InputError with the line and column.
 nlohmann::json read_json_file(const std::filesystem::path& file);
 // Atomic write: temporary file in the same folder, fsync, rename.
+// An output file can be written there: not a folder, its folder exists (InputError naming it).
+// Commands call it before long work so that a typo costs nothing.
+void check_output_path(const std::filesystem::path& file);
 void write_text_atomic(const std::filesystem::path& file, const std::string& text);
 
 // Typed getters: throw InputError(file, 0, key, …) on a missing key or wrong type.

@@ -437,7 +437,10 @@ Result Station::run() {
       }
     }
     res.exit_code = (dynamic_cast<const std::invalid_argument*>(&e) || dynamic_cast<const InputError*>(&e)) ? 2 : 1;
-    res.message = std::string("station aborted: ") + e.what() + (table_ ? (stopped ? "; table stopped and disabled" : "; table stop attempted (no answer)") : "");
+    // Before the table or the IMU was touched (a plan error, a bad URI) nothing ran: say so.
+    const bool ran = table_ || imu_ || writer;
+    res.message = std::string(ran ? "station aborted: " : "station not started (nothing ran): ") + e.what() +
+                  (table_ ? (stopped ? "; table stopped and disabled" : "; table stop attempted (no answer)") : "");
     res.summary["aborted"] = true;
     res.summary["table_stopped"] = stopped;
   }

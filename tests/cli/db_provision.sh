@@ -20,7 +20,7 @@ PY
 "$CALBENCH" db init >/dev/null
 "$CALBENCH" db store-bench --coeffs c.json --sha256 "$(printf 'a%.0s' {1..64})" --qc r=1:2 >/dev/null
 set +e; "$CALBENCH" provision 4660 --export x.json 2> err.txt; rc=$?; set -e
-[ "$rc" = 2 ] && grep -q "no approved coefficient set" err.txt || fail "draft set provisioned"
+[ "$rc" = 1 ] && grep -q "no approved coefficient set: its newest, set 1, is draft (calbench db approve 1)" err.txt || { cat err.txt; fail "draft set provisioned"; }
 "$CALBENCH" db approve 1 >/dev/null
 "$CALBENCH" provision 4660 --export x.json | grep -q "exported" || fail "export"
 python3 -c 'import json; assert json.load(open("x.json")) == json.load(open("c.json"))' || fail "exported set differs"
@@ -54,4 +54,10 @@ PY
 ev=$(sqlite3 "$CALBENCH_DB" "SELECT group_concat(kind||':'||ok, ' ') FROM provisioning_events ORDER BY id")
 [ "$ev" = "export:1 device:0 device:0 device:0 device:1" ] || fail "events: $ev"
 sqlite3 "$CALBENCH_DB" "SELECT readback_json FROM provisioning_events WHERE ok = 1 AND kind = 'device'" | grep -q '"read_back"' || fail "readback not recorded"
+# Re-provisioning (issue 17): after a first provisioning the default set is the one the unit holds;
+# it can be written again (a replaced or re-flashed unit) without --set, and approving it again
+# is not a refusal.
+"$CALBENCH" provision 4660 --to-device emu://4660 --json > again.json || fail "re-provisioning without --set"
+python3 -c 'import json; p = json.load(open("again.json")); assert p["ok"] and p["set"] == 1, p' || fail "re-provisioned set"
+"$CALBENCH" db approve 1 | grep -q "already provisioned" || fail "approving a provisioned set"
 echo "db_provision: ok"

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Messages that told the wrong story (issue 17, item 5): an unknown command suggests the nearest; a
+# --db that is not a database, a folder as --db or --out, an --out in a missing folder are bad input
+# (exit 2) named by the path the user gave; a plan error says that nothing ran.
+set -euo pipefail
+T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
+cd "$T"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+expect() {  # expect RC PATTERN CMD...
+  local want=$1 pat=$2; shift 2
+  set +e; "$@" > out.txt 2> err.txt; local rc=$?; set -e
+  [ "$rc" = "$want" ] || { cat err.txt; fail "exit $rc (expected $want): $*"; }
+  grep -q -- "$pat" err.txt || { cat err.txt; fail "message does not match '$pat': $*"; }
+}
+expect 2 "unknown command 'fti' for 'calbench'; did you mean 'fit'?" "$CALBENCH" fti drive x
+expect 2 "unknown command 'drvie' for 'calbench fit'; did you mean 'drive'?" "$CALBENCH" fit drvie x
+expect 2 "unknown command 'devcies' for 'calbench db'; did you mean 'devices'?" "$CALBENCH" db devcies
+printf 't_s,a\n0,1\n' > notdb.csv
+expect 2 "notdb.csv: not a calbench database" "$CALBENCH" db devices --db notdb.csv
+mkdir folder
+expect 2 "folder: is a folder, not a database file" "$CALBENCH" db devices --db folder
+"$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 2 --until 40 --out rec > /dev/null
+expect 2 "folder: is a folder: give a file name" "$CALBENCH" fit drive rec --out folder
+expect 2 "nowhere/r.json: cannot write: the folder nowhere does not exist" "$CALBENCH" fit drive rec --out nowhere/r.json
+ls | grep -q '\.tmp\.' && fail "temporary file left behind"
+printf '[plan]\nname = 3\n' > bad.toml
+expect 2 "station not started (nothing ran): bad.toml:2" "$CALBENCH" station run --emulated --plan bad.toml --db s.db --out st
+echo "cli_messages: ok"
