@@ -254,6 +254,14 @@ InMotionResult parse_inmotion_result(const std::string& text, const std::string&
   if (!j.contains("recording")) throw InputError(f, 0, "recording", "missing key");
   r.recording_path = req_string(j["recording"], "path", f, "recording");
   r.recording_sha256 = req_string(j["recording"], "sha256", f, "recording");
+  // The unit that drove (fit drive writes it since issue 17): a result of another unit's drive is
+  // never filed under this one.
+  if (j["recording"].contains("device") && j["recording"]["device"].is_object()) {
+    const std::string rs = req_string(j["recording"]["device"], "serial", f, "recording.device");
+    if (!rs.empty() && rs != r.device.serial)
+      throw InputError(f, 0, "recording.device.serial",
+                       "the drive was recorded by unit '" + rs + "', the result is filed under unit '" + r.device.serial + "'");
+  }
   if (r.recording_sha256.size() != 64 ||
       r.recording_sha256.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
     throw InputError(f, 0, "recording.sha256", "expected 64 hexadecimal digits");

@@ -270,6 +270,12 @@ void cmd_import_inmotion(const DbArgs& a) {
   std::stringstream ss;
   ss << in.rdbuf();
   const InMotionResult r = parse_inmotion_result(ss.str(), a.file);  // before opening: nothing written on bad input
+  // Where the recording is at hand, it must still be the one the result was fitted on.
+  const std::filesystem::path imu = std::filesystem::path(r.recording_path) / "imu.csv";
+  if (std::filesystem::is_regular_file(imu) && sha256_file(imu) != r.recording_sha256)
+    throw InputError(a.file, 0, "recording.sha256",
+                     imu.string() + " has changed since the fit (its SHA-256 differs): refit, or import on the machine "
+                     "that holds the recording it was fitted on");
   auto s = open_store(a);
   const ImportOutcome o = import_inmotion(*s, r, a.file, a.parent ? std::optional<std::int64_t>(a.parent) : std::nullopt);
   if (a.json) {

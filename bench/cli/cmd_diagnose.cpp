@@ -22,7 +22,10 @@ struct DiagnoseArgs {
 // Drive recordings (meta.json kind "drive"): bench/diagnose/drive_run.hpp, docs/diagnosis.md "Drives".
 void run_diagnose_drive(const DiagnoseArgs& a) {
   std::optional<DriveCoeffs> given;
-  if (!a.coeffs.empty()) given = read_drive_coeffs(a.coeffs);
+  if (!a.coeffs.empty()) {
+    given = read_drive_coeffs(a.coeffs);
+    check_same_unit(given->set.device, a.coeffs, a.dir);
+  }
   const DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
   const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr, !a.no_innovations);
@@ -46,7 +49,10 @@ void run_diagnose(const DiagnoseArgs& a) {
   const TableSpec table = a.plan.empty() ? recording_table_spec(in.meta) : load_plan(a.plan).table;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
   CoefficientSet given;
-  if (!a.coeffs.empty()) given = read_coefficients(a.coeffs);
+  if (!a.coeffs.empty()) {
+    given = read_coefficients(a.coeffs);
+    check_same_unit(given.device, a.coeffs, a.dir);
+  }
   const DiagRun run = run_diagnosis(in, a.coeffs.empty() ? nullptr : &given, table);
   if (!a.out.empty()) write_coefficients(a.out, run.improved);
   if (!a.report.empty()) write_diagnosis_report(a.report, in, run, a.dir);

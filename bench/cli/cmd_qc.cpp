@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "bench/cli/registry.hpp"
+#include "bench/io/recording.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "bench/io/input_error.hpp"
 #include "calibration/effects/effect_compensation.hpp"
@@ -19,7 +20,10 @@ struct QcArgs {
 
 void run(const QcArgs& a) {
   std::vector<QcSet> sets;
-  for (const auto& c : a.coeffs) sets.push_back(load_qc_set(c));
+  for (const auto& c : a.coeffs) {
+    sets.push_back(load_qc_set(c));
+    if (sets.back().device) check_same_unit(*sets.back().device, c, a.dir);
+  }
   // Out-of-sample by default: start where the latest fit window of an in-motion result ended.
   std::optional<double> from;
   std::string sample = "as requested with --from";

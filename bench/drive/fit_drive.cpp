@@ -321,18 +321,7 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     args.coeffs_recording_sha256 = in.recording_sha256;
   }
   // A drive refines only its own unit's coefficients: the set and the recording name one device.
-  if (bench && !a.dir.empty() && fs::exists(fs::path(a.dir) / "meta.json")) {
-    const RecordingMeta rm = read_meta(fs::path(a.dir));
-    const std::string src = a.coeffs.empty() ? "--coeffs" : a.coeffs;
-    if (!rm.device.serial.empty() && !bench->device.serial.empty() && rm.device.serial != bench->device.serial)
-      throw InputError(src, 0, "device.serial",
-                       "the coefficient set is of unit '" + bench->device.serial + "', the recording " +
-                           (fs::path(a.dir) / "meta.json").string() + " of unit '" + rm.device.serial +
-                           "': a drive refines only its own unit's set");
-    if (!rm.device.model.empty() && !bench->device.model.empty() && rm.device.model != bench->device.model)
-      throw InputError(src, 0, "device.model",
-                       "the coefficient set is of a " + bench->device.model + ", the recording of a " + rm.device.model);
-  }
+  if (bench && !a.dir.empty()) check_same_unit(bench->device, a.coeffs.empty() ? "--coeffs" : a.coeffs, fs::path(a.dir));
   InputEffects fx;
   if (bench) {
     fx.terms = effects_from_json(bench->extra, a.coeffs.empty() ? "--coeffs" : a.coeffs, &fx.sigma);
@@ -536,6 +525,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
                     {"sha256_reference", fs::exists(dir / "reference.csv") ? nlohmann::json(sha256_file(dir / "reference.csv")) : nlohmann::json(nullptr)},
                     {"sha256_meta", sha256_file(dir / "meta.json")}};
   if (gnss) j["recording"]["sha256_gnss"] = sha256_file(dir / "gnss.csv");
+  j["recording"]["device"] = {{"model", meta.device.model}, {"serial", meta.device.serial}};  // the unit that drove
   j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss);
   j["window_s"] = {t_first, t_last};
   j["observations"] = a.obs;
@@ -574,6 +564,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   j["coefficients"] = set_json(dev, total);
   j["correction"] = set_json(dev, corr);
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
+  if (!a.coeffs.empty() && fs::is_regular_file(a.coeffs)) j["input_coefficients_sha256"] = sha256_file(a.coeffs);
   j["priors"] = pc.json;
   if (!a.coeffs_recording_sha256.empty() && a.coeffs_recording_sha256 == j["recording"]["sha256"]) {
     const std::string w = "the input set was fitted on this same recording (imu.csv SHA-256 equal): its information is "
@@ -639,8 +630,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     const double from = oos ? t_last : t_first;
     std::optional<Vec3> before_mount;
     if (a.coeffs_mounting_deg) before_mount = a.coeffs_mounting_deg->first;
-    QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, before_mount, std::nullopt, fx.terms};
-    QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms};
+    QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, before_mount, std::nullopt, fx.terms, std::nullopt};
+    QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms, std::nullopt};
     const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s);
     qj = qc_json(q);
     qj["sample"] = oos ? "out-of-sample (after the fit window)" : "in-sample (no data after the fit window)";

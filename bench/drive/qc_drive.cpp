@@ -24,13 +24,17 @@ QcSet load_qc_set(const std::string& arg) {
   s.name = fs::path(arg).stem().string();
   const nlohmann::json j = read_json_file(arg);
   if (j.is_object() && j.contains("coefficients")) {
-    s.errors = coefficients_from_json(j["coefficients"], arg).errors;
+    const CoefficientSet cs = coefficients_from_json(j["coefficients"], arg);
+    s.errors = cs.errors;
+    s.device = cs.device;
     s.effects = effects_from_json(j["coefficients"], arg);
     if (j.contains("mounting_rpy_deg")) s.mounting_rpy_deg = jvec3(jreq(j["mounting_rpy_deg"], "value", arg, "mounting_rpy_deg.value"), arg, "mounting_rpy_deg.value");
     if (j.contains("window_s") && j["window_s"].is_array() && j["window_s"].size() == 2)
       s.fit_window_s = std::make_pair(jnum(j["window_s"][0], arg, "window_s[0]"), jnum(j["window_s"][1], arg, "window_s[1]"));
   } else {
-    s.errors = coefficients_from_json(j, arg).errors;
+    const CoefficientSet cs = coefficients_from_json(j, arg);
+    s.errors = cs.errors;
+    s.device = cs.device;
     s.effects = effects_from_json(j, arg);
     // A simulator truth.json states the true mounting (key "mounting"); use it like a result's.
     if (j.is_object() && j.contains("mounting") && j["mounting"].is_object() && j["mounting"].contains("rpy_deg"))

@@ -18,6 +18,7 @@ struct QcSet {
   std::optional<Vec3> mounting_rpy_deg;  // from an in-motion RESULT.json; else the nominal one
   std::optional<std::pair<double, double>> fit_window_s;  // the data the set was fitted on, if known
   EffectTerms effects;                 // catalogue keys of the set (compensated on the IMU samples)
+  std::optional<DeviceId> device;      // the unit the set is of (none for "none")
 };
 // A coefficients.json, an in-motion RESULT.json (its "coefficients" and "mounting_rpy_deg"), or "none".
 // Catalogue keys (docs/diagnosis.md) of the set are read into `effects`.

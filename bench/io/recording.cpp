@@ -307,3 +307,18 @@ std::string sha256_file(const fs::path& file) {
 }
 
 }  // namespace calbench
+
+namespace calbench {
+void check_same_unit(const DeviceId& d, const std::string& source, const fs::path& dir) {
+  if (!fs::exists(dir / "meta.json")) return;
+  const RecordingMeta m = read_meta(dir);
+  const std::string meta = (dir / "meta.json").string();
+  if (!m.device.serial.empty() && !d.serial.empty() && m.device.serial != d.serial)
+    throw InputError(source, 0, "device.serial",
+                     "the coefficient set is of unit '" + d.serial + "', the recording " + meta + " of unit '" + m.device.serial +
+                         "': coefficients are used only with their own unit's recordings");
+  if (!m.device.model.empty() && !d.model.empty() && m.device.model != d.model)
+    throw InputError(source, 0, "device.model",
+                     "the coefficient set is of a " + d.model + ", the recording " + meta + " of a " + m.device.model);
+}
+}  // namespace calbench

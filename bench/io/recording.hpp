@@ -156,4 +156,9 @@ class RecordingWriter {
 // SHA-256 of a file, hex.
 std::string sha256_file(const fs::path& file);
 
+// Provenance at a hand-over: a coefficient set (from `source`, a file or an option) used with the
+// recording in `dir` must be of the recording's unit — same serial and model as its meta.json (an
+// empty serial or model on either side is not compared). InputError naming both otherwise.
+void check_same_unit(const DeviceId& set_device, const std::string& source, const fs::path& dir);
+
 }  // namespace calbench

@@ -118,6 +118,19 @@ for v in nan 0 0x10 1e999; do expect2 "prior-gyro-bias" "$CALBENCH" fit drive re
 for v in -1 nan inf; do expect2 "sigma-pos" "$CALBENCH" fit drive rec --out x.json --sigma-pos "$v"; done
 expect2 "allowance-gyro-bias-dph" "$CALBENCH" fit drive rec --coeffs bench.json --out x.json --allowance-gyro-bias-dph 0x10
 [ ! -e x.json ] || fail "an output was written for bad input"
+# Provenance at every hand-over (issue 17): qc and diagnose refuse another unit's set; the import
+# refuses a result whose drive was recorded by another unit, and one whose recording has changed.
+expect2 "other.json.*device.serial.*unit .2002" "$CALBENCH" qc rec --coeffs other.json --horizon 10
+expect2 "other.json.*device.serial.*unit .2002" "$CALBENCH" diagnose rec --coeffs other.json --no-innovations
+python3 -c '
+import json; r = json.load(open("r.json")); assert r["recording"]["device"]["serial"] == "4242", r["recording"]
+assert len(r["input_coefficients_sha256"]) == 64
+r["recording"]["device"]["serial"] = "2002"; json.dump(r, open("wrongunit.json", "w"))'
+expect2 "recording.device.serial.*recorded by unit .2002" "$CALBENCH" db import-inmotion wrongunit.json
+cp -r rec rec2
+"$CALBENCH" fit drive rec2 --coeffs bench.json --window 0:150 --out r2.json > /dev/null
+printf '# appended after the fit\n' >> rec2/imu.csv
+expect2 "recording.sha256.*imu.csv has changed since the fit" "$CALBENCH" db import-inmotion r2.json
 # Options that cannot act are named: an allowance without --coeffs; the same recording fitted twice.
 "$CALBENCH" fit drive rec --window 0:150 --out raw.json --allowance-gyro-scale-ppm 100 > /dev/null 2> w1.txt
 grep -q "allowance-gyro-scale-ppm.*no effect.*no --coeffs" w1.txt || { cat w1.txt; fail "ignored allowance not named"; }
