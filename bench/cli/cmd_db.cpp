@@ -1,6 +1,7 @@
 // calbench db …: the coefficient database (docs/database.md).
 #include <cmath>
 #include <fstream>
+#include <array>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -117,14 +118,19 @@ void cmd_devices(const DbArgs& a) {
     print_json(json{{"devices", arr}}.dump(2));
     return;
   }
-  std::cout << std::left << std::setw(16) << "SERIAL" << std::setw(12) << "MODEL" << std::setw(10) << "FIRMWARE"
-            << std::setw(6) << "SETS" << "LATEST\n";
+  // Columns as wide as their widest entry (a long firmware string ran into the next column).
+  std::vector<std::array<std::string, 5>> rows{{"SERIAL", "MODEL", "FIRMWARE", "SETS", "LATEST"}};
   for (const auto& d : list)
-    std::cout << std::left << std::setw(16) << d.device.serial << std::setw(12) << d.device.model << std::setw(10)
-              << (d.device.firmware.empty() ? "-" : d.device.firmware) << std::setw(6) << d.sets
-              << (d.latest_version ? "v" + std::to_string(*d.latest_version) + " " + d.latest_source + " " + d.latest_status
-                                   : std::string("-"))
-              << "\n";
+    rows.push_back({d.device.serial, d.device.model, d.device.firmware.empty() ? "-" : d.device.firmware, std::to_string(d.sets),
+                    d.latest_version ? "v" + std::to_string(*d.latest_version) + " " + d.latest_source + " " + d.latest_status
+                                     : std::string("-")});
+  std::array<std::size_t, 5> w{};
+  for (const auto& r : rows)
+    for (std::size_t c = 0; c < 5; ++c) w[c] = std::max(w[c], r[c].size());
+  for (const auto& r : rows) {
+    for (std::size_t c = 0; c < 4; ++c) std::cout << std::left << std::setw(static_cast<int>(w[c] + 2)) << r[c];
+    std::cout << r[4] << "\n";
+  }
   std::cout << list.size() << " device(s)\n";
 }
 

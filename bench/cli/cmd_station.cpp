@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <filesystem>
 #include <iostream>
 
 #include "bench/cli/registry.hpp"
@@ -19,7 +20,7 @@ struct StationArgs {
   station::Options o;
   std::string plan, out = "station-out";
   std::vector<std::string> inject;
-  bool json = false;
+  bool json = false, force = false;
 };
 
 std::uint16_t parse_u16(const std::string& v, const std::string& key) {
@@ -54,6 +55,9 @@ void apply_inject(const std::string& kv, station::Injections& in) {
 void run_station(StationArgs& a) {
   a.o.plan_file = a.plan;
   a.o.out_dir = a.out;
+  // A rerun must not silently replace an earlier run's recording and coefficients.
+  if (!a.force && (std::filesystem::exists(a.o.out_dir / "COEFFS.json") || std::filesystem::exists(a.o.out_dir / "recording" / "meta.json")))
+    throw InputError(a.out, 0, "", "already holds a station run (recording/, COEFFS.json): give another --out, or --force to replace it");
   for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
   a.o.progress_tty = ::isatty(STDERR_FILENO) && !a.json;
@@ -63,6 +67,13 @@ void run_station(StationArgs& a) {
   if (a.json) print_json(r.summary.dump(2));
   std::cerr << (r.exit_code == 0 ? "" : "calbench: ") << r.message << std::endl;
   if (r.exit_code != 0) throw Exit{r.exit_code};
+  // The next step of the workflow, to type.
+  if (r.summary.contains("db") && r.summary["db"].contains("set"))
+    std::cerr << "next: calbench db approve " << r.summary["db"]["set"].get<long long>() << " --db " << a.o.db
+              << "   (QC thresholds; then calbench provision SERIAL --to-device URI)" << std::endl;
+  else if (r.summary.contains("coefficients"))
+    std::cerr << "next: calbench db store-bench --coeffs " << r.summary["coefficients"].get<std::string>()
+              << " --recording " << (a.o.out_dir / "recording").string() << " --db DB   (or rerun with --db)" << std::endl;
 }
 
 const bool registered = add_command(20, [](CLI::App& app) {
@@ -77,7 +88,9 @@ const bool registered = add_command(20, [](CLI::App& app) {
                 "in-process table emulator (real Modbus TCP on an ephemeral loopback port) and IMU emulator, "
                 "emulated clock faster than real time");
   run->add_option("--db", a->o.db, "also store the bench run and its coefficient set (draft) in this database");
-  run->add_option("--out", a->out, "output folder: recording/, COEFFS.json")->capture_default_str();
+  run->add_option("--out", a->out, "output folder: recording/, COEFFS.json (an existing run there is refused without --force)")
+      ->capture_default_str();
+  run->add_flag("--force", a->force, "replace an earlier run in --out");
   run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")->capture_default_str();
   run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")->capture_default_str();
   run->add_option("--inject", a->inject,

@@ -25,4 +25,18 @@ expect 2 "nowhere/r.json: cannot write: the folder nowhere does not exist" "$CAL
 ls | grep -q '\.tmp\.' && fail "temporary file left behind"
 printf '[plan]\nname = 3\n' > bad.toml
 expect 2 "station not started (nothing ran): bad.toml:2" "$CALBENCH" station run --emulated --plan bad.toml --db s.db --out st
+# Station care (issue 17, item 8): the next command is printed; a rerun into the same --out is
+# refused unless --force; db devices keeps its columns apart.
+"$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1 > /dev/null 2> run1.txt
+grep -q "^next: calbench db approve 1 --db s.db" run1.txt || { cat run1.txt; fail "no next step after the run"; }
+expect 2 "st1: already holds a station run.*--force" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1
+"$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1 --force > /dev/null 2>&1 || fail "--force"
+"$CALBENCH" db devices --db s.db > dev.txt
+python3 - <<'PY' || fail "db devices columns run together"
+rows = [l.rstrip("\n") for l in open("dev.txt")][:2]
+head, row = rows
+starts = [i for i in range(len(head)) if head[i] != " " and (i == 0 or head[i - 1] == " ")]
+for a, b in zip(starts, starts[1:]):  # every field ends before the next column starts, with a space
+    assert row[b - 1] == " ", (head, row)
+PY
 echo "cli_messages: ok"
