@@ -29,7 +29,10 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
   const DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
   const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr, !a.no_innovations);
-  if (!a.out.empty()) write_coefficients(a.out, run.improved);
+  // An IMPROVED.json claims an improvement: without a finding there is none, and none is written.
+  const bool write_out = !a.out.empty() && !run.result.core.findings.empty();
+  if (write_out) write_coefficients(a.out, run.improved);
+  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
   if (!a.report.empty()) write_drive_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
     auto j = drive_diagnosis_json(in, run);
@@ -38,7 +41,7 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
     print_json(j.dump(2));
   } else {
     std::cout << "diagnosis of " << a.dir << "\n" << drive_diagnosis_text(in, run);
-    if (!a.out.empty()) std::cout << "improved coefficients written to " << a.out << "\n";
+    if (write_out) std::cout << "improved coefficients written to " << a.out << "\n";
     if (!a.report.empty()) std::cout << "report written to " << a.report << "\n";
   }
 }
@@ -54,7 +57,9 @@ void run_diagnose(const DiagnoseArgs& a) {
     check_same_unit(given.device, a.coeffs, a.dir);
   }
   const DiagRun run = run_diagnosis(in, a.coeffs.empty() ? nullptr : &given, table);
-  if (!a.out.empty()) write_coefficients(a.out, run.improved);
+  const bool write_out = !a.out.empty() && !run.result.findings.empty();
+  if (write_out) write_coefficients(a.out, run.improved);
+  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
   if (!a.report.empty()) write_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
     auto j = diagnosis_json(run);
@@ -62,7 +67,7 @@ void run_diagnose(const DiagnoseArgs& a) {
     print_json(j.dump(2));
   } else {
     std::cout << "diagnosis of " << a.dir << "\n" << diagnosis_text(run);
-    if (!a.out.empty()) std::cout << "improved coefficients written to " << a.out << "\n";
+    if (write_out) std::cout << "improved coefficients written to " << a.out << "\n";
     if (!a.report.empty()) std::cout << "report written to " << a.report << "\n";
   }
 }

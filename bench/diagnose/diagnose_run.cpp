@@ -335,7 +335,9 @@ std::string diagnosis_text(const DiagRun& run) {
   std::ostringstream o;
   o << "coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << "; " << r.parents
     << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\n";
-  if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the sensor's noise\n";
+  if (r.findings.empty())
+    o << (r.unexplained.empty() ? "no finding: the residual is consistent with the model and the sensor's noise\n"
+                                : "no catalogue finding, but the residual is NOT consistent: see unexplained below\n");
   for (const auto& f : r.findings) o << "* " << finding_sentence(f) << "\n";
   for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
   for (const auto& u : r.unexplained) {

@@ -329,7 +329,11 @@ std::string innovation_sentence(int type, const DriveInnovations& v) {
   o << kObsName[type] << " innovations: NIS/dof " << arrow(b.nis_per_dof, a.nis_per_dof) << " (1 if consistent), gated "
     << (v.compared ? std::to_string(b.rejected) + " → " + std::to_string(a.rejected) : std::to_string(b.rejected)) << " of "
     << b.epochs << "; whiteness (Ljung–Box p, worst component) " << arrow(b.ljung_box_p_min, a.ljung_box_p_min, 2)
-    << (a.ljung_box_p_min < 1e-4 ? " (not white)" : " (white)");
+    << (a.ljung_box_p_min < 0.05 ? " (not white at the 5 % level)" : " (white at the 5 % level)");
+  // Far from 1 either way is not "consistent": below, the assumed noise is too large (a smaller
+  // NIS after a correction is then no improvement); above, too small or a model error remains.
+  if (a.nis_per_dof < 0.5) o << "; NIS/dof " << fmt(a.nis_per_dof, 3) << " is far below 1: the assumed noise is too large";
+  else if (a.nis_per_dof > 2) o << "; NIS/dof " << fmt(a.nis_per_dof, 3) << " is far above 1: noise too small or a model error left";
   if (!a.worst_windows.empty()) {
     const auto& w = a.worst_windows[0];
     o << "; worst 20 s window " << fmt(w.t0, 4) << "–" << fmt(w.t1, 4) << " s (NIS/dof " << fmt(w.nis_per_dof) << ")";
@@ -513,7 +517,16 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
     o << "mounting correction (MEMS axes): " << fmt(R.mounting_delta(0) / units::kDeg) << ", "
       << fmt(R.mounting_delta(1) / units::kDeg) << ", " << fmt(R.mounting_delta(2) / units::kDeg) << " ° (σ "
       << fmt(R.mounting_sigma.maxCoeff() / units::kDeg) << " °) relative to " << in.mounting_source << "\n";
-  if (r.findings.empty()) o << "no finding: the residual is consistent with the model and the noise\n";
+  int flagged = 0;  // motion classes whose mean residual is beyond 3σ after the fit
+  for (const auto& sg : R.segments)
+    for (int a = 0; a < 6; ++a) flagged += std::abs(sg.z_after[a]) > 3;
+  if (r.findings.empty()) {
+    if (r.unexplained.empty() && flagged == 0)
+      o << "no finding: the residual is consistent with the model and the noise (no axis unexplained, no motion class beyond 3σ)\n";
+    else
+      o << "no catalogue finding, but the residual is NOT consistent: " << r.unexplained.size() << " axis(es) unexplained, "
+        << flagged << " motion-class mean(s) beyond 3σ (marked ! below)\n";
+  }
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi)
     o << "* " << drive_finding_sentence(r.findings[fi], fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1) << "\n";
   for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";

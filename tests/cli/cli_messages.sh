@@ -25,6 +25,20 @@ expect 2 "nowhere/r.json: cannot write: the folder nowhere does not exist" "$CAL
 ls | grep -q '\.tmp\.' && fail "temporary file left behind"
 printf '[plan]\nname = 3\n' > bad.toml
 expect 2 "station not started (nothing ran): bad.toml:2" "$CALBENCH" station run --emulated --plan bad.toml --db s.db --out st
+# Diagnosis that does not contradict itself (issue 17, item 6): no IMPROVED.json without a finding;
+# "white" only with the level it holds at; NIS/dof far below 1 read as too large an assumed noise.
+"$CALBENCH" diagnose rec --out imp.json > diag.txt 2> diag.err
+if grep -q "^no finding" diag.txt; then
+  [ ! -e imp.json ] || fail "IMPROVED.json written without a finding"
+  grep -q "imp.json not written" diag.err || fail "not said that --out was not written"
+else
+  [ -e imp.json ] || fail "a finding but no IMPROVED.json"
+fi
+grep -q "(white)" diag.txt && fail "'white' without its level"
+"$CALBENCH" diagnose "$SHARED/data/psins-vehicle-100s" > psins.txt
+grep -q "attitude innovations: NIS/dof .* → 0.049.*far below 1: the assumed noise is too large" psins.txt || { grep innovations psins.txt; fail "NIS far below 1 not read as too large a noise"; }
+grep -q "Ljung–Box p, worst component) 0 → 0 (not white at the 5 % level)" psins.txt || fail "whiteness level"
+
 # Station care (issue 17, item 8): the next command is printed; a rerun into the same --out is
 # refused unless --force; db devices keeps its columns apart.
 "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1 > /dev/null 2> run1.txt
