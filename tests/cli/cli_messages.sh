@@ -43,6 +43,19 @@ grep -q "Ljung–Box p, worst component) 0 → 0 (not white at the 5 % level)" p
 # refused unless --force; db devices keeps its columns apart.
 "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1 > /dev/null 2> run1.txt
 grep -q "^next: calbench db approve 1 --db s.db" run1.txt || { cat run1.txt; fail "no next step after the run"; }
+grep -Eq "^plan [^:]+: 12 steps, about [0-9.]+ min, about [0-9]+ MB to write into st1 \([0-9]+ MB free\)" run1.txt \
+  || { cat run1.txt; fail "no duration and data volume before the run"; }
+# A disk that cannot hold the recording is refused before anything moves (a 1 MB tmpfs, where this
+# test may mount one: as root, outside a restricted sandbox).
+mkdir tiny
+if mount -t tmpfs -o size=1m tmpfs tiny 2> /dev/null; then
+  set +e; "$CALBENCH" station run --emulated --plan "$SRC/bench/plans/factory.toml" --db tiny/x.db --out tiny/st > /dev/null 2> full.txt; rc=$?; set -e
+  umount tiny
+  [ "$rc" = 1 ] && grep -q "station not started (nothing ran): not enough free disk space for the recording: the plan writes about 413 MB, 1 MB are free" full.txt \
+    || { cat full.txt; fail "a full disk not refused before the run"; }
+else
+  echo "cli_messages: note: cannot mount a tmpfs here, the free-space refusal is not exercised"
+fi
 expect 2 "st1: already holds a station run.*--force" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1
 "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db s.db --out st1 --force > /dev/null 2>&1 || fail "--force"
 "$CALBENCH" db devices --db s.db > dev.txt
