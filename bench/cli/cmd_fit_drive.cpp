@@ -153,25 +153,11 @@ const bool registered = add_command(31, [](CLI::App& app) {
       ->check(finite_pos);
   // Stability allowances (docs/in-motion.md, "Priors"): finite and >= 0; NaN and negatives are bad input (exit 2).
   const inmotion::StabilityAllowance& def = inmotion::stability_allowance_table().front();
-  const struct {
-    const char* name;
-    double* field;
-    const char* what;
-    double deflt;
-  } allowances[] = {
-      {"--allowance-gyro-bias-dph", &a->allowance.gyro_bias_dph, "gyro bias, deg/h", def.gyro_bias / kDegPerHour},
-      {"--allowance-accel-bias-mg", &a->allowance.accel_bias_mg, "accelerometer bias, mg", def.accel_bias / kMilliG},
-      {"--allowance-gyro-scale-ppm", &a->allowance.gyro_scale_ppm, "gyro scale factor, ppm", def.gyro_scale / kPpm},
-      {"--allowance-gyro-skew-ppm", &a->allowance.gyro_skew_ppm, "gyro skew, ppm", def.gyro_skew / kPpm},
-      {"--allowance-accel-scale-ppm", &a->allowance.accel_scale_ppm, "accelerometer scale factor, ppm", def.accel_scale / kPpm},
-      {"--allowance-accel-skew-ppm", &a->allowance.accel_skew_ppm, "accelerometer skew, ppm", def.accel_skew / kPpm},
-      {"--allowance-mount-deg", &a->allowance.mount_deg, "mounting per axis when --coeffs is a RESULT.json, deg", def.mount / kDeg},
-  };
-  for (const auto& al : allowances)
-    d->add_option(al.name, *al.field,
+  for (const AllowanceOption& al : allowance_options())
+    d->add_option(al.option, a->allowance.*al.given,
                   std::string("with --coeffs: stability allowance (1-sigma, how far it can move between the set's "
                               "calibration and the drive) of the ") + al.what + " (" + def.device_class + " default " +
-                      fmt_default(al.deflt) + ")")
+                      fmt_default(def.*al.field / al.unit) + ")")
         ->check(finite_nonneg)
         ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(finite_pos);

@@ -19,6 +19,25 @@
 #include "calibration/units.hpp"
 
 namespace calbench {
+
+const std::array<AllowanceOption, 7>& allowance_options() {
+  using namespace units;
+  using A = FitDriveArgs::Allowances;
+  using S = inmotion::StabilityAllowance;
+  static const std::array<AllowanceOption, 7> t = {{
+      {"--allowance-gyro-bias-dph", &A::gyro_bias_dph, &S::gyro_bias, kDegPerHour, "gyro_bias_dph", "gyro bias, deg/h"},
+      {"--allowance-accel-bias-mg", &A::accel_bias_mg, &S::accel_bias, kMilliG, "accel_bias_mg", "accelerometer bias, mg"},
+      {"--allowance-gyro-scale-ppm", &A::gyro_scale_ppm, &S::gyro_scale, kPpm, "gyro_scale_ppm", "gyro scale factor, ppm"},
+      {"--allowance-gyro-skew-ppm", &A::gyro_skew_ppm, &S::gyro_skew, kPpm, "gyro_skew_ppm", "gyro skew, ppm"},
+      {"--allowance-accel-scale-ppm", &A::accel_scale_ppm, &S::accel_scale, kPpm, "accel_scale_ppm",
+       "accelerometer scale factor, ppm"},
+      {"--allowance-accel-skew-ppm", &A::accel_skew_ppm, &S::accel_skew, kPpm, "accel_skew_ppm", "accelerometer skew, ppm"},
+      {"--allowance-mount-deg", &A::mount_deg, &S::mount, kDeg, "mount_deg",
+       "mounting per axis when --coeffs is a RESULT.json, deg"},
+  }};
+  return t;
+}
+
 namespace {
 
 std::pair<double, double> parse_window(const std::string& w) {
@@ -151,30 +170,18 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
     if (!row)
       j["device_class_note"] = "no allowance row for model '" + bench->device.model + "': the " + al.device_class +
                                " class is used (override with --allowance-*)";
-    nlohmann::json over = nlohmann::json::array();
-    const FitDriveArgs::Allowances& o = a.allowance;
-    const struct {
-      double given;
-      double* field;
-      double unit;
-      const char* option;
-    } rows[] = {{o.gyro_bias_dph, &al.gyro_bias, kDegPerHour, "--allowance-gyro-bias-dph"},
-                {o.accel_bias_mg, &al.accel_bias, kMilliG, "--allowance-accel-bias-mg"},
-                {o.gyro_scale_ppm, &al.gyro_scale, kPpm, "--allowance-gyro-scale-ppm"},
-                {o.gyro_skew_ppm, &al.gyro_skew, kPpm, "--allowance-gyro-skew-ppm"},
-                {o.accel_scale_ppm, &al.accel_scale, kPpm, "--allowance-accel-scale-ppm"},
-                {o.accel_skew_ppm, &al.accel_skew, kPpm, "--allowance-accel-skew-ppm"},
-                {o.mount_deg, &al.mount, kDeg, "--allowance-mount-deg"}};
-    for (const auto& r : rows) {
-      if (std::isnan(r.given)) continue;
-      if (!std::isfinite(r.given) || r.given < 0) throw InputError(r.option, 0, "", "expected a finite number >= 0");
-      *r.field = r.given * r.unit;
-      over.push_back(r.option);
+    nlohmann::json over = nlohmann::json::array(), shown = nlohmann::json::object();
+    for (const AllowanceOption& o : allowance_options()) {
+      const double v = a.allowance.*o.given;
+      if (!std::isnan(v)) {
+        if (!std::isfinite(v) || v < 0) throw InputError(o.option, 0, "", "expected a finite number >= 0");
+        al.*o.field = v * o.unit;
+        over.push_back(o.option);
+      }
+      shown[o.json_key] = al.*o.field / o.unit;
     }
-    j["allowance"] = {{"gyro_bias_dph", al.gyro_bias / kDegPerHour}, {"accel_bias_mg", al.accel_bias / kMilliG},
-                      {"gyro_scale_ppm", al.gyro_scale / kPpm},     {"gyro_skew_ppm", al.gyro_skew / kPpm},
-                      {"accel_scale_ppm", al.accel_scale / kPpm},   {"accel_skew_ppm", al.accel_skew / kPpm},
-                      {"mount_deg", al.mount / kDeg},               {"overridden", over}};
+    shown["overridden"] = over;
+    j["allowance"] = shown;
     Vec3 mount_sigma = Vec3::Constant(kUnknownSigma);
     if (a.coeffs_mounting_deg) {
       mount_sigma = inmotion::mounting_sigma_from_rpy(a.coeffs_mounting_deg->first * kDeg, a.coeffs_mounting_deg->second * kDeg);
@@ -186,18 +193,14 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
     // A σ far beyond anything a calibration of this class produces is a broken file, not a prior:
     // the filter would run with P of 1e300 and return nothing meaningful.
     const inmotion::ParameterPriors ds = inmotion::datasheet_priors();
-    const auto& nm = inmotion::prior_parameter_names();
     for (std::size_t k = 0; k < 24; ++k) {
       const double sgm = pc.report.set_sigma[k], lim = 100 * inmotion::prior_value(ds, k);
       if (std::isfinite(sgm) && sgm > lim) {
-        const std::string& n = nm[k];
-        const std::string tri = n.substr(0, n.find('.'));
-        const bool b = n.find(".bias.") != std::string::npos;
-        const char* ax = "xyz";
-        const int i = static_cast<int>(std::string(ax).find(n[n.size() - (b ? 1 : 2)]));
-        const std::string key = b ? tri + ".sigma_bias[" + std::to_string(i) + "]"
-                                  : tri + ".sigma_M[" + std::to_string(i) + "][" +
-                                        std::to_string(std::string(ax).find(n.back())) + "]";
+        // The set's key of parameter k (order of prior_parameter_names(): per triad 3 biases, 9 M).
+        const std::size_t r = k % 12;
+        const std::string tri = k < 12 ? "gyro" : "accel";
+        const std::string key = r < 3 ? tri + ".sigma_bias[" + std::to_string(r) + "]"
+                                      : tri + ".sigma_M[" + std::to_string((r - 3) / 3) + "][" + std::to_string((r - 3) % 3) + "]";
         std::ostringstream m;
         m << "sigma " << sgm << " is implausible for a " << al.device_class << " (more than 100x the data-sheet class "
           << inmotion::prior_value(ds, k) << "): not usable as a prior";
@@ -213,20 +216,17 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
   }
   // Options that cannot act here are named, not silently dropped.
   nlohmann::json without = nlohmann::json::array();
-  const FitDriveArgs::Allowances& ov = a.allowance;
-  for (const auto& [v, name] : {std::pair{ov.gyro_bias_dph, "--allowance-gyro-bias-dph"}, {ov.accel_bias_mg, "--allowance-accel-bias-mg"},
-                                {ov.gyro_scale_ppm, "--allowance-gyro-scale-ppm"}, {ov.gyro_skew_ppm, "--allowance-gyro-skew-ppm"},
-                                {ov.accel_scale_ppm, "--allowance-accel-scale-ppm"}, {ov.accel_skew_ppm, "--allowance-accel-skew-ppm"},
-                                {ov.mount_deg, "--allowance-mount-deg"}}) {
-    if (std::isnan(v)) continue;
+  for (const AllowanceOption& o : allowance_options()) {
+    if (std::isnan(a.allowance.*o.given)) continue;
     std::string why;
     if (!bench) why = "no --coeffs: raw data take the data-sheet priors";
-    else if (std::string(name) == "--allowance-mount-deg" && !a.coeffs_mounting_deg) why = "the input set carries no mounting";
-    else if (std::string(name) == "--allowance-gyro-bias-dph" && a.prior_gyro_bias_dps > 0) why = "--prior-gyro-bias sets the gyro bias prior";
-    else if (std::string(name) == "--allowance-accel-bias-mg" && a.prior_accel_bias_mg > 0) why = "--prior-accel-bias sets the accelerometer bias prior";
+    else if (o.field == &inmotion::StabilityAllowance::mount && !a.coeffs_mounting_deg) why = "the input set carries no mounting";
+    else if (o.field == &inmotion::StabilityAllowance::gyro_bias && a.prior_gyro_bias_dps > 0) why = "--prior-gyro-bias sets the gyro bias prior";
+    else if (o.field == &inmotion::StabilityAllowance::accel_bias && a.prior_accel_bias_mg > 0)
+      why = "--prior-accel-bias sets the accelerometer bias prior";
     if (why.empty()) continue;
-    without.push_back({{"option", name}, {"reason", why}});
-    input_warning(name, 0, "has no effect here: " + why);
+    without.push_back({{"option", o.option}, {"reason", why}});
+    input_warning(o.option, 0, "has no effect here: " + why);
   }
   if (!without.empty()) j["options_without_effect"] = without;
   // --prior-gyro-bias / --prior-accel-bias override the bias priors whatever their source.
@@ -272,13 +272,7 @@ nlohmann::json determined_by(const inmotion::ParameterPriors& prior, const inmot
                              const std::optional<CoefficientSet>& bench) {
   nlohmann::json c = nlohmann::json::object(), m = nlohmann::json::object();
   const auto& names = inmotion::prior_parameter_names();
-  inmotion::ParameterPriors parent;
-  if (bench) {
-    parent.gyro_bias = bench->errors.gyro.sigma_bias;
-    parent.accel_bias = bench->errors.accel.sigma_bias;
-    parent.gyro_M = bench->errors.gyro.sigma_M;
-    parent.accel_M = bench->errors.accel.sigma_M;
-  }
+  const inmotion::ParameterPriors parent = bench ? inmotion::sigma_of(bench->errors) : inmotion::ParameterPriors{};
   nlohmann::json count = {{"bench", 0}, {"drive", 0}, {"both", 0}, {"prior", 0}};
   for (std::size_t k = 0; k < names.size(); ++k) {
     const double p = inmotion::prior_value(prior, k), q = inmotion::prior_value(post, k);
@@ -574,12 +568,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   }
   {
     // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
-    inmotion::ParameterPriors post;
-    post.gyro_bias = total.gyro.sigma_bias;
-    post.accel_bias = total.accel.sigma_bias;
-    post.gyro_M = total.gyro.sigma_M;
-    post.accel_M = total.accel.sigma_M;
-    for (int i = 0; i < 3; ++i) post.mount(i) = std::sqrt(f->P()(inmotion::kMount + i, inmotion::kMount + i));
+    const inmotion::ParameterPriors post =
+        inmotion::sigma_of(total, f->P().template block<3, 3>(inmotion::kMount, inmotion::kMount).diagonal().cwiseSqrt());
     j["determined_by"] = determined_by(pc.report.sigma_raw, post, bench);
   }
   if (fx.present) {

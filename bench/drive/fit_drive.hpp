@@ -1,6 +1,7 @@
 // `calbench fit drive`: the in-motion calibration of a drive recording (calibration/inmotion),
 // producing RESULT.json (contract in docs/in-motion.md) and optionally the estimate series.
 #pragma once
+#include <array>
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -41,6 +42,19 @@ struct FitDriveArgs {
   std::function<void(int type, const inmotion::InnovationRecord&)> on_innovation;
   bool write_out = true;      // false: return RESULT.json without writing a.out
 };
+
+// The --allowance-* options, one row each: the option, its field in FitDriveArgs::Allowances (in
+// the display unit), the StabilityAllowance member it overrides (SI), SI per display unit, the key
+// of RESULT.json priors.allowance, and what it is. The CLI, the fit and RESULT.json read this table.
+struct AllowanceOption {
+  const char* option;
+  double FitDriveArgs::Allowances::*given;
+  double inmotion::StabilityAllowance::*field;
+  double unit;
+  const char* json_key;
+  const char* what;
+};
+const std::array<AllowanceOption, 7>& allowance_options();
 
 // Runs the fit, writes args.out (and args.series), returns RESULT.json. Catalogue keys of the
 // coefficients (docs/diagnosis.md) are compensated on the IMU samples before the filter

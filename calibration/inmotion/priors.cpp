@@ -11,6 +11,16 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
+ParameterPriors sigma_of(const SensorErrors& e, const Vec3& mount_sigma) {
+  ParameterPriors p;
+  p.gyro_bias = e.gyro.sigma_bias;
+  p.accel_bias = e.accel.sigma_bias;
+  p.gyro_M = e.gyro.sigma_M;
+  p.accel_M = e.accel.sigma_M;
+  p.mount = mount_sigma;
+  return p;
+}
+
 ParameterPriors datasheet_priors() {
   using namespace units;
   ParameterPriors p;
@@ -96,12 +106,8 @@ PriorReport priors_datasheet(const ParameterPriors& datasheet) {
 PriorReport priors_from_set(const SensorErrors& set, const StabilityAllowance& a, const Vec3& mount_sigma,
                             const ParameterPriors& datasheet) {
   PriorReport r = priors_datasheet(datasheet);
-  ParameterPriors given, allow;
-  given.gyro_bias = set.gyro.sigma_bias;
-  given.accel_bias = set.accel.sigma_bias;
-  given.gyro_M = set.gyro.sigma_M;
-  given.accel_M = set.accel.sigma_M;
-  given.mount = mount_sigma;
+  const ParameterPriors given = sigma_of(set, mount_sigma);
+  ParameterPriors allow;
   allow.gyro_bias.setConstant(a.gyro_bias);
   allow.accel_bias.setConstant(a.accel_bias);
   for (int i = 0; i < 3; ++i)

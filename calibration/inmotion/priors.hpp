@@ -26,6 +26,9 @@ struct ParameterPriors {
   Vec3 mount = Vec3::Zero();       // rad, per axis of the mounting misalignment δμ
 };
 
+// The σ of a coefficient set in this layout (bias and M of both triads) with the mounting's σ.
+ParameterPriors sigma_of(const SensorErrors& e, const Vec3& mount_sigma = Vec3::Zero());
+
 // Data-sheet class of a raw ADIS16488A (no calibration applied): initial bias 0.5 °/s and 30 mg
 // (2.5× and 1.9× the data sheet's ±0.2 °/s and ±16 mg initial bias error), scale 1 %, skew 0.2 %,
 // mounting 1° per axis (the installation tolerance of a vehicle bracket).
