@@ -179,6 +179,19 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
       return;
     }
     r = check_approval(set, store.qc_of_set(set), t);
+    // The signature: a named operator, by default another than the one who stored the set.
+    const Actor& who = store.actor();
+    const std::string creator = set.created_by.substr(0, set.created_by.rfind('@'));
+    const bool four_eyes = store.setting(kFourEyes) == "on";
+    if (!who.named()) {
+      r.reasons.push_back("approval needs a named operator: --operator NAME or CALBENCH_OPERATOR (the OS user '" +
+                          who.user + "' records who ran a command but does not sign)");
+      r.ok = false;
+    } else if (four_eyes && who.user == creator) {
+      r.reasons.push_back("four-eyes: set " + std::to_string(set_id) + " was stored by '" + creator +
+                          "'; another operator must approve it (a one-person lab: calbench db settings four_eyes off)");
+      r.ok = false;
+    }
     // A combined set refines its parent: the parent must have passed approval itself.
     if (set.parent_id) {
       const auto p = store.find_set(*set.parent_id);
@@ -190,7 +203,9 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
       }
     }
     if (r.ok) {
-      store.set_status(set_id, SetStatus::approved, "thresholds: " + t.source);
+      store.set_status(set_id, SetStatus::approved,
+                       "signed by " + who.user + " (" + who.source + "), stored by " + creator +
+                           (four_eyes ? "" : ", four-eyes off") + "; thresholds: " + t.source);
     } else {
       std::string why;
       for (const auto& s : r.reasons) why += (why.empty() ? "" : "; ") + s;

@@ -47,8 +47,10 @@ ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vecto
 // The thresholds as readable lines in display units ("gyro |bias| <= 3600 °/h", ...).
 std::vector<std::string> describe_thresholds(const Thresholds& t);
 
-// Check and, when every check passes, approve (draft → approved), in one transaction. A refusal is
-// recorded in the audit log with its reasons; the set stays draft.
+// Check and, when every check passes, approve (draft → approved), in one transaction. The store's
+// actor signs: it must be a named operator (Actor::named) and, unless the database's four_eyes
+// setting is "off", not the operator who stored the set. A refusal is recorded in the audit log
+// with its reasons; the set stays draft.
 ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t);
 
 }  // namespace calbench::db

@@ -139,6 +139,15 @@ ALTER TABLE qc_results ADD COLUMN sample TEXT NOT NULL DEFAULT ''
   CHECK (sample IN ('', 'in-sample', 'out-of-sample', 'not applicable'));
 ALTER TABLE qc_results ADD COLUMN criterion TEXT NOT NULL DEFAULT '';
 )SQL",
+      // ---- 3: settings of this database (e.g. four-eyes approval), who changed them and when ----
+      R"SQL(
+CREATE TABLE settings (
+  key        TEXT PRIMARY KEY,
+  value      TEXT NOT NULL,
+  changed_at TEXT NOT NULL,
+  changed_by TEXT NOT NULL
+);
+)SQL",
   };
   return m;
 }

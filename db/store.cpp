@@ -1,7 +1,9 @@
 #include "db/store.hpp"
 
+#include <pwd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
@@ -44,13 +46,46 @@ SetStatus status_from_string(const std::string& s) {
   throw InputError("unknown status '" + s + "' (draft, approved, provisioned, revoked)");
 }
 
-Actor Actor::from_environment() {
+std::string operator_name_problem(const std::string& name) {
+  const std::string n = "operator name '" + name + "' ";
+  if (name.empty() || name.size() > 64) return n + "must be 1 to 64 characters";
+  if (name.find('@') != std::string::npos) return n + "must not contain '@' (the station is recorded beside it)";
+  bool printable = false;
+  for (unsigned char c : name) {
+    if (c < 0x20 || c == 0x7f) return n + "contains control characters";
+    if (c != ' ') printable = true;
+  }
+  if (!printable || name.front() == ' ' || name.back() == ' ') return n + "must not be blank or start or end with a space";
+  return {};
+}
+
+void check_operator_name(const std::string& name, const std::string& where) {
+  if (const std::string p = operator_name_problem(name); !p.empty()) throw arg_error(where, p);
+}
+
+Actor Actor::from_environment(const std::string& operator_option) {
   Actor a;
-  const char* u = std::getenv("CALBENCH_USER");
-  if (!u || !*u) u = std::getenv("USER");
-  a.user = (u && *u) ? u : "unknown";
-  const char* s = std::getenv("CALBENCH_STATION");
-  if (s && *s) {
+  auto env = [](const char* k) -> std::string {
+    const char* v = std::getenv(k);
+    return v ? v : "";
+  };
+  if (!operator_option.empty()) {
+    check_operator_name(operator_option, "--operator");
+    a.user = operator_option, a.source = "--operator";
+  } else if (const std::string o = env("CALBENCH_OPERATOR"); !o.empty()) {
+    check_operator_name(o, "CALBENCH_OPERATOR");
+    a.user = o, a.source = "CALBENCH_OPERATOR";
+  } else if (const std::string u = env("CALBENCH_USER"); !u.empty()) {
+    check_operator_name(u, "CALBENCH_USER");
+    a.user = u, a.source = "CALBENCH_USER";
+  } else {
+    const passwd* pw = ::getpwuid(::geteuid());
+    std::string os = pw && pw->pw_name && *pw->pw_name ? pw->pw_name : env("USER");
+    a.user = os.empty() ? "unknown" : os;
+    a.source = "OS user";
+  }
+  const std::string s = env("CALBENCH_STATION");
+  if (!s.empty()) {
     a.station = s;
   } else {
     char host[256] = {};
@@ -285,6 +320,93 @@ StoredSet Store::store_set(const DeviceInfo& d, SetSource source, const std::str
     out.set_id = insert_set_locked(out.device_id, source, p.canonical_json, p.errors, parent, std::nullopt,
                                    std::nullopt, &out.version);
   });
+  return out;
+}
+
+std::int64_t Store::store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason) {
+  if (run.outcome != "fail" && run.outcome != "aborted")
+    throw arg_error("outcome", "a run without a set is 'fail' or 'aborted', got '" + run.outcome + "'");
+  for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at})
+    check_text(*f, "bench_run", false);
+  // The reason is an exception's text: keep it on one line and bounded.
+  std::string why;
+  for (char c : reason.substr(0, 2000)) why += (static_cast<unsigned char>(c) < 0x20) ? ' ' : c;
+  std::int64_t id = 0;
+  conn_->write_transaction([&] {
+    const std::int64_t device = ensure_device_locked(d);
+    std::optional<std::int64_t> station;
+    if (!run.station.empty()) station = ensure_station_locked(*this, *conn_, run.station, "");
+    auto st = conn_->prepare(std::string(
+        "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
+        "outcome, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + kNow + ")");
+    st.bind(1, device).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
+        .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome);
+    st.run();
+    id = conn_->last_insert_rowid();
+    audit_locked("bench_run", id, "create",
+                 "plan " + run.plan + ", outcome " + run.outcome + (why.empty() ? "" : ": " + why) +
+                     (run.recording_path.empty() ? "" : "; partial recording " + run.recording_path));
+    insert_qc_locked(run.qc, id, std::nullopt);
+  });
+  return id;
+}
+
+namespace {
+struct KnownSetting {
+  const char* key;
+  const char* fallback;
+  std::vector<std::string> values;
+};
+const std::vector<KnownSetting>& known_settings() {
+  static const std::vector<KnownSetting> k = {{kFourEyes, "on", {"on", "off"}}};
+  return k;
+}
+const KnownSetting& known_setting(const std::string& key) {
+  std::string all;
+  for (const auto& k : known_settings()) {
+    if (key == k.key) return k;
+    all += (all.empty() ? "" : ", ") + std::string(k.key);
+  }
+  throw arg_error("setting", "unknown setting '" + key + "' (settings: " + all + ")");
+}
+}  // namespace
+
+void Store::set_setting(const std::string& key, const std::string& value) {
+  const KnownSetting& k = known_setting(key);
+  if (std::find(k.values.begin(), k.values.end(), value) == k.values.end()) {
+    std::string vals;
+    for (const auto& v : k.values) vals += (vals.empty() ? "" : ", ") + v;
+    throw arg_error(key, "'" + value + "' is not one of: " + vals);
+  }
+  if (!actor_.named())
+    throw DbError(1, "changing a setting needs a named operator (--operator NAME or CALBENCH_OPERATOR); the OS "
+                     "user '" + actor_.user + "' is not a signature");
+  conn_->write_transaction([&] {
+    const std::string before = setting(key);
+    auto st = conn_->prepare(std::string("INSERT INTO settings(key, value, changed_at, changed_by) VALUES (?, ?, ") +
+                             kNow + ", ?) ON CONFLICT(key) DO UPDATE SET value = excluded.value, "
+                             "changed_at = excluded.changed_at, changed_by = excluded.changed_by");
+    st.bind(1, key).bind(2, value).bind(3, actor_.user + "@" + actor_.station).run();
+    audit_locked("setting", 0, "set", key + ": " + before + " -> " + value);
+  });
+}
+
+std::string Store::setting(const std::string& key) {
+  const KnownSetting& k = known_setting(key);
+  auto st = conn_->prepare("SELECT value FROM settings WHERE key = ?");
+  st.bind(1, key);
+  return st.step() ? st.text(0) : std::string(k.fallback);
+}
+
+std::vector<Setting> Store::settings() {
+  std::vector<Setting> out;
+  for (const auto& k : known_settings()) {
+    Setting s{k.key, k.fallback, "", ""};
+    auto st = conn_->prepare("SELECT value, changed_at, changed_by FROM settings WHERE key = ?");
+    st.bind(1, std::string(k.key));
+    if (st.step()) s.value = st.text(0), s.changed_at = st.text(1), s.changed_by = st.text(2);
+    out.push_back(s);
+  }
   return out;
 }
 

@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 2;
+inline constexpr int kSchemaVersion = 3;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -34,12 +34,32 @@ std::string to_string(SetStatus s);  // "draft" | "approved" | "provisioned" | "
 SetSource source_from_string(const std::string& s);
 SetStatus status_from_string(const std::string& s);
 
-// Who makes a change: user and station names, recorded with every audit entry.
+// Who makes a change: the operator's name and the station, recorded with every audit entry, every
+// set (created_by) and every provisioning event.
 struct Actor {
   std::string user;
   std::string station;
-  // CALBENCH_USER, else USER, else "unknown"; CALBENCH_STATION, else the host name.
-  static Actor from_environment();
+  // Where `user` came from: "--operator", "CALBENCH_OPERATOR", "CALBENCH_USER" (older name of
+  // CALBENCH_OPERATOR) — a named operator, a signature — or "OS user" (the login name, which
+  // records who ran the command but does not sign an approval).
+  std::string source = "OS user";
+  bool named() const { return source != "OS user"; }
+  // The operator: `operator_option` (the CLI's --operator) if given, else $CALBENCH_OPERATOR, else
+  // $CALBENCH_USER, else the OS user. Station: $CALBENCH_STATION, else the host name. A name must
+  // be 1–64 printable characters without '@' (InputError naming where it came from).
+  static Actor from_environment(const std::string& operator_option = "");
+};
+// What is wrong with an operator name (see Actor::from_environment), or "" when it is fine;
+// check_operator_name throws it as an InputError naming `where` (the option or variable).
+std::string operator_name_problem(const std::string& name);
+void check_operator_name(const std::string& name, const std::string& where);
+
+// Settings of one database (table `settings`), changed only through Store::set_setting (audited).
+// "four_eyes": "on" (default) — an approval must be signed by a named operator other than the one
+// who stored the set; "off" — a one-person lab: the same named operator may approve.
+inline constexpr const char* kFourEyes = "four_eyes";
+struct Setting {
+  std::string key, value, changed_at, changed_by;  // changed_* empty: the built-in default
 };
 
 struct DeviceInfo {
@@ -192,6 +212,13 @@ class Store {
   void record_provisioning(std::int64_t set_id, const std::string& kind, const std::string& target, bool ok,
                            const std::string& readback_json, const std::string& message);
   void audit(const std::string& entity, std::int64_t entity_id, const std::string& action, const std::string& detail);
+  // A bench run that produced no set (outcome "aborted" or "fail"), with why, so that `db history`
+  // shows it. Returns the run id.
+  std::int64_t store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason);
+  // Settings (see kFourEyes). set_setting() needs a named operator and a known key and value.
+  void set_setting(const std::string& key, const std::string& value);
+  std::string setting(const std::string& key);  // the value, or the built-in default
+  std::vector<Setting> settings();               // every known key, default or set
 
   // ---- reads ----
   std::optional<Device> find_device(const std::string& serial);

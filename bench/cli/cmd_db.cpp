@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "bench/cli/operator_option.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/input_error.hpp"
@@ -26,6 +27,7 @@ using namespace calbench::db;
 
 struct DbArgs {
   std::string db;
+  std::string op;  // --operator
   std::string serial;
   std::int64_t set = 0;
   std::string out, reason, thresholds, file;
@@ -34,6 +36,8 @@ struct DbArgs {
   // store-bench
   std::string coeffs, recording, plan, station, started, ended, outcome = "pass", firmware, sha256;
   std::vector<std::string> qc;
+  // settings
+  std::string key, value;
 };
 
 std::string db_path(const DbArgs& a) { return a.db.empty() ? Store::default_path() : a.db; }
@@ -42,10 +46,17 @@ void add_db_option(CLI::App* sub, DbArgs& a) {
   sub->add_option("--db", a.db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
 }
 
+void add_operator_option(CLI::App* sub, DbArgs& a) {
+  cli::add_operator_option(sub, a.op,
+                           "who you are, recorded with the change (default: $CALBENCH_OPERATOR, else the OS user, "
+                           "which does not sign an approval)");
+}
+
 std::unique_ptr<Store> open_store(const DbArgs& a, bool create = false) {
   OpenOptions o;
   o.create = create;
-  return std::make_unique<Store>(db_path(a), o);
+  const Actor who = Actor::from_environment(a.op);  // a bad name is refused before the file is opened
+  return std::make_unique<Store>(db_path(a), o, who);
 }
 
 std::string fmt(double v, int prec = 4) {
@@ -229,6 +240,35 @@ void cmd_revoke(const DbArgs& a) {
   std::cout << "set " << a.set << " revoked" << (a.reason.empty() ? "" : ": " + a.reason) << "\n";
 }
 
+void cmd_settings(const DbArgs& a) {
+  auto s = open_store(a);
+  if (!a.key.empty() && !a.value.empty()) {
+    const std::string before = s->setting(a.key);
+    s->set_setting(a.key, a.value);
+    std::cout << a.key << ": " << before << " -> " << a.value << " (by " << s->actor().user << ")\n";
+    return;
+  }
+  const auto all = s->settings();
+  if (a.json) {
+    json arr = json::array();
+    for (const auto& x : all)
+      if (a.key.empty() || x.key == a.key)
+        arr.push_back({{"key", x.key}, {"value", x.value}, {"default", x.changed_at.empty()},
+                       {"changed_at", x.changed_at}, {"changed_by", x.changed_by}});
+    print_json(json{{"settings", arr}}.dump(2));
+    return;
+  }
+  bool found = false;
+  for (const auto& x : all) {
+    if (!a.key.empty() && x.key != a.key) continue;
+    found = true;
+    std::cout << x.key << " = " << x.value
+              << (x.changed_at.empty() ? "  (built-in default)" : "  (set by " + x.changed_by + " at " + x.changed_at + ")")
+              << "\n";
+  }
+  if (!found) s->setting(a.key);  // throws: unknown setting, with the list of known ones
+}
+
 void cmd_export(const DbArgs& a) {
   auto s = open_store(a);
   const auto set = s->get_set(a.set);
@@ -340,7 +380,7 @@ void cmd_store_bench(const DbArgs& a) {
   const CoefficientSet c = read_coefficients(a.coeffs);  // validates, names the file
   DeviceInfo d{c.device.model, c.device.serial, a.firmware};
   BenchRunInput run;
-  run.station = a.station.empty() ? Actor::from_environment().station : a.station;
+  run.station = a.station.empty() ? Actor::from_environment(a.op).station : a.station;
   run.plan = a.plan;
   run.recording_path = a.recording;
   run.recording_sha256 = a.sha256;
@@ -375,7 +415,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   auto a = std::make_shared<DbArgs>();
   auto* db = app.add_subcommand("db", "coefficient database: devices, versioned sets, approval, history");
   db->require_subcommand(1);
-  leaf(db, "init", "create the database (or migrate it to this version's schema)", a, cmd_init);
+  add_operator_option(leaf(db, "init", "create the database (or migrate it to this version's schema)", a, cmd_init), *a);
   leaf(db, "devices", "list devices with their newest coefficient set", a, cmd_devices)
       ->add_flag("--json", a->json, "machine-readable output");
   auto* show = leaf(db, "show", "a device's coefficient sets (with σ, QC) and provisioning events", a, cmd_show);
@@ -389,9 +429,19 @@ const bool registered = add_command(70, [](CLI::App& app) {
   appr->add_option("SET", a->set, "coefficient set id")->required();
   appr->add_option("--thresholds", a->thresholds, "thresholds config (JSON; default: built-in ADIS16488A limits)");
   appr->add_flag("--json", a->json, "machine-readable output");
+  add_operator_option(appr, *a);
+  appr->footer("The approval is signed: a named operator (--operator or CALBENCH_OPERATOR) other than the one who\n"
+               "stored the set (four-eyes; a one-person lab: calbench db settings four_eyes off).");
   auto* rev = leaf(db, "revoke", "revoke a set (it can no longer be provisioned)", a, cmd_revoke);
   rev->add_option("SET", a->set, "coefficient set id")->required();
   rev->add_option("--reason", a->reason, "why (recorded in the audit log)");
+  add_operator_option(rev, *a);
+  auto* set = leaf(db, "settings", "show or change a setting of this database (four_eyes on|off), audited", a,
+                   cmd_settings);
+  set->add_option("KEY", a->key, "setting name (four_eyes)");
+  set->add_option("VALUE", a->value, "new value (changing needs a named operator)");
+  set->add_flag("--json", a->json, "machine-readable output");
+  add_operator_option(set, *a);
   auto* exp = leaf(db, "export", "write a set as coefficients.json", a, cmd_export);
   exp->add_option("SET", a->set, "coefficient set id")->required();
   exp->add_option("--out", a->out, "output file")->required();
@@ -402,6 +452,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   imp->add_option("RESULT", a->file, "RESULT.json of `calbench fit drive`")->required();
   imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)");
   imp->add_flag("--json", a->json, "machine-readable output");
+  add_operator_option(imp, *a);
   auto* sb = leaf(db, "store-bench", "store a bench run and its coefficient set (draft)", a, cmd_store_bench);
   sb->add_option("--coeffs", a->coeffs, "coefficients.json of the bench fit")->required();
   sb->add_option("--recording", a->recording, "bench recording folder (its imu.csv is hashed)");
@@ -414,6 +465,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   sb->add_option("--firmware", a->firmware, "device firmware revision");
   sb->add_option("--qc", a->qc, "QC result NAME=VALUE[:THRESHOLD[:UNIT[:SAMPLE]]] (repeatable; SAMPLE in-sample, out-of-sample or \"not applicable\")");
   sb->add_flag("--json", a->json, "machine-readable output");
+  add_operator_option(sb, *a);
 });
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <nlohmann/json.hpp>
 
+#include "bench/cli/operator_option.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
 #include "db/input_errors.hpp"
@@ -26,7 +27,7 @@ using namespace calbench::db;
 using namespace calbench::devices;
 
 struct ProvisionArgs {
-  std::string db, serial, uri, out;
+  std::string db, serial, uri, out, op;
   std::int64_t set = 0;
   bool json = false;
 };
@@ -143,7 +144,7 @@ CoefficientSetRecord choose_set(Store& s, const Device& d, std::int64_t set_id) 
 }
 
 void run(const ProvisionArgs& a) {
-  Store s(a.db.empty() ? Store::default_path() : a.db);
+  Store s(a.db.empty() ? Store::default_path() : a.db, OpenOptions{}, Actor::from_environment(a.op));
   const auto dev = s.find_device(a.serial);
   if (!dev) throw arg_error("SERIAL", "unknown device '" + a.serial + "' in " + s.connection().path());
   const CoefficientSetRecord set = choose_set(s, *dev, a.set);
@@ -221,6 +222,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   ex->excludes(to);
   sub->add_option("--db", a->db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
   sub->add_flag("--json", a->json, "machine-readable output");
+  add_operator_option(sub, a->op, "who provisions, recorded with the event (default: $CALBENCH_OPERATOR, else the OS user)");
   sub->callback([a] {
     if (a->uri.empty() && a->out.empty()) throw arg_error("provision", "give --to-device IMU-URI or --export FILE");
     run(*a);

@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <iostream>
 
+#include "bench/cli/operator_option.hpp"
 #include "bench/cli/registry.hpp"
+#include "db/store.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/station/station.hpp"
 
@@ -60,6 +62,8 @@ void run_station(StationArgs& a) {
     throw InputError(a.out, 0, "", "already holds a station run (recording/, COEFFS.json): give another --out, or --force to replace it");
   for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
+  // A bad operator name is bad input, refused before anything moves.
+  (void)db::Actor::from_environment(a.o.operator_name);
   a.o.progress_tty = ::isatty(STDERR_FILENO) && !a.json;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -70,7 +74,8 @@ void run_station(StationArgs& a) {
   // The next step of the workflow, to type.
   if (r.summary.contains("db") && r.summary["db"].contains("set"))
     std::cerr << "next: calbench db approve " << r.summary["db"]["set"].get<long long>() << " --db " << a.o.db
-              << "   (QC thresholds; then calbench provision SERIAL --to-device URI)" << std::endl;
+              << " --operator NAME   (signed by a QC engineer other than the station's operator; QC thresholds; "
+                 "then calbench provision SERIAL --to-device URI)" << std::endl;
   else if (r.summary.contains("coefficients"))
     std::cerr << "next: calbench db store-bench --coeffs " << r.summary["coefficients"].get<std::string>()
               << " --recording " << (a.o.out_dir / "recording").string() << " --db DB   (or rerun with --db)" << std::endl;
@@ -91,6 +96,8 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_option("--out", a->out, "output folder: recording/, COEFFS.json (an existing run there is refused without --force)")
       ->capture_default_str();
   run->add_flag("--force", a->force, "replace an earlier run in --out");
+  add_operator_option(run, a->o.operator_name,
+                  "who runs the station, recorded with the run and the set (default: $CALBENCH_OPERATOR, else the OS user)");
   run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")->capture_default_str();
   run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")->capture_default_str();
   run->add_option("--inject", a->inject,

@@ -411,9 +411,9 @@ Result Station::run() {
     if (!o_.db.empty()) {  // the coefficient store: bench run + draft set, one transaction
       db::OpenOptions dbo;
       dbo.create = true;
-      db::Store store(o_.db, dbo);
+      db::Store store(o_.db, dbo, db::Actor::from_environment(o_.operator_name));
       db::BenchRunInput run;
-      run.station = o_.emulated ? "calbench-emulated" : db::Actor::from_environment().station;
+      run.station = o_.emulated ? "calbench-emulated" : db::Actor::from_environment(o_.operator_name).station;
       run.plan = plan_.name;
       run.recording_path = rec_dir.string();
       run.recording_sha256 = sha256_file(rec_dir / "imu.csv");
@@ -470,6 +470,32 @@ Result Station::run() {
                   (table_ ? (stopped ? "; table stopped and disabled" : "; table stop attempted (no answer)") : "");
     res.summary["aborted"] = true;
     res.summary["table_stopped"] = stopped;
+    // An aborted run is part of the unit's history: recorded (outcome "aborted", with why) once the
+    // unit is known, so `db history SERIAL` shows it. Best effort: the abort itself is what counts.
+    if (!o_.db.empty() && imu_ && imu_->identity().prod_id != 0) {
+      try {
+        db::OpenOptions dbo;
+        dbo.create = true;
+        db::Store store(o_.db, dbo, db::Actor::from_environment(o_.operator_name));
+        db::BenchRunInput run;
+        run.station = o_.emulated ? "calbench-emulated" : store.actor().station;
+        run.plan = plan_.name;
+        run.recording_path = writer ? rec_dir.string() : "";
+        run.started_at = started_;
+        run.ended_at = iso_utc(std::chrono::system_clock::now());
+        run.outcome = "aborted";
+        run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples", db::kSampleNotApplicable,
+                          "no IMU sample lost while recording: value ≤ 0"});
+        const auto& id = imu_->identity();
+        const std::int64_t run_id = store.store_bench_run({"ADIS16488A", id.serial_string(), id.firmware()}, run,
+                                                          std::string(e.what()) + " (after " + std::to_string(samples_) +
+                                                              " samples)");
+        res.summary["db"] = {{"path", o_.db}, {"bench_run", run_id}, {"outcome", "aborted"}};
+        res.message += "; recorded as aborted bench run " + std::to_string(run_id) + " in " + o_.db;
+      } catch (const std::exception& w) {
+        log_ << "could not record the aborted run in " << o_.db << ": " << w.what() << "\n";
+      }
+    }
   }
   if (table_emu_) table_emu_->stop();
   res.summary["ok"] = res.exit_code == 0;

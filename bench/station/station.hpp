@@ -31,6 +31,7 @@ struct Options {
   bool emulated = false;
   std::filesystem::path out_dir = "station-out";
   std::string db;              // also store run + draft set here (COEFFS.json is always written)
+  std::string operator_name;   // who runs the station (recorded; empty: $CALBENCH_OPERATOR, else the OS user)
   std::uint64_t seed = 1;      // emulated unit
   int max_repeats = 2;         // per step
   double heartbeat_s = 0.1;    // bus-clock period of heartbeat + status poll

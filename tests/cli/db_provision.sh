@@ -21,7 +21,7 @@ PY
 "$CALBENCH" db store-bench --coeffs c.json --sha256 "$(printf 'a%.0s' {1..64})" --qc r=1:2 >/dev/null
 set +e; "$CALBENCH" provision 4660 --export x.json 2> err.txt; rc=$?; set -e
 [ "$rc" = 1 ] && grep -q "no approved coefficient set: its newest, set 1, is draft (calbench db approve 1)" err.txt || { cat err.txt; fail "draft set provisioned"; }
-"$CALBENCH" db approve 1 >/dev/null
+"$CALBENCH" db approve 1 --operator qc-anna >/dev/null
 "$CALBENCH" provision 4660 --export x.json | grep -q "exported" || fail "export"
 python3 -c 'import json; assert json.load(open("x.json")) == json.load(open("c.json"))' || fail "exported set differs"
 # Wrong unit: SERIAL_NUM 0x1234 = 4660 expected; 4661 refused; wrong PROD_ID refused.
@@ -59,5 +59,5 @@ sqlite3 "$CALBENCH_DB" "SELECT readback_json FROM provisioning_events WHERE ok =
 # is not a refusal.
 "$CALBENCH" provision 4660 --to-device emu://4660 --json > again.json || fail "re-provisioning without --set"
 python3 -c 'import json; p = json.load(open("again.json")); assert p["ok"] and p["set"] == 1, p' || fail "re-provisioned set"
-"$CALBENCH" db approve 1 | grep -q "already provisioned" || fail "approving a provisioned set"
+"$CALBENCH" db approve 1 --operator qc-anna | grep -q "already provisioned" || fail "approving a provisioned set"
 echo "db_provision: ok"

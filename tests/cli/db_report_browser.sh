@@ -89,14 +89,14 @@ for f in u*.json; do
   "$CALBENCH" db store-bench --coeffs "$f" --sha256 "$(printf 'a%.0s' {1..64})" --plan "factory <plan>" \
     --qc gyro_resid_rms=1e-5:1e-4:rad/s:in-sample >/dev/null
 done
-"$CALBENCH" db approve 1 >/dev/null   # U00's bench set
-"$CALBENCH" db approve 2 >/dev/null   # U01's bench set
+"$CALBENCH" db approve 1 --operator qc-anna >/dev/null   # U00's bench set
+"$CALBENCH" db approve 2 --operator qc-anna >/dev/null   # U01's bench set
 "$CALBENCH" db import-inmotion good.json --json | python3 -c 'import json,sys; o=json.load(sys.stdin); assert o["source"] == "combined" and o["parent"] == 1, o'
 "$CALBENCH" db import-inmotion worse.json --json | python3 -c 'import json,sys; o=json.load(sys.stdin); assert o["source"] == "combined" and o["parent"] == 2, o'
 # The good combined set (better than its parent out of sample, σ within limits) is approvable;
 # the worse one is refused for its QC.
-"$CALBENCH" db approve 13 >/dev/null || fail "a combined set better than its parent was refused"
-set +e; "$CALBENCH" db approve 14 > /dev/null 2> refused.txt; rc=$?; set -e
+"$CALBENCH" db approve 13 --operator qc-anna >/dev/null || fail "a combined set better than its parent was refused"
+set +e; "$CALBENCH" db approve 14 --operator qc-anna > /dev/null 2> refused.txt; rc=$?; set -e
 [ "$rc" = 1 ] && grep -q "sets.in-motion.final_cpe_m" refused.txt || { cat refused.txt; fail "a combined set worse than its parent was approved"; }
 "$CALBENCH" report U00 --html dev.html >/dev/null
 "$CALBENCH" report U01 --html worse.html >/dev/null

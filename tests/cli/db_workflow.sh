@@ -23,13 +23,13 @@ PY
 }
 count() { sqlite3 "$1" "SELECT COUNT(*) FROM $2"; }
 
-"$CALBENCH" db init --db w.db | grep -q "schema version 2" || fail "init"
+"$CALBENCH" db init --db w.db | grep -q "schema version 3" || fail "init"
 coeffs A100 1 > a1.json
 "$CALBENCH" db store-bench --db w.db --coeffs a1.json --plan factory --sha256 "$(printf 'a%.0s' {1..64})" \
   --qc gyro_resid_rms=1e-5:1e-4:rad/s --firmware 1.10 | grep -q "set 1 (A100 v1, draft)" || fail "store-bench"
 # CALBENCH_DB is honoured.
 CALBENCH_DB=w.db "$CALBENCH" db show A100 | grep -q "set 1  v1  bench  draft" || fail "show via CALBENCH_DB"
-"$CALBENCH" db approve 1 --db w.db | grep -q "approved" || fail "approve"
+"$CALBENCH" db approve 1 --operator qc-anna --db w.db | grep -q "approved" || fail "approve"
 "$CALBENCH" db export 1 --db w.db --out e.json >/dev/null
 python3 - a1.json e.json <<'PY' || fail "export differs from the stored set"
 import json, sys
@@ -39,18 +39,18 @@ PY
 # A set with a too-large σ is refused with the reason, exit 1, stays draft.
 coeffs A100 2 1e-3 > a2.json
 "$CALBENCH" db store-bench --db w.db --coeffs a2.json --sha256 "$(printf 'b%.0s' {1..64})" --qc r=1:2 >/dev/null
-set +e; "$CALBENCH" db approve 2 --db w.db 2> why.txt; rc=$?; set -e
+set +e; "$CALBENCH" db approve 2 --operator qc-anna --db w.db 2> why.txt; rc=$?; set -e
 [ "$rc" = 1 ] || fail "approve of a bad set: exit $rc"
 grep -q "gyro bias x: σ = 206.3 °/h exceeds 10 °/h" why.txt || { cat why.txt; fail "refusal reason"; }
 [ "$(sqlite3 w.db "SELECT status FROM coefficient_sets WHERE id = 2")" = draft ] || fail "refused set changed"
 # A thresholds file can loosen it.
 echo '{"gyro": {"max_sigma_bias_dph": 500}}' > th.json
-"$CALBENCH" db approve 2 --db w.db --thresholds th.json --json | python3 -c 'import json,sys; assert json.load(sys.stdin)["approved"]'
+"$CALBENCH" db approve 2 --operator qc-anna --db w.db --thresholds th.json --json | python3 -c 'import json,sys; assert json.load(sys.stdin)["approved"]'
 echo '{"gyro": {"max_sigma_bias": 500}}' > typo.json
-set +e; "$CALBENCH" db approve 2 --db w.db --thresholds typo.json 2> err.txt; rc=$?; set -e
+set +e; "$CALBENCH" db approve 2 --operator qc-anna --db w.db --thresholds typo.json 2> err.txt; rc=$?; set -e
 [ "$rc" = 2 ] && grep -q "typo.json: 'gyro.max_sigma_bias': unknown key" err.txt || { cat err.txt; fail "thresholds typo"; }
 "$CALBENCH" db revoke 1 --db w.db --reason "superseded" | grep -q revoked || fail "revoke"
-set +e; "$CALBENCH" db approve 1 --db w.db >/dev/null 2>&1; rc=$?; set -e
+set +e; "$CALBENCH" db approve 1 --operator qc-anna --db w.db >/dev/null 2>&1; rc=$?; set -e
 [ "$rc" != 0 ] || fail "revoked set approved"
 "$CALBENCH" db history A100 --db w.db > hist.txt
 grep -q "qa-tester@line-3  coefficient_set 1  status  approved -> revoked: superseded" hist.txt || { cat hist.txt; fail "history"; }

@@ -68,12 +68,12 @@ PY
 python3 -c 'import json; j = json.load(open("imp.json")); assert j["source"] == "combined" and j["parent"] == 1, j' \
   || fail "not stored as combined with parent 1"
 # A combined set refines an approved set: with its parent still a draft it is refused, naming the parent.
-set +e; "$CALBENCH" db approve 2 > appr.txt 2> apperr.txt; rc=$?; set -e
+set +e; "$CALBENCH" db approve 2 --operator qc-anna > appr.txt 2> apperr.txt; rc=$?; set -e
 [ "$rc" = 1 ] && grep -q "parent set 1 is draft" apperr.txt || { cat apperr.txt; fail "combined set approved over a draft parent"; }
-"$CALBENCH" db approve 1 >/dev/null || fail "bench set not approved"
-"$CALBENCH" db approve 2 > appr.txt || { cat appr.txt; fail "combined set refused with the default thresholds"; }
+"$CALBENCH" db approve 1 --operator qc-anna >/dev/null || fail "bench set not approved"
+"$CALBENCH" db approve 2 --operator qc-anna > appr.txt || { cat appr.txt; fail "combined set refused with the default thresholds"; }
 # Approving again changes nothing and is not a refusal.
-"$CALBENCH" db approve 2 > again.txt || fail "approving an approved set again failed"
+"$CALBENCH" db approve 2 --operator qc-anna > again.txt || fail "approving an approved set again failed"
 grep -q "already approved" again.txt || fail "second approval not reported as already approved"
 # The same result imported twice is refused (it would store a second identical set).
 set +e; "$CALBENCH" db import-inmotion r.json > /dev/null 2> imperr.txt; rc=$?; set -e

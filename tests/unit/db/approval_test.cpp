@@ -18,13 +18,14 @@ bool has_reason(const ApprovalCheck& c, const std::string& needle) {
 TEST(DbApproval, GoodSetIsApprovedAndAudited) {
   test::TempDir t;
   Store s(t.db(), test::create_opts(), test::test_actor());
+  Store q(t.db(), {}, test::qc_actor());  // the QC engineer who signs
   const auto id = s.store_bench({"ADIS16488A", "P1", ""}, test::bench_run(), test::payload("P1", test::random_errors(1))).set_id;
-  const auto r = approve_checked(s, id, default_thresholds());
+  const auto r = approve_checked(q, id, default_thresholds());
   EXPECT_TRUE(r.ok);
   EXPECT_EQ(s.get_set(id).status, SetStatus::approved);
   // A second approval changes nothing and is not a refusal (nothing in the audit log).
   const auto audit = s.audit_of_device(s.get_set(id).device_id).size();
-  const auto again = approve_checked(s, id, default_thresholds());
+  const auto again = approve_checked(q, id, default_thresholds());
   EXPECT_TRUE(again.already);
   EXPECT_TRUE(again.reasons.empty());
   EXPECT_EQ(s.get_set(id).status, SetStatus::approved);
@@ -34,6 +35,7 @@ TEST(DbApproval, GoodSetIsApprovedAndAudited) {
 TEST(DbApproval, CombinedSetWaitsForItsParent) {
   test::TempDir t;
   Store s(t.db(), test::create_opts(), test::test_actor());
+  Store q(t.db(), {}, test::qc_actor());  // the QC engineer who signs
   const auto parent = s.store_bench({"ADIS16488A", "P9", ""}, test::bench_run(), test::payload("P9", test::random_errors(9))).set_id;
   const SensorErrors e = test::random_errors(10);
   std::int64_t child = 0;
@@ -43,18 +45,19 @@ TEST(DbApproval, CombinedSetWaitsForItsParent) {
   });
   Thresholds th = default_thresholds();
   th.require_qc = false;  // this test is about the parent only
-  const auto r = approve_checked(s, child, th);
+  const auto r = approve_checked(q, child, th);
   EXPECT_FALSE(r.ok);
   bool named = false;
   for (const auto& w : r.reasons) named = named || w.find("parent set " + std::to_string(parent) + " is draft") != std::string::npos;
   EXPECT_TRUE(named);
-  EXPECT_TRUE(approve_checked(s, parent, default_thresholds()).ok);
-  EXPECT_TRUE(approve_checked(s, child, th).ok);
+  EXPECT_TRUE(approve_checked(q, parent, default_thresholds()).ok);
+  EXPECT_TRUE(approve_checked(q, child, th).ok);
 }
 
 TEST(DbApproval, EachThresholdRefusesWithItsReason) {
   test::TempDir t;
   Store s(t.db(), test::create_opts(), test::test_actor());
+  Store q(t.db(), {}, test::qc_actor());  // the QC engineer who signs
   SensorErrors e = test::random_errors(2);
   e.gyro.bias(1) = 2.0 * kDeg;            // 7200 °/h > 3600
   e.accel.M(2, 2) = 0.05;                 // 50000 ppm scale > 25000
@@ -62,7 +65,7 @@ TEST(DbApproval, EachThresholdRefusesWithItsReason) {
   e.accel.sigma_bias(0) = 5 * kMilliG;    // σ 5 mg > 2
   e.gyro.sigma_M(2, 0) = kUnknownSigma;   // not estimated
   const auto id = s.store_bench({"ADIS16488A", "P2", ""}, test::bench_run(false), test::payload("P2", e)).set_id;
-  const auto r = approve_checked(s, id, default_thresholds());
+  const auto r = approve_checked(q, id, default_thresholds());
   EXPECT_FALSE(r.ok);
   EXPECT_TRUE(has_reason(r, "gyro bias y")) ;
   EXPECT_TRUE(has_reason(r, "accel M[zz]"));
@@ -121,6 +124,50 @@ TEST(DbApproval, ThresholdCheckIgnoresStatusAndQcReasonSaysWhy) {
     required = required || l.find("m1") != std::string::npos;
   }
   EXPECT_TRUE(sigma && required);
+}
+
+TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {
+  test::TempDir t;
+  Store station(t.db(), test::create_opts(), Actor{"sam", "line-1", "CALBENCH_OPERATOR"});
+  const auto id =
+      station.store_bench({"ADIS16488A", "S1", ""}, test::bench_run(), test::payload("S1", test::random_errors(4))).set_id;
+  EXPECT_EQ(station.get_set(id).created_by, "sam@line-1");
+  // An OS user records who ran a command but does not sign.
+  Store os(t.db(), {}, Actor{"root", "qc-desk"});
+  auto r = approve_checked(os, id, default_thresholds());
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(has_reason(r, "approval needs a named operator"));
+  // Four-eyes (the default): the operator who stored the set cannot approve it.
+  r = approve_checked(station, id, default_thresholds());
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(has_reason(r, "four-eyes: set " + std::to_string(id) + " was stored by 'sam'"));
+  EXPECT_EQ(station.get_set(id).status, SetStatus::draft);
+  // A setting is changed only by a named operator, to a known value, and audited.
+  EXPECT_THROW(os.set_setting(kFourEyes, "off"), DbError);
+  EXPECT_THROW(station.set_setting(kFourEyes, "maybe"), InputError);
+  EXPECT_THROW(station.set_setting("three_eyes", "on"), InputError);
+  EXPECT_EQ(station.setting(kFourEyes), "on");
+  station.set_setting(kFourEyes, "off");  // a one-person lab
+  EXPECT_EQ(os.setting(kFourEyes), "off");
+  const auto all = os.settings();
+  ASSERT_EQ(all.size(), 1u);
+  EXPECT_EQ(all[0].changed_by, "sam@line-1");
+  EXPECT_FALSE(all[0].changed_at.empty());
+  r = approve_checked(station, id, default_thresholds());
+  EXPECT_TRUE(r.ok);
+  // The approval names its signer in the audit log.
+  bool signed_entry = false;
+  for (const auto& a : os.audit_of_device(os.get_set(id).device_id))
+    signed_entry = signed_entry || (a.action == "status" && a.user == "sam" &&
+                                    a.detail.find("signed by sam (CALBENCH_OPERATOR), stored by sam, four-eyes off") !=
+                                        std::string::npos);
+  EXPECT_TRUE(signed_entry);
+}
+
+TEST(DbApproval, OperatorNamesAreChecked) {
+  EXPECT_NO_THROW(check_operator_name("Anna Müller", "--operator"));
+  for (const std::string& bad : std::vector<std::string>{"", " anna", "anna ", "a@b", "a\nb", std::string(65, 'x')})
+    EXPECT_THROW(check_operator_name(bad, "--operator"), InputError) << bad;
 }
 
 }  // namespace

@@ -32,7 +32,9 @@ inline OpenOptions create_opts() {
   return o;
 }
 
+// The station's actor (an OS user: records, does not sign) and a QC engineer who signs approvals.
 inline Actor test_actor() { return Actor{"tester", "station-T"}; }
+inline Actor qc_actor() { return Actor{"qc-anna", "qc-desk", "--operator"}; }
 
 // A plausible ADIS16488A error set with σ, drawn from `seed`.
 inline SensorErrors random_errors(unsigned seed) {

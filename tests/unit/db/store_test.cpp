@@ -102,6 +102,25 @@ TEST(DbStore, StoresBenchRunAndSetAtomicallyWithVersionsAndAudit) {
   EXPECT_TRUE(created);
 }
 
+// A run that produced no set (aborted) is kept in the unit's history with why; no set is created.
+TEST(DbStore, AbortedRunIsRecordedWithItsReasonAndNoSet) {
+  TempDir t;
+  Store s(t.db(), test::create_opts(), test::test_actor());
+  BenchRunInput run = test::bench_run();
+  run.outcome = "aborted";
+  run.recording_path = "out/recording";
+  EXPECT_THROW(s.store_bench_run({"ADIS16488A", "AB1", ""}, test::bench_run(), "x"), InputError);  // "pass" needs a set
+  const auto id = s.store_bench_run({"ADIS16488A", "AB1", ""}, run, "table lost\nat step 3");
+  EXPECT_EQ(s.bench_run(id)->outcome, "aborted");
+  EXPECT_EQ(s.count("coefficient_sets"), 0);
+  bool found = false;
+  for (const auto& a : s.audit_of_device(s.find_device("AB1")->id))
+    found = found || (a.entity == "bench_run" && a.entity_id == id &&
+                      a.detail.find("outcome aborted: table lost at step 3; partial recording out/recording") !=
+                          std::string::npos);
+  EXPECT_TRUE(found);
+}
+
 TEST(DbStore, UnknownSigmaRoundTripsAsNull) {
   TempDir t;
   Store s(t.db(), test::create_opts(), test::test_actor());

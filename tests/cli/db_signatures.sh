@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# Issue 17 items 2 and 8: every write names its operator; an approval is signed by a named operator
+# other than the one who stored the set (four-eyes), relaxed only by an audited database setting;
+# bad operator names are bad input (exit 2); an aborted station run is recorded in `db history`
+# with its reason; the device report shows the names.
+set -euo pipefail
+T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
+cd "$T"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+unset CALBENCH_OPERATOR CALBENCH_USER
+export CALBENCH_DB="$T/s.db" CALBENCH_STATION=line-7
+run() { set +e; "$@" > out.txt 2> err.txt; rc=$?; set -e; }
+
+# The station's operator from the environment stores the set.
+CALBENCH_OPERATOR="Sam Station" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated \
+  --db s.db --out run 2> station.txt
+grep -q "^next: calbench db approve 1 --db s.db --operator NAME" station.txt || { cat station.txt; fail "next step without --operator"; }
+[ "$(sqlite3 s.db "SELECT created_by FROM coefficient_sets WHERE id = 1")" = "Sam Station@line-7" ] || fail "created_by"
+
+# Without a named operator (the OS user only): refused, exit 1, naming both ways to sign.
+run "$CALBENCH" db approve 1
+[ "$rc" = 1 ] && grep -q "approval needs a named operator: --operator NAME or CALBENCH_OPERATOR" err.txt || { cat err.txt; fail "unsigned approval: exit $rc"; }
+# The operator who stored it: four-eyes refusal, exit 1.
+run "$CALBENCH" db approve 1 --operator "Sam Station"
+[ "$rc" = 1 ] && grep -q "four-eyes: set 1 was stored by 'Sam Station'" err.txt || { cat err.txt; fail "self-approval: exit $rc"; }
+[ "$(sqlite3 s.db "SELECT status FROM coefficient_sets WHERE id = 1")" = draft ] || fail "a refusal changed the status"
+# Bad names are bad input (exit 2), from the option and from the environment, naming where.
+run "$CALBENCH" db approve 1 --operator "qa@lab"
+[ "$rc" = 2 ] && grep -q -- "--operator: operator name 'qa@lab' must not contain '@'" err.txt || { cat err.txt; fail "bad --operator: exit $rc"; }
+run env CALBENCH_OPERATOR=" " "$CALBENCH" db approve 1
+[ "$rc" = 2 ] && grep -q "CALBENCH_OPERATOR: operator name ' ' must not be blank" err.txt || { cat err.txt; fail "blank CALBENCH_OPERATOR: exit $rc"; }
+run "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --db s.db --out run9 --operator ""
+[ "$rc" = 2 ] && grep -q -- "--operator: operator name .. must be 1 to 64 characters" err.txt || { cat err.txt; fail "empty --operator for a station: exit $rc"; }
+# Another, named operator signs: approved; the audit log names signer and storer.
+"$CALBENCH" db approve 1 --operator "Quinn QC" > out.txt || { cat out.txt; fail "signed approval refused"; }
+"$CALBENCH" db history 1001 > hist.txt
+grep -q "Quinn QC@line-7  coefficient_set 1  status  draft -> approved: signed by Quinn QC (--operator), stored by Sam Station" hist.txt \
+  || { cat hist.txt; fail "approval signature not in the history"; }
+grep -q "approve-refused  four-eyes" hist.txt || fail "four-eyes refusal not in the history"
+
+# Settings: changing needs a named operator; unknown keys/values are bad input; audited with name and time.
+run "$CALBENCH" db settings four_eyes off
+[ "$rc" = 1 ] && grep -q "changing a setting needs a named operator" err.txt || { cat err.txt; fail "unsigned setting change: exit $rc"; }
+run "$CALBENCH" db settings four_eyes maybe --operator "Quinn QC"
+[ "$rc" = 2 ] && grep -q "four_eyes: 'maybe' is not one of: on, off" err.txt || { cat err.txt; fail "bad setting value: exit $rc"; }
+run "$CALBENCH" db settings five_eyes on --operator "Quinn QC"
+[ "$rc" = 2 ] && grep -q "unknown setting 'five_eyes' (settings: four_eyes)" err.txt || { cat err.txt; fail "unknown setting: exit $rc"; }
+"$CALBENCH" db settings | grep -q "four_eyes = on  (built-in default)" || fail "default setting"
+# A one-person lab: the same operator stores and approves once four_eyes is off.
+CALBENCH_OPERATOR="Olga Solo" "$CALBENCH" db store-bench --coeffs run/COEFFS.json --recording run/recording \
+  --qc residual=0.1:1 > /dev/null
+run "$CALBENCH" db approve 2 --operator "Olga Solo"
+[ "$rc" = 1 ] || fail "self-approval with four_eyes on: exit $rc"
+"$CALBENCH" db settings four_eyes off --operator "Olga Solo" > /dev/null
+"$CALBENCH" db settings --json | python3 -c '
+import json, sys
+s = json.load(sys.stdin)["settings"][0]
+assert s["key"] == "four_eyes" and s["value"] == "off" and not s["default"], s
+assert s["changed_by"] == "Olga Solo@line-7" and s["changed_at"], s'
+"$CALBENCH" db approve 2 --operator "Olga Solo" > out.txt || { cat err.txt; fail "one-person lab approval refused"; }
+grep -q "four-eyes off" <("$CALBENCH" db history 1001) || fail "relaxed approval not marked in the history"
+
+# Provisioning records its operator.
+"$CALBENCH" provision 1001 --set 2 --export p.json --operator "Pat Provisioning" > /dev/null
+[ "$(sqlite3 s.db "SELECT actor FROM provisioning_events ORDER BY id DESC LIMIT 1")" = "Pat Provisioning@line-7" ] || fail "provisioning actor"
+
+# An aborted run is in the history, with its reason and the partial recording.
+run "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --db s.db --out run2 \
+  --inject table-kill-at=20 --operator "Sam Station"
+[ "$rc" = 1 ] && grep -q "recorded as aborted bench run 3 in s.db" err.txt || { cat err.txt; fail "aborted run: exit $rc"; }
+"$CALBENCH" db history 1001 > hist.txt
+grep -q "Sam Station@line-7  bench_run 3  create  plan short, outcome aborted: .*; partial recording run2/recording" hist.txt \
+  || { cat hist.txt; fail "aborted run not in the history"; }
+[ "$(sqlite3 s.db "SELECT count(*) FROM coefficient_sets")" = 2 ] || fail "an aborted run created a set"
+
+# The device report shows the names.
+"$CALBENCH" report 1001 --html r.html > /dev/null
+grep -q "Quinn QC@line-7" r.html && grep -q "Pat Provisioning@line-7" r.html && grep -q "Sam Station@line-7" r.html \
+  || fail "report without the operators' names"
+echo "db_signatures: ok"
