@@ -415,9 +415,11 @@ std::string plot_svg(const std::filesystem::path& tmp, const std::string& tag, c
   {
     std::ofstream g(gp);
     g << "set terminal svg size 720,360 dynamic font 'sans,11'\nset output '" << svg.string() << "'\n"
-      << "set xlabel '" << cname << "'\nset ylabel 'residual (" << unit << ")'\nset key outside top\nset grid\n"
-      << "plot '" << dat.string() << "' using 1:2 with points pt 7 ps 0.3 lc rgb '#d62728' title 'before', '"
-      << dat.string() << "' using 1:3 with points pt 7 ps 0.3 lc rgb '#1f77b4' title 'after'\n";
+      << "set xlabel '" << condition_axis_label(cname) << "'\nset ylabel 'residual (" << unit
+      << ")'\nset key outside top\nset grid\n"
+      // "before" as open circles under the smaller, half-transparent "after" dots: both stay visible.
+      << "plot '" << dat.string() << "' using 1:2 with points pt 6 ps 0.6 lc rgb '#d62728' title 'before', '"
+      << dat.string() << "' using 1:3 with points pt 7 ps 0.35 lc rgb '#601f77b4' title 'after'\n";
   }
   const std::string cmd = "gnuplot '" + gp.string() + "' 2>/dev/null";
   if (std::system(cmd.c_str()) != 0 || !std::filesystem::exists(svg)) return "<p><i>(plot unavailable: gnuplot failed)</i></p>";
@@ -439,7 +441,8 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
   std::filesystem::create_directories(tmp);
   std::ostringstream o;
   o << "<!DOCTYPE html><html><head><meta charset='utf-8'><title>calbench diagnose: " << html_escape(title)
-    << "</title><style>body{font-family:sans-serif;max-width:1000px;margin:auto}table{border-collapse:collapse}"
+    << "</title><style>body{font-family:sans-serif;max-width:1000px;margin:auto;padding:0 1em}"
+       "table{border-collapse:collapse}svg{max-width:100%;height:auto}p,pre{overflow-wrap:anywhere}"
        "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}</style></head><body>\n";
   o << "<h1>Diagnosis of " << html_escape(title) << "</h1>\n";
   o << "<p>Coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << ". " << r.parents
@@ -453,7 +456,7 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
       << fmt(f.heldout_delta_chi2) << ".</p>\n";
     const int a = finding_axis_index(f, r);
     o << "<p>Residual of " << kSensor[a / 3] << " " << kAxis[a % 3] << " against " << html_escape(f.condition)
-      << ", before (red) and after (blue):</p>\n"
+      << ", before (red circles) and after (blue dots):</p>\n"
       << plot_svg(tmp, std::string("f").append(std::to_string(k++)), in, r, a, f.condition);
   }
   if (!r.unexplained.empty()) {

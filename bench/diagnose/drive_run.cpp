@@ -562,7 +562,10 @@ void write_drive_diagnosis_report(const std::filesystem::path& html, const Drive
   const DiagnoseResult& r = run.result.core;
   std::ostringstream h;
   h << "<!doctype html><html><head><meta charset=\"utf-8\"><title>calbench diagnose (drive) "
-    << report::html_escape(title) << "</title></head><body><h1>Drive diagnosis: " << report::html_escape(title)
+    << report::html_escape(title)
+    << "</title><style>body{font-family:sans-serif;max-width:1000px;margin:auto;padding:0 1em}"
+       "pre{white-space:pre-wrap;overflow-wrap:anywhere}img{max-width:100%;height:auto}</style></head><body>"
+       "<h1>Drive diagnosis: " << report::html_escape(title)
     << "</h1><pre>" << report::html_escape(drive_diagnosis_text(in, run)) << "</pre>";
   std::vector<std::pair<int, std::string>> plots;  // axis, condition
   for (const auto& f : r.findings) {
@@ -589,10 +592,12 @@ void write_drive_diagnosis_report(const std::filesystem::path& html, const Drive
     for (int k = 0; k < r.parents; ++k)
       data << drive_condition_value(in.data, k, cond) << " " << disp(r.residual[a].before[k], s) << " "
            << disp(r.residual[a].after[k], s) << "\n";
-    const std::string script = "set terminal pngcairo size 800,420\nset output 'plot.png'\nset xlabel '" + cond +
-                               "'\nset ylabel '" + kAxisName[a] + " residual (" + disp_unit(s) +
-                               ")'\nset key outside\nplot 'd.txt' u 1:2 w p pt 7 ps 0.4 lc rgb 'red' t 'before', "
-                               "'' u 1:3 w p pt 7 ps 0.4 lc rgb 'blue' t 'after'\n";
+    // "before" as open circles under the smaller, half-transparent "after" dots: both stay visible.
+    const std::string script = "set terminal pngcairo size 800,420\nset output 'plot.png'\nset xlabel '" +
+                               condition_axis_label(cond) + "'\nset ylabel '" + kAxisName[a] + " residual (" +
+                               disp_unit(s) + ")'\nset key outside\nset grid\n"
+                               "plot 'd.txt' u 1:2 w p pt 6 ps 0.8 lc rgb '#d62728' t 'before', "
+                               "'' u 1:3 w p pt 7 ps 0.45 lc rgb '#601f77b4' t 'after'\n";
     h << "<h2>" << kAxisName[a] << " vs " << report::html_escape(cond) << "</h2>";
     try {
       h << "<img src=\"" << report::png_data_uri(report::run_gnuplot(script, {{"d.txt", data.str()}})) << "\">";

@@ -585,6 +585,18 @@ double condition_value(const DiagData& d, const SubBlock& s, const std::string& 
   return 0.0;
 }
 
+std::string condition_axis_label(const std::string& name) {
+  static const std::vector<std::pair<std::string, std::string>> units = {
+      {"rate", "rad/s"},      {"|w|", "rad/s"},       {"w_x", "rad/s"},        {"w_y", "rad/s"},
+      {"w_z", "rad/s"},       {"turn_rate", "rad/s"}, {"f_x", "m/s²"},         {"f_y", "m/s²"},
+      {"f_z", "m/s²"},        {"f", "m/s²"},          {"|f|", "m/s²"},         {"along_accel", "m/s²"},
+      {"ang_accel", "rad/s²"}, {"speed", "m/s"},      {"temperature", "°C"},   {"dT/dt", "°C/s"},
+      {"time", "s"},          {"angle", "°"}};
+  for (const auto& [n, u] : units)
+    if (n == name) return name + " (" + u + ")";
+  return name;
+}
+
 void ljung_box(const std::vector<double>& x, int lags, double& q, double& p) {
   const std::size_t n = x.size();
   q = 0;

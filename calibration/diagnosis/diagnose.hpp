@@ -146,6 +146,9 @@ DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, cons
 
 std::vector<std::string> condition_names();
 double condition_value(const DiagData& d, const SubBlock& s, const std::string& name);
+// A plot-axis label for a condition of condition_value() or drive_condition_value(), with the unit
+// of the value those return (SI; angle in degrees): "time (s)", "w_z (rad/s)", "temperature (°C)".
+std::string condition_axis_label(const std::string& name);
 
 // Ljung–Box Q over `lags` lags and its p-value (χ² with `lags` dof, Wilson–Hilferty).
 void ljung_box(const std::vector<double>& x, int lags, double& q, double& p);

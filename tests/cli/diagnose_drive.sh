@@ -31,6 +31,9 @@ assert abs(imp["time_offset"]["s"] - 0.002) < 0.0004 and abs(imp["lever_arm"]["m
 assert sorted(imp["diagnosis"]["effects_added"]) == ["lever_arm accel", "time_offset reference"], imp["diagnosis"]
 PY
 grep -q "data:image/png" "$T/report.html" || grep -q "plot unavailable" "$T/report.html" || { echo "report has no plot section"; exit 1; }
+# Issue 17 item 6: long text lines wrap (they were cut at the page edge), images scale.
+grep -q "pre{white-space:pre-wrap" "$T/report.html" && grep -q "img{max-width:100%" "$T/report.html" \
+  || { echo "report text or plots cut at the page edge"; exit 1; }
 # With IMPROVED.json (M fixed, its terms applied) nothing new is found.
 "$CALBENCH" diagnose "$T/rec" --coeffs "$T/improved.json" --json >"$T/d2.json"
 python3 -c "import json; d=json.load(open('$T/d2.json')); assert d['findings'] == [], d['findings']"

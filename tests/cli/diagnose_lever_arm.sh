@@ -22,6 +22,11 @@ imp = json.load(open(t + "/improved.json"))
 assert abs(imp["lever_arm"]["m"][2] - 0.005) < 0.001, imp["lever_arm"]
 PY
 grep -q "<svg" "$T/report.html" || { echo "report has no plot"; exit 1; }
+# Issue 17 item 6: the plot's x axis names its unit, "before" is drawn as open circles under the
+# "after" dots (both visible), and the page scales wide content instead of cutting it.
+grep -Eq "(rate|w_[xyz]|f_[xyz]|temperature|dT/dt|time|angle) \((rad/s|m/s²|°C|°C/s|s|°)\)" "$T/report.html" \
+  || { echo "plot x axis without a unit"; exit 1; }
+grep -q "svg{max-width:100%" "$T/report.html" || { echo "wide plots are cut, not scaled"; exit 1; }
 "$CALBENCH" diagnose "$T/rec" --coeffs "$T/improved.json" --json >"$T/d2.json"
 python3 -c "import json,sys; d=json.load(open('$T/d2.json')); assert not [f for f in d['findings'] if f['effect']=='lever_arm'], d['findings']"
 # Bad input: unknown effect → exit 2 with the option named.
