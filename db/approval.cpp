@@ -144,6 +144,22 @@ ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vecto
   return r;
 }
 
+std::string parent_reason(Store& store, const CoefficientSetRecord& set) {
+  if (!set.parent_id) return {};
+  const auto p = store.find_set(*set.parent_id);
+  if (!p || (p->status != SetStatus::draft && p->status != SetStatus::revoked)) return {};
+  return "parent set " + std::to_string(p->id) + " is " + to_string(p->status) +
+         (p->status == SetStatus::draft ? ": approve the set it refines first"
+                                        : ": a set refined from a revoked set cannot be approved");
+}
+
+ApprovalCheck check_standing(Store& store, const CoefficientSetRecord& set, const Thresholds& t) {
+  ApprovalCheck r = check_thresholds(set, store.qc_of_set(set), t);
+  if (const std::string why = parent_reason(store, set); !why.empty()) r.reasons.push_back(why);
+  r.ok = r.reasons.empty();
+  return r;
+}
+
 std::vector<std::string> describe_thresholds(const Thresholds& t) {
   std::vector<std::string> out;
   const auto f = [](double v) {
@@ -192,15 +208,9 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
                           "'; another operator must approve it (a one-person lab: calbench db settings four_eyes off)");
       r.ok = false;
     }
-    // A combined set refines its parent: the parent must have passed approval itself.
-    if (set.parent_id) {
-      const auto p = store.find_set(*set.parent_id);
-      if (p && (p->status == SetStatus::draft || p->status == SetStatus::revoked)) {
-        r.reasons.push_back("parent set " + std::to_string(p->id) + " is " + to_string(p->status) +
-                            (p->status == SetStatus::draft ? ": approve the set it refines first"
-                                                           : ": a set refined from a revoked set cannot be approved"));
-        r.ok = false;
-      }
+    if (const std::string why = parent_reason(store, set); !why.empty()) {
+      r.reasons.push_back(why);
+      r.ok = false;
     }
     if (r.ok) {
       store.set_status(set_id, SetStatus::approved,

@@ -44,6 +44,12 @@ ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<
 // Every check of check_approval() except the status (that only a draft can be approved): whether
 // a set, approved or not, meets the thresholds `t` (the device report's verdict).
 ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);
+// Why a set cannot be approved because of its parent (a combined set refines an approved set: the
+// parent must not be draft or revoked), or "" when the parent is fine or there is none.
+std::string parent_reason(Store& store, const CoefficientSetRecord& set);
+// Every check of approve_checked() except the status and the signature: the thresholds, the QC
+// results of the set's run and the parent rule (the device report's verdict).
+ApprovalCheck check_standing(Store& store, const CoefficientSetRecord& set, const Thresholds& t);
 // The thresholds as readable lines in display units ("gyro |bias| <= 3600 °/h", ...).
 std::vector<std::string> describe_thresholds(const Thresholds& t);
 

@@ -161,7 +161,7 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
   if (!current) {
     reasons.push_back(sets.empty() ? "the device has no coefficient set" : "every coefficient set of the device is revoked");
   } else {
-    const ApprovalCheck chk = check_thresholds(*current, store.qc_of_set(*current), t);
+    const ApprovalCheck chk = check_standing(store, *current, t);
     const bool approved = current->status == SetStatus::approved || current->status == SetStatus::provisioned;
     reasons = chk.reasons;
     const std::string set = "Set " + std::to_string(current->id);

@@ -70,6 +70,10 @@ python3 -c 'import json; j = json.load(open("imp.json")); assert j["source"] == 
 # A combined set refines an approved set: with its parent still a draft it is refused, naming the parent.
 set +e; "$CALBENCH" db approve 2 --operator qc-anna > appr.txt 2> apperr.txt; rc=$?; set -e
 [ "$rc" = 1 ] && grep -q "parent set 1 is draft" apperr.txt || { cat apperr.txt; fail "combined set approved over a draft parent"; }
+# The device report's verdict says the same (it checked only the thresholds before).
+serial=$(python3 -c 'import json; print(json.load(open("r.json"))["device"]["serial"])')
+"$CALBENCH" report "$serial" --html rep.html > /dev/null
+grep -q "parent set 1 is draft: approve the set it refines first" rep.html || fail "report verdict does not name the draft parent"
 "$CALBENCH" db approve 1 --operator qc-anna >/dev/null || fail "bench set not approved"
 "$CALBENCH" db approve 2 --operator qc-anna > appr.txt || { cat appr.txt; fail "combined set refused with the default thresholds"; }
 # Approving again changes nothing and is not a refusal.

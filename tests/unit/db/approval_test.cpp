@@ -50,7 +50,12 @@ TEST(DbApproval, CombinedSetWaitsForItsParent) {
   bool named = false;
   for (const auto& w : r.reasons) named = named || w.find("parent set " + std::to_string(parent) + " is draft") != std::string::npos;
   EXPECT_TRUE(named);
+  // The report's verdict (check_standing) names the same reason, in the same words.
+  const auto standing = check_standing(s, s.get_set(child), th);
+  EXPECT_FALSE(standing.ok);
+  EXPECT_TRUE(has_reason(standing, "parent set " + std::to_string(parent) + " is draft: approve the set it refines first"));
   EXPECT_TRUE(approve_checked(q, parent, default_thresholds()).ok);
+  EXPECT_TRUE(check_standing(s, s.get_set(child), th).ok);
   EXPECT_TRUE(approve_checked(q, child, th).ok);
 }
 
