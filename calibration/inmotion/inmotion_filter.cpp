@@ -19,6 +19,16 @@ void set_diag(M& P, int off, double sigma) {
   for (int i = 0; i < K; ++i) P(off + i, off + i) = sigma * sigma;
 }
 
+// The measurement update shared by the observations of eqs (13)–(15) and the course update:
+// dx += K·ν, P −= K·(PHᵀ)ᵀ (K = PHᵀS⁻¹ computed by the caller), P kept symmetric.
+template <int N, int M>
+void apply_update(Eigen::Matrix<double, N, N>& P, Eigen::Matrix<double, N, 1>& dx, const Eigen::Matrix<double, N, M>& K,
+                  const Eigen::Matrix<double, N, M>& PHt, const Eigen::Matrix<double, M, 1>& nu) {
+  dx += K * nu;
+  P -= K * PHt.transpose();
+  P = 0.5 * (P + P.transpose()).eval();
+}
+
 DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, const TriadNoise& n) {
   return v ? (*v)[static_cast<std::size_t>(i)] : DriftPrior{n.drift_sigma, n.drift_tau_s};
 }
@@ -324,9 +334,7 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       if (nis <= kChi2_3_95) ++st.within95;
     }
     const Eigen::Matrix<double, N, 3> K = Sl.solve(PHt.transpose()).transpose();
-    dx += K * nu;
-    P_ -= K * PHt.transpose();
-    P_ = 0.5 * (P_ + P_.transpose()).eval();
+    apply_update<N, 3>(P_, dx, K, PHt, nu);
   }
   // The course over ground as a heading observation while the heading is poorly known.
   if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && cfg_.course_update_s > 0 &&
@@ -346,10 +354,7 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       const Vec PHt = P_ * H.transpose();
       const double S = (H * PHt)(0) + sc * sc;
       if (nu * nu / S <= cfg_.gate_nis / 3) {  // the gate per degree of freedom
-        const Vec K = PHt / S;
-        dx += K * nu;
-        P_ -= K * PHt.transpose();
-        P_ = 0.5 * (P_ + P_.transpose()).eval();
+        apply_update<N, 1>(P_, dx, PHt / S, PHt, Eigen::Matrix<double, 1, 1>(nu));
         ++align_.course_updates;
       } else {
         ++align_.course_rejected;
