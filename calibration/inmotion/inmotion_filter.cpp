@@ -392,6 +392,7 @@ void InMotionFilterT<N>::finish_levelling(const RefObs& r) {
   align_.level_rpy = Vec3(roll, pitch, 0.0);
   align_.level_accel_std = std::sqrt(std::max(0.0, lvl_f2_ / lvl_T_ - f.squaredNorm()));
   align_.level_gyro_mean = (lvl_dth_ / lvl_T_).norm();
+  lvl_snap_ = Snapshot{P_, bg_, ba_, dg_, da_, xg0_, xa0_, Mg_, Ma_, C_mb_};
   phase_ = Phase::heading_unknown;
 }
 
@@ -442,6 +443,13 @@ bool InMotionFilterT<N>::course(double& cog, double& sigma, std::string& how) co
 template <int N>
 void InMotionFilterT<N>::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {
   ins::NavState& s = nav_.state();
+  if (phase_ == Phase::heading_unknown && cfg_.restart_at_heading) {
+    // Keep the attitude (the standstill's tilt), forget the sensor-error states' standstill.
+    const Snapshot& k = lvl_snap_;
+    P_ = k.P;
+    bg_ = k.bg, ba_ = k.ba, dg_ = k.dg, da_ = k.da, xg0_ = k.xg0, xa0_ = k.xa0, Mg_ = k.Mg, Ma_ = k.Ma, C_mb_ = k.C_mb;
+    refresh_correctors();
+  }
   const Mat3 C_nm = s.C_nb();
   const double dpsi = std::remainder(cog - ins::rpy_from_dcm(C_nm * C_mb_.transpose())(2), 2 * units::kPi);
   Mat3 R;
@@ -449,7 +457,7 @@ void InMotionFilterT<N>::realign(const RefObs& r, double cog, double sigma, cons
   s.q_nb = ins::Quat(R * C_nm);
   s.q_nb.normalize();
   const Mat3 C_nb = R * C_nm * C_mb_.transpose();
-  if (phase_ == Phase::heading_unknown) {
+  if (phase_ == Phase::heading_unknown && !cfg_.restart_at_heading) {
     // Standing with a placeholder heading, the INS took the Earth rate off the gyros in the wrong
     // axes, and the fixes made the gyro drift estimate take up the difference (the tilt stayed put):
     // b̂ − b = (C_nm − Ĉ_nm)ᵀ·ω_ie. With the heading known, that part is given back.

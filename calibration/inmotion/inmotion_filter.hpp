@@ -85,6 +85,11 @@ struct InMotionConfig {
   // course_update_s (a chord of fix positions is then mostly new fixes). 0 s: off.
   double course_update_s = 10;
   double course_update_sigma = 1.0 * units::kDeg;
+  // GNSS-only start: at the first heading alignment, forget what the standstill with the
+  // placeholder heading taught the sensor-error states (values and covariance back to the end of
+  // levelling). With the heading unknown the filter's model of that standstill is wrong (the Earth
+  // rate in the wrong axes, linearised 100°+ from the truth), so what it learnt is not information.
+  bool restart_at_heading = true;
 };
 
 // How the filter got (and kept) its heading: for RESULT.json and the summary.
@@ -221,6 +226,12 @@ class InMotionFilterT {
   InnovationRecord innov_[3];
   enum class Phase { levelling, heading_unknown, aligned };
   Phase phase_ = Phase::aligned;
+  struct Snapshot {
+    Mat P;
+    Vec3 bg, ba, dg, da, xg0, xa0;
+    Mat3 Mg, Ma, C_mb;
+  };
+  Snapshot lvl_snap_;  // at the end of levelling (restart_at_heading)
   Vec3 lvl_dth_ = Vec3::Zero(), lvl_dv_ = Vec3::Zero();
   double lvl_T_ = 0, lvl_f2_ = 0;  // levelling sums: time, Σ|f|²·dt
   std::deque<Fix> fixes_;

@@ -103,3 +103,67 @@ TEST(InmotionGnss, GnssOnlyOpeningStandstillAlignsWithoutLockOut) {
     EXPECT_LT(o.err_end, 1.0) << seed;
   }
 }
+
+// The opening standstill with the heading unknown teaches the filter nothing true about the sensor
+// errors (its model puts the Earth rate in the wrong axes, linearised 100°+ from the truth): with
+// restart_at_heading (the default) the sensor-error states go back to the end of levelling at the
+// first heading, and the drive's estimates are within 3σ; without it the horizontal gyro drifts
+// come out overconfident (issue 16: 76.7 % within 3σ over 1 h drives, raw priors, GNSS `pos`).
+namespace {
+struct Coverage {
+  int within = 0, n = 0;
+  double worst_gyro_bias_z = 0;  // largest |error|/σ of the gyro biases
+};
+Coverage coverage(std::uint64_t seed, bool restart) {
+  Route route = lap_route(48.1, 11.6, 520, 35, 3);
+  route.segments[0].duration_s = 60;
+  DriveSimConfig cfg = drive_config(route, seed, 100, Vec3(0.4, -0.3, 0.5), Vec3(-1.0, 0.3, -0.4));
+  cfg.gnss.rate_hz = 1;
+  cfg.reference.rate_hz = 0;
+  InMotionConfig fc;
+  fc.obs_pos = true;
+  fc.obs_vel = fc.obs_att = false;
+  fc.obs_rate_hz = 1;
+  fc.restart_at_heading = restart;
+  FilterReplay<InMotionFilter> replay(fc, nominal_mounting(), cfg.lever_arm);
+  DriveSinks sinks;
+  sinks.imu = [&](const SimImu& m) { replay.imu(m); };
+  sinks.gnss = [&](const SimGnss& g) {
+    replay.reference(gnss_fix_obs(g.t, g.lat, g.lon, g.h, nullptr, g.sigma_h, g.sigma_v, g.sigma_vel));
+  };
+  simulate_drive(cfg, sinks);
+  const SensorErrors e = replay.filter().estimate();
+  Coverage c;
+  for (const auto* tr : {&e.gyro, &e.accel}) {
+    const TriadErrors& t = tr == &e.gyro ? cfg.mems.gyro : cfg.mems.accel;
+    for (int i = 0; i < 3; ++i) {
+      const double zb = std::abs(tr->bias(i) - t.bias(i)) / tr->sigma_bias(i);
+      if (tr == &e.gyro) c.worst_gyro_bias_z = std::max(c.worst_gyro_bias_z, zb);
+      c.within += zb <= 3;
+      ++c.n;
+      for (int j = 0; j < 3; ++j) {
+        c.within += std::abs(tr->M(i, j) - t.M(i, j)) <= 3 * tr->sigma_M(i, j);
+        ++c.n;
+      }
+    }
+  }
+  std::printf("seed %llu restart_at_heading %d: %d of %d within 3 sigma, worst gyro bias %.1f sigma\n",
+              static_cast<unsigned long long>(seed), restart ? 1 : 0, c.within, c.n, c.worst_gyro_bias_z);
+  return c;
+}
+}  // namespace
+
+TEST(InmotionGnss, StandstillWithoutHeadingLeavesNoFalseInformation) {
+  int within = 0, n = 0, within_old = 0;
+  double worst = 0, worst_old = 0;
+  for (std::uint64_t seed : {5, 21, 33}) {
+    const Coverage c = coverage(seed, true), old = coverage(seed, false);
+    within += c.within, n += c.n, within_old += old.within;
+    worst = std::max(worst, c.worst_gyro_bias_z), worst_old = std::max(worst_old, old.worst_gyro_bias_z);
+  }
+  EXPECT_GE(within, static_cast<int>(std::ceil(0.95 * n))) << within << " of " << n;
+  EXPECT_LT(worst, 3.0);
+  // The check can fail: without the restart the same drives are overconfident.
+  EXPECT_LT(within_old, within);
+  EXPECT_GT(worst_old, 3.0);
+}
