@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
@@ -44,8 +45,6 @@ void run_table(const EmulateArgs& a) {
   } catch (const std::invalid_argument& e) {
     throw InputError("--order", 0, "order", e.what());
   }
-  if (!(a.watchdog_s > 0)) throw InputError("--watchdog", 0, "watchdog", "must be > 0 seconds");
-  if (!(a.speed > 0)) throw InputError("--speed", 0, "speed", "must be > 0");
   cfg.watchdog_s = a.watchdog_s;
   devices::TableEmulator emu(cfg, std::make_shared<devices::WallClock>(a.speed));
   emu.start();
@@ -72,10 +71,11 @@ const bool registered = add_command(25, [](CLI::App& app) {
   t->add_option("--listen", args->listen, "HOST:PORT to bind (loopback unless told otherwise; port 0 = any free)")
       ->capture_default_str();
   t->add_option("--watchdog", args->watchdog_s, "seconds without a heartbeat change before the table stops")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(finite_positive());
   t->add_option("--order", args->order, "32-bit word order on the wire: abcd (high word first) or cdab")
       ->capture_default_str();
-  t->add_option("--speed", args->speed, "emulated clock speed relative to real time")->capture_default_str();
+  t->add_option("--speed", args->speed, "emulated clock speed relative to real time")->capture_default_str()->check(finite_positive());
   t->add_option("--port-file", args->port_file, "write the bound port number to this file");
   t->add_flag("--json", args->json, "print the listening URI as JSON");
   t->callback([args] { run_table(*args); });

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "bench/bench_recording.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
@@ -94,7 +95,7 @@ const bool registered = add_command(30, [](CLI::App& app) {
       ->check(CLI::IsMember({"paper", "full"}));
   b->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
-  b->add_option("--block", a->block_s, "block length for averaging, seconds")->check(CLI::Range(0.01, 100.0));
+  b->add_option("--block", a->block_s, "block length for averaging, seconds")->check(finite_number(0.01, 100.0));
   b->add_option("--effects", a->effects,
                 "hold the catalogue terms of this coefficient set fixed (e.g. IMPROVED.json from `calbench diagnose`): "
                 "their predicted output is removed before b and M are fitted, and the keys go into --out")

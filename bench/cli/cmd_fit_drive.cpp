@@ -1,9 +1,8 @@
 // calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
 //                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
-#include <charconv>
-#include <cmath>
 #include <iostream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/fit_drive.hpp"
 #include "calibration/inmotion/priors.hpp"
@@ -111,18 +110,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
   auto* d = fit->add_subcommand("drive", "In-motion calibration against the reference INS/GNSS of a drive recording "
                                          "(EKF, paper eqs 13-15)");
   // Numbers from the command line: decimal, finite; NaN, inf, hex and negatives are bad input (exit 2).
-  auto number = [](bool positive) {
-    return CLI::Validator(
-        [positive](const std::string& v) -> std::string {
-          double x = 0;
-          const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
-          if (r.ec == std::errc() && r.ptr == v.data() + v.size() && std::isfinite(x) && (positive ? x > 0 : x >= 0))
-            return {};
-          return std::string("expected a finite number ") + (positive ? "> 0" : ">= 0") + ", got '" + v + "'";
-        },
-        positive ? "NUMBER>0" : "NUMBER>=0");
-  };
-  const CLI::Validator finite_nonneg = number(false), finite_pos = number(true);
+  const CLI::Validator finite_nonneg = finite_non_negative(), finite_pos = finite_positive();
   d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
   d->add_option("--coeffs", a->coeffs,
                  "coefficient set applied to the data first (coefficients.json, or an earlier RESULT.json whose "

@@ -15,6 +15,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
@@ -575,13 +576,14 @@ const bool registered = add_command(40, [](CLI::App& app) {
       ->check(CLI::ExistingPath);
   sub->add_option("--column", a->columns, "columns to identify (default: all value columns)");
   sub->add_option("--max-lag", a->max_lag_s, "maximum lag of the correlation fits, s (default: automatic, 3 T)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
   sub->add_option("--decimate", a->decimate,
                   "block-average this many samples before the correlation analysis (Allan uses the raw samples)")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1000000}));
+      ->check(whole_number(1, 1000000));
   sub->add_option("--from", a->from_s,
                   "CSV input: skip rows before this time, s (e.g. the in-motion filter's convergence at the start "
-                  "of a fit drive --series)");
+                  "of a fit drive --series)")
+      ->check(finite_number());
   sub->add_flag("--no-allan", a->no_allan, "skip the Allan deviation");
   sub->add_flag("--json", a->json_out, "print the result as JSON on stdout");
   sub->add_option("--plot", a->plot, "write a Fig. 3-like PNG here (and OUT-allan.png), with gnuplot");

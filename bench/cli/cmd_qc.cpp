@@ -1,6 +1,7 @@
 // calbench qc DIR --coeffs A.json [--coeffs B.json ...|none] [--from T0] [--horizon S] [--json] [--plot OUT.png]
 #include <iostream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/drive/qc_drive.hpp"
@@ -76,8 +77,9 @@ const bool registered = add_command(50, [](CLI::App& app) {
                  "coefficients.json, in-motion RESULT.json, or 'none' (repeatable); catalogue keys of a set "
                  "(IMPROVED.json) are compensated on the IMU samples")
       ->required();
-  q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)");
-  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(CLI::PositiveNumber);
+  q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)")
+      ->check(finite_number());
+  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(finite_positive());
   q->add_flag("--json", a->json, "machine output");
   q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)");
   q->callback([a] { run(*a); });

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/station/station.hpp"
@@ -91,8 +92,12 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_option("--out", a->out, "output folder: recording/, COEFFS.json (an existing run there is refused without --force)")
       ->capture_default_str();
   run->add_flag("--force", a->force, "replace an earlier run in --out");
-  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")->capture_default_str();
-  run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")->capture_default_str();
+  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")
+      ->capture_default_str()
+      ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
+  run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")
+      ->capture_default_str()
+      ->check(whole_number(0, 100));
   run->add_option("--inject", a->inject,
                   "emulated faults KEY=VALUE: table-kill-at=S (emulated s), imu-prod-id=0x4060, imu-flags=0x0008, "
                   "imu-skip-every=N, imu-self-test=0x0001");
