@@ -226,6 +226,11 @@ void cmd_approve(const DbArgs& a) {
 
 void cmd_revoke(const DbArgs& a) {
   auto s = open_store(a);
+  // Revoking a revoked set again changes nothing and is not an error (as approving an approved set).
+  if (s->get_set(a.set).status == SetStatus::revoked) {
+    std::cout << "set " << a.set << " is already revoked (no change)\n";
+    return;
+  }
   s->set_status(a.set, SetStatus::revoked, a.reason);
   std::cout << "set " << a.set << " revoked" << (a.reason.empty() ? "" : ": " + a.reason) << "\n";
 }
