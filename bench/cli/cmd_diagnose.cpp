@@ -8,6 +8,7 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 
 namespace calbench::cli {
@@ -47,6 +48,8 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
 }
 
 void run_diagnose(const DiagnoseArgs& a) {
+  for (const std::string* f : {&a.out, &a.report})  // before the work: a wrong path costs nothing
+    if (!f->empty()) check_output_path(*f);
   if (read_meta(a.dir).kind == RecordingKind::drive) return run_diagnose_drive(a);
   const DiagInput in = load_diag_input(a.dir);
   const TableSpec table = a.plan.empty() ? recording_table_spec(in.meta) : load_plan(a.plan).table;

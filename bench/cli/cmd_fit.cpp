@@ -56,6 +56,7 @@ void run_fit_bench_effects(const FitBenchArgs& a, BenchFitOptions opt) {
 }
 
 void run_fit_bench(const FitBenchArgs& a) {
+  if (!a.out.empty()) check_output_path(a.out);  // before the fit: a wrong --out costs nothing
   BenchFitOptions opt;
   opt.method = a.method == "ekf" ? BenchMethod::ekf : BenchMethod::lsq;
   opt.model = a.model == "paper" ? BenchModel::paper : BenchModel::full;

@@ -431,6 +431,8 @@ std::vector<double> block_average(const std::vector<double>& x, std::size_t m) {
 }
 
 void run_identify(const IdentifyArgs& a) {
+  for (const std::string* f : {&a.out, &a.plot})  // before the work: a wrong path costs nothing
+    if (!f->empty()) check_output_path(*f);
   Loaded L = fs::is_directory(a.input) ? load_recording(a) : load_csv(a);
   std::vector<Result> results;
   for (auto& s : L.series) {

@@ -40,6 +40,7 @@ void run_simulate_bench(const SimBenchArgs& a) {
   const fs::path out(a.out);
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  check_output_folder(out);
   RecordingMeta meta;
   meta.kind = RecordingKind::bench;
   meta.device = truth.device;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
 
 namespace calbench {
@@ -83,6 +84,7 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   if (out.filename().empty()) out = out.parent_path();  // "rec/"
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  check_output_folder(out);
   std::vector<double> v;
   // IMU rate: given, or the median interval of the first rows.
   double rate = a.rate_hz;
