@@ -40,13 +40,27 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 }  // namespace
 
 // Walks the command words of argv down the subcommand tree; a word where a subcommand is required
-// and none has that name is an unknown command: the message names it and suggests the nearest.
+// and none has that name is an unknown command: the message names it and suggests the nearest. An
+// unknown option where a command is required, or no command at all, is named the same way (CLI11
+// would only say "A subcommand is required").
 std::string unknown_command(const CLI::App& root, int argc, char** argv) {
   const CLI::App* app = &root;
   std::string path = "calbench";
+  auto commands = [&] {
+    std::string all;
+    for (const CLI::App* c : const_cast<CLI::App*>(app)->get_subcommands([](CLI::App*) { return true; }))
+      all += (all.empty() ? "" : ", ") + c->get_name();
+    return "(commands: " + all + "; " + path + " --help)";
+  };
   for (int i = 1; i < argc; ++i) {
     const std::string w = argv[i];
-    if (w.empty() || w[0] == '-') return {};
+    if (w.empty()) return {};
+    if (w[0] == '-') {
+      if (app->get_require_subcommand_min() == 0) return {};
+      const std::string name = w.substr(0, w.find('='));
+      if (const_cast<CLI::App*>(app)->get_option_no_throw(name)) return {};  // --help, --version
+      return "unknown option '" + name + "' for '" + path + "': a command comes first " + commands();
+    }
     const auto subs = const_cast<CLI::App*>(app)->get_subcommands([](CLI::App*) { return true; });
     if (subs.empty()) return {};
     const CLI::App* next = nullptr;
@@ -58,17 +72,17 @@ std::string unknown_command(const CLI::App& root, int argc, char** argv) {
       continue;
     }
     if (app->get_require_subcommand_min() == 0) return {};  // a positional argument (e.g. report SERIAL)
-    std::string best, all;
+    std::string best;
     std::size_t bd = 99;
     for (const CLI::App* c : subs) {
-      all += (all.empty() ? "" : ", ") + c->get_name();
       const std::size_t d = edit_distance(w, c->get_name());
       if (d < bd) bd = d, best = c->get_name();
     }
     std::string m = "unknown command '" + w + "' for '" + path + "'";
     if (bd <= std::max<std::size_t>(2, w.size() / 3)) m += "; did you mean '" + best + "'?";
-    return m + " (commands: " + all + "; " + path + " --help)";
+    return m + " " + commands();
   }
+  if (app->get_require_subcommand_min() > 0) return "'" + path + "' needs a command " + commands();
   return {};
 }
 
