@@ -10,6 +10,7 @@
 
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
+#include "bench/io/message_text.hpp"
 #include "bench/io/recording.hpp"
 
 namespace calbench {
@@ -39,7 +40,7 @@ class TextRows {
         auto r = std::from_chars(c, e, x);
         if (r.ec != std::errc() || (r.ptr < e && !(*r.ptr == ' ' || *r.ptr == '\t' || *r.ptr == '\r' || *r.ptr == ',')))
           throw InputError(path_, line_, "column " + std::to_string(v.size() + 1),
-                           "not a number: '" + std::string(start, std::min<std::size_t>(20, static_cast<std::size_t>(e - start))) + "'");
+                           "not a number: '" + field_text(std::string_view(start, static_cast<std::size_t>(e - start)), 20) + "'");
         if (!std::isfinite(x)) throw InputError(path_, line_, "column " + std::to_string(v.size() + 1), "NaN or infinity");
         v.push_back(x);
         c = r.ptr;
@@ -64,7 +65,7 @@ class TextRows {
 void check_range(const TextRows& r, std::size_t col, double v, double lo, double hi, const char* what) {
   if (!(v >= lo && v <= hi))
     throw InputError(r.path(), r.line(), "column " + std::to_string(col + 1),
-                     std::string(what) + " " + std::to_string(v) + " outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+                     std::string(what) + " " + number_text(v) + " outside [" + number_text(lo) + ", " + number_text(hi) + "]");
 }
 
 void check_time(const TextRows& r, double t, double& last, bool& first) {
