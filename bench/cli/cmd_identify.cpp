@@ -185,7 +185,7 @@ Loaded load_recording(const IdentifyArgs& a) {
     for (const auto& c : a.columns) {
       auto it = std::find_if(std::begin(names), std::end(names), [&](const char* n) { return c == n; });
       if (it == std::end(names))
-        throw InputError(L.file, 1, c,
+        throw InputError("--column", 0, c,
                          "unknown column for a recording (use gx_rad_s … az_m_s2; increments are "
                          "converted to these rates)");
       pick.push_back(static_cast<int>(it - std::begin(names)));

@@ -200,7 +200,7 @@ LEFT="m.json" t identify-binary 2 "garbage\.bin" "$CALBENCH" identify garbage.bi
 LEFT="m.json" t identify-max-lag-nan 2 "--max-lag: .*'nan'" "$CALBENCH" identify series.csv --max-lag nan --out m.json
 LEFT="m.json" t identify-decimate-zero 2 "--decimate: .*'0'" "$CALBENCH" identify series.csv --decimate 0 --out m.json
 LEFT="m.json" t identify-from-nan 2 "--from: .*'nan'" "$CALBENCH" identify series.csv --from nan --out m.json
-LEFT="m.json" t identify-column-recording 2 "rec/imu\.csv:1: 'speed'" "$CALBENCH" identify rec --column speed --out m.json
+LEFT="m.json" t identify-column-recording 2 "--column: 'speed': unknown column for a recording" "$CALBENCH" identify rec --column speed --out m.json
 LEFT="m.json" t identify-folder-no-meta 2 "folder/meta\.json" "$CALBENCH" identify folder --out m.json
 
 # ---------------------------------------------------------------------------------- qc
