@@ -433,6 +433,8 @@ std::vector<double> block_average(const std::vector<double>& x, std::size_t m) {
 void run_identify(const IdentifyArgs& a) {
   for (const std::string* f : {&a.out, &a.plot})  // before the work: a wrong path costs nothing
     if (!f->empty()) check_output_path(*f);
+  if (fs::is_directory(a.input) && a.from_s > -1e299)  // documented for CSV input; not silently ignored
+    throw InputError("--from", 0, "", a.input + " is a recording folder: --from applies to CSV input (e.g. a fit drive --series)");
   Loaded L = fs::is_directory(a.input) ? load_recording(a) : load_csv(a);
   std::vector<Result> results;
   for (auto& s : L.series) {

@@ -201,6 +201,7 @@ LEFT="m.json" t identify-max-lag-nan 2 "--max-lag: .*'nan'" "$CALBENCH" identify
 LEFT="m.json" t identify-decimate-zero 2 "--decimate: .*'0'" "$CALBENCH" identify series.csv --decimate 0 --out m.json
 LEFT="m.json" t identify-from-nan 2 "--from: .*'nan'" "$CALBENCH" identify series.csv --from nan --out m.json
 LEFT="m.json" t identify-column-recording 2 "--column: 'speed': unknown column for a recording" "$CALBENCH" identify rec --column speed --out m.json
+LEFT="m.json" t identify-from-recording 2 "--from: rec is a recording folder: --from applies to CSV input" "$CALBENCH" identify rec --from 5 --out m.json
 LEFT="m.json" t identify-folder-no-meta 2 "folder/meta\.json" "$CALBENCH" identify folder --out m.json
 
 # ---------------------------------------------------------------------------------- qc
@@ -218,6 +219,8 @@ t diagnose-dir-missing 2 "dir: .*nope" "$CALBENCH" diagnose nope
 t diagnose-empty-folder 2 "folder/meta\.json" "$CALBENCH" diagnose folder
 LEFT="imp.json" t diagnose-coeffs-binary 2 "garbage\.bin" "$CALBENCH" diagnose rec --coeffs garbage.bin --out imp.json
 LEFT="imp.json" t diagnose-coeffs-folder 2 "--coeffs: .*folder" "$CALBENCH" diagnose rec --coeffs folder --out imp.json
+LEFT="imp.json" t diagnose-plan-on-drive 2 "--plan: rec is a drive recording: --plan .* applies to bench recordings" "$CALBENCH" diagnose rec --plan "$SRC/tests/data/short_plan.toml" --out imp.json
+LEFT="imp.json" t diagnose-no-innovations-on-bench 2 "--no-innovations: bench is a bench recording" "$CALBENCH" diagnose bench --no-innovations --out imp.json
 mkrec r3; : > r3/reference.csv
 t diagnose-empty-reference 2 "r3/reference\.csv: empty file" "$CALBENCH" diagnose r3
 
