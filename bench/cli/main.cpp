@@ -86,6 +86,42 @@ std::string unknown_command(const CLI::App& root, int argc, char** argv) {
   return {};
 }
 
+// An option the command does not have (CLI11: "The following arguments were not expected"): the
+// nearest long option of that command, when one is near.
+std::string nearest_option(CLI::App& root, int argc, char** argv) {
+  CLI::App* app = &root;
+  std::string path = "calbench";
+  std::vector<std::string> unknown;
+  for (int i = 1; i < argc; ++i) {
+    const std::string w = argv[i];
+    if (w.rfind("--", 0) == 0) {
+      const std::string name = w.substr(0, w.find('='));
+      if (!app->get_option_no_throw(name)) unknown.push_back(name);
+      continue;
+    }
+    for (CLI::App* c : app->get_subcommands([](CLI::App*) { return true; }))
+      if (c->get_name() == w) {
+        app = c;
+        path += " " + w;
+        unknown.clear();  // options before a subcommand belong to its parent
+        break;
+      }
+  }
+  std::string out;
+  for (const std::string& u : unknown) {
+    std::string best;
+    std::size_t bd = 99;
+    for (const CLI::Option* o : app->get_options())
+      for (const std::string& l : o->get_lnames()) {
+        const std::size_t d = edit_distance(u.substr(2), l);
+        if (d < bd) bd = d, best = "--" + l;
+      }
+    if (!best.empty() && bd <= std::max<std::size_t>(2, (u.size() - 2) / 3))
+      out += "calbench: '" + u + "' is not an option of '" + path + "'; did you mean '" + best + "'? (" + path + " --help)\n";
+  }
+  return out;
+}
+
 }  // namespace calbench::cli
 
 int main(int argc, char** argv) {
@@ -106,6 +142,10 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
+  } catch (const CLI::ExtrasError& e) {
+    app.exit(e);
+    std::cerr << calbench::cli::nearest_option(app, argc, argv);
+    return 2;
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return 2;

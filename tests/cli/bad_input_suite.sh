@@ -110,7 +110,7 @@ LEFT="s1" t sim-bench-seed-nan 2 "--seed" "$CALBENCH" simulate bench --plan "$SR
 LEFT="s1" t sim-bench-seed-huge 2 "--seed: .*99999999999999999999" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --seed 99999999999999999999 --out s1
 LEFT="s1" t sim-bench-inject-unknown 2 "--inject.*warp_drive" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --inject warp_drive:value=1 --out s1
 LEFT="s1" t sim-bench-inject-nan 2 "--inject.*time_offset.*nan|nan.*time_offset" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --inject time_offset:value=nan --out s1
-LEFT="s1" t sim-bench-unknown-option 2 "--sede" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --sede 3 --out s1
+LEFT="s1" t sim-bench-unknown-option 2 "'--sede' is not an option of 'calbench simulate bench'; did you mean '--seed'\?" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --sede 3 --out s1
 t sim-bench-out-exists 2 "bench: already holds a recording.*--force" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --out bench
 t sim-bench-out-is-file 2 "empty\.txt: is a file, not a folder" "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --out empty.txt
 
@@ -177,6 +177,7 @@ LEFT="c.json" t fit-bench-effects-binary 2 "garbage\.bin" "$CALBENCH" fit bench 
 # ---------------------------------------------------------------------------------- fit drive
 t fit-sub-typo 2 "unknown command 'dirve' for 'calbench fit'; did you mean 'drive'\?" "$CALBENCH" fit dirve rec
 LEFT="r.json" t fit-drive-allowance-nan 2 "--allowance-gyro-scale-ppm: expected a finite number >= 0, got 'nan'" "$CALBENCH" fit drive rec --out r.json --allowance-gyro-scale-ppm nan
+LEFT="r.json" t fit-drive-unknown-option 2 "'--allowance-gyro-scale' is not an option of 'calbench fit drive'; did you mean '--allowance-gyro-scale-ppm'\?" "$CALBENCH" fit drive rec --out r.json --allowance-gyro-scale 3
 LEFT="r.json" t fit-drive-sigma-pos-negative 2 "--sigma-pos: expected a finite number > 0, got '-1'" "$CALBENCH" fit drive rec --out r.json --sigma-pos -1
 LEFT="r.json" t fit-drive-window-reversed 2 "--window: T1 must be after T0" "$CALBENCH" fit drive rec --out r.json --window 20:10
 LEFT="r.json" t fit-drive-window-garbage 2 "--window: .*'5abc:10'" "$CALBENCH" fit drive rec --out r.json --window 5abc:10
@@ -245,7 +246,7 @@ t db-history-unknown-serial 2 "SERIAL: unknown device 'NOPE-1'" "$CALBENCH" db h
 t db-show-serial-required 2 "SERIAL is required" "$CALBENCH" db show --db d.db
 t db-history-db-missing 2 "nope\.db: no database here" "$CALBENCH" db history "$SERIAL" --db nope.db
 t db-fleet-not-db 2 "notdb\.csv: not a calbench database" "$CALBENCH" db fleet --db notdb.csv
-t db-devices-unknown-option 2 "not expected: --jsn" "$CALBENCH" db devices --db d.db --jsn
+t db-devices-unknown-option 2 "'--jsn' is not an option of 'calbench db devices'; did you mean '--json'\?" "$CALBENCH" db devices --db d.db --jsn
 t db-approve-not-a-number 2 "SET: .*'abc'" "$CALBENCH" db approve abc --db d.db
 t db-approve-zero 2 "SET: expected a whole number >= 1, got '0'" "$CALBENCH" db approve 0 --db d.db
 t db-approve-unknown-set 2 "no coefficient set 99" "$CALBENCH" db approve 99 --db d.db
