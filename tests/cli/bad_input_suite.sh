@@ -170,6 +170,8 @@ sed 's/^t_s,\(.*\),step,/t_s,\1,stage,/' bench/reference.csv > b3/reference.csv
 LEFT="c.json" t fit-bench-ref-header 2 "b3/reference\.csv:2: 'step': missing required column" "$CALBENCH" fit bench b3 --out c.json
 mkdir -p b4 && cp bench/imu.csv bench/reference.csv b4/ && cp garbage.bin b4/meta.json
 LEFT="c.json" t fit-bench-meta-binary 2 "b4/meta\.json" "$CALBENCH" fit bench b4 --out c.json
+mkdir -p b7 && cp bench/imu.csv bench/reference.csv b7/ && sed 's/"imu_rate_hz": *[0-9.e+]*/"imu_rate_hz": 1e300/' bench/meta.json > b7/meta.json
+LEFT="c.json" t fit-bench-meta-rate 2 "b7/meta\.json: 'imu_rate_hz': 1e\+300 Hz is not an IMU rate" "$CALBENCH" fit bench b7 --out c.json
 t fit-bench-out-missing-folder 2 "nowhere/c\.json: cannot write: the folder nowhere does not exist" "$CALBENCH" fit bench bench --out nowhere/c.json
 t fit-bench-out-is-folder 2 "folder: is a folder" "$CALBENCH" fit bench bench --out folder
 LEFT="c.json" t fit-bench-effects-binary 2 "garbage\.bin" "$CALBENCH" fit bench bench --effects garbage.bin --out c.json
