@@ -2,6 +2,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <charconv>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
@@ -40,10 +42,22 @@ void apply_inject(const std::string& kv, station::Injections& in) {
   if (eq == std::string::npos) throw InputError("--inject", 0, kv, "expected KEY=VALUE");
   const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
   try {
-    if (k == "table-kill-at") in.table_kill_at_s = std::stod(v);
-    else if (k == "imu-prod-id") in.imu_prod_id = parse_u16(v, k);
+    // Whole decimal numbers in range: "nan", "-5" or "3abc" were taken and the fault silently never came.
+    if (k == "table-kill-at") {
+      double x = 0;
+      const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
+      if (r.ec != std::errc() || r.ptr != v.data() + v.size() || !std::isfinite(x) || x < 0)
+        throw InputError("--inject", 0, k, "expected a finite time >= 0 s, got '" + v + "'");
+      in.table_kill_at_s = x;
+    } else if (k == "imu-prod-id") in.imu_prod_id = parse_u16(v, k);
     else if (k == "imu-flags") in.imu_sys_e_flag = parse_u16(v, k);
-    else if (k == "imu-skip-every") in.imu_skip_every = std::stoi(v);
+    else if (k == "imu-skip-every") {
+      int n = 0;
+      const auto r = std::from_chars(v.data(), v.data() + v.size(), n);
+      if (r.ec != std::errc() || r.ptr != v.data() + v.size() || n < 1)
+        throw InputError("--inject", 0, k, "expected a whole number >= 1, got '" + v + "'");
+      in.imu_skip_every = n;
+    }
     else if (k == "imu-self-test") in.imu_self_test_diag = parse_u16(v, k);
     else throw InputError("--inject", 0, k, "unknown; one of table-kill-at, imu-prod-id, imu-flags, imu-skip-every, imu-self-test");
   } catch (const InputError&) {

@@ -132,6 +132,8 @@ LEFT="st" t station-plan-json 2 "not started \(nothing ran\): coeffs-like\.json:
 LEFT="st" t station-max-repeats-negative 2 "--max-repeats: .*'-1'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --max-repeats -1 --out st
 LEFT="st" t station-seed-float 2 "--seed: .*'1\.5'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --seed 1.5 --out st
 LEFT="st" t station-inject-unknown 2 "--inject: 'warp'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --inject warp=1 --out st
+LEFT="st" t station-inject-nan 2 "--inject: 'table-kill-at': expected a finite time >= 0 s, got 'nan'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --inject table-kill-at=nan --out st
+LEFT="st" t station-inject-skip-zero 2 "--inject: 'imu-skip-every': expected a whole number >= 1, got '0'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --inject imu-skip-every=0 --out st
 LEFT="st" t station-inject-not-emulated 2 "--inject.*needs --emulated" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --inject imu-flags=0x0008 --out st
 LEFT="st" t station-table-uri 2 "not started \(nothing ran\): --table: table URI 'bogus://x'" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --table bogus://x --imu ft232h --out st
 LEFT="st" t station-imu-uri 2 "--imu.*nonsense" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --table modbus-tcp://127.0.0.1:1 --imu nonsense --out st
