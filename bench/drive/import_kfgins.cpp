@@ -178,6 +178,8 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       w.drive_ref(row);
       ++sum.ref_rows;
     }
+    // A drive recording without its reference is no recording (the import went "fine" with 0 rows).
+    if (sum.ref_rows == 0) throw InputError(a.truth, 0, "", "no truth rows (week, t, lat, lon, h, vn, ve, vd, roll, pitch, yaw)");
   }
   if (!a.gnss.empty()) {
     TextRows r(a.gnss, 7);
@@ -202,6 +204,7 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       w.gnss(g);
       ++sum.gnss_rows;
     }
+    if (sum.gnss_rows == 0) throw InputError(a.gnss, 0, "", "no GNSS fixes (t, lat, lon, h, std n/e/u); leave out --gnss for none");
   }
   w.finish();
 }

@@ -21,7 +21,7 @@ SKIPPED=()
 # t ID RC REGEX CMD... : run CMD (stdin empty, 60 s at most); its exit status must be RC and its
 # stderr must match the extended regex REGEX (NONE: stderr must be empty). LEFT="p1 p2" before t:
 # paths that must not exist afterwards (no output, no half-written file; removed after the check so
-# that one failure does not cascade). Any "*.tmp.*" file left in the work folder fails.
+# that one failure does not cascade). Any "*.tmp.*" file or ".*.importing-*" folder left fails.
 t() {
   local id=$1 want=$2 pat=$3
   shift 3
@@ -41,10 +41,10 @@ t() {
     [ -z "$why" ] && [ -e "$p" ] && why="left $p behind"
     rm -rf "$p"
   done
-  if [ -z "$why" ] && [ -n "$(find "$T" -name '*.tmp.*' -print -quit)" ]; then
-    why="left a temporary file: $(find "$T" -name '*.tmp.*' | head -1)"
-  fi
-  find "$T" -name '*.tmp.*' -exec rm -f {} + 2> /dev/null
+  local tmp
+  tmp=$(find "$T" \( -name '*.tmp.*' -o -name '.*.importing-*' \) -print -quit)
+  if [ -z "$why" ] && [ -n "$tmp" ]; then why="left a temporary file or folder: $tmp"; fi
+  find "$T" \( -name '*.tmp.*' -o -name '.*.importing-*' \) -prune -exec rm -rf {} + 2> /dev/null
   [ -n "${VERBOSE:-}" ] && echo "$id [$rc]: $(tr '\n' ' ' < "$T/err.txt" | cut -c 1-400)"
   if [ -z "$why" ]; then
     PASSED=$((PASSED + 1))
@@ -315,6 +315,8 @@ LEFT="kf" t import-lever-inf 2 "--lever-arm: .*'inf'" "$CALBENCH" import kf-gins
 LEFT="kf" t import-sigma-zero 2 "--ref-sigma-pos: .*'0'" "$CALBENCH" import kf-gins --imu imu.txt --truth truth.nav --ref-sigma-pos 0 --out kf
 printf '1.00 0 0 0 0 0 0\n1.01 0 0\n1.02 0 0 0 0 0 0\n' > imu-short.txt
 LEFT="kf" t import-imu-short-row 2 "imu-short\.txt:2" "$CALBENCH" import kf-gins --imu imu-short.txt --truth truth.nav --out kf
+LEFT="kf" t import-truth-empty 2 "empty\.txt: no truth rows" "$CALBENCH" import kf-gins --imu imu.txt --truth empty.txt --out kf
+LEFT="kf" t import-gnss-empty 2 "empty\.txt: no GNSS fixes" "$CALBENCH" import kf-gins --imu imu.txt --truth truth.nav --gnss empty.txt --out kf
 LEFT="kf" t import-truth-binary 2 "garbage\.bin:1: 'column 1': not a number: '[ -~]*'$" "$CALBENCH" import kf-gins --imu imu.txt --truth garbage.bin --out kf
 printf '1.00 30 114 20 1 1 1\n1.01 30 114 20 1.7e308 1 1\n' > huge.pos
 LEFT="kf" t import-gnss-huge 2 "huge\.pos:2: 'column 5': .*1\.7e\+308 outside \[0, " "$CALBENCH" import kf-gins --imu imu.txt --truth truth.nav --gnss huge.pos --out kf
