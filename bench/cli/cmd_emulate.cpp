@@ -1,4 +1,6 @@
 // calbench emulate table: the two-axis rate-table emulator as a standalone Modbus TCP server.
+#include <arpa/inet.h>
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -33,6 +35,9 @@ void run_table(const EmulateArgs& a) {
   const auto colon = a.listen.rfind(':');
   if (colon == std::string::npos || colon == 0) throw InputError("--listen", 0, "listen", "expected HOST:PORT, e.g. 127.0.0.1:1502");
   cfg.bind = a.listen.substr(0, colon);
+  in_addr ip{};  // the Modbus library takes a numeric IPv4 address (a name ended in "modbus_new_tcp failed", exit 1)
+  if (::inet_pton(AF_INET, cfg.bind.c_str(), &ip) != 1)
+    throw InputError("--listen", 0, "listen", "HOST must be an IPv4 address such as 127.0.0.1, got '" + cfg.bind + "'");
   try {
     std::size_t n = 0;
     cfg.port = std::stoi(a.listen.substr(colon + 1), &n);

@@ -144,6 +144,7 @@ t station-out-is-file 2 "not started \(nothing ran\): empty\.txt: is a file, not
 # ---------------------------------------------------------------------------------- emulate table
 t emulate-sub-typo 2 "unknown command 'tabel' for 'calbench emulate'; did you mean 'table'\?" "$CALBENCH" emulate tabel
 t emulate-listen-no-port 2 "--listen.*HOST:PORT" "$CALBENCH" emulate table --listen localhost
+t emulate-listen-hostname 2 "--listen: 'listen': HOST must be an IPv4 address such as 127\.0\.0\.1, got 'no\.such\.host\.invalid'" "$CALBENCH" emulate table --listen no.such.host.invalid:0
 t emulate-listen-port-range 2 "--listen.*0\.\.65535" "$CALBENCH" emulate table --listen 127.0.0.1:70000
 t emulate-watchdog-inf 2 "--watchdog: .*'inf'" "$CALBENCH" emulate table --listen 127.0.0.1:0 --watchdog inf
 t emulate-speed-zero 2 "--speed: .*'0'" "$CALBENCH" emulate table --listen 127.0.0.1:0 --speed 0
