@@ -75,6 +75,8 @@ void run_station(StationArgs& a) {
     throw InputError(a.out, 0, "", "already holds a station run (recording/, COEFFS.json): give another --out, or --force to replace it");
   for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
+  if (a.o.emulated && !a.o.imu_uri.empty())  // was silently ignored: the emulated IMU ran instead
+    throw InputError("--imu", 0, "", "not used with --emulated (the IMU is emulated; --table may name an external table)");
   a.o.progress_tty = ::isatty(STDERR_FILENO) && !a.json;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

@@ -135,6 +135,8 @@ LEFT="st" t station-inject-unknown 2 "--inject: 'warp'" "$CALBENCH" station run 
 LEFT="st" t station-inject-nan 2 "--inject: 'table-kill-at': expected a finite time >= 0 s, got 'nan'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --inject table-kill-at=nan --out st
 LEFT="st" t station-inject-skip-zero 2 "--inject: 'imu-skip-every': expected a whole number >= 1, got '0'" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --inject imu-skip-every=0 --out st
 LEFT="st" t station-inject-not-emulated 2 "--inject.*needs --emulated" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --inject imu-flags=0x0008 --out st
+LEFT="st" t station-no-table 2 "not started \(nothing ran\): --table is required without --emulated" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --out st
+LEFT="st" t station-imu-with-emulated 2 "--imu: not used with --emulated" "$CALBENCH" station run --emulated --imu ft232h --plan "$SRC/tests/data/short_plan.toml" --out st
 LEFT="st" t station-table-uri 2 "not started \(nothing ran\): --table: table URI 'bogus://x'" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --table bogus://x --imu ft232h --out st
 LEFT="st" t station-imu-uri 2 "--imu.*nonsense" "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --table modbus-tcp://127.0.0.1:1 --imu nonsense --out st
 LEFT="st" t station-db-not-db 2 "not started \(nothing ran\): notdb\.csv: not a calbench database" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db notdb.csv --out st
