@@ -1,5 +1,8 @@
 // calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
 //                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
 #include <iostream>
 
 #include "bench/cli/number_options.hpp"
@@ -13,11 +16,22 @@ namespace {
 
 void print_summary(const nlohmann::json& j) {
   using namespace units;
+  // value ± σ: σ to two significant digits and the value to the same decimal place (six digits of σ
+  // were noise); a null σ is unknown, not 0 (the value then with five significant digits).
   auto vec = [](const nlohmann::json& v, const nlohmann::json& s, double k, const char* unit) {
     std::ostringstream o;
-    for (int i = 0; i < 3; ++i)
-      o << (i ? ", " : "") << v[i].get<double>() / k << " ± " << (s[i].is_null() ? 0.0 : s[i].get<double>() / k);
-    o << ' ' << unit;
+    for (int i = 0; i < 3; ++i) {
+      const double x = v[i].get<double>() / k;
+      o << (i ? ", " : "");
+      if (s[i].is_null() || !(s[i].get<double>() > 0)) {
+        o << std::setprecision(5) << x << " ± " << (s[i].is_null() ? "unknown" : "0");
+        continue;
+      }
+      const double sg = s[i].get<double>() / k;
+      const int dec = std::clamp(1 - static_cast<int>(std::floor(std::log10(sg))), 0, 12);
+      o << std::fixed << std::setprecision(dec) << x << " ± " << sg << std::defaultfloat;
+    }
+    o << std::setprecision(6) << ' ' << unit;
     return o.str();
   };
   const auto& c = j["coefficients"];
