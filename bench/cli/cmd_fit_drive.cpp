@@ -98,7 +98,8 @@ void print_summary(const nlohmann::json& j) {
                 << r["action"].get<std::string>() << "\n";
   }
   for (const auto& [k, v] : j["consistency"].items()) {
-    std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected";
+    std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
+              << " (expected 3), " << v["rejected"] << " rejected";
     if (v["forced"].get<long>() > 0) std::cout << ", " << v["forced"] << " forced after a run of rejections";
     std::cout << "\n";
   }
@@ -106,7 +107,7 @@ void print_summary(const nlohmann::json& j) {
     for (const auto& s : j["qc"]["sets"])
       std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"].get<double>() << " s over "
                 << j["qc"]["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
-                << s["final_cpe_m"].get<double>() << " m\n";
+                << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
   std::cout << std::flush;
 }
 

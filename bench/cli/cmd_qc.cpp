@@ -1,4 +1,5 @@
 // calbench qc DIR --coeffs A.json [--coeffs B.json ...|none] [--from T0] [--horizon S] [--json] [--plot OUT.png]
+#include <iomanip>
 #include <iostream>
 
 #include "bench/cli/number_options.hpp"
@@ -55,7 +56,8 @@ void run(const QcArgs& a) {
   std::cout << "QC of " << a.dir << ": inertial-only navigation from T0 = " << q.from_s << " s for " << q.horizon_s << " s, "
             << sample << "\n";
   for (const auto& s : j["sets"]) {
-    std::cout << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
+    // ΔS to four significant digits (the JSON keeps them all).
+    std::cout << std::setprecision(4) << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
               << s["max_cpe_m"].get<double>() << " m";
     for (const auto& [k, v] : s["cpe_m_at"].items()) std::cout << ", @" << k << " s " << v.get<double>() << " m";
     if (s.contains("effects")) {
