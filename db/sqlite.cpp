@@ -5,7 +5,9 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <thread>
@@ -49,11 +51,24 @@ void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, 
 Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(path), opt_(opt) {
   if (!opt.create && !std::filesystem::exists(path))
     throw InputError(path, 0, "", "no database here (create it with `calbench db init`, or give --db / CALBENCH_DB)");
+  // SQLite takes an empty file for a new database and would write a schema into it: only commands
+  // that create one (db init, those that store) may.
+  if (!opt.create && std::filesystem::is_regular_file(path) && std::filesystem::file_size(path) == 0)
+    throw InputError(path, 0, "", "not a calbench database (an empty file): give the database with --db or CALBENCH_DB; "
+                                  "`calbench db init --db FILE` creates one");
   int flags = opt.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (opt.create && !opt.read_only) flags |= SQLITE_OPEN_CREATE;
   flags |= SQLITE_OPEN_NOMUTEX;
   if (std::filesystem::is_directory(path))
     throw InputError(path, 0, "", "is a folder, not a database file (give the database file with --db or CALBENCH_DB)");
+  if (const auto dir = std::filesystem::path(path).parent_path(); !dir.empty() && !std::filesystem::is_directory(dir))
+    throw InputError(path, 0, "", "cannot create the database: the folder " + dir.string() + " does not exist");
+  if (opt.create && !std::filesystem::exists(path)) {
+    const auto dir = std::filesystem::path(path).parent_path();
+    if (::access(dir.empty() ? "." : dir.c_str(), W_OK) != 0)
+      throw InputError(path, 0, "", "cannot create the database in " + (dir.empty() ? std::string(".") : dir.string()) + ": " +
+                                        std::strerror(errno) + " (give another --db)");
+  }
   const int rc = sqlite3_open_v2(path.c_str(), &db_, flags, nullptr);
   if (rc != SQLITE_OK) {
     std::string msg = path + ": cannot open database: " + (db_ ? sqlite3_errmsg(db_) : sqlite3_errstr(rc));
@@ -67,6 +82,14 @@ Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(
   try {
     with_busy_retry(opt_.retry_budget, path_, [&] {
       exec("PRAGMA foreign_keys = ON");
+      if (!opt_.create) {
+        // Reads the header (another kind of file fails here, named below). Schema version 0 is another
+        // program's SQLite database: refused before the journal mode below would change it.
+        Statement v(db_, "PRAGMA user_version");
+        if (v.step() && v.int64(0) == 0)
+          throw InputError(path_, 0, "", "not a calbench database (another program's SQLite database): give the database "
+                                         "with --db or CALBENCH_DB; `calbench db init --db FILE` creates one");
+      }
       if (!opt_.read_only) {
         // WAL: readers never block the writer; the setting persists in the file.
         Statement wal(db_, "PRAGMA journal_mode = WAL");

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "bench/cli/operator_option.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/input_error.hpp"
@@ -236,6 +237,11 @@ void cmd_approve(const DbArgs& a) {
 
 void cmd_revoke(const DbArgs& a) {
   auto s = open_store(a);
+  // Revoking a revoked set again changes nothing and is not an error (as approving an approved set).
+  if (s->get_set(a.set).status == SetStatus::revoked) {
+    std::cout << "set " << a.set << " is already revoked (no change)\n";
+    return;
+  }
   s->set_status(a.set, SetStatus::revoked, a.reason);
   std::cout << "set " << a.set << " revoked" << (a.reason.empty() ? "" : ": " + a.reason) << "\n";
 }
@@ -426,14 +432,14 @@ const bool registered = add_command(70, [](CLI::App& app) {
   hist->add_flag("--json", a->json, "machine-readable output");
   auto* appr = leaf(db, "approve", "approve a draft set if it passes the QC thresholds (else list why not, exit 1)", a,
                     cmd_approve);
-  appr->add_option("SET", a->set, "coefficient set id")->required();
+  appr->add_option("SET", a->set, "coefficient set id")->required()->check(set_id());
   appr->add_option("--thresholds", a->thresholds, "thresholds config (JSON; default: built-in ADIS16488A limits)");
   appr->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(appr, *a);
   appr->footer("The approval is signed: a named operator (--operator or CALBENCH_OPERATOR) other than the one who\n"
                "stored the set (four-eyes; a one-person lab: calbench db settings four_eyes off).");
   auto* rev = leaf(db, "revoke", "revoke a set (it can no longer be provisioned)", a, cmd_revoke);
-  rev->add_option("SET", a->set, "coefficient set id")->required();
+  rev->add_option("SET", a->set, "coefficient set id")->required()->check(set_id());
   rev->add_option("--reason", a->reason, "why (recorded in the audit log)");
   add_operator_option(rev, *a);
   auto* set = leaf(db, "settings", "show or change a setting of this database (four_eyes on|off), audited", a,
@@ -443,20 +449,26 @@ const bool registered = add_command(70, [](CLI::App& app) {
   set->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(set, *a);
   auto* exp = leaf(db, "export", "write a set as coefficients.json", a, cmd_export);
-  exp->add_option("SET", a->set, "coefficient set id")->required();
+  exp->add_option("SET", a->set, "coefficient set id")->required()->check(set_id());
   exp->add_option("--out", a->out, "output file")->required();
   leaf(db, "fleet", "distribution of every coefficient across devices, outliers flagged (robust z > 3.5)", a, cmd_fleet)
       ->add_flag("--json", a->json, "machine-readable output");
   auto* imp = leaf(db, "import-inmotion", "store an in-motion fit result (RESULT.json) against its device", a,
                    cmd_import_inmotion);
   imp->add_option("RESULT", a->file, "RESULT.json of `calbench fit drive`")->required();
-  imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)");
+  imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)")->check(set_id());
   imp->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(imp, *a);
   auto* sb = leaf(db, "store-bench", "store a bench run and its coefficient set (draft)", a, cmd_store_bench);
   sb->add_option("--coeffs", a->coeffs, "coefficients.json of the bench fit")->required();
   sb->add_option("--recording", a->recording, "bench recording folder (its imu.csv is hashed)");
-  sb->add_option("--sha256", a->sha256, "SHA-256 of the recording (instead of hashing --recording)");
+  sb->add_option("--sha256", a->sha256, "SHA-256 of the recording (instead of hashing --recording)")
+      ->check(CLI::Validator(
+          [](const std::string& v) -> std::string {
+            if (v.size() == 64 && v.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos) return {};
+            return "expected 64 hexadecimal digits (a SHA-256), got '" + v + "'";
+          },
+          "HEX64"));
   sb->add_option("--plan", a->plan, "bench plan name or path");
   sb->add_option("--station", a->station, "station name (default: $CALBENCH_STATION, else host name)");
   sb->add_option("--started", a->started, "start time, ISO 8601 UTC");

@@ -8,6 +8,7 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 
 namespace calbench::cli {
@@ -21,6 +22,8 @@ struct DiagnoseArgs {
 
 // Drive recordings (meta.json kind "drive"): bench/diagnose/drive_run.hpp, docs/diagnosis.md "Drives".
 void run_diagnose_drive(const DiagnoseArgs& a) {
+  if (!a.plan.empty())  // an option for another kind of recording is not silently ignored
+    throw InputError("--plan", 0, "", a.dir + " is a drive recording: --plan (the bench table's accuracy) applies to bench recordings");
   std::optional<DriveCoeffs> given;
   if (!a.coeffs.empty()) {
     given = read_drive_coeffs(a.coeffs);
@@ -47,7 +50,11 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
 }
 
 void run_diagnose(const DiagnoseArgs& a) {
+  for (const std::string* f : {&a.out, &a.report})  // before the work: a wrong path costs nothing
+    if (!f->empty()) check_output_path(*f);
   if (read_meta(a.dir).kind == RecordingKind::drive) return run_diagnose_drive(a);
+  if (a.no_innovations)
+    throw InputError("--no-innovations", 0, "", a.dir + " is a bench recording: --no-innovations (the in-motion filter runs) applies to drives");
   const DiagInput in = load_diag_input(a.dir);
   const TableSpec table = a.plan.empty() ? recording_table_spec(in.meta) : load_plan(a.plan).table;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";

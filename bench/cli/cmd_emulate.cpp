@@ -1,4 +1,6 @@
 // calbench emulate table: the two-axis rate-table emulator as a standalone Modbus TCP server.
+#include <arpa/inet.h>
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -7,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
@@ -32,6 +35,9 @@ void run_table(const EmulateArgs& a) {
   const auto colon = a.listen.rfind(':');
   if (colon == std::string::npos || colon == 0) throw InputError("--listen", 0, "listen", "expected HOST:PORT, e.g. 127.0.0.1:1502");
   cfg.bind = a.listen.substr(0, colon);
+  in_addr ip{};  // the Modbus library takes a numeric IPv4 address (a name ended in "modbus_new_tcp failed", exit 1)
+  if (::inet_pton(AF_INET, cfg.bind.c_str(), &ip) != 1)
+    throw InputError("--listen", 0, "listen", "HOST must be an IPv4 address such as 127.0.0.1, got '" + cfg.bind + "'");
   try {
     std::size_t n = 0;
     cfg.port = std::stoi(a.listen.substr(colon + 1), &n);
@@ -44,8 +50,6 @@ void run_table(const EmulateArgs& a) {
   } catch (const std::invalid_argument& e) {
     throw InputError("--order", 0, "order", e.what());
   }
-  if (!(a.watchdog_s > 0)) throw InputError("--watchdog", 0, "watchdog", "must be > 0 seconds");
-  if (!(a.speed > 0)) throw InputError("--speed", 0, "speed", "must be > 0");
   cfg.watchdog_s = a.watchdog_s;
   devices::TableEmulator emu(cfg, std::make_shared<devices::WallClock>(a.speed));
   emu.start();
@@ -72,10 +76,11 @@ const bool registered = add_command(25, [](CLI::App& app) {
   t->add_option("--listen", args->listen, "HOST:PORT to bind (loopback unless told otherwise; port 0 = any free)")
       ->capture_default_str();
   t->add_option("--watchdog", args->watchdog_s, "seconds without a heartbeat change before the table stops")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(finite_positive());
   t->add_option("--order", args->order, "32-bit word order on the wire: abcd (high word first) or cdab")
       ->capture_default_str();
-  t->add_option("--speed", args->speed, "emulated clock speed relative to real time")->capture_default_str();
+  t->add_option("--speed", args->speed, "emulated clock speed relative to real time")->capture_default_str()->check(finite_positive());
   t->add_option("--port-file", args->port_file, "write the bound port number to this file");
   t->add_flag("--json", args->json, "print the listening URI as JSON");
   t->callback([args] { run_table(*args); });

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "bench/bench_recording.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
@@ -55,6 +56,7 @@ void run_fit_bench_effects(const FitBenchArgs& a, BenchFitOptions opt) {
 }
 
 void run_fit_bench(const FitBenchArgs& a) {
+  if (!a.out.empty()) check_output_path(a.out);  // before the fit: a wrong --out costs nothing
   BenchFitOptions opt;
   opt.method = a.method == "ekf" ? BenchMethod::ekf : BenchMethod::lsq;
   opt.model = a.model == "paper" ? BenchModel::paper : BenchModel::full;
@@ -94,7 +96,7 @@ const bool registered = add_command(30, [](CLI::App& app) {
       ->check(CLI::IsMember({"paper", "full"}));
   b->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
-  b->add_option("--block", a->block_s, "block length for averaging, seconds")->check(CLI::Range(0.01, 100.0));
+  b->add_option("--block", a->block_s, "block length for averaging, seconds")->check(finite_number(0.01, 100.0));
   b->add_option("--effects", a->effects,
                 "hold the catalogue terms of this coefficient set fixed (e.g. IMPROVED.json from `calbench diagnose`): "
                 "their predicted output is removed before b and M are fitted, and the keys go into --out")

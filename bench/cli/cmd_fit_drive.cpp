@@ -1,9 +1,11 @@
 // calbench fit drive DIR [--coeffs BENCH.json] --out RESULT.json [--obs pos,vel,att] [--series CSV]
 //                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
-#include <charconv>
+#include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <iostream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/fit_drive.hpp"
 #include "calibration/inmotion/priors.hpp"
@@ -14,11 +16,22 @@ namespace {
 
 void print_summary(const nlohmann::json& j) {
   using namespace units;
+  // value ± σ: σ to two significant digits and the value to the same decimal place (six digits of σ
+  // were noise); a null σ is unknown, not 0 (the value then with five significant digits).
   auto vec = [](const nlohmann::json& v, const nlohmann::json& s, double k, const char* unit) {
     std::ostringstream o;
-    for (int i = 0; i < 3; ++i)
-      o << (i ? ", " : "") << v[i].get<double>() / k << " ± " << (s[i].is_null() ? 0.0 : s[i].get<double>() / k);
-    o << ' ' << unit;
+    for (int i = 0; i < 3; ++i) {
+      const double x = v[i].get<double>() / k;
+      o << (i ? ", " : "");
+      if (s[i].is_null() || !(s[i].get<double>() > 0)) {
+        o << std::setprecision(5) << x << " ± " << (s[i].is_null() ? "unknown" : "0");
+        continue;
+      }
+      const double sg = s[i].get<double>() / k;
+      const int dec = std::clamp(1 - static_cast<int>(std::floor(std::log10(sg))), 0, 12);
+      o << std::fixed << std::setprecision(dec) << x << " ± " << sg << std::defaultfloat;
+    }
+    o << std::setprecision(6) << ' ' << unit;
     return o.str();
   };
   const auto& c = j["coefficients"];
@@ -85,7 +98,8 @@ void print_summary(const nlohmann::json& j) {
                 << r["action"].get<std::string>() << "\n";
   }
   for (const auto& [k, v] : j["consistency"].items()) {
-    std::cout << "  NIS " << k << ": mean " << v["mean_nis"].get<double>() << " (expected 3), " << v["rejected"] << " rejected";
+    std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
+              << " (expected 3), " << v["rejected"] << " rejected";
     if (v["forced"].get<long>() > 0) std::cout << ", " << v["forced"] << " forced after a run of rejections";
     std::cout << "\n";
   }
@@ -93,7 +107,7 @@ void print_summary(const nlohmann::json& j) {
     for (const auto& s : j["qc"]["sets"])
       std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"].get<double>() << " s over "
                 << j["qc"]["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
-                << s["final_cpe_m"].get<double>() << " m\n";
+                << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
   std::cout << std::flush;
 }
 
@@ -111,18 +125,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
   auto* d = fit->add_subcommand("drive", "In-motion calibration against the reference INS/GNSS of a drive recording "
                                          "(EKF, paper eqs 13-15)");
   // Numbers from the command line: decimal, finite; NaN, inf, hex and negatives are bad input (exit 2).
-  auto number = [](bool positive) {
-    return CLI::Validator(
-        [positive](const std::string& v) -> std::string {
-          double x = 0;
-          const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
-          if (r.ec == std::errc() && r.ptr == v.data() + v.size() && std::isfinite(x) && (positive ? x > 0 : x >= 0))
-            return {};
-          return std::string("expected a finite number ") + (positive ? "> 0" : ">= 0") + ", got '" + v + "'";
-        },
-        positive ? "NUMBER>0" : "NUMBER>=0");
-  };
-  const CLI::Validator finite_nonneg = number(false), finite_pos = number(true);
+  const CLI::Validator finite_nonneg = finite_non_negative(), finite_pos = finite_positive();
   d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
   d->add_option("--coeffs", a->coeffs,
                  "coefficient set applied to the data first (coefficients.json, or an earlier RESULT.json whose "

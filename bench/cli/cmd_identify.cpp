@@ -15,6 +15,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
@@ -184,7 +185,7 @@ Loaded load_recording(const IdentifyArgs& a) {
     for (const auto& c : a.columns) {
       auto it = std::find_if(std::begin(names), std::end(names), [&](const char* n) { return c == n; });
       if (it == std::end(names))
-        throw InputError(L.file, 1, c,
+        throw InputError("--column", 0, c,
                          "unknown column for a recording (use gx_rad_s … az_m_s2; increments are "
                          "converted to these rates)");
       pick.push_back(static_cast<int>(it - std::begin(names)));
@@ -430,6 +431,10 @@ std::vector<double> block_average(const std::vector<double>& x, std::size_t m) {
 }
 
 void run_identify(const IdentifyArgs& a) {
+  for (const std::string* f : {&a.out, &a.plot})  // before the work: a wrong path costs nothing
+    if (!f->empty()) check_output_path(*f);
+  if (fs::is_directory(a.input) && a.from_s > -1e299)  // documented for CSV input; not silently ignored
+    throw InputError("--from", 0, "", a.input + " is a recording folder: --from applies to CSV input (e.g. a fit drive --series)");
   Loaded L = fs::is_directory(a.input) ? load_recording(a) : load_csv(a);
   std::vector<Result> results;
   for (auto& s : L.series) {
@@ -575,13 +580,14 @@ const bool registered = add_command(40, [](CLI::App& app) {
       ->check(CLI::ExistingPath);
   sub->add_option("--column", a->columns, "columns to identify (default: all value columns)");
   sub->add_option("--max-lag", a->max_lag_s, "maximum lag of the correlation fits, s (default: automatic, 3 T)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_positive());
   sub->add_option("--decimate", a->decimate,
                   "block-average this many samples before the correlation analysis (Allan uses the raw samples)")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1000000}));
+      ->check(whole_number(1, 1000000));
   sub->add_option("--from", a->from_s,
                   "CSV input: skip rows before this time, s (e.g. the in-motion filter's convergence at the start "
-                  "of a fit drive --series)");
+                  "of a fit drive --series)")
+      ->check(finite_number());
   sub->add_flag("--no-allan", a->no_allan, "skip the Allan deviation");
   sub->add_flag("--json", a->json_out, "print the result as JSON on stdout");
   sub->add_option("--plot", a->plot, "write a Fig. 3-like PNG here (and OUT-allan.png), with gnuplot");

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/cli/operator_option.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/input_error.hpp"
 #include "db/input_errors.hpp"
@@ -215,7 +216,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   auto a = std::make_shared<ProvisionArgs>();
   auto* sub = app.add_subcommand("provision", "write an approved coefficient set to an IMU (or export it), recorded in the database");
   sub->add_option("SERIAL", a->serial, "device serial number")->required();
-  sub->add_option("--set", a->set, "coefficient set id (default: the newest approved or provisioned set)");
+  sub->add_option("--set", a->set, "coefficient set id (default: the newest approved or provisioned set)")->check(set_id());
   auto* to = sub->add_option("--to-device", a->uri, "IMU URI: emu://SERIAL_NUM, mcp2210://[USB-SERIAL], ft232h://[USB-SERIAL]");
   auto* ex = sub->add_option("--export", a->out, "write the set as coefficients.json instead");
   to->excludes(ex);

@@ -1,6 +1,8 @@
 // calbench qc DIR --coeffs A.json [--coeffs B.json ...|none] [--from T0] [--horizon S] [--json] [--plot OUT.png]
+#include <iomanip>
 #include <iostream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/drive/qc_drive.hpp"
@@ -54,7 +56,8 @@ void run(const QcArgs& a) {
   std::cout << "QC of " << a.dir << ": inertial-only navigation from T0 = " << q.from_s << " s for " << q.horizon_s << " s, "
             << sample << "\n";
   for (const auto& s : j["sets"]) {
-    std::cout << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
+    // ΔS to four significant digits (the JSON keeps them all).
+    std::cout << std::setprecision(4) << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
               << s["max_cpe_m"].get<double>() << " m";
     for (const auto& [k, v] : s["cpe_m_at"].items()) std::cout << ", @" << k << " s " << v.get<double>() << " m";
     if (s.contains("effects")) {
@@ -76,8 +79,9 @@ const bool registered = add_command(50, [](CLI::App& app) {
                  "coefficients.json, in-motion RESULT.json, or 'none' (repeatable); catalogue keys of a set "
                  "(IMPROVED.json) are compensated on the IMU samples")
       ->required();
-  q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)");
-  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(CLI::PositiveNumber);
+  q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)")
+      ->check(finite_number());
+  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(finite_positive());
   q->add_flag("--json", a->json, "machine output");
   q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)");
   q->callback([a] { run(*a); });

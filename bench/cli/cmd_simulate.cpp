@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "bench/bench_recording.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/io/json_util.hpp"
@@ -39,6 +40,7 @@ void run_simulate_bench(const SimBenchArgs& a) {
   const fs::path out(a.out);
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  check_output_folder(out);
   RecordingMeta meta;
   meta.kind = RecordingKind::bench;
   meta.device = truth.device;
@@ -73,7 +75,8 @@ const bool registered = add_command(10, [](CLI::App& app) {
   b->add_option("--plan", a->plan, "plan file (TOML), e.g. bench/plans/factory.toml")->required()->check(CLI::ExistingFile);
   b->add_option("--truth", a->truth, "coefficients.json of the simulated unit, or 'random' to draw one")->required();
   b->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, truth.json)")->required();
-  b->add_option("--seed", a->seed, "random seed (noise, drift, and the unit for --truth random)");
+  b->add_option("--seed", a->seed, "random seed (noise, drift, and the unit for --truth random)")
+      ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
   b->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");
   b->add_option("--inject", a->inject,
                  "inject a catalogue effect the nominal model lacks, SI units, repeatable: e.g. "

@@ -1,6 +1,7 @@
 // calbench simulate drive --route ROUTE --truth TRUTH.json|random --out DIR [--seed N]
 #include <iostream>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/simulate_drive.hpp"
 
@@ -15,9 +16,10 @@ const bool registered = add_command(11, [](CLI::App& app) {
   d->add_option("--route", a->route, "route file (TOML), e.g. bench/routes/default.toml")->required()->check(CLI::ExistingFile);
   d->add_option("--truth", a->truth, "coefficients.json of the simulated unit (optional key \"mounting\"), or 'random'")->required();
   d->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, gnss.csv, truth.json)")->required();
-  d->add_option("--seed", a->seed, "random seed (noise, drift, and the unit and mounting for --truth random)");
+  d->add_option("--seed", a->seed, "random seed (noise, drift, and the unit and mounting for --truth random)")
+      ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
   d->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");
-  d->add_option("--until", a->until_s, "simulate only the first SECONDS of the route");
+  d->add_option("--until", a->until_s, "simulate only the first SECONDS of the route")->check(finite_positive());
   d->add_flag("--force", a->force, "overwrite an existing recording in --out");
   d->add_option("--inject", a->inject,
                 "inject a catalogue effect into the MEMS output, SI units, repeatable (docs/diagnosis.md): e.g. "

@@ -2,11 +2,14 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <charconv>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
 
 #include "bench/cli/operator_option.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "db/store.hpp"
 #include "bench/io/input_error.hpp"
@@ -41,10 +44,22 @@ void apply_inject(const std::string& kv, station::Injections& in) {
   if (eq == std::string::npos) throw InputError("--inject", 0, kv, "expected KEY=VALUE");
   const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
   try {
-    if (k == "table-kill-at") in.table_kill_at_s = std::stod(v);
-    else if (k == "imu-prod-id") in.imu_prod_id = parse_u16(v, k);
+    // Whole decimal numbers in range: "nan", "-5" or "3abc" were taken and the fault silently never came.
+    if (k == "table-kill-at") {
+      double x = 0;
+      const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
+      if (r.ec != std::errc() || r.ptr != v.data() + v.size() || !std::isfinite(x) || x < 0)
+        throw InputError("--inject", 0, k, "expected a finite time >= 0 s, got '" + v + "'");
+      in.table_kill_at_s = x;
+    } else if (k == "imu-prod-id") in.imu_prod_id = parse_u16(v, k);
     else if (k == "imu-flags") in.imu_sys_e_flag = parse_u16(v, k);
-    else if (k == "imu-skip-every") in.imu_skip_every = std::stoi(v);
+    else if (k == "imu-skip-every") {
+      int n = 0;
+      const auto r = std::from_chars(v.data(), v.data() + v.size(), n);
+      if (r.ec != std::errc() || r.ptr != v.data() + v.size() || n < 1)
+        throw InputError("--inject", 0, k, "expected a whole number >= 1, got '" + v + "'");
+      in.imu_skip_every = n;
+    }
     else if (k == "imu-self-test") in.imu_self_test_diag = parse_u16(v, k);
     else throw InputError("--inject", 0, k, "unknown; one of table-kill-at, imu-prod-id, imu-flags, imu-skip-every, imu-self-test");
   } catch (const InputError&) {
@@ -64,6 +79,8 @@ void run_station(StationArgs& a) {
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
   // A bad operator name is bad input, refused before anything moves.
   (void)db::Actor::from_environment(a.o.operator_name);
+  if (a.o.emulated && !a.o.imu_uri.empty())  // was silently ignored: the emulated IMU ran instead
+    throw InputError("--imu", 0, "", "not used with --emulated (the IMU is emulated; --table may name an external table)");
   a.o.progress_tty = ::isatty(STDERR_FILENO) && !a.json;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -98,8 +115,12 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_flag("--force", a->force, "replace an earlier run in --out");
   add_operator_option(run, a->o.operator_name,
                   "who runs the station, recorded with the run and the set (default: $CALBENCH_OPERATOR, else the OS user)");
-  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")->capture_default_str();
-  run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")->capture_default_str();
+  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")
+      ->capture_default_str()
+      ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
+  run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")
+      ->capture_default_str()
+      ->check(whole_number(0, 100));
   run->add_option("--inject", a->inject,
                   "emulated faults KEY=VALUE: table-kill-at=S (emulated s), imu-prod-id=0x4060, imu-flags=0x0008, "
                   "imu-skip-every=N, imu-self-test=0x0001");

@@ -40,13 +40,27 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 }  // namespace
 
 // Walks the command words of argv down the subcommand tree; a word where a subcommand is required
-// and none has that name is an unknown command: the message names it and suggests the nearest.
+// and none has that name is an unknown command: the message names it and suggests the nearest. An
+// unknown option where a command is required, or no command at all, is named the same way (CLI11
+// would only say "A subcommand is required").
 std::string unknown_command(const CLI::App& root, int argc, char** argv) {
   const CLI::App* app = &root;
   std::string path = "calbench";
+  auto commands = [&] {
+    std::string all;
+    for (const CLI::App* c : const_cast<CLI::App*>(app)->get_subcommands([](CLI::App*) { return true; }))
+      all += (all.empty() ? "" : ", ") + c->get_name();
+    return "(commands: " + all + "; " + path + " --help)";
+  };
   for (int i = 1; i < argc; ++i) {
     const std::string w = argv[i];
-    if (w.empty() || w[0] == '-') return {};
+    if (w.empty()) return {};
+    if (w[0] == '-') {
+      if (app->get_require_subcommand_min() == 0) return {};
+      const std::string name = w.substr(0, w.find('='));
+      if (const_cast<CLI::App*>(app)->get_option_no_throw(name)) return {};  // --help, --version
+      return "unknown option '" + name + "' for '" + path + "': a command comes first " + commands();
+    }
     const auto subs = const_cast<CLI::App*>(app)->get_subcommands([](CLI::App*) { return true; });
     if (subs.empty()) return {};
     const CLI::App* next = nullptr;
@@ -58,18 +72,54 @@ std::string unknown_command(const CLI::App& root, int argc, char** argv) {
       continue;
     }
     if (app->get_require_subcommand_min() == 0) return {};  // a positional argument (e.g. report SERIAL)
-    std::string best, all;
+    std::string best;
     std::size_t bd = 99;
     for (const CLI::App* c : subs) {
-      all += (all.empty() ? "" : ", ") + c->get_name();
       const std::size_t d = edit_distance(w, c->get_name());
       if (d < bd) bd = d, best = c->get_name();
     }
     std::string m = "unknown command '" + w + "' for '" + path + "'";
     if (bd <= std::max<std::size_t>(2, w.size() / 3)) m += "; did you mean '" + best + "'?";
-    return m + " (commands: " + all + "; " + path + " --help)";
+    return m + " " + commands();
   }
+  if (app->get_require_subcommand_min() > 0) return "'" + path + "' needs a command " + commands();
   return {};
+}
+
+// An option the command does not have (CLI11: "The following arguments were not expected"): the
+// nearest long option of that command, when one is near.
+std::string nearest_option(CLI::App& root, int argc, char** argv) {
+  CLI::App* app = &root;
+  std::string path = "calbench";
+  std::vector<std::string> unknown;
+  for (int i = 1; i < argc; ++i) {
+    const std::string w = argv[i];
+    if (w.rfind("--", 0) == 0) {
+      const std::string name = w.substr(0, w.find('='));
+      if (!app->get_option_no_throw(name)) unknown.push_back(name);
+      continue;
+    }
+    for (CLI::App* c : app->get_subcommands([](CLI::App*) { return true; }))
+      if (c->get_name() == w) {
+        app = c;
+        path += " " + w;
+        unknown.clear();  // options before a subcommand belong to its parent
+        break;
+      }
+  }
+  std::string out;
+  for (const std::string& u : unknown) {
+    std::string best;
+    std::size_t bd = 99;
+    for (const CLI::Option* o : app->get_options())
+      for (const std::string& l : o->get_lnames()) {
+        const std::size_t d = edit_distance(u.substr(2), l);
+        if (d < bd) bd = d, best = "--" + l;
+      }
+    if (!best.empty() && bd <= std::max<std::size_t>(2, (u.size() - 2) / 3))
+      out += "calbench: '" + u + "' is not an option of '" + path + "'; did you mean '" + best + "'? (" + path + " --help)\n";
+  }
+  return out;
 }
 
 }  // namespace calbench::cli
@@ -92,6 +142,10 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
+  } catch (const CLI::ExtrasError& e) {
+    app.exit(e);
+    std::cerr << calbench::cli::nearest_option(app, argc, argv);
+    return 2;
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return 2;

@@ -1,6 +1,7 @@
 #include "bench/drive/fit_drive.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -45,12 +46,15 @@ std::pair<double, double> parse_window(const std::string& w) {
   if (w.empty()) return {t0, t1};
   const auto c = w.find(':');
   if (c == std::string::npos) throw InputError("--window", 0, "", "expected T0:T1 (seconds; either may be empty)");
-  try {
-    if (c > 0) t0 = std::stod(w.substr(0, c));
-    if (c + 1 < w.size()) t1 = std::stod(w.substr(c + 1));
-  } catch (const std::exception&) {
-    throw InputError("--window", 0, "", "expected T0:T1 (seconds)");
-  }
+  // Each bound a whole finite decimal number ("5abc", "nan", "1e999" are bad input).
+  auto bound = [&](std::size_t from, std::size_t to, double& t) {
+    const char* p = w.data() + from;
+    const auto r = std::from_chars(p, w.data() + to, t, std::chars_format::general);
+    if (r.ec != std::errc() || r.ptr != w.data() + to || !std::isfinite(t))
+      throw InputError("--window", 0, "", "expected T0:T1 (finite seconds), got '" + w + "'");
+  };
+  if (c > 0) bound(0, c, t0);
+  if (c + 1 < w.size()) bound(c + 1, w.size(), t1);
   if (!(t1 > t0)) throw InputError("--window", 0, "", "T1 must be after T0");
   return {t0, t1};
 }

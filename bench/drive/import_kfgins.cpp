@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/json_util.hpp"
+#include "bench/io/message_text.hpp"
 #include "bench/io/recording.hpp"
 
 namespace calbench {
@@ -38,7 +40,7 @@ class TextRows {
         auto r = std::from_chars(c, e, x);
         if (r.ec != std::errc() || (r.ptr < e && !(*r.ptr == ' ' || *r.ptr == '\t' || *r.ptr == '\r' || *r.ptr == ',')))
           throw InputError(path_, line_, "column " + std::to_string(v.size() + 1),
-                           "not a number: '" + std::string(start, std::min<std::size_t>(20, static_cast<std::size_t>(e - start))) + "'");
+                           "not a number: '" + field_text(std::string_view(start, static_cast<std::size_t>(e - start)), 20) + "'");
         if (!std::isfinite(x)) throw InputError(path_, line_, "column " + std::to_string(v.size() + 1), "NaN or infinity");
         v.push_back(x);
         c = r.ptr;
@@ -63,7 +65,7 @@ class TextRows {
 void check_range(const TextRows& r, std::size_t col, double v, double lo, double hi, const char* what) {
   if (!(v >= lo && v <= hi))
     throw InputError(r.path(), r.line(), "column " + std::to_string(col + 1),
-                     std::string(what) + " " + std::to_string(v) + " outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+                     std::string(what) + " " + number_text(v) + " outside [" + number_text(lo) + ", " + number_text(hi) + "]");
 }
 
 void check_time(const TextRows& r, double t, double& last, bool& first) {
@@ -83,6 +85,7 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   if (out.filename().empty()) out = out.parent_path();  // "rec/"
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  check_output_folder(out);
   std::vector<double> v;
   // IMU rate: given, or the median interval of the first rows.
   double rate = a.rate_hz;
@@ -175,6 +178,8 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       w.drive_ref(row);
       ++sum.ref_rows;
     }
+    // A drive recording without its reference is no recording (the import went "fine" with 0 rows).
+    if (sum.ref_rows == 0) throw InputError(a.truth, 0, "", "no truth rows (week, t, lat, lon, h, vn, ve, vd, roll, pitch, yaw)");
   }
   if (!a.gnss.empty()) {
     TextRows r(a.gnss, 7);
@@ -199,6 +204,7 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       w.gnss(g);
       ++sum.gnss_rows;
     }
+    if (sum.gnss_rows == 0) throw InputError(a.gnss, 0, "", "no GNSS fixes (t, lat, lon, h, std n/e/u); leave out --gnss for none");
   }
   w.finish();
 }

@@ -6,6 +6,7 @@
 
 #include "bench/io/toml_text.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/message_text.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {
@@ -27,7 +28,7 @@ struct Ctx {
     const auto v = n->value<double>();
     if (!v) fail(n, k, "expected a number");
     if (!std::isfinite(*v)) fail(n, k, "NaN or infinity is not allowed");
-    if (*v < lo || *v > hi) fail(n, k, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    if (*v < lo || *v > hi) fail(n, k, "out of range [" + number_text(lo) + ", " + number_text(hi) + "]");
     return *v;
   }
   Vec3 vec3(const toml::table& t, const std::string& prefix, const char* key, const Vec3& def) const {

@@ -89,6 +89,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   const fs::path out(a.out);
   if (fs::exists(out / "meta.json") && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  check_output_folder(out);
   fs::create_directories(out);
   write_coefficients(out / "truth.json", truth);
 

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "bench/io/input_error.hpp"
+#include "bench/io/message_text.hpp"
 #include "bench/io/input_warning.hpp"
 
 namespace calbench {
@@ -67,8 +68,11 @@ int CsvReader::optional(std::string_view name) {
 int CsvReader::require(std::string_view name) {
   const int s = optional(name);
   if (s < 0) {
+    // Columns are required before the first row is read: the line read last is the header (after
+    // any '#' comment lines, so not always line 1).
+    const std::size_t header_line = rows_ == 0 && line_no_ > 0 ? line_no_ : 1;
     line_no_ = 0;
-    throw InputError(path_, 1, std::string(name), "missing required column");
+    throw InputError(path_, header_line, std::string(name), "missing required column");
   }
   return s;
 }
@@ -136,7 +140,7 @@ bool CsvReader::next() {
         const auto r = std::from_chars(first, f.data() + f.size(), v);
         if (f.empty()) fail(slot_names_[slot], "empty field");
         if (r.ec != std::errc() || r.ptr != f.data() + f.size())
-          fail(slot_names_[slot], "not a number: '" + std::string(f.substr(0, 40)) + "'");
+          fail(slot_names_[slot], "not a number: '" + field_text(f) + "'");
         if (!std::isfinite(v)) fail(slot_names_[slot], "NaN or infinity is not allowed");
         values_[slot] = v;
       }
@@ -152,7 +156,7 @@ bool CsvReader::next() {
     if (time_slot_ >= 0) {
       const double tv = values_[time_slot_];
       if (rows_ > 0) {
-        if (tv == last_time_) fail(slot_names_[time_slot_], "duplicated time " + std::to_string(tv));
+        if (tv == last_time_) fail(slot_names_[time_slot_], "duplicated time " + number_text(tv));
         if (tv < last_time_) fail(slot_names_[time_slot_], "time goes backwards");
       }
       last_time_ = tv;

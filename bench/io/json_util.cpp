@@ -30,13 +30,33 @@ void check_output_path(const std::filesystem::path& file) {
   const auto parent = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
   if (!std::filesystem::is_directory(parent))
     throw InputError(file.string(), 0, "", "cannot write: the folder " + parent.string() + " does not exist");
+  if (::access(parent.c_str(), W_OK) != 0)
+    throw InputError(file.string(), 0, "", "cannot write into the folder " + parent.string() + ": " + std::strerror(errno) +
+                                               " (give another path)");
+}
+
+void check_output_folder(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  if (fs::exists(dir) && !fs::is_directory(dir))
+    throw InputError(dir.string(), 0, "", "is a file, not a folder: give a folder to write into");
+  // The nearest folder that exists must take new entries (the rest is created below it).
+  fs::path p = dir;
+  while (!p.empty() && !fs::exists(p)) p = p.parent_path();
+  if (p.empty()) p = ".";
+  if (!fs::is_directory(p)) throw InputError(dir.string(), 0, "", "cannot create the folder: " + p.string() + " is a file");
+  if (::access(p.c_str(), W_OK) != 0)
+    throw InputError(dir.string(), 0, "", "cannot write into " + p.string() + ": " + std::strerror(errno) + " (give another folder)");
 }
 
 void write_text_atomic(const std::filesystem::path& file, const std::string& text) {
   check_output_path(file);
   const auto tmp = file.string() + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) throw std::runtime_error(file.string() + ": cannot write: " + std::strerror(errno));
+  if (fd < 0) {
+    const int e = errno;  // a place that takes no files is the user's choice (bad input); anything else a failure
+    if (e == EACCES || e == EPERM || e == EROFS) throw InputError(file.string(), 0, "", std::string("cannot write: ") + std::strerror(e));
+    throw std::runtime_error(file.string() + ": cannot write: " + std::strerror(e));
+  }
   std::size_t off = 0;
   while (off < text.size()) {
     const ssize_t n = ::write(fd, text.data() + off, text.size() - off);

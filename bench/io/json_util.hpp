@@ -11,9 +11,13 @@ namespace calbench {
 // Parse a JSON file; syntax errors become InputError with the line and column.
 nlohmann::json read_json_file(const std::filesystem::path& file);
 // Atomic write: temporary file in the same folder, fsync, rename.
-// An output file can be written there: not a folder, its folder exists (InputError naming it).
+// An output file can be written there: not a folder, its folder exists and takes new files (InputError
+// naming it).
 // Commands call it before long work so that a typo costs nothing.
 void check_output_path(const std::filesystem::path& file);
+// An output folder can be made or written there: not a file, and the nearest existing folder on its
+// path takes new entries (InputError naming it otherwise).
+void check_output_folder(const std::filesystem::path& dir);
 void write_text_atomic(const std::filesystem::path& file, const std::string& text);
 
 // Typed getters: throw InputError(file, 0, key, …) on a missing key or wrong type.

@@ -5,6 +5,7 @@
 
 #include "bench/io/toml_text.hpp"
 #include "bench/io/input_error.hpp"
+#include "bench/io/message_text.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {
@@ -32,7 +33,7 @@ struct Ctx {
     if (auto d = n->value<double>()) v = *d;
     if (!v) fail(n, k, "expected a number");
     if (!std::isfinite(*v)) fail(n, k, "NaN or infinity is not allowed");
-    if (*v < lo || *v > hi) fail(n, k, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    if (*v < lo || *v > hi) fail(n, k, "out of range [" + number_text(lo) + ", " + number_text(hi) + "]");
     return *v;
   }
 

@@ -8,6 +8,7 @@
 
 #include "bench/io/input_error.hpp"
 #include "bench/io/json_util.hpp"
+#include "bench/io/message_text.hpp"
 
 namespace calbench {
 
@@ -33,6 +34,8 @@ RecordingMeta read_meta(const fs::path& dir) {
   m.device.serial = serial.is_number_integer() ? std::to_string(serial.get<long long>()) : jstr(serial, f, "device.serial");
   m.imu_rate_hz = jnum(jreq(j, "imu_rate_hz", f, ""), f, "imu_rate_hz");
   if (m.imu_rate_hz <= 0) throw InputError(f, 0, "imu_rate_hz", "must be positive");
+  if (m.imu_rate_hz > 1e6)  // an IMU's output rate; 1e300 passed and broke the step checks that use 1/rate
+    throw InputError(f, 0, "imu_rate_hz", number_text(m.imu_rate_hz) + " Hz is not an IMU rate (at most 1000000 Hz)");
   if (j.contains("site") || m.kind == RecordingKind::bench) {
     const auto& s = jreq(j, "site", f, "");
     Site site;

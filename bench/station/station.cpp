@@ -115,6 +115,13 @@ class Station {
 void Station::setup() {
   plan_ = load_plan(o_.plan_file);
   if (plan_.steps.empty()) throw std::runtime_error(o_.plan_file.string() + ": the plan has no steps");
+  // Where the results go is checked before anything moves (a wrong --out or --db found after the
+  // plan costs a table cycle); nothing is written yet: a missing database is created at the end.
+  check_output_folder(o_.out_dir);
+  if (!o_.db.empty()) {
+    if (fs::exists(o_.db)) db::Store check(o_.db);  // a calbench database (named InputError otherwise)
+    else check_output_path(o_.db);
+  }
   earth_ = std::make_unique<SiteEarth>(plan_.site);
   plan_s_ = plan_duration_s(plan_);
   // What the run will write, before anything moves: imu.csv and reference.csv at 17 significant
@@ -184,9 +191,15 @@ void Station::setup() {
   } else {
     if (table_uri.empty()) throw std::invalid_argument("--table is required without --emulated");
     if (o_.imu_uri.empty()) throw std::invalid_argument("--imu is required without --emulated");
-    bus_ = open_imu(o_.imu_uri);
   }
-  table_ = std::make_unique<TableClient>(parse_table_uri(table_uri));
+  TableUri table_at;  // a malformed URI is bad input, found before any device is opened
+  try {
+    table_at = parse_table_uri(table_uri);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--table", 0, "", e.what());
+  }
+  if (!o_.emulated) bus_ = open_imu(o_.imu_uri);
+  table_ = std::make_unique<TableClient>(table_at);
   table_->connect();
   log_ << "table: " << table_uri << "\n";
   imu_ = std::make_unique<Adis16488a>(*bus_);

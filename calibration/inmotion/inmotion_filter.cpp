@@ -32,6 +32,13 @@ void apply_update(Eigen::Matrix<double, N, N>& P, Eigen::Matrix<double, N, 1>& d
 DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, const TriadNoise& n) {
   return v ? (*v)[static_cast<std::size_t>(i)] : DriftPrior{n.drift_sigma, n.drift_tau_s};
 }
+
+// A factor in a message: three significant digits ("x12.3", not std::to_string's "x12.345678").
+std::string factor_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", v);
+  return b;
+}
 }  // namespace
 
 bool needs_augmented_layout(const InMotionConfig& cfg) {
@@ -324,7 +331,7 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       static const char* tn[3] = {"position", "velocity", "attitude"};
       recoveries_.push_back({r.t, std::string("lost track: ") + tn[type] + " rejected by the gate for " +
                                       std::to_string(static_cast<int>(cfg_.gate_recover_s)) + " s",
-                             "navigation covariance widened x" + std::to_string(hi) + " until NIS = gate, epoch used"});
+                             "navigation covariance widened x" + factor_text(hi) + " until NIS = gate, epoch used"});
       PHt = P_ * H.transpose();
       Sl.compute(H * PHt + o.R);
     } else {

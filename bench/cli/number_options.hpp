@@ -1,0 +1,73 @@
+// Checks for the numbers of command-line options (every numeric option of every command uses one):
+// decimal, finite, in range. NaN, inf, 1e999, hex and out-of-range values are bad input (exit 2),
+// named by the option. CLI11's own PositiveNumber, NonNegativeNumber and Range let "nan" through,
+// and its integer conversion reads "-1" into an unsigned option as 18446744073709551615 and "010"
+// as 8: whole numbers are rewritten to plain decimal before CLI11 converts them.
+#pragma once
+#include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <string>
+
+namespace calbench::cli {
+
+namespace number_detail {
+inline std::string show(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+}  // namespace number_detail
+
+// A finite decimal number x with lo <= x <= hi, or lo < x when lo_open.
+inline CLI::Validator finite_number(double lo = -std::numeric_limits<double>::infinity(),
+                                    double hi = std::numeric_limits<double>::infinity(), bool lo_open = false) {
+  using number_detail::show;
+  std::string want, desc;
+  if (std::isfinite(lo) && std::isfinite(hi)) {
+    want = "from " + show(lo) + " to " + show(hi);
+    desc = "NUMBER in [" + show(lo) + ", " + show(hi) + "]";
+  } else if (std::isfinite(lo)) {
+    want = (lo_open ? "> " : ">= ") + show(lo);
+    desc = "NUMBER" + std::string(lo_open ? ">" : ">=") + show(lo);
+  } else {
+    desc = "NUMBER";
+  }
+  return CLI::Validator(
+      [lo, hi, lo_open, want](std::string& v) -> std::string {
+        double x = 0;
+        const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
+        if (r.ec == std::errc() && r.ptr == v.data() + v.size() && std::isfinite(x) && (lo_open ? x > lo : x >= lo) &&
+            x <= hi)
+          return {};
+        return "expected a finite number" + (want.empty() ? std::string() : " " + want) + ", got '" + v + "'";
+      },
+      desc);
+}
+inline CLI::Validator finite_positive() { return finite_number(0, std::numeric_limits<double>::infinity(), true); }
+inline CLI::Validator finite_non_negative() { return finite_number(0); }
+
+// A whole number in decimal digits, lo <= n <= hi (for unsigned and signed integer options alike;
+// signed ones give hi <= INT64_MAX).
+inline CLI::Validator whole_number(std::uint64_t lo, std::uint64_t hi) {
+  const bool open = hi == std::numeric_limits<std::uint64_t>::max() ||
+                    hi == static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max());
+  const std::string want = open ? ">= " + std::to_string(lo) : "from " + std::to_string(lo) + " to " + std::to_string(hi);
+  return CLI::Validator(
+      [lo, hi, want](std::string& v) -> std::string {
+        std::uint64_t n = 0;
+        const auto r = std::from_chars(v.data(), v.data() + v.size(), n, 10);
+        if (!v.empty() && r.ec == std::errc() && r.ptr == v.data() + v.size() && n >= lo && n <= hi) {
+          v = std::to_string(n);  // no leading zeros: CLI11 would read "010" as octal
+          return {};
+        }
+        return "expected a whole number " + want + ", got '" + v + "'";
+      },
+      "INTEGER " + want);
+}
+inline CLI::Validator set_id() { return whole_number(1, std::numeric_limits<std::int64_t>::max()); }
+
+}  // namespace calbench::cli
