@@ -32,18 +32,25 @@ struct Outcome {
   std::string mode;
 };
 
-// seed: unit and simulator; gnss: aid with the GNSS fixes (else the reference INS at 1 Hz).
-Outcome run(std::uint64_t seed, bool gnss, bool realign, double settle_s, const Vec3& lever = Vec3(-1.0, 0.3, -0.4)) {
-  Route route = lap_route(48.1, 11.6, 520, 35, 2);
+// A 60 s opening standstill, then `laps` laps at 100 Hz; aided by GNSS fixes at 1 Hz (else the
+// reference INS's positions at 1 Hz); the filter with position observations only.
+DriveSimConfig standstill_drive(std::uint64_t seed, int laps, bool gnss, const Vec3& lever, InMotionConfig& fc) {
+  Route route = lap_route(48.1, 11.6, 520, 35, laps);
   route.segments[0].duration_s = 60;  // the opening standstill
   DriveSimConfig cfg = drive_config(route, seed, 100, Vec3(0.4, -0.3, 0.5), lever);
   cfg.gnss.rate_hz = gnss ? 1 : 0;
   if (gnss) cfg.reference.rate_hz = 0;
-  InMotionConfig fc;
   fc.obs_pos = true;
   fc.obs_vel = fc.obs_att = false;
   fc.obs_rate_hz = 1;
+  return cfg;
+}
+
+// seed: unit and simulator; gnss: aid with the GNSS fixes (else the reference INS at 1 Hz).
+Outcome run(std::uint64_t seed, bool gnss, bool realign, double settle_s, const Vec3& lever = Vec3(-1.0, 0.3, -0.4)) {
+  InMotionConfig fc;
   fc.realign_heading = realign;
+  const DriveSimConfig cfg = standstill_drive(seed, 2, gnss, lever, fc);
   FilterReplay<InMotionFilter> replay(fc, nominal_mounting(), cfg.lever_arm);
   const Mat3 C_mb_true = ins::dcm_from_rpy(cfg.mounting_rpy);
   Outcome o;
@@ -115,16 +122,9 @@ struct Coverage {
   double worst_gyro_bias_z = 0;  // largest |error|/σ of the gyro biases
 };
 Coverage coverage(std::uint64_t seed, bool restart) {
-  Route route = lap_route(48.1, 11.6, 520, 35, 3);
-  route.segments[0].duration_s = 60;
-  DriveSimConfig cfg = drive_config(route, seed, 100, Vec3(0.4, -0.3, 0.5), Vec3(-1.0, 0.3, -0.4));
-  cfg.gnss.rate_hz = 1;
-  cfg.reference.rate_hz = 0;
   InMotionConfig fc;
-  fc.obs_pos = true;
-  fc.obs_vel = fc.obs_att = false;
-  fc.obs_rate_hz = 1;
   fc.restart_at_heading = restart;
+  const DriveSimConfig cfg = standstill_drive(seed, 3, true, Vec3(-1.0, 0.3, -0.4), fc);
   FilterReplay<InMotionFilter> replay(fc, nominal_mounting(), cfg.lever_arm);
   DriveSinks sinks;
   sinks.imu = [&](const SimImu& m) { replay.imu(m); };
