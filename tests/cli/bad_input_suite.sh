@@ -14,6 +14,7 @@ cleanup() { [ "$RO_MOUNTED" = 1 ] && umount "$T/ro" 2> /dev/null; rm -rf "$T"; }
 trap cleanup EXIT
 cd "$T" || exit 1
 export CALBENCH_DB="$T/default-does-not-exist.db"  # never the caller's database
+unset CALBENCH_OPERATOR CALBENCH_USER  # the stores are by the OS user; approvals name another operator
 
 PASSED=0
 FAILED=()
@@ -68,7 +69,7 @@ ok "$CALBENCH" db init --db d.db
 ok "$CALBENCH" db store-bench --db d.db --coeffs bench/truth.json --sha256 "$SHA"  # set 1: draft
 echo '{"allow_unknown_sigma": true, "require_qc": false, "gyro": {"max_abs_bias_dph": 1e9, "max_abs_scale_ppm": 1e9, "max_abs_skew_ppm": 1e9, "max_sigma_bias_dph": 1e9, "max_sigma_M_ppm": 1e9}, "accel": {"max_abs_bias_mg": 1e9, "max_abs_scale_ppm": 1e9, "max_abs_skew_ppm": 1e9, "max_sigma_bias_mg": 1e9, "max_sigma_M_ppm": 1e9}}' > loose.json
 ok "$CALBENCH" db store-bench --db d.db --coeffs bench/truth.json --sha256 "$SHA"  # set 2: approved below
-ok "$CALBENCH" db approve 2 --db d.db --thresholds loose.json
+ok "$CALBENCH" db approve 2 --db d.db --thresholds loose.json --operator qc-anna
 ok "$CALBENCH" db store-bench --db d.db --coeffs bench/truth.json --sha256 "$SHA"  # set 3: revoked below
 ok "$CALBENCH" db revoke 3 --db d.db --reason test
 SERIAL=SIM-3
@@ -279,9 +280,17 @@ t db-store-recording-no-imu 2 "folder/imu\.csv: recording has no imu\.csv" "$CAL
 cmp -s d.db d.db.orig || FAILED+=("db: a refused command changed the database")  # nothing stored by any of the above
 # Refusals (exit 1, recorded in the audit log) and repeats that change nothing (exit 0).
 t db-approve-refused 1 "set 1 NOT approved" "$CALBENCH" db approve 1 --db d.db
-t db-approve-again 0 NONE "$CALBENCH" db approve 2 --db d.db --thresholds loose.json
+t db-approve-again 0 NONE "$CALBENCH" db approve 2 --db d.db --thresholds loose.json --operator qc-anna
 grep -q "set 2 is already approved (no change)" out.txt || FAILED+=("db-approve-again: stdout lacks 'already approved'")
-t db-approve-revoked 1 "set 3 NOT approved|revoked" "$CALBENCH" db approve 3 --db d.db --thresholds loose.json
+t db-approve-revoked 1 "set 3 NOT approved|revoked" "$CALBENCH" db approve 3 --db d.db --thresholds loose.json --operator qc-anna
+t db-approve-unsigned 1 "approval needs a named operator: --operator NAME or CALBENCH_OPERATOR" "$CALBENCH" db approve 1 --db d.db --thresholds loose.json
+t db-approve-operator-at 2 "--operator: operator name 'qa@lab' must not contain '@'" "$CALBENCH" db approve 1 --db d.db --operator qa@lab
+t db-approve-operator-empty 2 "--operator: operator name '' must be 1 to 64 characters" "$CALBENCH" db approve 1 --db d.db --operator ""
+t db-approve-operator-env 2 "CALBENCH_OPERATOR: operator name ' x' must not be blank or start or end with a space" env "CALBENCH_OPERATOR= x" "$CALBENCH" db approve 1 --db d.db
+t db-settings-unknown 2 "unknown setting 'five_eyes' \\(settings: four_eyes\\)" "$CALBENCH" db settings five_eyes on --db d.db --operator qc-anna
+t db-settings-value 2 "four_eyes: 'maybe' is not one of: on, off" "$CALBENCH" db settings four_eyes maybe --db d.db --operator qc-anna
+t db-settings-unsigned 1 "changing a setting needs a named operator" "$CALBENCH" db settings four_eyes off --db d.db
+t provision-operator-control 2 "--operator: operator name .* contains control characters" "$CALBENCH" provision 1001 --export p.json --db d.db --operator "$(printf 'a\tb')"
 t db-revoke-again 0 NONE "$CALBENCH" db revoke 3 --db d.db
 grep -q "set 3 is already revoked (no change)" out.txt || FAILED+=("db-revoke-again: stdout lacks 'already revoked'")
 
