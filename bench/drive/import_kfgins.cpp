@@ -176,6 +176,9 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       ++sum.ref_rows;
     }
   }
+  // A file without data rows would give a recording calbench's readers refuse ("no data rows").
+  if (sum.imu_rows == 0) throw InputError(a.imu, 0, "", "no data rows");
+  if (sum.ref_rows == 0) throw InputError(a.truth, 0, "", "no data rows");
   if (!a.gnss.empty()) {
     TextRows r(a.gnss, 7);
     double last = 0;
@@ -199,6 +202,7 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       w.gnss(g);
       ++sum.gnss_rows;
     }
+    if (sum.gnss_rows == 0) throw InputError(a.gnss, 0, "", "no data rows");
   }
   w.finish();
 }
