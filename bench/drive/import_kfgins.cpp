@@ -181,6 +181,8 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
     // A drive recording without its reference is no recording (the import went "fine" with 0 rows).
     if (sum.ref_rows == 0) throw InputError(a.truth, 0, "", "no truth rows (week, t, lat, lon, h, vn, ve, vd, roll, pitch, yaw)");
   }
+  // A file without data rows would give a recording calbench's readers refuse ("no data rows").
+  if (sum.imu_rows == 0) throw InputError(a.imu, 0, "", "no data rows (IMU increments: t, dθ x/y/z, dv x/y/z)");
   if (!a.gnss.empty()) {
     TextRows r(a.gnss, 7);
     double last = 0;

@@ -65,6 +65,13 @@ ls -A | grep -q importing && fail "temporary import folder left behind"
 printf '0 1.00 95 114 20 0 0 0 0 0 0\n' > badlat.nav
 expect2 "badlat.nav:1.*column 3.*latitude" "$CALBENCH" import kf-gins --imu imu.txt --truth badlat.nav --out kf
 [ ! -e kf ] || fail "partial recording left by a failed import"
+# A truth.nav or .pos without data rows was imported into a recording calbench then refused to read
+# ("reference.csv: no data rows"; found by fuzzing): refused at the import, nothing written.
+printf '# no rows\n' > empty.nav
+expect2 "empty.nav: no truth rows" "$CALBENCH" import kf-gins --imu imu.txt --truth empty.nav --out kf
+printf '%% no rows\n' > empty.pos
+expect2 "empty.pos: no GNSS fixes" "$CALBENCH" import kf-gins --imu imu.txt --truth truth.nav --gnss empty.pos --out kf
+[ ! -e kf ] || fail "partial recording left by a failed import"
 "$CALBENCH" import kf-gins --imu imu.txt --truth truth.nav --out kf/ > /dev/null || fail "a good import failed"
 [ -s kf/meta.json ] && grep -q '"complete"' kf/meta.json || fail "good import incomplete"
 
