@@ -282,29 +282,41 @@ void Store::insert_qc_locked(const std::vector<QcResult>& qc, std::optional<std:
   }
 }
 
+// The fields of a bench run, checked before any transaction (nothing is written on bad input).
+static void check_bench_run(const BenchRunInput& run) {
+  if (run.outcome != "pass" && run.outcome != "fail" && run.outcome != "aborted")
+    throw arg_error("outcome", "expected pass, fail or aborted, got '" + run.outcome + "'");
+  for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at})
+    check_text(*f, "bench_run", false);
+}
+
+// The bench run's row, its audit entry (`detail`) and its QC results, inside the caller's transaction.
+static std::int64_t insert_bench_run_locked(Store& store, Connection& c, std::int64_t device_id, const BenchRunInput& run,
+                                            const std::string& detail) {
+  std::optional<std::int64_t> station;
+  if (!run.station.empty()) station = ensure_station_locked(store, c, run.station, "");
+  auto st = c.prepare(std::string(
+      "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
+      "outcome, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + kNow + ")");
+  st.bind(1, device_id).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
+      .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome);
+  st.run();
+  const std::int64_t id = c.last_insert_rowid();
+  store.audit_locked("bench_run", id, "create", detail);
+  store.insert_qc_locked(run.qc, id, std::nullopt);
+  return id;
+}
+
 StoredSet Store::store_bench(const DeviceInfo& d, const BenchRunInput& run, const std::string& coefficients_json) {
   // Validate everything before the transaction: nothing is written on bad input.
   const ParsedCoefficients p = parse_coefficients(coefficients_json, "coefficients", d.serial);
   if (p.device.model != d.model)
     throw InputError("coefficients", 0, "device.model", "model '" + p.device.model + "' is not '" + d.model + "'");
-  if (run.outcome != "pass" && run.outcome != "fail" && run.outcome != "aborted")
-    throw arg_error("outcome", "expected pass, fail or aborted, got '" + run.outcome + "'");
-  for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at})
-    check_text(*f, "bench_run", false);
+  check_bench_run(run);
   StoredSet out;
   conn_->write_transaction([&] {
     out.device_id = ensure_device_locked(d);
-    std::optional<std::int64_t> station;
-    if (!run.station.empty()) station = ensure_station_locked(*this, *conn_, run.station, "");
-    auto st = conn_->prepare(std::string(
-        "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
-        "outcome, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + kNow + ")");
-    st.bind(1, out.device_id).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
-        .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome);
-    st.run();
-    out.run_id = conn_->last_insert_rowid();
-    audit_locked("bench_run", out.run_id, "create", "plan " + run.plan + ", outcome " + run.outcome);
-    insert_qc_locked(run.qc, out.run_id, std::nullopt);
+    out.run_id = insert_bench_run_locked(*this, *conn_, out.device_id, run, "plan " + run.plan + ", outcome " + run.outcome);
     out.set_id = insert_set_locked(out.device_id, SetSource::bench, p.canonical_json, p.errors, std::nullopt,
                                    out.run_id, std::nullopt, &out.version);
   });
@@ -326,27 +338,15 @@ StoredSet Store::store_set(const DeviceInfo& d, SetSource source, const std::str
 std::int64_t Store::store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason) {
   if (run.outcome != "fail" && run.outcome != "aborted")
     throw arg_error("outcome", "a run without a set is 'fail' or 'aborted', got '" + run.outcome + "'");
-  for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at})
-    check_text(*f, "bench_run", false);
+  check_bench_run(run);
   // The reason is an exception's text: keep it on one line and bounded.
   std::string why;
   for (char c : reason.substr(0, 2000)) why += (static_cast<unsigned char>(c) < 0x20) ? ' ' : c;
   std::int64_t id = 0;
   conn_->write_transaction([&] {
-    const std::int64_t device = ensure_device_locked(d);
-    std::optional<std::int64_t> station;
-    if (!run.station.empty()) station = ensure_station_locked(*this, *conn_, run.station, "");
-    auto st = conn_->prepare(std::string(
-        "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
-        "outcome, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + kNow + ")");
-    st.bind(1, device).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
-        .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome);
-    st.run();
-    id = conn_->last_insert_rowid();
-    audit_locked("bench_run", id, "create",
-                 "plan " + run.plan + ", outcome " + run.outcome + (why.empty() ? "" : ": " + why) +
-                     (run.recording_path.empty() ? "" : "; partial recording " + run.recording_path));
-    insert_qc_locked(run.qc, id, std::nullopt);
+    id = insert_bench_run_locked(*this, *conn_, ensure_device_locked(d), run,
+                                 "plan " + run.plan + ", outcome " + run.outcome + (why.empty() ? "" : ": " + why) +
+                                     (run.recording_path.empty() ? "" : "; partial recording " + run.recording_path));
   });
   return id;
 }

@@ -79,6 +79,9 @@ class Station {
                    std::string& why);
   void command_step(const PlanStep& s);
   void progress(const std::string& what, bool line = false);
+  // The store and the bench-run record of this run (the done and the aborted run share them).
+  std::unique_ptr<db::Store> open_store() const;
+  db::BenchRunInput bench_run_record(const db::Store& store, const std::string& outcome, const std::string& recording) const;
   void check_stop() {
     if (stop_) throw Aborted("interrupted (Ctrl-C)");
     if (o_.inject.table_kill_at_s >= 0 && table_emu_ && table_emu_->port() && clock_ &&
@@ -352,6 +355,26 @@ bool Station::record_step(int k, const PlanStep& s, std::vector<ImuRecord>& imu,
   return why.empty();
 }
 
+std::unique_ptr<db::Store> Station::open_store() const {
+  db::OpenOptions dbo;
+  dbo.create = true;
+  return std::make_unique<db::Store>(o_.db, dbo, db::Actor::from_environment(o_.operator_name));
+}
+
+db::BenchRunInput Station::bench_run_record(const db::Store& store, const std::string& outcome,
+                                            const std::string& recording) const {
+  db::BenchRunInput run;
+  run.station = o_.emulated ? "calbench-emulated" : store.actor().station;
+  run.plan = plan_.name;
+  run.recording_path = recording;
+  run.started_at = started_;
+  run.ended_at = iso_utc(std::chrono::system_clock::now());
+  run.outcome = outcome;
+  run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples", db::kSampleNotApplicable,
+                    "no IMU sample lost while recording: value ≤ 0"});
+  return run;
+}
+
 Result Station::run() {
   Result res;
   std::unique_ptr<RecordingWriter> writer;
@@ -422,22 +445,12 @@ Result Station::run() {
     const CoefficientSet cs = bench_result_to_coefficients(fr, fo, data.meta, rec_dir.string());
     write_coefficients(o_.out_dir / "COEFFS.json", cs);
     if (!o_.db.empty()) {  // the coefficient store: bench run + draft set, one transaction
-      db::OpenOptions dbo;
-      dbo.create = true;
-      db::Store store(o_.db, dbo, db::Actor::from_environment(o_.operator_name));
-      db::BenchRunInput run;
-      run.station = o_.emulated ? "calbench-emulated" : db::Actor::from_environment(o_.operator_name).station;
-      run.plan = plan_.name;
-      run.recording_path = rec_dir.string();
+      const std::unique_ptr<db::Store> store = open_store();
+      db::BenchRunInput run = bench_run_record(*store, "pass", rec_dir.string());
       run.recording_sha256 = sha256_file(rec_dir / "imu.csv");
-      run.started_at = started_;
-      run.ended_at = iso_utc(std::chrono::system_clock::now());
-      run.outcome = "pass";
-      run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples", db::kSampleNotApplicable,
-                        "no IMU sample lost while recording: value ≤ 0"});
       run.qc.push_back({"step_repeats", static_cast<double>(repeats_), std::nullopt, true, "", db::kSampleNotApplicable, ""});
       const auto& id = imu_->identity();
-      const db::StoredSet st = store.store_bench({"ADIS16488A", id.serial_string(), id.firmware()}, run,
+      const db::StoredSet st = store->store_bench({"ADIS16488A", id.serial_string(), id.firmware()}, run,
                                                  coefficients_to_json(cs).dump(2));
       res.summary["db"] = {{"path", o_.db}, {"set", st.set_id}, {"version", st.version}, {"bench_run", st.run_id}};
       log_ << "stored in " << o_.db << ": set " << st.set_id << " (v" << st.version << ", draft)\n";
@@ -487,20 +500,10 @@ Result Station::run() {
     // unit is known, so `db history SERIAL` shows it. Best effort: the abort itself is what counts.
     if (!o_.db.empty() && imu_ && imu_->identity().prod_id != 0) {
       try {
-        db::OpenOptions dbo;
-        dbo.create = true;
-        db::Store store(o_.db, dbo, db::Actor::from_environment(o_.operator_name));
-        db::BenchRunInput run;
-        run.station = o_.emulated ? "calbench-emulated" : store.actor().station;
-        run.plan = plan_.name;
-        run.recording_path = writer ? rec_dir.string() : "";
-        run.started_at = started_;
-        run.ended_at = iso_utc(std::chrono::system_clock::now());
-        run.outcome = "aborted";
-        run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples", db::kSampleNotApplicable,
-                          "no IMU sample lost while recording: value ≤ 0"});
+        const std::unique_ptr<db::Store> store = open_store();
+        const db::BenchRunInput run = bench_run_record(*store, "aborted", writer ? rec_dir.string() : "");
         const auto& id = imu_->identity();
-        const std::int64_t run_id = store.store_bench_run({"ADIS16488A", id.serial_string(), id.firmware()}, run,
+        const std::int64_t run_id = store->store_bench_run({"ADIS16488A", id.serial_string(), id.firmware()}, run,
                                                           std::string(e.what()) + " (after " + std::to_string(samples_) +
                                                               " samples)");
         res.summary["db"] = {{"path", o_.db}, {"bench_run", run_id}, {"outcome", "aborted"}};
