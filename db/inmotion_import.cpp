@@ -380,7 +380,7 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
         "INSERT INTO inmotion_runs(device_id, recording_path, recording_sha256, reference_system, mounting_roll_deg, "
         "mounting_pitch_deg, mounting_yaw_deg, mounting_roll_sigma_deg, mounting_pitch_sigma_deg, "
         "mounting_yaw_sigma_deg, consistency_json, qc_json, result_json, created_at) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))");
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, " + std::string(store.connection().now_sql()) + ") RETURNING id");
     st.bind(1, dev->id).bind(2, r.recording_path).bind(3, r.recording_sha256).bind(4, r.reference_system);
     for (int i = 0; i < 3; ++i) {
       const auto k = static_cast<std::size_t>(i);
@@ -389,8 +389,8 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
       st.bind(8 + i, r.mounting_sigma_deg[k]);  // +inf → NULL
     }
     st.bind(11, r.consistency_json).bind(12, r.qc_json).bind(13, r.result_json);
-    st.run();
-    out.run_id = store.connection().last_insert_rowid();
+    st.step();
+    out.run_id = st.int64(0);
     store.audit_locked("inmotion_run", out.run_id, "create", "import " + f);
     store.insert_qc_locked(r.qc, std::nullopt, out.run_id);
     out.set_id = store.insert_set_locked(dev->id, out.source, r.coefficients.canonical_json, r.coefficients.errors,

@@ -148,6 +148,27 @@ CREATE TABLE settings (
   changed_by TEXT NOT NULL
 );
 )SQL",
+      // ---- 4: a stable id per run and set (forwarding from a station's journal is idempotent),
+      //         and the journal's record of what reached the central store ----
+      R"SQL(
+ALTER TABLE bench_runs ADD COLUMN uid TEXT;
+CREATE UNIQUE INDEX bench_runs_uid ON bench_runs(uid);
+ALTER TABLE inmotion_runs ADD COLUMN uid TEXT;
+CREATE UNIQUE INDEX inmotion_runs_uid ON inmotion_runs(uid);
+ALTER TABLE coefficient_sets ADD COLUMN uid TEXT;
+CREATE UNIQUE INDEX coefficient_sets_uid ON coefficient_sets(uid);
+CREATE TRIGGER coefficient_sets_uid_immutable BEFORE UPDATE OF uid ON coefficient_sets
+WHEN NEW.uid IS NOT OLD.uid
+BEGIN SELECT RAISE(ABORT, 'coefficient sets are immutable'); END;
+CREATE TABLE forwarded (
+  uid        TEXT PRIMARY KEY,
+  entity     TEXT NOT NULL,
+  local_id   INTEGER NOT NULL,
+  central_id INTEGER NOT NULL,
+  target     TEXT NOT NULL,
+  at         TEXT NOT NULL
+);
+)SQL",
   };
   return m;
 }

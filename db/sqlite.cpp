@@ -26,6 +26,48 @@ void throw_sqlite(sqlite3* db, int rc, std::string_view context) {
 namespace {
 bool is_busy(int rc) { return (rc & 0xff) == SQLITE_BUSY || (rc & 0xff) == SQLITE_LOCKED; }
 
+class SqliteStatement : public StatementImpl {
+ public:
+  SqliteStatement(sqlite3* db, std::string_view sql) : db_(db) {
+    const int rc = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &st_, nullptr);
+    if (rc != SQLITE_OK) throw_sqlite(db, rc, "prepare");
+  }
+  ~SqliteStatement() override {
+    if (st_) sqlite3_finalize(st_);
+  }
+  void bind_int64(int i, std::int64_t v) override { check(sqlite3_bind_int64(st_, i, v)); }
+  void bind_double(int i, double v) override { check(sqlite3_bind_double(st_, i, v)); }
+  void bind_text(int i, std::string_view v) override {
+    check(sqlite3_bind_text(st_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
+  }
+  void bind_null(int i) override { check(sqlite3_bind_null(st_, i)); }
+  bool step() override {
+    const int rc = sqlite3_step(st_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    sqlite3_reset(st_);
+    throw_sqlite(db_, rc, "SQL");
+  }
+  void reset() override {
+    sqlite3_reset(st_);
+    sqlite3_clear_bindings(st_);
+  }
+  bool is_null(int col) const override { return sqlite3_column_type(st_, col) == SQLITE_NULL; }
+  std::int64_t int64(int col) const override { return sqlite3_column_int64(st_, col); }
+  double real(int col) const override { return sqlite3_column_double(st_, col); }
+  std::string text(int col) const override {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(st_, col));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(st_, col))) : std::string();
+  }
+
+ private:
+  void check(int rc) {
+    if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
+  }
+  sqlite3* db_;
+  sqlite3_stmt* st_ = nullptr;
+};
+
 // Retry `fn` on BusyError with jittered exponential back-off until `budget` is spent.
 template <class F>
 void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, F&& fn) {
@@ -48,7 +90,7 @@ void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, 
 }
 }  // namespace
 
-Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(path), opt_(opt) {
+SqliteConnection::SqliteConnection(const std::string& path, const OpenOptions& opt) : Connection(path, opt) {
   if (!opt.create && !std::filesystem::exists(path))
     throw InputError(path, 0, "", "no database here (create it with `calbench db init`, or give --db / CALBENCH_DB)");
   // SQLite takes an empty file for a new database and would write a schema into it: only commands
@@ -85,14 +127,14 @@ Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(
       if (!opt_.create) {
         // Reads the header (another kind of file fails here, named below). Schema version 0 is another
         // program's SQLite database: refused before the journal mode below would change it.
-        Statement v(db_, "PRAGMA user_version");
+        SqliteStatement v(db_, "PRAGMA user_version");
         if (v.step() && v.int64(0) == 0)
           throw InputError(path_, 0, "", "not a calbench database (another program's SQLite database): give the database "
                                          "with --db or CALBENCH_DB; `calbench db init --db FILE` creates one");
       }
       if (!opt_.read_only) {
         // WAL: readers never block the writer; the setting persists in the file.
-        Statement wal(db_, "PRAGMA journal_mode = WAL");
+        SqliteStatement wal(db_, "PRAGMA journal_mode = WAL");
         if (wal.step() && wal.text(0) != "wal")
           throw DbError(SQLITE_ERROR, path_ + ": cannot switch the database to WAL mode");
         // FULL: a committed transaction survives a power cut, not only a process crash.
@@ -114,13 +156,13 @@ Connection::Connection(const std::string& path, const OpenOptions& opt) : path_(
   }
 }
 
-Connection::~Connection() {
+SqliteConnection::~SqliteConnection() {
   if (db_) sqlite3_close_v2(db_);
 }
 
-Statement Connection::prepare(std::string_view sql) { return Statement(db_, sql); }
+Statement SqliteConnection::prepare(std::string_view sql) { return Statement(std::make_unique<SqliteStatement>(db_, sql)); }
 
-void Connection::exec(const char* sql) {
+void SqliteConnection::exec(const char* sql) {
   char* err = nullptr;
   const int rc = sqlite3_exec(db_, sql, nullptr, nullptr, &err);
   if (rc != SQLITE_OK) {
@@ -131,101 +173,10 @@ void Connection::exec(const char* sql) {
   }
 }
 
-std::int64_t Connection::last_insert_rowid() const { return sqlite3_last_insert_rowid(db_); }
-int Connection::changes() const { return sqlite3_changes(db_); }
-
-void Connection::transaction(const char* begin_sql, const std::function<void()>& body) {
-  if (in_tx_) {  // nested: part of the enclosing transaction
-    body();
-    return;
-  }
-  with_busy_retry(opt_.retry_budget, path_, [&] {
-    exec(begin_sql);
-    in_tx_ = true;
-    try {
-      body();
-      exec("COMMIT");
-      in_tx_ = false;
-    } catch (...) {
-      in_tx_ = false;
-      if (!sqlite3_get_autocommit(db_)) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-      throw;
-    }
-  });
-}
-
-void Connection::write_transaction(const std::function<void()>& body) { transaction("BEGIN IMMEDIATE", body); }
-
-void Connection::read_transaction(const std::function<void()>& body) { transaction("BEGIN DEFERRED", body); }
-
-Statement::Statement(sqlite3* db, std::string_view sql) : db_(db) {
-  const int rc = sqlite3_prepare_v2(db, sql.data(), static_cast<int>(sql.size()), &st_, nullptr);
-  if (rc != SQLITE_OK) throw_sqlite(db, rc, "prepare");
-}
-
-Statement::~Statement() {
-  if (st_) sqlite3_finalize(st_);
-}
-
-Statement::Statement(Statement&& o) noexcept : db_(o.db_), st_(o.st_) { o.st_ = nullptr; }
-
-Statement& Statement::bind(int i, std::int64_t v) {
-  const int rc = sqlite3_bind_int64(st_, i, v);
-  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
-  return *this;
-}
-
-Statement& Statement::bind(int i, double v) {
-  if (!std::isfinite(v)) return bind_null(i);
-  const int rc = sqlite3_bind_double(st_, i, v);
-  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
-  return *this;
-}
-
-Statement& Statement::bind(int i, std::string_view v) {
-  const int rc = sqlite3_bind_text(st_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT);
-  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
-  return *this;
-}
-
-Statement& Statement::bind_null(int i) {
-  const int rc = sqlite3_bind_null(st_, i);
-  if (rc != SQLITE_OK) throw_sqlite(db_, rc, "bind");
-  return *this;
-}
-
-bool Statement::step() {
-  const int rc = sqlite3_step(st_);
-  if (rc == SQLITE_ROW) return true;
-  if (rc == SQLITE_DONE) return false;
-  sqlite3_reset(st_);
-  throw_sqlite(db_, rc, "SQL");
-}
-
-void Statement::run() {
-  while (step()) {
-  }
-}
-
-void Statement::reset() {
-  sqlite3_reset(st_);
-  sqlite3_clear_bindings(st_);
-}
-
-bool Statement::is_null(int col) const { return sqlite3_column_type(st_, col) == SQLITE_NULL; }
-std::int64_t Statement::int64(int col) const { return sqlite3_column_int64(st_, col); }
-double Statement::real(int col) const { return is_null(col) ? NAN : sqlite3_column_double(st_, col); }
-std::string Statement::text(int col) const {
-  const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(st_, col));
-  return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(st_, col))) : std::string();
-}
-std::optional<std::int64_t> Statement::opt_int64(int col) const {
-  if (is_null(col)) return std::nullopt;
-  return int64(col);
-}
-std::optional<double> Statement::opt_real(int col) const {
-  if (is_null(col)) return std::nullopt;
-  return sqlite3_column_double(st_, col);
+void SqliteConnection::begin(bool write) { exec(write ? "BEGIN IMMEDIATE" : "BEGIN DEFERRED"); }
+void SqliteConnection::commit() { exec("COMMIT"); }
+void SqliteConnection::rollback() noexcept {
+  if (!sqlite3_get_autocommit(db_)) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
 }
 
 }  // namespace calbench::db

@@ -4,16 +4,20 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <random>
 #include <cmath>
 #include <cstdlib>
 
 #include "bench/io/input_error.hpp"
 #include "db/input_errors.hpp"
+#include "db/postgres/pg_connection.hpp"
+#include "db/postgres/pg_schema.hpp"
 #include "db/schema.hpp"
 
 namespace calbench::db {
 
-static constexpr const char* kNow = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
 
 std::string to_string(SetSource s) {
   switch (s) {
@@ -94,13 +98,22 @@ Actor Actor::from_environment(const std::string& operator_option) {
   return a;
 }
 
+std::string new_uid() {
+  static thread_local std::mt19937_64 rng(std::random_device{}() ^ (static_cast<std::uint64_t>(::getpid()) << 32) ^
+                                          static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()));
+  char buf[33];
+  std::snprintf(buf, sizeof buf, "%016llx%016llx", static_cast<unsigned long long>(rng()),
+                static_cast<unsigned long long>(rng()));
+  return buf;
+}
+
 std::string Store::default_path() {
   const char* p = std::getenv("CALBENCH_DB");
   return (p && *p) ? p : "calbench.db";
 }
 
 Store::Store(const std::string& path, const OpenOptions& opt, Actor actor)
-    : conn_(std::make_unique<Connection>(path, opt)), actor_(std::move(actor)) {
+    : conn_(open_connection(path, opt)), actor_(std::move(actor)) {
   if (opt.read_only) {
     const int v = schema_version();
     if (v != kSchemaVersion)
@@ -112,14 +125,31 @@ Store::Store(const std::string& path, const OpenOptions& opt, Actor actor)
 }
 
 int Store::schema_version() {
+  if (conn_->dialect() == Dialect::postgres) {
+    auto t = conn_->prepare("SELECT to_regclass('schema_version') IS NOT NULL");
+    t.step();
+    if (t.int64(0) == 0) return 0;
+    auto st = conn_->prepare("SELECT COALESCE(MAX(version), 0) FROM schema_version");
+    st.step();
+    return static_cast<int>(st.int64(0));
+  }
   auto st = conn_->prepare("PRAGMA user_version");
   st.step();
   return static_cast<int>(st.int64(0));
 }
 
+void Store::audit_migration(int from) {
+  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, action, detail) "
+                                       "VALUES (") + conn_->now_sql() + ", ?, ?, 'schema', ?, 'migrate', ?)");
+  st.bind(1, actor_.user).bind(2, actor_.station).bind(3, kSchemaVersion)
+      .bind(4, "from version " + std::to_string(from) + " to " + std::to_string(kSchemaVersion));
+  st.run();
+}
+
 void Store::migrate() {
-  const auto& m = migrations();
   static_assert(kSchemaVersion >= 1);
+  if (conn_->dialect() == Dialect::postgres) return migrate_postgres();
+  const auto& m = migrations();
   if (static_cast<int>(m.size()) != kSchemaVersion) throw std::logic_error("schema: kSchemaVersion != migrations");
   if (schema_version() == kSchemaVersion) return;
   conn_->write_transaction([&] {
@@ -130,14 +160,44 @@ void Store::migrate() {
     for (int i = v; i < kSchemaVersion; ++i) conn_->exec(m[static_cast<std::size_t>(i)]);
     // user_version cannot take a bound parameter; the value is a compile-time integer.
     conn_->exec(("PRAGMA user_version = " + std::to_string(kSchemaVersion)).c_str());
-    if (v < kSchemaVersion) {
-      auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, user, station, entity, entity_id, action, detail) "
-                                           "VALUES (") + kNow + ", ?, ?, 'schema', ?, 'migrate', ?)");
-      st.bind(1, actor_.user).bind(2, actor_.station).bind(3, kSchemaVersion)
-          .bind(4, "from version " + std::to_string(v) + " to " + std::to_string(kSchemaVersion));
-      st.run();
-    }
+    if (v < kSchemaVersion) audit_migration(v);
   });
+}
+
+// PostgreSQL: the base schema (db/postgres/schema.sql, version 3) on an empty database, then the
+// migrations after it, all in one transaction under an advisory lock, so that two processes
+// starting at once migrate once. Only the owner of the tables can migrate: any other role that
+// finds an older schema is told to ask for `calbench db init`.
+void Store::migrate_postgres() {
+  const int v0 = schema_version();
+  if (v0 == kSchemaVersion) return;
+  if (v0 > kSchemaVersion)
+    throw DbError(1, conn_->path() + ": database schema version " + std::to_string(v0) +
+                         " is newer than this calbench (" + std::to_string(kSchemaVersion) + ")");
+  try {
+    conn_->write_transaction([&] {
+      conn_->exec("SELECT pg_advisory_xact_lock(7203518)");  // calbench's migration lock
+      const int v = schema_version();
+      if (v == kSchemaVersion) return;
+      if (v == 0) conn_->exec(pg_base_schema());
+      const int base = v == 0 ? kPgBaseSchemaVersion : v;
+      const auto& m = pg_migrations();
+      for (int i = base; i < kSchemaVersion; ++i) conn_->exec(m[static_cast<std::size_t>(i - kPgBaseSchemaVersion)]);
+      audit_migration(v);
+    });
+  } catch (const PermissionError&) {
+    throw DbError(1, conn_->path() + ": the database has schema version " + std::to_string(v0) + ", this calbench needs " +
+                         std::to_string(kSchemaVersion) + "; role '" +
+                         static_cast<PgConnection&>(*conn_).role() +
+                         "' may not change the schema: the database owner runs `calbench db init --db URI`");
+  }
+}
+
+void Store::apply_roles() {
+  if (conn_->dialect() != Dialect::postgres) throw std::logic_error("apply_roles: not PostgreSQL");
+  conn_->exec(pg_roles_sql());  // its own transaction
+  conn_->write_transaction([&] { audit_locked("schema", kSchemaVersion, "roles", "calbench_station, calbench_qc, "
+                                                                              "calbench_provisioning, calbench_reader"); });
 }
 
 // ---------------------------------------------------------------- writes
@@ -157,8 +217,8 @@ void Store::audit_locked(const std::string& entity, std::int64_t entity_id, cons
     st.bind(1, entity_id);
     if (st.step()) device = st.int64(0);
   }
-  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, user, station, entity, entity_id, device_id, action, detail) "
-                                       "VALUES (") + kNow + ", ?, ?, ?, ?, ?, ?, ?)");
+  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, device_id, action, detail) "
+                                       "VALUES (") + conn_->now_sql() + ", ?, ?, ?, ?, ?, ?, ?)");
   st.bind(1, actor_.user).bind(2, actor_.station).bind(3, entity).bind(4, entity_id).bind(5, device)
       .bind(6, action).bind(7, detail);
   st.run();
@@ -194,9 +254,9 @@ std::int64_t Store::ensure_device_locked(const DeviceInfo& d) {
     }
     return id;
   }
-  auto ins = conn_->prepare(std::string("INSERT INTO devices(model, serial, firmware, created_at) VALUES (?, ?, ?, ") + kNow + ")");
-  ins.bind(1, d.model).bind(2, d.serial).bind(3, d.firmware).run();
-  const std::int64_t id = conn_->last_insert_rowid();
+  auto ins = conn_->prepare(std::string("INSERT INTO devices(model, serial, firmware, created_at) VALUES (?, ?, ?, ") + conn_->now_sql() + ") RETURNING id");
+  ins.bind(1, d.model).bind(2, d.serial).bind(3, d.firmware).step();
+  const std::int64_t id = ins.int64(0);
   audit_locked("device", id, "create", d.model + " " + d.serial);
   return id;
 }
@@ -212,9 +272,9 @@ static std::int64_t ensure_station_locked(Store& s, Connection& c, const std::st
   auto st = c.prepare("SELECT id FROM stations WHERE name = ?");
   st.bind(1, name);
   if (st.step()) return st.int64(0);
-  auto ins = c.prepare(std::string("INSERT INTO stations(name, description, created_at) VALUES (?, ?, ") + kNow + ")");
-  ins.bind(1, name).bind(2, desc).run();
-  const std::int64_t id = c.last_insert_rowid();
+  auto ins = c.prepare(std::string("INSERT INTO stations(name, description, created_at) VALUES (?, ?, ") + c.now_sql() + ") RETURNING id");
+  ins.bind(1, name).bind(2, desc).step();
+  const std::int64_t id = ins.int64(0);
   s.audit_locked("station", id, "create", name);
   return id;
 }
@@ -228,7 +288,17 @@ std::int64_t Store::ensure_station(const std::string& name, const std::string& d
 std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, const std::string& canonical_json,
                                       const SensorErrors& e, std::optional<std::int64_t> parent,
                                       std::optional<std::int64_t> bench_run, std::optional<std::int64_t> inmotion_run,
-                                      int* version_out) {
+                                      int* version_out, const std::string& uid, bool* existed) {
+  if (existed) *existed = false;
+  if (!uid.empty()) {  // forwarded again (e.g. after a crash between the two stores): the one already there
+    auto q = conn_->prepare("SELECT id, version FROM coefficient_sets WHERE uid = ?");
+    q.bind(1, uid);
+    if (q.step()) {
+      if (version_out) *version_out = static_cast<int>(q.int64(1));
+      if (existed) *existed = true;
+      return q.int64(0);
+    }
+  }
   if (parent) {
     auto p = conn_->prepare("SELECT device_id FROM coefficient_sets WHERE id = ?");
     p.bind(1, *parent);
@@ -242,11 +312,13 @@ std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, 
   const int version = static_cast<int>(v.int64(0));
   auto ins = conn_->prepare(std::string(
       "INSERT INTO coefficient_sets(device_id, version, source, parent_id, bench_run_id, inmotion_run_id, "
-      "payload_json, status, created_at, created_by) VALUES (?, ?, ?, ?, ?, ?, ?, 'draft', ") + kNow + ", ?)");
+      "payload_json, status, created_at, created_by, uid) VALUES (?, ?, ?, ?, ?, ?, ?, 'draft', ") + conn_->now_sql() +
+      ", ?, ?) RETURNING id");
   ins.bind(1, device_id).bind(2, version).bind(3, to_string(source)).bind(4, parent).bind(5, bench_run)
-      .bind(6, inmotion_run).bind(7, canonical_json).bind(8, actor_.user + "@" + actor_.station);
-  ins.run();
-  const std::int64_t id = conn_->last_insert_rowid();
+      .bind(6, inmotion_run).bind(7, canonical_json).bind(8, actor_.user + "@" + actor_.station)
+      .bind(9, uid.empty() ? new_uid() : uid);
+  ins.step();
+  const std::int64_t id = ins.int64(0);
   if (hook_) hook_("set-row");
   auto val = conn_->prepare("INSERT INTO coefficient_values(set_id, name, value, sigma) VALUES (?, ?, ?, ?)");
   for (const auto& name : coefficient_names()) {
@@ -291,17 +363,28 @@ static void check_bench_run(const BenchRunInput& run) {
 }
 
 // The bench run's row, its audit entry (`detail`) and its QC results, inside the caller's transaction.
+// A run whose uid is already stored is not stored again: its id is returned with *existed = true.
 static std::int64_t insert_bench_run_locked(Store& store, Connection& c, std::int64_t device_id, const BenchRunInput& run,
-                                            const std::string& detail) {
+                                            const std::string& detail, bool* existed = nullptr) {
+  if (existed) *existed = false;
+  if (!run.uid.empty()) {
+    auto q = c.prepare("SELECT id FROM bench_runs WHERE uid = ?");
+    q.bind(1, run.uid);
+    if (q.step()) {
+      if (existed) *existed = true;
+      return q.int64(0);
+    }
+  }
   std::optional<std::int64_t> station;
   if (!run.station.empty()) station = ensure_station_locked(store, c, run.station, "");
   auto st = c.prepare(std::string(
       "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
-      "outcome, created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + kNow + ")");
+      "outcome, created_at, uid) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + c.now_sql() + ", ?) RETURNING id");
   st.bind(1, device_id).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
-      .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome);
-  st.run();
-  const std::int64_t id = c.last_insert_rowid();
+      .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome)
+      .bind(9, run.uid.empty() ? new_uid() : run.uid);
+  st.step();
+  const std::int64_t id = st.int64(0);
   store.audit_locked("bench_run", id, "create", detail);
   store.insert_qc_locked(run.qc, id, std::nullopt);
   return id;
@@ -316,21 +399,31 @@ StoredSet Store::store_bench(const DeviceInfo& d, const BenchRunInput& run, cons
   StoredSet out;
   conn_->write_transaction([&] {
     out.device_id = ensure_device_locked(d);
-    out.run_id = insert_bench_run_locked(*this, *conn_, out.device_id, run, "plan " + run.plan + ", outcome " + run.outcome);
+    out.run_id = insert_bench_run_locked(*this, *conn_, out.device_id, run, "plan " + run.plan + ", outcome " + run.outcome,
+                                         &out.existed);
+    if (out.existed) {  // the same run again (forwarded twice): its set, not a second one
+      auto q = conn_->prepare("SELECT id, version FROM coefficient_sets WHERE bench_run_id = ? ORDER BY id LIMIT 1");
+      q.bind(1, out.run_id);
+      if (q.step()) {
+        out.set_id = q.int64(0);
+        out.version = static_cast<int>(q.int64(1));
+        return;
+      }
+    }
     out.set_id = insert_set_locked(out.device_id, SetSource::bench, p.canonical_json, p.errors, std::nullopt,
-                                   out.run_id, std::nullopt, &out.version);
+                                   out.run_id, std::nullopt, &out.version, run.uid.empty() ? "" : run.uid + "/set");
   });
   return out;
 }
 
 StoredSet Store::store_set(const DeviceInfo& d, SetSource source, const std::string& coefficients_json,
-                           std::optional<std::int64_t> parent) {
+                           std::optional<std::int64_t> parent, const std::string& uid) {
   const ParsedCoefficients p = parse_coefficients(coefficients_json, "coefficients", d.serial);
   StoredSet out;
   conn_->write_transaction([&] {
     out.device_id = ensure_device_locked(d);
     out.set_id = insert_set_locked(out.device_id, source, p.canonical_json, p.errors, parent, std::nullopt,
-                                   std::nullopt, &out.version);
+                                   std::nullopt, &out.version, uid, &out.existed);
   });
   return out;
 }
@@ -384,7 +477,7 @@ void Store::set_setting(const std::string& key, const std::string& value) {
   conn_->write_transaction([&] {
     const std::string before = setting(key);
     auto st = conn_->prepare(std::string("INSERT INTO settings(key, value, changed_at, changed_by) VALUES (?, ?, ") +
-                             kNow + ", ?) ON CONFLICT(key) DO UPDATE SET value = excluded.value, "
+                             conn_->now_sql() + ", ?) ON CONFLICT(key) DO UPDATE SET value = excluded.value, "
                              "changed_at = excluded.changed_at, changed_by = excluded.changed_by");
     st.bind(1, key).bind(2, value).bind(3, actor_.user + "@" + actor_.station).run();
     audit_locked("setting", 0, "set", key + ": " + before + " -> " + value);
@@ -445,12 +538,12 @@ void Store::record_provisioning(std::int64_t set_id, const std::string& kind, co
                                          "; only approved sets are provisioned");
     auto ins = conn_->prepare(std::string(
         "INSERT INTO provisioning_events(set_id, device_id, kind, target, ok, readback_json, message, actor, at) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + kNow + ")");
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + conn_->now_sql() + ") RETURNING id");
     ins.bind(1, set_id).bind(2, device).bind(3, kind).bind(4, target).bind(5, ok ? 1 : 0)
         .bind(6, readback_json.empty() ? std::string("{}") : readback_json).bind(7, message)
         .bind(8, actor_.user + "@" + actor_.station);
-    ins.run();
-    const std::int64_t ev = conn_->last_insert_rowid();
+    ins.step();
+    const std::int64_t ev = ins.int64(0);
     audit_locked("coefficient_set", set_id, kind == "device" ? "provision" : "export",
                  std::string(ok ? "ok" : "FAILED") + " to " + target + " (event " + std::to_string(ev) + ")" +
                      (message.empty() ? "" : ": " + message));
@@ -566,7 +659,7 @@ std::vector<CoefficientSetRecord> Store::sets_of(std::int64_t device_id) {
 
 std::optional<CoefficientSetRecord> Store::latest_set(std::int64_t device_id, std::optional<SetStatus> status) {
   auto st = conn_->prepare(std::string(kSetColumns) +
-                           "WHERE s.device_id = ? AND (? IS NULL OR s.status = ?) ORDER BY s.version DESC LIMIT 1");
+                           "WHERE s.device_id = ? AND (CAST(? AS TEXT) IS NULL OR s.status = CAST(? AS TEXT)) ORDER BY s.version DESC LIMIT 1");
   std::optional<std::string> s;
   if (status) s = to_string(*status);
   st.bind(1, device_id).bind(2, s).bind(3, s);
@@ -652,7 +745,7 @@ std::vector<ProvisioningEvent> Store::provisioning_of(std::int64_t device_id) {
 
 std::vector<AuditEntry> Store::audit_of_device(std::int64_t device_id) {
   std::vector<AuditEntry> out;
-  auto st = conn_->prepare("SELECT id, at, user, station, entity, entity_id, action, detail FROM audit_log "
+  auto st = conn_->prepare("SELECT id, at, \"user\", station, entity, entity_id, action, detail FROM audit_log "
                            "WHERE device_id = ? ORDER BY id");
   st.bind(1, device_id);
   while (st.step())

@@ -21,11 +21,11 @@
 #include <vector>
 
 #include "calibration/sensor_model.hpp"
-#include "db/sqlite.hpp"
+#include "db/connection.hpp"
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 3;
+inline constexpr int kSchemaVersion = 4;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -97,6 +97,9 @@ struct BenchRunInput {
   std::string recording_sha256; // SHA-256 of imu.csv (or of the recording as the station defines it)
   std::string started_at, ended_at;  // ISO 8601 UTC
   std::string outcome = "pass";  // "pass" | "fail" | "aborted"
+  // Stable id of the run (forwarding from a station's journal): a run whose uid is already stored
+  // is not stored again. Empty: a new random one. The run's set gets uid + "/set".
+  std::string uid;
   std::vector<QcResult> qc;     // bench residuals and checks
 };
 
@@ -149,6 +152,7 @@ struct DeviceSummary {
 struct StoredSet {
   std::int64_t device_id = 0, run_id = 0, set_id = 0;
   int version = 0;
+  bool existed = false;  // the uid was already stored: these are the ids of that earlier store
 };
 
 // One row of the fleet view: one coefficient of the newest non-revoked set of one device.
@@ -165,6 +169,8 @@ struct FleetValue {
 // Names of the 24 indexed coefficients, in a fixed order: gyro.bias.{x,y,z}, gyro.M.{xx..zz},
 // accel.bias.{x,y,z}, accel.M.{xx..zz}.
 const std::vector<std::string>& coefficient_names();
+// A new random id for a run or set (32 hex digits).
+std::string new_uid();
 // value/σ of a named coefficient of a set of errors.
 double coefficient_value(const SensorErrors& e, const std::string& name);
 double coefficient_sigma(const SensorErrors& e, const std::string& name);
@@ -197,6 +203,10 @@ class Store {
   // "set-values") in the middle of writing a set. Not for production use.
   void set_test_hook(std::function<void(const char* point)> hook) { hook_ = std::move(hook); }
   const Actor& actor() const { return actor_; }
+  // Who the next changes are by (forwarding from a journal writes as the operator who ran the station).
+  void set_actor(Actor a) { actor_ = std::move(a); }
+  // PostgreSQL: create/refresh the four roles with their grants and row rules (roles.sql), audited.
+  void apply_roles();
 
   // ---- writes (each one transaction, audited) ----
   // Creates the device if unknown (model/serial), updates firmware when given. Returns its id.
@@ -206,7 +216,7 @@ class Store {
   StoredSet store_bench(const DeviceInfo& d, const BenchRunInput& run, const std::string& coefficients_json);
   // A coefficient set without a run (e.g. imported from a file), source as given.
   StoredSet store_set(const DeviceInfo& d, SetSource source, const std::string& coefficients_json,
-                      std::optional<std::int64_t> parent = std::nullopt);
+                      std::optional<std::int64_t> parent = std::nullopt, const std::string& uid = "");
   // Status changes. approve() does not check thresholds: use approve_checked() (db/approval.hpp).
   void set_status(std::int64_t set_id, SetStatus to, const std::string& reason);
   void record_provisioning(std::int64_t set_id, const std::string& kind, const std::string& target, bool ok,
@@ -244,7 +254,7 @@ class Store {
   std::int64_t insert_set_locked(std::int64_t device_id, SetSource source, const std::string& canonical_json,
                                  const SensorErrors& e, std::optional<std::int64_t> parent,
                                  std::optional<std::int64_t> bench_run, std::optional<std::int64_t> inmotion_run,
-                                 int* version_out);
+                                 int* version_out, const std::string& uid = "", bool* existed = nullptr);
   void insert_qc_locked(const std::vector<QcResult>& qc, std::optional<std::int64_t> bench_run,
                         std::optional<std::int64_t> inmotion_run);
   std::int64_t ensure_device_locked(const DeviceInfo& d);
@@ -254,6 +264,8 @@ class Store {
  private:
   CoefficientSetRecord read_set_row(Statement& st);
   void migrate();
+  void migrate_postgres();
+  void audit_migration(int from);
   std::unique_ptr<Connection> conn_;
   Actor actor_;
   std::function<void(const char*)> hook_;

@@ -19,6 +19,7 @@
 #include "db/approval.hpp"
 #include "db/fleet.hpp"
 #include "db/inmotion_import.hpp"
+#include "db/journal.hpp"
 #include "db/store.hpp"
 
 namespace calbench::cli {
@@ -39,12 +40,15 @@ struct DbArgs {
   std::vector<std::string> qc;
   // settings
   std::string key, value;
+  bool roles = false;  // db init --roles
+  std::string journal;  // a station's journal (with a PostgreSQL --db)
+  bool status = false;  // db sync --status
 };
 
 std::string db_path(const DbArgs& a) { return a.db.empty() ? Store::default_path() : a.db; }
 
 void add_db_option(CLI::App* sub, DbArgs& a) {
-  sub->add_option("--db", a.db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
+  sub->add_option("--db", a.db, "database: a SQLite file or a postgresql:// URI (default: $CALBENCH_DB, else ./calbench.db)");
 }
 
 void add_operator_option(CLI::App* sub, DbArgs& a) {
@@ -115,7 +119,14 @@ void print_set_summary(const CoefficientSetRecord& s) {
 
 void cmd_init(const DbArgs& a) {
   auto s = open_store(a, true);
-  std::cout << "database " << db_path(a) << " ready (schema version " << s->schema_version() << ")\n";
+  if (a.roles) {
+    if (s->connection().dialect() != Dialect::postgres)
+      throw arg_error("--roles", "roles are PostgreSQL's (a SQLite file has no users): give --db postgresql://OWNER@HOST/DB");
+    s->apply_roles();
+  }
+  std::cout << "database " << s->connection().path() << " ready (schema version " << s->schema_version() << ")"
+            << (a.roles ? "; roles calbench_station, calbench_qc, calbench_provisioning, calbench_reader in place" : "")
+            << "\n";
 }
 
 void cmd_devices(const DbArgs& a) {
@@ -399,6 +410,28 @@ void cmd_store_bench(const DbArgs& a) {
   run.ended_at = a.ended;
   run.outcome = a.outcome;
   for (const auto& q : a.qc) run.qc.push_back(parse_qc_option(q));
+  if (is_postgres_uri(db_path(a))) {
+    // A central store: the journal first (never waits for the network), then forwarded.
+    check_target(db_path(a));
+    OpenOptions o;
+    o.create = true;
+    Store j(journal_path(a.journal), o, Actor::from_environment(a.op));
+    const StoredSet st = j.store_bench(d, run, coefficients_to_json(c).dump(2));
+    const SyncOutcome so = sync_journal(j, db_path(a));
+    if (a.json) {
+      print_json(json{{"journal", j.connection().path()}, {"journal_bench_run", st.run_id}, {"journal_set", st.set_id},
+                      {"central", redact_uri(db_path(a))}, {"reached", so.reached}, {"forwarded", so.forwarded + so.already},
+                      {"pending", so.pending_after}, {"lines", so.lines}}.dump(2));
+      return;
+    }
+    std::cout << "stored bench run " << st.run_id << " and set " << st.set_id << " in the journal " << j.connection().path()
+              << "\n";
+    for (const auto& l : so.lines) std::cout << "  forwarded: " << l << "\n";
+    if (!so.reached)
+      std::cout << "central store not reached (" << so.error << "): " << so.pending_after
+                << " run(s) wait in the journal; `calbench db sync` forwards them\n";
+    return;
+  }
   auto s = open_store(a, true);
   const StoredSet st = s->store_bench(d, run, coefficients_to_json(c).dump(2));
   if (a.json) {
@@ -407,6 +440,47 @@ void cmd_store_bench(const DbArgs& a) {
   }
   std::cout << "stored bench run " << st.run_id << " and set " << st.set_id << " (" << d.serial << " v" << st.version
             << ", draft)\n";
+}
+
+// db sync: forward the journal's pending runs and sets to the central store (--db URI).
+void cmd_sync(const DbArgs& a) {
+  const std::string central = db_path(a);
+  if (!is_postgres_uri(central))
+    throw arg_error("--db", "db sync forwards a station's journal to a central PostgreSQL store: give --db postgresql://... "
+                            "(or CALBENCH_DB)");
+  check_target(central);
+  const std::string jp = journal_path(a.journal);
+  OpenOptions o;  // the journal must exist (a typo would otherwise create an empty one and report nothing to do)
+  Store j(jp, o, Actor::from_environment(a.op));
+  if (a.status) {
+    const auto items = pending(j);
+    if (a.json) {
+      json arr = json::array();
+      for (const auto& i : items)
+        arr.push_back({{"uid", i.uid}, {"serial", i.serial}, {"bench_run", i.local_run_id}, {"outcome", i.outcome},
+                       {"set", i.has_set}, {"created_at", i.created_at}});
+      print_json(json{{"journal", j.connection().path()}, {"central", redact_uri(central)}, {"pending", arr}}.dump(2));
+      return;
+    }
+    std::cout << "journal " << j.connection().path() << ": " << items.size() << " run(s) not yet in " << redact_uri(central)
+              << "\n";
+    for (const auto& i : items)
+      std::cout << "  " << i.created_at << "  " << i.serial << "  run " << i.local_run_id << " (" << i.outcome << ")"
+                << (i.has_set ? " with its set" : "") << "\n";
+    return;
+  }
+  const SyncOutcome so = sync_journal(j, central);
+  if (a.json) {
+    print_json(json{{"journal", j.connection().path()}, {"central", redact_uri(central)}, {"reached", so.reached},
+                    {"forwarded", so.forwarded}, {"already", so.already}, {"pending", so.pending_after},
+                    {"error", so.error}, {"lines", so.lines}}.dump(2));
+  } else {
+    for (const auto& l : so.lines) std::cout << "forwarded: " << l << "\n";
+    std::cout << so.forwarded << " forwarded, " << so.already << " already there, " << so.pending_after << " pending\n";
+  }
+  if (!so.reached || so.pending_after > 0)
+    throw DbError(1, "central store not reached: " + so.error + " (" + std::to_string(so.pending_after) +
+                         " run(s) still in the journal " + j.connection().path() + ")");
 }
 
 template <class F>
@@ -421,7 +495,15 @@ const bool registered = add_command(70, [](CLI::App& app) {
   auto a = std::make_shared<DbArgs>();
   auto* db = app.add_subcommand("db", "coefficient database: devices, versioned sets, approval, history");
   db->require_subcommand(1);
-  add_operator_option(leaf(db, "init", "create the database (or migrate it to this version's schema)", a, cmd_init), *a);
+  auto* init = leaf(db, "init", "create the database (or migrate it to this version's schema)", a, cmd_init);
+  add_operator_option(init, *a);
+  init->add_flag("--roles", a->roles,
+                 "PostgreSQL: also create the roles calbench_station, calbench_qc, calbench_provisioning and "
+                 "calbench_reader with their grants and row rules (db/postgres/roles.sql; idempotent)");
+  init->footer("--db takes a SQLite file or a PostgreSQL URI (postgresql://USER@HOST[:PORT]/DB[?sslmode=verify-full]);\n"
+               "the password comes from PGPASSFILE, ~/.pgpass or PGPASSWORD and is never printed. On PostgreSQL, run\n"
+               "init as the database's owner; then give each station and person a login role in one of the groups,\n"
+               "e.g. CREATE ROLE station3 LOGIN PASSWORD '...' IN ROLE calbench_station (docs/database.md).");
   leaf(db, "devices", "list devices with their newest coefficient set", a, cmd_devices)
       ->add_flag("--json", a->json, "machine-readable output");
   auto* show = leaf(db, "show", "a device's coefficient sets (with σ, QC) and provisioning events", a, cmd_show);
@@ -459,7 +541,18 @@ const bool registered = add_command(70, [](CLI::App& app) {
   imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)")->check(set_id());
   imp->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(imp, *a);
+  auto* sync = leaf(db, "sync", "forward a station's journal to the central PostgreSQL store (exactly once)", a, cmd_sync);
+  sync->add_option("--journal", a->journal, "the station's journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
+  sync->add_flag("--status", a->status, "only list what is pending (nothing is forwarded)");
+  sync->add_flag("--json", a->json, "machine-readable output");
+  add_operator_option(sync, *a);
+  sync->footer("With --db postgresql://..., the station and db store-bench write each run and its set to the journal\n"
+               "first and forward them at once when the server answers; what the server did not take waits there.\n"
+               "Forwarding is idempotent (each run and set has a stable id): interrupted and run again, each item\n"
+               "arrives exactly once. Exit 1 while anything stays pending.");
   auto* sb = leaf(db, "store-bench", "store a bench run and its coefficient set (draft)", a, cmd_store_bench);
+  sb->add_option("--journal", a->journal,
+                 "with a PostgreSQL --db: the local journal written first (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   sb->add_option("--coeffs", a->coeffs, "coefficients.json of the bench fit")->required();
   sb->add_option("--recording", a->recording, "bench recording folder (its imu.csv is hashed)");
   sb->add_option("--sha256", a->sha256, "SHA-256 of the recording (instead of hashing --recording)")

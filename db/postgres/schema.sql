@@ -10,8 +10,9 @@
 --   * versions are per device, unique (gapless numbering is the writer's: lock the device row,
 --     take max + 1, in one transaction).
 -- Timestamps are timestamptz (UTC on output as ISO 8601 with milliseconds, as the SQLite store).
-
-BEGIN;
+--
+-- `calbench db init --db postgresql://OWNER@HOST/DB` applies this file and the migrations after it
+-- (db/postgres/pg_schema.cpp) in one transaction; by hand: `psql -1 -f schema.sql` (one transaction).
 
 CREATE TABLE schema_version (
   version    integer PRIMARY KEY,
@@ -203,5 +204,3 @@ CREATE TRIGGER audit_log_no_truncate BEFORE TRUNCATE ON audit_log
   EXECUTE FUNCTION calbench_refuse('the audit log is append-only');
 
 INSERT INTO schema_version(version) VALUES (3);
-
-COMMIT;

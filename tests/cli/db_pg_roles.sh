@@ -13,7 +13,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 port=$("$SRC/tests/support/pg_server.sh" start "$T/pg") || { rc=$?; [ "$rc" = 77 ] && { echo "SKIP: no PostgreSQL"; exit 77; }; exit "$rc"; }
 admin() { psql -h "$T/pg" -p "$port" -U calbench_admin -v ON_ERROR_STOP=1 -qtAX "$@"; }
 admin -d postgres -c "CREATE DATABASE calbench"
-admin -d calbench -f "$SRC/db/postgres/schema.sql" >/dev/null
+admin -d calbench -1 -f "$SRC/db/postgres/schema.sql" >/dev/null
 admin -d calbench -f "$SRC/db/postgres/roles.sql" >/dev/null
 admin -d calbench -f "$SRC/db/postgres/roles.sql" >/dev/null   # idempotent
 export PGPASSFILE="$T/pgpass"
