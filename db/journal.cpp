@@ -77,6 +77,7 @@ SyncOutcome sync_journal(Store& journal, const std::string& central, const OpenO
     std::string line = it.serial + " run " + std::to_string(run->id) + " (" + run->outcome + ")";
     std::int64_t central_id = 0;
     bool existed = false;
+    SyncOutcome::Item item{it.uid};
     try {
       if (it.has_set) {
         auto st = journal.connection().prepare(
@@ -86,6 +87,8 @@ SyncOutcome sync_journal(Store& journal, const std::string& central, const OpenO
         const StoredSet s = c->store_bench(dev, in, st.text(0));
         central_id = s.run_id;
         existed = s.existed;
+        item.central_set = s.set_id;
+        item.version = s.version;
         line += " -> central run " + std::to_string(s.run_id) + ", set " + std::to_string(s.set_id) + " (v" +
                 std::to_string(s.version) + ")";
       } else {
@@ -115,6 +118,9 @@ SyncOutcome sync_journal(Store& journal, const std::string& central, const OpenO
       st.bind(1, it.uid).bind(2, run->id).bind(3, central_id).bind(4, c->connection().path()).run();
     });
     (existed ? out.already : out.forwarded) += 1;
+    item.central_run = central_id;
+    item.existed = existed;
+    out.items.push_back(item);
     out.pending_after -= 1;
     out.lines.push_back(line + (existed ? " (already there)" : ""));
   }

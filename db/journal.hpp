@@ -33,7 +33,14 @@ struct SyncOutcome {
   int forwarded = 0;           // stored at the centre by this sync
   int already = 0;             // found there already (an earlier sync was interrupted), now marked
   int pending_after = 0;       // still in the journal only
-  std::vector<std::string> lines;  // one per item: "A100 run 3 → central run 17, set 21 (v2)"
+  std::vector<std::string> lines;  // one per item: "A100 run 3 -> central run 17, set 21 (v2)"
+  struct Item {
+    std::string uid;  // the run's
+    std::int64_t central_run = 0, central_set = 0;  // central_set 0: a run without a set
+    int version = 0;
+    bool existed = false;
+  };
+  std::vector<Item> items;  // what reached the centre, in order
 };
 // Forward every pending item of `journal` to the store at `central` (a PostgreSQL URI). Items are
 // forwarded one transaction each, in order; a lost connection stops the sync (reached = false when

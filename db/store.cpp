@@ -124,6 +124,20 @@ Store::Store(const std::string& path, const OpenOptions& opt, Actor actor)
   }
 }
 
+namespace {
+// Serialises schema and role changes between processes (a PostgreSQL session advisory lock).
+struct PgSchemaLock {
+  Connection& c;
+  explicit PgSchemaLock(Connection& conn) : c(conn) { c.exec("SELECT pg_advisory_lock(7203518)"); }
+  ~PgSchemaLock() {
+    try {
+      c.exec("SELECT pg_advisory_unlock(7203518)");
+    } catch (...) {  // the session ends with the connection: the lock goes with it
+    }
+  }
+};
+}  // namespace
+
 int Store::schema_version() {
   if (conn_->dialect() == Dialect::postgres) {
     auto t = conn_->prepare("SELECT to_regclass('schema_version') IS NOT NULL");
@@ -174,9 +188,11 @@ void Store::migrate_postgres() {
   if (v0 > kSchemaVersion)
     throw DbError(1, conn_->path() + ": database schema version " + std::to_string(v0) +
                          " is newer than this calbench (" + std::to_string(kSchemaVersion) + ")");
+  // calbench's migration lock, taken before the transaction: a SERIALIZABLE transaction's snapshot
+  // is taken at its first statement, so a lock taken inside it would not show the other's schema.
+  const PgSchemaLock lock(*conn_);
   try {
     conn_->write_transaction([&] {
-      conn_->exec("SELECT pg_advisory_xact_lock(7203518)");  // calbench's migration lock
       const int v = schema_version();
       if (v == kSchemaVersion) return;
       if (v == 0) conn_->exec(pg_base_schema());
@@ -193,8 +209,20 @@ void Store::migrate_postgres() {
   }
 }
 
+std::string Store::may_record_provisioning() {
+  if (conn_->dialect() != Dialect::postgres) return {};
+  auto st = conn_->prepare("SELECT has_table_privilege('provisioning_events', 'INSERT') AND "
+                           "has_column_privilege('coefficient_sets', 'status', 'UPDATE'), session_user");
+  st.step();
+  if (st.int64(0)) return {};
+  return conn_->path() + ": the database refused this to role '" + st.text(1) +
+         "': it may not record provisioning (a member of calbench_provisioning provisions; nothing was written to the "
+         "device)";
+}
+
 void Store::apply_roles() {
   if (conn_->dialect() != Dialect::postgres) throw std::logic_error("apply_roles: not PostgreSQL");
+  const PgSchemaLock lock(*conn_);
   conn_->exec(pg_roles_sql());  // its own transaction
   conn_->write_transaction([&] { audit_locked("schema", kSchemaVersion, "roles", "calbench_station, calbench_qc, "
                                                                               "calbench_provisioning, calbench_reader"); });

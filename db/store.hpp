@@ -205,6 +205,9 @@ class Store {
   const Actor& actor() const { return actor_; }
   // Who the next changes are by (forwarding from a journal writes as the operator who ran the station).
   void set_actor(Actor a) { actor_ = std::move(a); }
+  // "" when this connection may record provisioning events and mark sets provisioned, else why not
+  // (PostgreSQL privileges of the session's role; SQLite: always).
+  std::string may_record_provisioning();
   // PostgreSQL: create/refresh the four roles with their grants and row rules (roles.sql), audited.
   void apply_roles();
 

@@ -149,6 +149,9 @@ void run(const ProvisionArgs& a) {
   const auto dev = s.find_device(a.serial);
   if (!dev) throw arg_error("SERIAL", "unknown device '" + a.serial + "' in " + s.connection().path());
   const CoefficientSetRecord set = choose_set(s, *dev, a.set);
+  // A central store's role must be allowed to record the event before anything reaches a device
+  // or a file: a device written without its record would be a unit nobody can trace.
+  if (const std::string why = s.may_record_provisioning(); !why.empty()) throw PermissionError(0, why);
 
   if (!a.out.empty()) {
     write_text_atomic(a.out, set.payload_json + "\n");
@@ -221,7 +224,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   auto* ex = sub->add_option("--export", a->out, "write the set as coefficients.json instead");
   to->excludes(ex);
   ex->excludes(to);
-  sub->add_option("--db", a->db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
+  sub->add_option("--db", a->db, "database: a SQLite file or a postgresql:// URI (default: $CALBENCH_DB, else ./calbench.db)");
   sub->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(sub, a->op, "who provisions, recorded with the event (default: $CALBENCH_OPERATOR, else the OS user)");
   sub->callback([a] {

@@ -19,7 +19,7 @@ const bool registered = add_command(90, [](CLI::App& app) {
   auto* sub = app.add_subcommand("report", "printable HTML report of a device (or of the fleet) from the database");
   sub->add_option("SERIAL", a->target, "device serial number, or `fleet` for the fleet report")->required();
   sub->add_option("--html", a->html, "output HTML file (self-contained, plots embedded)")->required();
-  sub->add_option("--db", a->db, "database file (default: $CALBENCH_DB, else ./calbench.db)");
+  sub->add_option("--db", a->db, "database: a SQLite file or a postgresql:// URI (default: $CALBENCH_DB, else ./calbench.db)");
   sub->add_option("--thresholds", a->thresholds,
                   "approval thresholds (JSON, as for `db approve`) for the verdict; default: built-in ADIS16488A limits");
   sub->callback([a] {

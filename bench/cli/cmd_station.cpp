@@ -14,6 +14,7 @@
 #include "db/store.hpp"
 #include "bench/io/input_error.hpp"
 #include "bench/station/station.hpp"
+#include "db/connection.hpp"
 
 namespace calbench::cli {
 namespace {
@@ -89,8 +90,18 @@ void run_station(StationArgs& a) {
   std::cerr << (r.exit_code == 0 ? "" : "calbench: ") << r.message << std::endl;
   if (r.exit_code != 0) throw Exit{r.exit_code};
   // The next step of the workflow, to type.
-  if (r.summary.contains("db") && r.summary["db"].contains("set"))
-    std::cerr << "next: calbench db approve " << r.summary["db"]["set"].get<long long>() << " --db " << a.o.db
+  const std::string shown = db::redact_uri(a.o.db);  // never a password on the screen
+  if (r.summary.contains("db") && r.summary["db"].contains("central")) {
+    const auto& c = r.summary["db"]["central"];
+    if (c.contains("set"))
+      std::cerr << "next: calbench db approve " << c["set"].get<long long>() << " --db " << shown
+                << " --operator NAME   (with QC's credentials: signed by a QC engineer other than the station's operator)"
+                << std::endl;
+    else
+      std::cerr << "next: calbench db sync --db " << shown << (a.o.journal.empty() ? "" : " --journal " + a.o.journal)
+                << "   (the run waits in the journal until the central store answers)" << std::endl;
+  } else if (r.summary.contains("db") && r.summary["db"].contains("set"))
+    std::cerr << "next: calbench db approve " << r.summary["db"]["set"].get<long long>() << " --db " << shown
               << " --operator NAME   (signed by a QC engineer other than the station's operator; QC thresholds; "
                  "then calbench provision SERIAL --to-device URI)" << std::endl;
   else if (r.summary.contains("coefficients"))
@@ -109,7 +120,11 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_flag("--emulated", a->o.emulated,
                 "in-process table emulator (real Modbus TCP on an ephemeral loopback port) and IMU emulator, "
                 "emulated clock faster than real time");
-  run->add_option("--db", a->o.db, "also store the bench run and its coefficient set (draft) in this database");
+  run->add_option("--db", a->o.db,
+                  "also store the bench run and its coefficient set (draft) in this database: a SQLite file or a "
+                  "postgresql:// URI (central store; written to --journal first, forwarded when the server answers)");
+  run->add_option("--journal", a->o.journal,
+                  "with a PostgreSQL --db: the station's local journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   run->add_option("--out", a->out, "output folder: recording/, COEFFS.json (an existing run there is refused without --force)")
       ->capture_default_str();
   run->add_flag("--force", a->force, "replace an earlier run in --out");

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <ostream>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "calibration/earth.hpp"
 #include "calibration/imu_error_sim.hpp"
 #include "calibration/units.hpp"
+#include "db/journal.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"
@@ -81,6 +83,8 @@ class Station {
   void progress(const std::string& what, bool line = false);
   // The store and the bench-run record of this run (the done and the aborted run share them).
   std::unique_ptr<db::Store> open_store() const;
+  std::string store_path() const;  // the SQLite file written: --db, or the journal of a central --db
+  void forward(db::Store& journal, nlohmann::json& summary, const std::string& uid);
   db::BenchRunInput bench_run_record(const db::Store& store, const std::string& outcome, const std::string& recording) const;
   void check_stop() {
     if (stop_) throw Aborted("interrupted (Ctrl-C)");
@@ -122,8 +126,12 @@ void Station::setup() {
   // plan costs a table cycle); nothing is written yet: a missing database is created at the end.
   check_output_folder(o_.out_dir);
   if (!o_.db.empty()) {
-    if (fs::exists(o_.db)) db::Store check(o_.db);  // a calbench database (named InputError otherwise)
-    else check_output_path(o_.db);
+    // A central store is not contacted here: the run never waits for the network (the journal
+    // takes the run, and forwards it at the end when the server answers).
+    db::check_target(o_.db);
+    const std::string local = store_path();
+    if (fs::exists(local)) db::Store check(local);  // a calbench database (named InputError otherwise)
+    else check_output_path(local);
   }
   earth_ = std::make_unique<SiteEarth>(plan_.site);
   plan_s_ = plan_duration_s(plan_);
@@ -355,21 +363,52 @@ bool Station::record_step(int k, const PlanStep& s, std::vector<ImuRecord>& imu,
   return why.empty();
 }
 
+std::string Station::store_path() const {
+  return db::is_postgres_uri(o_.db) ? db::journal_path(o_.journal) : o_.db;
+}
+
 std::unique_ptr<db::Store> Station::open_store() const {
   db::OpenOptions dbo;
   dbo.create = true;
-  return std::make_unique<db::Store>(o_.db, dbo, db::Actor::from_environment(o_.operator_name));
+  return std::make_unique<db::Store>(store_path(), dbo, db::Actor::from_environment(o_.operator_name));
+}
+
+// With a central store: forward what the journal holds (this run and any earlier one that waited).
+// An unreachable server is not an error of the run: the journal keeps it for `calbench db sync`.
+void Station::forward(db::Store& journal, nlohmann::json& summary, const std::string& uid) {
+  if (!db::is_postgres_uri(o_.db)) return;
+  try {
+    const db::SyncOutcome so = db::sync_journal(journal, o_.db);
+    summary["central"] = {{"uri", db::redact_uri(o_.db)}, {"reached", so.reached}, {"forwarded", so.forwarded + so.already},
+                          {"pending", so.pending_after}};
+    for (const auto& it : so.items)
+      if (it.uid == uid) {
+        summary["central"]["bench_run"] = it.central_run;
+        if (it.central_set) summary["central"]["set"] = it.central_set, summary["central"]["version"] = it.version;
+      }
+    for (const auto& l : so.lines) log_ << "forwarded to " << db::redact_uri(o_.db) << ": " << l << "\n";
+    if (!so.reached || so.pending_after > 0)
+      log_ << "central store not reached (" << so.error << "): " << so.pending_after
+           << " run(s) wait in the journal " << journal.connection().path() << "; `calbench db sync` forwards them\n";
+  } catch (const std::exception& e) {  // e.g. refused by the server: the run stays in the journal
+    summary["central"] = {{"uri", db::redact_uri(o_.db)}, {"reached", false}, {"error", e.what()}};
+    log_ << "could not forward to " << db::redact_uri(o_.db) << ": " << e.what() << " (the run stays in the journal "
+         << journal.connection().path() << ")\n";
+  }
 }
 
 db::BenchRunInput Station::bench_run_record(const db::Store& store, const std::string& outcome,
                                             const std::string& recording) const {
   db::BenchRunInput run;
-  run.station = o_.emulated ? "calbench-emulated" : store.actor().station;
+  // An emulated run is "calbench-emulated" unless the station is named ($CALBENCH_STATION).
+  const char* named = std::getenv("CALBENCH_STATION");
+  run.station = o_.emulated && !(named && *named) ? "calbench-emulated" : store.actor().station;
   run.plan = plan_.name;
   run.recording_path = recording;
   run.started_at = started_;
   run.ended_at = iso_utc(std::chrono::system_clock::now());
   run.outcome = outcome;
+  run.uid = db::new_uid();  // stable across forwarding from the journal
   run.qc.push_back({"samples_lost", static_cast<double>(lost_), 0.0, lost_ == 0, "samples", db::kSampleNotApplicable,
                     "no IMU sample lost while recording: value ≤ 0"});
   return run;
@@ -452,8 +491,10 @@ Result Station::run() {
       const auto& id = imu_->identity();
       const db::StoredSet st = store->store_bench({"ADIS16488A", id.serial_string(), id.firmware()}, run,
                                                  coefficients_to_json(cs).dump(2));
-      res.summary["db"] = {{"path", o_.db}, {"set", st.set_id}, {"version", st.version}, {"bench_run", st.run_id}};
-      log_ << "stored in " << o_.db << ": set " << st.set_id << " (v" << st.version << ", draft)\n";
+      res.summary["db"] = {{"path", store->connection().path()}, {"set", st.set_id}, {"version", st.version},
+                           {"bench_run", st.run_id}};
+      log_ << "stored in " << store->connection().path() << ": set " << st.set_id << " (v" << st.version << ", draft)\n";
+      forward(*store, res.summary["db"], run.uid);
     }
     if (o_.emulated) {
       // In the spec's coefficients.json schema, so every tool (compare, simulate drive) reads it.
@@ -506,10 +547,11 @@ Result Station::run() {
         const std::int64_t run_id = store->store_bench_run({"ADIS16488A", id.serial_string(), id.firmware()}, run,
                                                           std::string(e.what()) + " (after " + std::to_string(samples_) +
                                                               " samples)");
-        res.summary["db"] = {{"path", o_.db}, {"bench_run", run_id}, {"outcome", "aborted"}};
-        res.message += "; recorded as aborted bench run " + std::to_string(run_id) + " in " + o_.db;
+        res.summary["db"] = {{"path", store->connection().path()}, {"bench_run", run_id}, {"outcome", "aborted"}};
+        res.message += "; recorded as aborted bench run " + std::to_string(run_id) + " in " + store->connection().path();
+        forward(*store, res.summary["db"], run.uid);
       } catch (const std::exception& w) {
-        log_ << "could not record the aborted run in " << o_.db << ": " << w.what() << "\n";
+        log_ << "could not record the aborted run in " << store_path() << ": " << w.what() << "\n";
       }
     }
   }

@@ -30,7 +30,11 @@ struct Options {
   std::string imu_uri;         // ft232h[:serial] | mcp2210[:serial]; empty with --emulated
   bool emulated = false;
   std::filesystem::path out_dir = "station-out";
-  std::string db;              // also store run + draft set here (COEFFS.json is always written)
+  std::string db;              // also store run + draft set here (COEFFS.json is always written): a SQLite
+                               // file, or a PostgreSQL URI (then via the journal below, forwarded at once
+                               // when the server answers, else by `calbench db sync`)
+  std::string journal;         // with a PostgreSQL db: the local journal (empty: $CALBENCH_JOURNAL, else
+                               // ./calbench-journal.db)
   std::string operator_name;   // who runs the station (recorded; empty: $CALBENCH_OPERATOR, else the OS user)
   std::uint64_t seed = 1;      // emulated unit
   int max_repeats = 2;         // per step

@@ -2,7 +2,9 @@
 
 #include <libpq-fe.h>
 
+#include <algorithm>
 #include <charconv>
+#include <iterator>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -160,7 +162,35 @@ void check_target(const std::string& target) {
     throw InputError(redact_uri(target), 0, "", "not a valid PostgreSQL URI (" + why +
                                                    "); expected postgresql://USER@HOST[:PORT]/DATABASE[?sslmode=…]");
   }
+  // Values libpq checks only when it connects: checked here, so that a typo is bad input (exit 2)
+  // and not an unreachable server.
+  std::string bad;
+  for (PQconninfoOption* p = o; p->keyword; ++p) {
+    if (!p->val) continue;
+    const std::string k = p->keyword, v = p->val;
+    if (k == "port" || k == "connect_timeout") {
+      std::string part;
+      for (std::size_t i = 0; i <= v.size() && bad.empty(); ++i) {
+        if (i == v.size() || (k == "port" && v[i] == ',')) {
+          const bool digits = !part.empty() && part.find_first_not_of("0123456789") == std::string::npos;
+          if (!digits || (k == "port" && (part.size() > 5 || std::stoi(part) < 1 || std::stoi(part) > 65535)))
+            bad = k + " '" + part + "' is not " + (k == "port" ? "a port number (1-65535)" : "a whole number of seconds");
+          part.clear();
+        } else {
+          part += v[i];
+        }
+      }
+    } else if (k == "sslmode") {
+      const char* modes[] = {"disable", "allow", "prefer", "require", "verify-ca", "verify-full"};
+      if (std::find(std::begin(modes), std::end(modes), v) == std::end(modes))
+        bad = "sslmode '" + v + "' is not one of disable, allow, prefer, require, verify-ca, verify-full";
+    }
+    if (!bad.empty()) break;
+  }
   PQconninfoFree(o);
+  if (!bad.empty())
+    throw InputError(redact_uri(target), 0, "", "not a valid PostgreSQL URI: " + bad +
+                                                   " (expected postgresql://USER@HOST[:PORT]/DATABASE[?sslmode=…])");
 }
 
 PgConnection::PgConnection(const std::string& uri, const OpenOptions& opt) : Connection(redact_uri(uri), opt), uri_(uri) {
@@ -209,9 +239,12 @@ void PgConnection::reconnect() {
 void PgConnection::throw_result(PGresult* r, std::string_view context) {
   const char* ss = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : nullptr;
   const std::string state = ss ? ss : "";
-  std::string msg = trim(r ? PQresultErrorMessage(r) : PQerrorMessage(conn_));
-  if (msg.rfind("ERROR:  ", 0) == 0) msg = msg.substr(8);
-  if (const auto nl = msg.find('\n'); nl != std::string::npos) msg = msg.substr(0, nl);
+  // The primary message only (DETAIL and CONTEXT lines follow it), without its severity.
+  std::string msg = r ? PQresultErrorMessage(r) : PQerrorMessage(conn_);
+  if (const auto nl = msg.find('\n'); nl != std::string::npos && nl > 0) msg = msg.substr(0, nl);
+  msg = trim(msg);
+  for (const char* sev : {"ERROR: ", "FATAL: "})
+    if (msg.rfind(sev, 0) == 0) msg = msg.substr(std::strlen(sev));
   const std::string what = path_ + ": " + std::string(context) + ": " + msg;
   if (PQstatus(conn_) != CONNECTION_OK || state.rfind("08", 0) == 0 || state == "57P01" || state == "57P02" ||
       state == "57P03")
