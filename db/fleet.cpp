@@ -74,4 +74,56 @@ std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values)
   return out;
 }
 
+std::vector<StationStats> station_stats(const std::vector<FleetValue>& values) {
+  // station → coefficient → values; station → serials
+  std::map<std::string, std::map<std::string, std::vector<double>>> by;
+  std::map<std::string, std::vector<std::string>> serials;
+  for (const auto& v : values) {
+    by[v.station][v.name].push_back(v.value);
+    auto& s = serials[v.station];
+    if (std::find(s.begin(), s.end(), v.serial) == s.end()) s.push_back(v.serial);
+  }
+  std::vector<StationStats> out;
+  for (const auto& [station, coeffs] : by) {
+    StationStats st;
+    st.station = station;
+    st.serials = serials[station];
+    st.devices = st.serials.size();
+    for (const auto& name : coefficient_names()) {
+      const auto it = coeffs.find(name);
+      if (it == coeffs.end()) continue;
+      std::vector<double> others;
+      for (const auto& [o, oc] : by)
+        if (o != station)
+          if (const auto j = oc.find(name); j != oc.end()) others.insert(others.end(), j->second.begin(), j->second.end());
+      const std::vector<double>& mine = it->second;
+      if (mine.size() < 2 || others.size() < 3) continue;
+      StationCoefficient c;
+      c.name = name;
+      display_unit(name, c.unit, c.to_display);
+      c.n = mine.size();
+      c.n_others = others.size();
+      c.median = median_of(mine);
+      c.median_others = median_of(others);
+      std::vector<double> dev_o, dev_m;
+      for (double x : others) dev_o.push_back(std::abs(x - c.median_others));
+      for (double x : mine) dev_m.push_back(std::abs(x - c.median));
+      const double mad_o = median_of(dev_o), mad_m = median_of(dev_m);
+      const double sigma_o = 1.4826 * mad_o, sigma_m = 1.4826 * mad_m;
+      const double se = 1.2533 * std::sqrt(sigma_m * sigma_m / static_cast<double>(c.n) +
+                                           sigma_o * sigma_o / static_cast<double>(c.n_others));
+      const double d = c.median - c.median_others;
+      c.z = se > 0 ? d / se : (d == 0 ? 0 : std::copysign(INFINITY, d));
+      c.spread_ratio = mad_o > 0 ? mad_m / mad_o : (mad_m == 0 ? 1 : INFINITY);
+      c.offset_flag = std::abs(c.z) > kStationZ;
+      c.spread_flag = c.n >= kStationSpreadMinUnits && c.spread_ratio > kStationSpread;
+      st.tested = true;
+      st.flagged = st.flagged || c.offset_flag || c.spread_flag;
+      st.coefficients.push_back(c);
+    }
+    out.push_back(std::move(st));
+  }
+  return out;
+}
+
 }  // namespace calbench::db

@@ -31,4 +31,32 @@ void display_unit(const std::string& name, std::string& unit, double& to_display
 double median_of(std::vector<double> v);
 std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values);
 
+// Per station: do its units agree with the other stations' units? A table or fixture fault moves
+// every unit calibrated on it the same way (a tilted table: accelerometer biases and skews; a
+// table-rate error: gyro scale factors), which no single unit shows as an outlier. For each
+// coefficient, the station's median against the other stations' median, in units of the standard
+// error of the difference of two medians, 1.2533·√(σ_s²/n_s + σ_o²/n_o) with σ = 1.4826·MAD of each
+// group (Welch's form: a station whose units merely scatter more is not also called offset):
+// |z| > kStationZ flags it. Also its spread: MAD of the station over MAD of the others > kStationSpread
+// (with at least kStationSpreadMinUnits units). A station needs ≥ 2 units and the others ≥ 3.
+inline constexpr double kStationZ = 3.5;
+inline constexpr double kStationSpread = 3.0;
+inline constexpr std::size_t kStationSpreadMinUnits = 5;
+struct StationCoefficient {
+  std::string name, unit;
+  double to_display = 1;
+  std::size_t n = 0, n_others = 0;
+  double median = 0, median_others = 0, z = 0, spread_ratio = 0;  // SI medians
+  bool offset_flag = false, spread_flag = false;
+};
+struct StationStats {
+  std::string station;  // "" : sets without a known station
+  std::size_t devices = 0;
+  bool tested = false;  // enough units here and elsewhere to compare
+  bool flagged = false;
+  std::vector<StationCoefficient> coefficients;  // every coefficient when tested
+  std::vector<std::string> serials;
+};
+std::vector<StationStats> station_stats(const std::vector<FleetValue>& values);
+
 }  // namespace calbench::db

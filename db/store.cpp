@@ -787,13 +787,16 @@ std::vector<FleetValue> Store::fleet() {
   auto st = conn_->prepare(
       "WITH latest AS (SELECT device_id, MAX(version) AS version FROM coefficient_sets "
       "                WHERE status <> 'revoked' GROUP BY device_id) "
-      "SELECT d.serial, s.id, s.version, s.status, v.name, v.value, v.sigma FROM latest l "
+      "SELECT d.serial, s.id, s.version, s.status, v.name, v.value, v.sigma, COALESCE(sn.name, '') FROM latest l "
       "JOIN coefficient_sets s ON s.device_id = l.device_id AND s.version = l.version "
       "JOIN devices d ON d.id = s.device_id JOIN coefficient_values v ON v.set_id = s.id "
+      "LEFT JOIN coefficient_sets p ON p.id = s.parent_id "
+      "LEFT JOIN bench_runs r ON r.id = COALESCE(s.bench_run_id, p.bench_run_id) "
+      "LEFT JOIN stations sn ON sn.id = r.station_id "
       "ORDER BY d.serial, v.name");
   while (st.step())
     out.push_back(FleetValue{st.text(0), st.int64(1), static_cast<int>(st.int64(2)), st.text(3), st.text(4),
-                             st.real(5), st.is_null(6) ? kUnknownSigma : st.real(6)});
+                             st.real(5), st.is_null(6) ? kUnknownSigma : st.real(6), st.text(7)});
   return out;
 }
 

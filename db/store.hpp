@@ -164,6 +164,7 @@ struct FleetValue {
   std::string name;  // e.g. "gyro.bias.x", "accel.M.yz"
   double value = 0;
   double sigma = 0;  // +inf when unknown
+  std::string station;  // the station of the bench run behind the set (or its parent's); "" unknown
 };
 
 // Names of the 24 indexed coefficients, in a fixed order: gyro.bias.{x,y,z}, gyro.M.{xx..zz},

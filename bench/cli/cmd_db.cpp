@@ -298,6 +298,7 @@ void cmd_fleet(const DbArgs& a) {
   auto s = open_store(a);
   const auto values = s->fleet();
   const auto stats = fleet_stats(values);
+  const auto stations = station_stats(values);
   if (a.json) {
     json arr = json::array();
     for (const auto& c : stats) {
@@ -307,8 +308,21 @@ void cmd_fleet(const DbArgs& a) {
       arr.push_back({{"name", c.name}, {"n", c.n}, {"median", c.median}, {"mad", c.mad}, {"mean", c.mean},
                      {"stddev", c.stddev}, {"min", c.min}, {"max", c.max}, {"outliers", outl}});
     }
+    json sts = json::array();
+    for (const auto& st : stations) {
+      json flagged = json::array();
+      for (const auto& c : st.coefficients)
+        if (c.offset_flag || c.spread_flag)
+          flagged.push_back({{"name", c.name}, {"median", c.median}, {"median_others", c.median_others},
+                             {"z", sigma_or_null(c.z)}, {"spread_ratio", sigma_or_null(c.spread_ratio)},
+                             {"offset", c.offset_flag}, {"spread", c.spread_flag}});
+      sts.push_back({{"station", st.station}, {"devices", st.devices}, {"serials", st.serials}, {"compared", st.tested},
+                     {"flagged", st.flagged}, {"coefficients", flagged}});
+    }
     print_json(json{{"units", "SI (rad/s, m/s², dimensionless)"}, {"outlier_rule", "|0.6745 (x - median) / MAD| > 3.5"},
-                    {"coefficients", arr}}
+                    {"station_rule", "|median here - median elsewhere| / (1.2533 sqrt(s_here^2/n_here + s_else^2/n_else)) > 3.5, "
+                                     "s = 1.4826 MAD; or MAD here / MAD elsewhere > 3 with >= 5 units"},
+                    {"coefficients", arr}, {"stations", sts}}
                    .dump(2));
     return;
   }
@@ -324,6 +338,20 @@ void cmd_fleet(const DbArgs& a) {
               << fmt(c.median * c.to_display) << std::setw(12) << fmt(c.mad * c.to_display) << std::setw(12)
               << fmt(c.min * c.to_display) << std::setw(12) << fmt(c.max * c.to_display) << "  "
               << (outl.empty() ? "-" : outl) << "\n";
+  }
+  // Which station calibrated what; a station whose units drift apart from the others' is flagged.
+  std::cout << "\nstations: each against the others (offset |z| > " << kStationZ << ", spread ratio > " << kStationSpread
+            << ")\n";
+  for (const auto& st : stations) {
+    std::cout << "  " << std::left << std::setw(20) << (st.station.empty() ? "(unknown)" : st.station) << std::right
+              << std::setw(4) << st.devices << " unit(s)  "
+              << (!st.tested ? "not compared (too few units)" : st.flagged ? "DRIFTS APART: check its table and fixture" : "consistent")
+              << "\n";
+    for (const auto& c : st.coefficients)
+      if (c.offset_flag || c.spread_flag)
+        std::cout << "      " << c.name << ": median " << fmt(c.median * c.to_display) << " here, "
+                  << fmt(c.median_others * c.to_display) << " elsewhere " << c.unit << " (z " << fmt(c.z, 3) << ", spread "
+                  << fmt(c.spread_ratio, 3) << ")\n";
   }
 }
 

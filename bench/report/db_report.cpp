@@ -296,6 +296,34 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
   return page("calbench report " + dev->serial, b.str());
 }
 
+// Which station calibrated what, and whether a station's units drift apart from the others'
+// (db/fleet.hpp: a table or fixture fault shows there before any single unit is an outlier).
+static std::string station_section_html(const std::vector<StationStats>& ss) {
+  std::ostringstream b;
+  b << "<h2>Stations</h2>\n<div class=\"muted\">each station's units against the other stations' units, per "
+       "coefficient: offset z = difference of the medians over its standard error, flagged |z| &gt; "
+    << kStationZ << "; spread = MAD here over MAD elsewhere, flagged &gt; " << kStationSpread << " (with ≥ "
+    << kStationSpreadMinUnits << " units). A station needs ≥ 2 units and the others ≥ 3 to be compared.</div>\n"
+    << "<table><tr><th class=\"l\">station</th><th>units</th><th class=\"l\">verdict</th>"
+       "<th class=\"l\">flagged coefficients (median here / elsewhere, z, spread)</th><th class=\"l\">serials</th></tr>\n";
+  for (const auto& s : ss) {
+    std::string flags;
+    for (const auto& c : s.coefficients)
+      if (c.offset_flag || c.spread_flag)
+        flags += (flags.empty() ? "" : "; ") + c.name + ": " + num(c.median * c.to_display) + " / " +
+                 num(c.median_others * c.to_display) + " " + c.unit + ", z " + num(c.z, 3) + ", spread " +
+                 num(c.spread_ratio, 3);
+    std::string serials;
+    for (const auto& x : s.serials) serials += (serials.empty() ? "" : ", ") + x;
+    const char* verdict = !s.tested ? "not compared (too few units)" : s.flagged ? "DRIFTS APART: check its table and fixture" : "consistent";
+    b << "<tr><td class=\"l\">" << html_escape(s.station.empty() ? "(unknown)" : s.station) << "</td><td>" << s.devices
+      << "</td><td class=\"l " << (s.flagged ? "fail" : "") << "\">" << verdict << "</td><td class=\"l\">"
+      << html_escape(flags.empty() ? "–" : flags) << "</td><td class=\"l\">" << html_escape(serials) << "</td></tr>\n";
+  }
+  b << "</table>\n";
+  return b.str();
+}
+
 std::string fleet_report_html(Store& store) {
   const auto stats = fleet_stats(store.fleet());
   std::ostringstream b;
@@ -359,6 +387,7 @@ std::string fleet_report_html(Store& store) {
       << "</td></tr>\n";
   }
   b << "</table>\n";
+  b << station_section_html(station_stats(store.fleet()));
   return page("calbench fleet report", b.str());
 }
 
