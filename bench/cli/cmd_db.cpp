@@ -1,5 +1,6 @@
 // calbench db …: the coefficient database (docs/database.md).
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <array>
 #include <iomanip>
@@ -478,6 +479,9 @@ void cmd_sync(const DbArgs& a) {
                             "(or CALBENCH_DB)");
   check_target(central);
   const std::string jp = journal_path(a.journal);
+  if (!std::filesystem::exists(jp))
+    throw InputError(jp, 0, "", "no journal here (a station run or db store-bench with a PostgreSQL --db writes it): give "
+                                "--journal FILE or CALBENCH_JOURNAL");
   OpenOptions o;  // the journal must exist (a typo would otherwise create an empty one and report nothing to do)
   Store j(jp, o, Actor::from_environment(a.op));
   if (a.status) {

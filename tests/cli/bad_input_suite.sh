@@ -239,6 +239,21 @@ t db-init-missing-folder 2 "nowhere/x\.db: cannot create the database: the folde
 t db-init-folder 2 "folder: is a folder, not a database file" "$CALBENCH" db init --db folder
 t db-init-binary 2 "garbage\.bin: not a calbench database" "$CALBENCH" db init --db garbage.bin
 t db-devices-missing 2 "nope\.db: no database here" "$CALBENCH" db devices --db nope.db
+# PostgreSQL URIs (no server needed): malformed → 2, unreachable → 1; a password is never echoed,
+# and a station or store-bench with a malformed URI writes no journal.
+t db-pg-bad-port 2 "postgresql://st@127\.0\.0\.1:x1/c: not a valid PostgreSQL URI: port 'x1' is not a port number" "$CALBENCH" db devices --db "postgresql://st@127.0.0.1:x1/c"
+t db-pg-port-range 2 "port '70000' is not a port number" "$CALBENCH" db devices --db "postgresql://st@127.0.0.1:70000/c"
+t db-pg-sslmode 2 "sslmode 'sometimes' is not one of" "$CALBENCH" db devices --db "postgresql://st@h/c?sslmode=sometimes"
+t db-pg-bad-param 2 "not a valid PostgreSQL URI \(invalid URI query parameter" "$CALBENCH" db devices --db "postgresql://st@h/c?colour=blue"
+t db-pg-bad-escape 2 "^calbench: error: postgresql://st@h/c: not a valid PostgreSQL URI \(invalid password part|invalid percent" "$CALBENCH" db devices --db "postgresql://st:pa%zzss@h/c"
+grep -q "pa%zzss\|zzss" "$T/err.txt" && FAILED+=("db-pg-bad-escape: the password was echoed")
+t db-pg-unreachable 1 "postgresql://st@127\.0\.0\.1:1/c: cannot reach the database server" "$CALBENCH" db devices --db "postgresql://st:Hunter2pw@127.0.0.1:1/c"
+grep -q "Hunter2pw" "$T/err.txt" "$T/out.txt" && FAILED+=("db-pg-unreachable: the password was echoed")
+LEFT="j.db" t db-pg-store-bench-malformed 2 "not a valid PostgreSQL URI" "$CALBENCH" db store-bench --db "postgresql://st@h:0/c" --coeffs bench/truth.json --sha256 "$SHA" --journal j.db
+LEFT="j.db st" t station-pg-malformed 2 "not started \(nothing ran\): .*not a valid PostgreSQL URI" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db "postgresql://st@h/c?sslmode=x" --journal j.db --out st
+t db-sync-sqlite 2 "--db: db sync forwards a station's journal to a central PostgreSQL store" "$CALBENCH" db sync --db d.db
+t db-sync-no-journal 2 "nojournal\.db: no journal here \(a station run or db store-bench with a PostgreSQL --db writes it\)" "$CALBENCH" db sync --db "postgresql://st@127.0.0.1:1/c" --journal nojournal.db
+t db-init-roles-sqlite 2 "--roles: roles are PostgreSQL's" "$CALBENCH" db init --db d.db --roles
 t db-devices-not-db 2 "notdb\.csv: not a calbench database" "$CALBENCH" db devices --db notdb.csv
 : > empty.db
 t db-devices-empty-file 2 "empty\.db: not a calbench database \(an empty file" "$CALBENCH" db devices --db empty.db
