@@ -1,5 +1,5 @@
 // Coefficient database at fleet scale, SQLite and PostgreSQL side by side: 100,000 devices × 5
-// versions (500,000 sets, 12 M indexed coefficients, 1.1 M audit entries) per backend, built once
+// versions (500,000 sets, 12 M indexed coefficients, 1 M audit entries) per backend, built once
 // in a temporary folder (PostgreSQL: a throw-away server started with tests/support/pg_server.sh;
 // its rows are skipped with a message when PostgreSQL is not installed).
 //
