@@ -329,6 +329,9 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
                               std::optional<std::int64_t> parent) {
   constexpr double kTol = 1e-9;  // composition agreement (17-digit JSON, double arithmetic)
   ImportOutcome out;
+  // Drawn once, before the transaction: a re-run after a lost reply to its COMMIT recognises the
+  // run it stored (and does not call it "already imported").
+  const std::string uid = new_uid();
   store.connection().write_transaction([&] {
     out = ImportOutcome{};
     const auto dev = store.find_device(r.device.serial);
@@ -341,11 +344,22 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
                        "device " + r.device.serial + " is a " + dev->model + ", the result says " + r.device.model);
     // Which stored set did the fit start from?
     {  // The same result twice would store a second, identical set.
-      auto q = store.connection().prepare("SELECT id FROM inmotion_runs WHERE device_id = ? AND result_json = ?");
+      auto q = store.connection().prepare(
+          "SELECT r.id, COALESCE(r.uid, ''), s.id, s.version, s.source, s.parent_id FROM inmotion_runs r "
+          "LEFT JOIN coefficient_sets s ON s.inmotion_run_id = r.id WHERE r.device_id = ? AND r.result_json = ?");
       q.bind(1, dev->id).bind(2, r.result_json);
-      if (q.step())
+      if (q.step()) {
+        if (q.text(1) == uid) {  // this very import, committed before its reply was lost
+          out.run_id = q.int64(0);
+          out.set_id = q.int64(2);
+          out.version = static_cast<int>(q.int64(3));
+          out.source = source_from_string(q.text(4));
+          out.parent_id = q.opt_int64(5);
+          return;
+        }
         throw std::runtime_error(f + ": already imported (in-motion run " + std::to_string(q.int64(0)) +
                                  "): nothing stored");
+      }
     }
     if (parent) {
       const auto p = store.find_set(*parent);
@@ -379,8 +393,8 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
     auto st = store.connection().prepare(
         "INSERT INTO inmotion_runs(device_id, recording_path, recording_sha256, reference_system, mounting_roll_deg, "
         "mounting_pitch_deg, mounting_yaw_deg, mounting_roll_sigma_deg, mounting_pitch_sigma_deg, "
-        "mounting_yaw_sigma_deg, consistency_json, qc_json, result_json, created_at) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, " + std::string(store.connection().now_sql()) + ") RETURNING id");
+        "mounting_yaw_sigma_deg, consistency_json, qc_json, result_json, created_at, uid) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, " + std::string(store.connection().now_sql()) + ", ?) RETURNING id");
     st.bind(1, dev->id).bind(2, r.recording_path).bind(3, r.recording_sha256).bind(4, r.reference_system);
     for (int i = 0; i < 3; ++i) {
       const auto k = static_cast<std::size_t>(i);
@@ -388,13 +402,13 @@ ImportOutcome import_inmotion(Store& store, const InMotionResult& r, const std::
       else st.bind_null(5 + i);
       st.bind(8 + i, r.mounting_sigma_deg[k]);  // +inf → NULL
     }
-    st.bind(11, r.consistency_json).bind(12, r.qc_json).bind(13, r.result_json);
+    st.bind(11, r.consistency_json).bind(12, r.qc_json).bind(13, r.result_json).bind(14, uid);
     st.step();
     out.run_id = st.int64(0);
     store.audit_locked("inmotion_run", out.run_id, "create", "import " + f);
     store.insert_qc_locked(r.qc, std::nullopt, out.run_id);
     out.set_id = store.insert_set_locked(dev->id, out.source, r.coefficients.canonical_json, r.coefficients.errors,
-                                         out.parent_id, std::nullopt, out.run_id, &out.version);
+                                         out.parent_id, std::nullopt, out.run_id, &out.version, uid + "/set");
   });
   return out;
 }

@@ -424,10 +424,15 @@ StoredSet Store::store_bench(const DeviceInfo& d, const BenchRunInput& run, cons
   if (p.device.model != d.model)
     throw InputError("coefficients", 0, "device.model", "model '" + p.device.model + "' is not '" + d.model + "'");
   check_bench_run(run);
+  // The uid is drawn once, before the transaction: a transaction re-run after a lost reply to its
+  // COMMIT then finds the run it already stored instead of storing it again.
+  BenchRunInput r = run;
+  if (r.uid.empty()) r.uid = new_uid();
   StoredSet out;
   conn_->write_transaction([&] {
+    out = StoredSet{};
     out.device_id = ensure_device_locked(d);
-    out.run_id = insert_bench_run_locked(*this, *conn_, out.device_id, run, "plan " + run.plan + ", outcome " + run.outcome,
+    out.run_id = insert_bench_run_locked(*this, *conn_, out.device_id, r, "plan " + r.plan + ", outcome " + r.outcome,
                                          &out.existed);
     if (out.existed) {  // the same run again (forwarded twice): its set, not a second one
       auto q = conn_->prepare("SELECT id, version FROM coefficient_sets WHERE bench_run_id = ? ORDER BY id LIMIT 1");
@@ -439,7 +444,7 @@ StoredSet Store::store_bench(const DeviceInfo& d, const BenchRunInput& run, cons
       }
     }
     out.set_id = insert_set_locked(out.device_id, SetSource::bench, p.canonical_json, p.errors, std::nullopt,
-                                   out.run_id, std::nullopt, &out.version, run.uid.empty() ? "" : run.uid + "/set");
+                                   out.run_id, std::nullopt, &out.version, r.uid + "/set");
   });
   return out;
 }
@@ -447,11 +452,13 @@ StoredSet Store::store_bench(const DeviceInfo& d, const BenchRunInput& run, cons
 StoredSet Store::store_set(const DeviceInfo& d, SetSource source, const std::string& coefficients_json,
                            std::optional<std::int64_t> parent, const std::string& uid) {
   const ParsedCoefficients p = parse_coefficients(coefficients_json, "coefficients", d.serial);
+  const std::string u = uid.empty() ? new_uid() : uid;  // once, before the transaction (see store_bench)
   StoredSet out;
   conn_->write_transaction([&] {
+    out = StoredSet{};
     out.device_id = ensure_device_locked(d);
     out.set_id = insert_set_locked(out.device_id, source, p.canonical_json, p.errors, parent, std::nullopt,
-                                   std::nullopt, &out.version, uid, &out.existed);
+                                   std::nullopt, &out.version, u, &out.existed);
   });
   return out;
 }
@@ -463,9 +470,11 @@ std::int64_t Store::store_bench_run(const DeviceInfo& d, const BenchRunInput& ru
   // The reason is an exception's text: keep it on one line and bounded.
   std::string why;
   for (char c : reason.substr(0, 2000)) why += (static_cast<unsigned char>(c) < 0x20) ? ' ' : c;
+  BenchRunInput r = run;
+  if (r.uid.empty()) r.uid = new_uid();  // once, before the transaction (see store_bench)
   std::int64_t id = 0;
   conn_->write_transaction([&] {
-    id = insert_bench_run_locked(*this, *conn_, ensure_device_locked(d), run,
+    id = insert_bench_run_locked(*this, *conn_, ensure_device_locked(d), r,
                                  "plan " + run.plan + ", outcome " + run.outcome + (why.empty() ? "" : ": " + why) +
                                      (run.recording_path.empty() ? "" : "; partial recording " + run.recording_path));
   });

@@ -458,11 +458,10 @@ TEST_F(AmbiguousCommit, ARetriedSetWithAUidIsStoredOnce) {
   expect_sets_whole(s.connection(), false);
 }
 
-// Reproduces a bug in db/store.cpp (reported, not fixed here): a store without a uid (the station's
-// own `--db` store, store_set from the CLI) draws its random uid inside the transaction body, so
-// the retry after a COMMIT whose answer was lost draws another and stores the set a second time
-// (version n and n+1). Run with --gtest_also_run_disabled_tests.
-TEST_F(AmbiguousCommit, DISABLED_ARetriedStoreWithoutAUidIsStoredOnce) {
+// A store without a uid of the caller's (the station's own `--db` store, store_set from the CLI)
+// draws its uid once, before the transaction: the retry after a COMMIT whose answer was lost finds
+// the run it stored instead of storing the set a second time (version n and n+1).
+TEST_F(AmbiguousCommit, ARetriedStoreWithoutAUidIsStoredOnce) {
   Store s(uri, {}, test::test_actor());
   const DeviceInfo dev{"ADIS16488A", "A2", ""};
   proxy->arm();
