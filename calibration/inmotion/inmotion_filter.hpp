@@ -35,9 +35,14 @@ struct InMotionConfig {
   // In-run drift models per axis; defaults from `noise` (identified models may replace them).
   std::optional<std::array<DriftPrior, 3>> gyro_drift, accel_drift;
   // Between updates, move the drift estimates with their shaping filters (x̂ ← Φ·x̂, the filter's
-  // prediction). Always done for exponential-cosine axes (whose first state only acts through
-  // the dynamics); for first-order axes only when set, so that the default filter is unchanged.
-  bool propagate_drift = false;
+  // prediction; for a first-order axis d̂ ← e^{−αT}·d̂). Always done for exponential-cosine axes
+  // (whose first state only acts through the dynamics). For first-order axes it is the default:
+  // the error state's F (δḋ = −α·δd, error_model.hpp) assumes the estimate decays with the drift;
+  // held constant instead, the real error d̂ − d has the extra term α·d̂ the covariance does not
+  // carry, and the filter is overconfident about the drift, hence the heading between
+  // manoeuvres when only positions aid it (docs/in-motion.md, "GNSS-only drives"). false: the
+  // estimates held between updates (the filter before 2026-11-23).
+  bool propagate_drift = true;
   // Prior 1σ of the constant parameters, relative to the data the filter sees (priors.hpp): the
   // data-sheet class of a raw unit by default; for data corrected by a coefficient set,
   // priors_from_set() (the set's σ combined with the device class's stability allowance).
