@@ -323,10 +323,20 @@ void BM_InMotion_GnssAcceptance(benchmark::State& state) {
                   "RMS, max | bias, M within 3σ | bias | M | mounting within 3σ |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
       for (int k = 0; k < nc; ++k) {
         const Agg& a = agg[k];
-        std::printf("| %.0f Hz | %s | %d | %d | %ld / %ld | %ld | %.2f° / %.2f° | %d/%d | %.2f, %.1f | %.1f %% (%d/%d) | %d/%d | %d/%d | %d/%d |\n",
-                    rate, kCfgName[k], a.runs, a.lockouts, a.rejected, a.forced, a.realigned, a.head_max_after, a.head_end,
-                    a.heading_ok, a.runs, a.z_n ? std::sqrt(a.z2_sum / a.z_n) : 0.0, a.z_max, 100.0 * a.within / a.params, a.within, a.params, a.bias_within, a.bias_params, a.m_within, a.m_params,
-                    a.mount_within, 3 * a.runs);
+        if (k == 4)  // the bound: its parameter and mounting columns say nothing (priors ~0, truth given)
+          std::printf("\nThe bound, same drives and fixes:\n\n| IMU rate | bound | runs | lock-outs (runs with forced epochs) | "
+                      "rejected / forced epochs | heading error after 300 s of motion: max / max at end | runs < 0.5° | "
+                      "heading error / own σ: RMS, max |\n|---|---|---|---|---|---|---|---|\n");
+        if (k >= 4) {
+          std::printf("| %.0f Hz | %s | %d | %d | %ld / %ld | %.2f° / %.2f° | %d/%d | %.2f, %.1f |\n", rate, kCfgName[k], a.runs,
+                      a.lockouts, a.rejected, a.forced, a.head_max_after, a.head_end, a.heading_ok, a.runs,
+                      a.z_n ? std::sqrt(a.z2_sum / a.z_n) : 0.0, a.z_max);
+        } else {
+          std::printf("| %.0f Hz | %s | %d | %d | %ld / %ld | %ld | %.2f° / %.2f° | %d/%d | %.2f, %.1f | %.1f %% (%d/%d) | %d/%d | %d/%d | %d/%d |\n",
+                      rate, kCfgName[k], a.runs, a.lockouts, a.rejected, a.forced, a.realigned, a.head_max_after, a.head_end,
+                      a.heading_ok, a.runs, a.z_n ? std::sqrt(a.z2_sum / a.z_n) : 0.0, a.z_max, 100.0 * a.within / a.params, a.within, a.params, a.bias_within, a.bias_params, a.m_within, a.m_params,
+                      a.mount_within, 3 * a.runs);
+        }
         const std::string p = std::to_string(static_cast<int>(rate)) + "hz_" + std::to_string(k) + "_";
         state.counters[p + "within3s_pct"] = 100.0 * a.within / a.params;
         state.counters[p + "head_max_deg"] = a.head_max_after;
