@@ -75,6 +75,7 @@ InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb,
       }
     }
   }
+  predict_drift_ = cfg_.propagate_drift || !first.has_att;  // see InMotionConfig::propagate_drift
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
   nav_.reset(mems_state_from_reference(first, C_mb_, lever_));
@@ -543,7 +544,7 @@ const identification::DiscreteShapingFilter& InMotionFilterT<N>::discrete(int k,
 
 template <int N>
 void InMotionFilterT<N>::propagate_drift_nominal(double T) {
-  // x̂ ← Φ·x̂ (the prediction of the shaping filters). First-order axes only on request.
+  // x̂ ← Φ·x̂ (the prediction of the shaping filters). First-order axes on request or GNSS-only.
   for (int k = 0; k < 6; ++k) {
     double& d = k < 3 ? dg_(k) : da_(k - 3);
     if (expcos_[k]) {
@@ -551,7 +552,7 @@ void InMotionFilterT<N>::propagate_drift_nominal(double T) {
       const Eigen::Vector2d x = discrete(k, T).Phi * Eigen::Vector2d(x0, d);
       x0 = x(0);
       d = x(1);
-    } else if (cfg_.propagate_drift) {
+    } else if (predict_drift_) {
       d *= std::exp(-(k < 3 ? alpha_g_(k) : alpha_a_(k - 3)) * T);
     }
   }
