@@ -5,7 +5,8 @@
 #   * a station's credentials store runs and drafts (through its journal) but cannot approve or
 #     revoke: exit 1 with the role named; QC approves; provisioning writes the set to an
 #     emulated unit and records it;
-#   * the server stopped: the station's store goes to the journal, `db sync --status` lists it,
+#   * the server stopped half-way through a station run: it completes on its journal; with the
+#     server still away, stores go to the journal, `db sync --status` lists them,
 #     `db sync` forwards it after the restart; 20 syncs killed with SIGKILL at random points,
 #     then one to the end: every journal item at the centre exactly once;
 #   * bad targets: a malformed URI (exit 2, no journal written), an unreachable host and wrong
@@ -83,7 +84,15 @@ print(json.dumps({"format": "calbench-coefficients/1", "device": {"model": "ADIS
                   "gyro": tri(1e-3, 1e-6), "accel": tri(0.1, 1e-4)}))
 PY
 }
+# A station run while the server goes away half-way: it completes on the journal (exit 0) and says so.
+"$CALBENCH" station run --plan "$SRC/bench/plans/factory.toml" --emulated --seed 6 --db "$ST" --out st6 \
+  --operator sam > st6.txt 2>&1 &
+spid=$!
+for _ in $(seq 1 600); do grep -q "step 19/38" st6.txt && break; kill -0 $spid 2>/dev/null || break; sleep 0.05; done
+grep -q "step 19/38" st6.txt || { cat st6.txt; fail "the station did not get half-way"; }
 "$SRC/tests/support/pg_server.sh" stop "$T/pg"
+wait $spid || { cat st6.txt; fail "station run with the server away: exit $?"; }
+grep -q "central store not reached" st6.txt && grep -q "^next: calbench db sync" st6.txt || { cat st6.txt; fail "offline station run"; }
 N=30
 for i in $(seq 1 $N); do
   coeffs "J$((i % 7))" "$i" > c.json
@@ -91,7 +100,7 @@ for i in $(seq 1 $N); do
     || { cat sb.txt; fail "store-bench offline exit"; }
 done
 grep -q "central store not reached" sb.txt || { cat sb.txt; fail "offline store did not say so"; }
-"$CALBENCH" db sync --db "$ST" --status | grep -q "$N run(s) not yet in" || fail "sync --status"
+"$CALBENCH" db sync --db "$ST" --status | grep -q "$((N + 1)) run(s) not yet in" || fail "sync --status"
 set +e; "$CALBENCH" db sync --db "$ST" > /dev/null 2> err.txt; rc=$?; set -e
 [ "$rc" = 1 ] && grep -q "central store not reached" err.txt || { cat err.txt; fail "sync with the server away: exit $rc"; }
 "$SRC/tests/support/pg_server.sh" start "$T/pg" > /dev/null
@@ -114,7 +123,7 @@ admin() { psql -h "$T/pg" -p "$port" -U calbench_admin -v ON_ERROR_STOP=1 -qtAX 
 juids=$(sqlite3 "$T/journal.db" "SELECT uid FROM bench_runs ORDER BY uid" | tr '\n' ' ')
 cuids=$(admin -d calbench -c "SELECT uid FROM bench_runs WHERE uid IS NOT NULL ORDER BY uid" | tr '\n' ' ')
 [ "$juids" = "$cuids" ] || fail "journal and centre differ: $(echo "$juids" | wc -w) vs $(echo "$cuids" | wc -w) runs"
-[ "$(admin -d calbench -c "SELECT count(*) FROM coefficient_sets s JOIN bench_runs r ON r.id = s.bench_run_id WHERE r.uid IS NOT NULL")" = "$((N + 1))" ] || fail "sets at the centre"
+[ "$(admin -d calbench -c "SELECT count(*) FROM coefficient_sets s JOIN bench_runs r ON r.id = s.bench_run_id WHERE r.uid IS NOT NULL")" = "$((N + 2))" ] || fail "sets at the centre"
 [ "$(admin -d calbench -c "SELECT count(*) FROM coefficient_sets s WHERE (SELECT count(*) FROM coefficient_values v WHERE v.set_id = s.id) <> 24")" = 0 ] || fail "a partial set"
 [ "$(admin -d calbench -c "SELECT count(*) FROM (SELECT device_id FROM coefficient_sets GROUP BY device_id HAVING max(version) <> count(*) OR min(version) <> 1) g")" = 0 ] || fail "versions not gapless"
 
