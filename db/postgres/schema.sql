@@ -162,14 +162,11 @@ END $$;
 CREATE TRIGGER coefficient_sets_insert BEFORE INSERT ON coefficient_sets
   FOR EACH ROW EXECUTE FUNCTION calbench_set_insert();
 
--- Immutable, except the status, which only moves forwards.
+-- Immutable, except the status, which only moves forwards. Every other column is compared, so a
+-- column added by a later migration is immutable without editing this function.
 CREATE FUNCTION calbench_set_update() RETURNS trigger LANGUAGE plpgsql AS $$
 BEGIN
-  IF (NEW.payload_json, NEW.device_id, NEW.version, NEW.source, NEW.parent_id, NEW.bench_run_id,
-      NEW.inmotion_run_id, NEW.created_at, NEW.created_by, NEW.created_by_role, NEW.id)
-     IS DISTINCT FROM
-     (OLD.payload_json, OLD.device_id, OLD.version, OLD.source, OLD.parent_id, OLD.bench_run_id,
-      OLD.inmotion_run_id, OLD.created_at, OLD.created_by, OLD.created_by_role, OLD.id) THEN
+  IF to_jsonb(NEW) - 'status' IS DISTINCT FROM to_jsonb(OLD) - 'status' THEN
     RAISE EXCEPTION 'coefficient sets are immutable' USING ERRCODE = 'integrity_constraint_violation';
   END IF;
   IF NOT ((OLD.status = 'draft' AND NEW.status IN ('approved', 'revoked'))

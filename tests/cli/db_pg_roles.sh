@@ -5,13 +5,7 @@
 # approve, revoke, edit or delete a set even through plain psql; QC cannot provision or edit;
 # provisioning sees approved sets only and may only mark them provisioned; a reader writes nothing;
 # the audit log is append-only for everyone, the owner included, and records the database role.
-set -euo pipefail
-T=$(mktemp -d)
-cleanup() { "$SRC/tests/support/pg_server.sh" stop "$T/pg" || true; rm -rf "$T"; }
-trap cleanup EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
-port=$("$SRC/tests/support/pg_server.sh" start "$T/pg") || { rc=$?; [ "$rc" = 77 ] && { echo "SKIP: no PostgreSQL"; exit 77; }; exit "$rc"; }
-admin() { psql -h "$T/pg" -p "$port" -U calbench_admin -v ON_ERROR_STOP=1 -qtAX "$@"; }
+source "$SRC/tests/support/pg_test.sh"
 admin -d postgres -c "CREATE DATABASE calbench"
 admin -d calbench -1 -f "$SRC/db/postgres/schema.sql" >/dev/null
 admin -d calbench -f "$SRC/db/postgres/roles.sql" >/dev/null

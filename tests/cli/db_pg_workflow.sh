@@ -11,14 +11,8 @@
 #     then one to the end: every journal item at the centre exactly once;
 #   * bad targets: a malformed URI (exit 2, no journal written), an unreachable host and wrong
 #     credentials (exit 1, the password never echoed), an older schema (exit 1, what to do).
-set -euo pipefail
-T=$(mktemp -d)
-cleanup() { "$SRC/tests/support/pg_server.sh" stop "$T/pg" || true; rm -rf "$T"; }
-trap cleanup EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
-port=$("$SRC/tests/support/pg_server.sh" start "$T/pg") || { rc=$?; [ "$rc" = 77 ] && { echo "SKIP: no PostgreSQL"; exit 77; }; exit "$rc"; }
+source "$SRC/tests/support/pg_test.sh"
 cd "$T"
-admin() { psql -h "$T/pg" -p "$port" -U calbench_admin -v ON_ERROR_STOP=1 -qtAX "$@"; }
 admin -d postgres -c "CREATE DATABASE calbench"
 ADMIN="postgresql:///calbench?host=$T/pg&port=$port&user=calbench_admin"
 
@@ -71,19 +65,7 @@ x=$(admin -d calbench -c "SELECT db_role || ' ' || ok FROM provisioning_events W
 grep -q "anna@line-3  coefficient_set $set_id  status  draft -> approved" hist.txt || { cat hist.txt; fail "history"; }
 
 # The server away: stores go to the journal; sync forwards them after the restart.
-coeffs() {  # coeffs SERIAL SEED > file
-  python3 - "$@" <<'PY'
-import json, random, sys
-serial, seed = sys.argv[1], int(sys.argv[2])
-r = random.Random(seed)
-def tri(bias, sb):
-    return {"bias": [r.gauss(0, bias) for _ in range(3)],
-            "M": [[r.gauss(0, 3e-3 if i == j else 3e-4) for j in range(3)] for i in range(3)],
-            "sigma_bias": [sb] * 3, "sigma_M": [[2e-5] * 3 for _ in range(3)]}
-print(json.dumps({"format": "calbench-coefficients/1", "device": {"model": "ADIS16488A", "serial": serial},
-                  "gyro": tri(1e-3, 1e-6), "accel": tri(0.1, 1e-4)}))
-PY
-}
+coeffs() { python3 "$SRC/tests/support/make_coeffs.py" "$@"; }
 # A station run while the server goes away half-way: it completes on the journal (exit 0) and says so.
 "$CALBENCH" station run --plan "$SRC/bench/plans/factory.toml" --emulated --seed 6 --db "$ST" --out st6 \
   --operator sam > st6.txt 2>&1 &
@@ -118,7 +100,6 @@ for k in $(seq 1 20); do
 done
 "$CALBENCH" db sync --db "$ST" > sync.txt || { cat sync.txt; fail "final sync"; }
 "$CALBENCH" db sync --db "$ST" --status | grep -q "0 run(s) not yet in" || fail "pending after the final sync"
-admin() { psql -h "$T/pg" -p "$port" -U calbench_admin -v ON_ERROR_STOP=1 -qtAX "$@"; }
 # Every journal item is at the centre exactly once, whole, with gapless versions per serial.
 juids=$(sqlite3 "$T/journal.db" "SELECT uid FROM bench_runs ORDER BY uid" | tr '\n' ' ')
 cuids=$(admin -d calbench -c "SELECT uid FROM bench_runs WHERE uid IS NOT NULL ORDER BY uid" | tr '\n' ' ')

@@ -7,20 +7,7 @@ cd "$T"
 export CALBENCH_USER=qa-tester CALBENCH_STATION=line-3
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
-coeffs() {  # coeffs SERIAL SEED [sigma_gyro_bias] > file
-  python3 - "$@" <<'PY'
-import json, random, sys
-serial, seed = sys.argv[1], int(sys.argv[2])
-sgb = float(sys.argv[3]) if len(sys.argv) > 3 else 1e-6
-r = random.Random(seed)
-def tri(bias, sb):
-    return {"bias": [r.gauss(0, bias) for _ in range(3)],
-            "M": [[r.gauss(0, 3e-3 if i == j else 3e-4) for j in range(3)] for i in range(3)],
-            "sigma_bias": [sb] * 3, "sigma_M": [[2e-5] * 3 for _ in range(3)]}
-print(json.dumps({"format": "calbench-coefficients/1", "device": {"model": "ADIS16488A", "serial": serial},
-                  "gyro": tri(1e-3, sgb), "accel": tri(0.1, 1e-4), "temperature": {"model": "linear", "k": [1, 2, 3]}}))
-PY
-}
+coeffs() { python3 "$SRC/tests/support/make_coeffs.py" "$@"; }  # coeffs SERIAL SEED [sigma_gyro_bias] > file
 count() { sqlite3 "$1" "SELECT COUNT(*) FROM $2"; }
 
 "$CALBENCH" db init --db w.db | grep -q "schema version 4" || fail "init"

@@ -53,6 +53,23 @@ WriterResult read_result(const std::string& file) {
   return r;
 }
 
+// Waits for the writers and checks each one stored its `sets` without an error; returns their sum.
+WriterResult join_writers(const std::vector<pid_t>& pids, const std::string& dir, int sets) {
+  WriterResult sum;
+  for (std::size_t w = 0; w < pids.size(); ++w) {
+    int status = 0;
+    ::waitpid(pids[w], &status, 0);
+    const auto r = read_result(dir + "/writer-" + std::to_string(w) + ".txt");
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "writer " << w << ": " << r.error;
+    EXPECT_EQ(r.error, "") << "writer " << w;
+    EXPECT_EQ(r.stored, sets) << "writer " << w;
+    sum.stored += r.stored;
+    sum.existed += r.existed;
+    sum.attempts += r.attempts;
+  }
+  return sum;
+}
+
 // Forks `n` writers. Each waits on `go` (a pipe the parent closes to start them all at once), runs
 // `body(w, result)` and writes its result to dir/writer-w.txt; an exception is its error.
 std::vector<pid_t> fork_writers(int n, const std::string& dir, int go_read, int go_write,
@@ -179,17 +196,9 @@ TEST_F(PgFixture, EightProcessesStore100SetsEachOn20SharedSerials) {
   ::close(go[0]);
   const auto t0 = Clock::now();
   ::close(go[1]);  // start
-  int attempts = 0;
-  for (int w = 0; w < kWriters; ++w) {
-    int status = 0;
-    ::waitpid(pids[static_cast<std::size_t>(w)], &status, 0);
-    const auto r = read_result(dir + "/writer-" + std::to_string(w) + ".txt");
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "writer " << w << ": " << r.error;
-    EXPECT_EQ(r.error, "") << "writer " << w;
-    EXPECT_EQ(r.stored, kSets) << "writer " << w;
-    EXPECT_EQ(r.existed, 0) << "writer " << w << ": a new uid was reported as already stored";
-    attempts += r.attempts;
-  }
+  const WriterResult all = join_writers(pids, dir, kSets);
+  EXPECT_EQ(all.existed, 0) << "a new uid was reported as already stored";
+  const int attempts = all.attempts;
   const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
   Store s(pg->uri(), {}, test::test_actor());
   auto& c = s.connection();
@@ -254,18 +263,8 @@ TEST_F(PgFixture, ServerSigkilledDuringABurstLosesAndDuplicatesNothing) {
   const std::string port = pg->port();
   ASSERT_EQ(pg->start(), port) << "restarted on another port: the writers cannot find it";
   const double away = std::chrono::duration<double>(Clock::now() - t_kill).count();
-  int stored = 0, existed = 0, attempts = 0;
-  for (int w = 0; w < kWriters; ++w) {
-    int status = 0;
-    ::waitpid(pids[static_cast<std::size_t>(w)], &status, 0);
-    const auto r = read_result(dir + "/writer-" + std::to_string(w) + ".txt");
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "writer " << w << ": " << r.error;
-    EXPECT_EQ(r.error, "") << "writer " << w;
-    EXPECT_EQ(r.stored, kSets) << "writer " << w;
-    stored += r.stored;
-    existed += r.existed;
-    attempts += r.attempts;
-  }
+  const WriterResult all = join_writers(pids, dir, kSets);
+  const int stored = all.stored, existed = all.existed, attempts = all.attempts;
   for (ssize_t n; (n = ::read(progress[0], buf, sizeof buf)) > 0;) done += static_cast<int>(n);
   ::close(progress[0]);
   const double total = std::chrono::duration<double>(Clock::now() - t_kill).count();
