@@ -104,7 +104,6 @@ nlohmann::json apply_drift_models(const std::string& file, inmotion::InMotionCon
     }
   cfg.gyro_drift = g;
   cfg.accel_drift = acc;
-  cfg.propagate_drift = true;
   return {{"file", file},
           {"layout", inmotion::needs_augmented_layout(cfg) ? "augmented (exp-cosine states)" : "default"},
           {"axes", axes}};

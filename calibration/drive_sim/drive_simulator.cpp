@@ -106,7 +106,7 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
     }
     const auto out = mems.sample(t, w_in, f_in);
     if (sinks.imu) sinks.imu(SimImu{t, out.gyro, out.accel});
-    if (sinks.truth) sinks.truth(SimTruth{t, lat, lon, h, b.v_n, b.C_nb, b.w_ib, b.f});
+    if (sinks.truth) sinks.truth(SimTruth{t, lat, lon, h, b.v_n, b.C_nb, b.w_ib, b.f, mems.gyro_drift(), mems.accel_drift()});
 
     // Reference epochs and GNSS fixes in (t − dt, t]: position interpolated linearly.
     auto interp = [&](double te, double& la, double& lo, double& hh) {

@@ -77,6 +77,7 @@ struct SimTruth {
   Vec3 v_ned;
   Mat3 C_nb;
   Vec3 w_ib_b, f_b;  // reference body
+  Vec3 gyro_drift = Vec3::Zero(), accel_drift = Vec3::Zero();  // the MEMS unit's in-run drift now
 };
 
 struct DriveSinks {

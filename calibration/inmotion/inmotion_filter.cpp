@@ -75,7 +75,6 @@ InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb,
       }
     }
   }
-  predict_drift_ = cfg_.propagate_drift || !first.has_att;  // see InMotionConfig::propagate_drift
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
   nav_.reset(mems_state_from_reference(first, C_mb_, lever_));
@@ -544,7 +543,12 @@ const identification::DiscreteShapingFilter& InMotionFilterT<N>::discrete(int k,
 
 template <int N>
 void InMotionFilterT<N>::propagate_drift_nominal(double T) {
-  // x̂ ← Φ·x̂ (the prediction of the shaping filters). First-order axes on request or GNSS-only.
+  // Between updates the drift estimates move with their shaping filters: x̂ ← Φ·x̂, the filter's
+  // prediction (for a first-order axis d̂ ← e^{−αT}·d̂). The error state's F (δḋ = −α·δd,
+  // error_model.hpp) assumes the estimate decays with the drift; held constant instead, the real
+  // error d̂ − d would have the extra term α·d̂ the covariance does not carry, and the filter would
+  // be overconfident about the drift (before 2026-11-23 the estimates were held: with a reference
+  // INS always, GNSS-only until 3f38af4; docs/in-motion.md, "GNSS-only drives").
   for (int k = 0; k < 6; ++k) {
     double& d = k < 3 ? dg_(k) : da_(k - 3);
     if (expcos_[k]) {
@@ -552,7 +556,7 @@ void InMotionFilterT<N>::propagate_drift_nominal(double T) {
       const Eigen::Vector2d x = discrete(k, T).Phi * Eigen::Vector2d(x0, d);
       x0 = x(0);
       d = x(1);
-    } else if (predict_drift_) {
+    } else {
       d *= std::exp(-(k < 3 ? alpha_g_(k) : alpha_a_(k - 3)) * T);
     }
   }

@@ -34,16 +34,6 @@ struct InMotionConfig {
   NoiseSpec noise = adis16488a_noise();  // white-noise densities (process noise)
   // In-run drift models per axis; defaults from `noise` (identified models may replace them).
   std::optional<std::array<DriftPrior, 3>> gyro_drift, accel_drift;
-  // Between updates, move the drift estimates with their shaping filters (x̂ ← Φ·x̂, the filter's
-  // prediction; for a first-order axis d̂ ← e^{−αT}·d̂). Always done for exponential-cosine axes
-  // (whose first state only acts through the dynamics) and in a GNSS-only fit (first epoch
-  // without attitude): the error state's F (δḋ = −α·δd, error_model.hpp) assumes the estimate
-  // decays with the drift; held constant instead, the real error d̂ − d has the extra term α·d̂
-  // that the covariance does not carry, and the filter is overconfident about the drift, hence
-  // about the heading between manoeuvres when only positions aid it (docs/in-motion.md, "GNSS-only
-  // drives"). With a reference INS only when set, so that its measured figures stay those of the
-  // filter they were measured with (docs/in-motion.md: open item).
-  bool propagate_drift = false;
   // Prior 1σ of the constant parameters, relative to the data the filter sees (priors.hpp): the
   // data-sheet class of a raw unit by default; for data corrected by a coefficient set,
   // priors_from_set() (the set's σ combined with the device class's stability allowance).
@@ -244,7 +234,6 @@ class InMotionFilterT {
   double last_realign_t_ = -1e300;
   bool motion_check_ = true;  // the heading σ is checked at the next start of motion
   double last_course_t_ = -1e300;
-  bool predict_drift_ = false;  // first-order drift estimates predicted between updates (propagate_drift)
   AlignmentReport align_;
   std::vector<Recovery> recoveries_;
 

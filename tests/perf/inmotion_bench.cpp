@@ -13,6 +13,8 @@
 //   BM_InMotion_AcceptanceRaw   the same drives fitted on raw data (no --coeffs): data-sheet priors.
 // Run: bench/drive/acceptance.sh (or calbench_perf --benchmark_filter=InMotion).
 // It runs only with INMOTION_ACCEPTANCE=1 (minutes of CPU). INMOTION_SEEDS=N overrides the number of seeds of the acceptance run.
+// INMOTION_DIAG=1 prints per seed and axis the combined set's bias error against its σ and the unit's true in-run
+// drift at the end of the window (SimTruth, evaluation only).
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
@@ -191,6 +193,14 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
   double t_qc0 = 0;
   SeedResult out;
   drivesim::DriveSinks s;
+  // INMOTION_DIAG=1 (evaluation only): the unit's true in-run drift at the end of the fit window.
+  const bool diag = std::getenv("INMOTION_DIAG") != nullptr;
+  Vec3 true_dg = Vec3::Zero(), true_da = Vec3::Zero(), dg_hat = Vec3::Zero(), dg_fit = Vec3::Zero(), da_fit = Vec3::Zero();
+  if (diag)
+    s.truth = [&](const drivesim::SimTruth& x) {
+      true_dg = x.gyro_drift;
+      true_da = x.accel_drift;
+    };
   s.imu = [&](const drivesim::SimImu& m) {
     if (tp >= 0) {
       const double dt = m.t - tp;
@@ -234,6 +244,9 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
       if (r.t >= t_fit) {
         total = start == Start::bench ? compose_fused(bench, f->estimate()) : f->estimate();
         f->mounting_rpy(mr, ms);
+        dg_fit = true_dg;
+        da_fit = true_da;
+        dg_hat = f->gyro_drift();
         const Mat3 C_est = ins::dcm_from_rpy(mr);
         qb = std::make_unique<qc::InertialRun>(bench, C_est, cfg.lever_arm, r);
         qi = std::make_unique<qc::InertialRun>(total, C_est, cfg.lever_arm, r);
@@ -298,6 +311,16 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
   }
   for (int i = 0; i < 3; ++i)
     out.mount_within += std::abs(std::remainder(mr(i) - cfg.mounting_rpy(i), 2 * units::kPi)) <= 3 * ms(i);
+  if (diag) {
+    const double u = units::kDegPerHour, m = units::kMilliG;
+    for (int i = 0; i < 3; ++i)
+      std::printf("diag seed %llu gyro %c: b^-b %+.2f (sigma %.2f) d(t_fit) %+.2f d^ %+.2f d^+b^-b-d %+.2f deg/h;"
+                  " accel: b^-b %+.3f (sigma %.3f) d(t_fit) %+.3f mg\n",
+                  static_cast<unsigned long long>(seed), "xyz"[i], (total.gyro.bias(i) - cfg.mems.gyro.bias(i)) / u,
+                  total.gyro.sigma_bias(i) / u, dg_fit(i) / u, dg_hat(i) / u,
+                  (dg_hat(i) + total.gyro.bias(i) - cfg.mems.gyro.bias(i) - dg_fit(i)) / u,
+                  (total.accel.bias(i) - cfg.mems.accel.bias(i)) / m, total.accel.sigma_bias(i) / m, da_fit(i) / m);
+  }
   out.gyro_sigma = total.gyro.sigma_bias / units::kDegPerHour;
   out.gyro_err = (total.gyro.bias - cfg.mems.gyro.bias) / units::kDegPerHour;
   out.gyro_total_sigma = f->gyro_total_drift_sigma() / units::kDegPerHour;

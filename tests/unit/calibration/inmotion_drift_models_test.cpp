@@ -232,7 +232,6 @@ TEST(InmotionDriftModels, IdentifiedModelsMakeTheFilterConsistent) {
       EXPECT_LT(std::abs(std::log(b.sigma / kGyroSigma)), std::abs(std::log(5.1 * kDegPerHour / kGyroSigma))) << i;
     }
     c.gyro_drift = g;
-    c.propagate_drift = true;
     return c;
   };
   auto fit = [&](const InMotionConfig& c) {
