@@ -91,6 +91,8 @@ void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, 
 }  // namespace
 
 SqliteConnection::SqliteConnection(const std::string& path, const OpenOptions& opt) : Connection(path, opt) {
+  if (const auto p = path.find("://"); p != std::string::npos && p > 0 && path.find('/') > p)
+    throw InputError(path, 0, "", "not a database: neither a SQLite file nor a postgresql:// (or postgres://) URI");
   if (!opt.create && !std::filesystem::exists(path))
     throw InputError(path, 0, "", "no database here (create it with `calbench db init`, or give --db / CALBENCH_DB)");
   // SQLite takes an empty file for a new database and would write a schema into it: only commands

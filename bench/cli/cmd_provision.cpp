@@ -54,11 +54,14 @@ long parse_int(const std::string& s, const std::string& what) {
 }
 
 OpenedImu open_imu(const std::string& uri) {
+  // SCHEME://REST, or the station's form SCHEME[:REST] (ft232h:SERIAL, mcp2210).
   const auto sep = uri.find("://");
-  if (sep == std::string::npos)
-    throw arg_error("--to-device", "expected emu://SERIAL, mcp2210://[USB-SERIAL] or ft232h://[USB-SERIAL], got '" + uri + "'");
-  const std::string scheme = uri.substr(0, sep);
-  std::string rest = uri.substr(sep + 3), query;
+  const auto colon = uri.find(':');
+  const std::string scheme = sep != std::string::npos ? uri.substr(0, sep) : uri.substr(0, colon);
+  if (scheme != "mcp2210" && scheme != "ft232h" && sep == std::string::npos)
+    throw arg_error("--to-device", "expected emu://SERIAL, mcp2210[:USB-SERIAL] or ft232h[:USB-SERIAL], got '" + uri + "'");
+  std::string rest = sep != std::string::npos ? uri.substr(sep + 3) : colon == std::string::npos ? "" : uri.substr(colon + 1),
+              query;
   if (const auto q = rest.find('?'); q != std::string::npos) {
     query = rest.substr(q + 1);
     rest = rest.substr(0, q);
@@ -220,7 +223,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   auto* sub = app.add_subcommand("provision", "write an approved coefficient set to an IMU (or export it), recorded in the database");
   sub->add_option("SERIAL", a->serial, "device serial number")->required();
   sub->add_option("--set", a->set, "coefficient set id (default: the newest approved or provisioned set)")->check(set_id());
-  auto* to = sub->add_option("--to-device", a->uri, "IMU URI: emu://SERIAL_NUM, mcp2210://[USB-SERIAL], ft232h://[USB-SERIAL]");
+  auto* to = sub->add_option("--to-device", a->uri, "IMU: emu://SERIAL_NUM (emulated), mcp2210[:USB-SERIAL] or ft232h[:USB-SERIAL] (as station run --imu; mcp2210://… and ft232h://… also work)");
   auto* ex = sub->add_option("--export", a->out, "write the set as coefficients.json instead");
   to->excludes(ex);
   ex->excludes(to);

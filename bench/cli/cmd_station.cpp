@@ -93,9 +93,13 @@ void run_station(StationArgs& a) {
   const std::string shown = db::redact_uri(a.o.db);  // never a password on the screen
   if (r.summary.contains("db") && r.summary["db"].contains("central")) {
     const auto& c = r.summary["db"]["central"];
+    // The approval is QC's: the same database as a QC login.
+    std::string qc = shown;
+    if (const auto s = qc.find("://"), at = qc.find('@'); s != std::string::npos && at != std::string::npos && at > s)
+      qc.replace(s + 3, at - s - 3, "QC_USER");
     if (c.contains("set"))
-      std::cerr << "next: calbench db approve " << c["set"].get<long long>() << " --db " << shown
-                << " --operator NAME   (with QC's credentials: signed by a QC engineer other than the station's operator)"
+      std::cerr << "next: calbench db approve " << c["set"].get<long long>() << " --db " << qc
+                << " --operator NAME   (as a member of calbench_qc, signed by someone other than the station's operator)"
                 << std::endl;
     else
       std::cerr << "next: calbench db sync --db " << shown << (a.o.journal.empty() ? "" : " --journal " + a.o.journal)

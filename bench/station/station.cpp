@@ -39,9 +39,11 @@ struct Aborted : std::runtime_error {
 };
 
 std::unique_ptr<SpiBus> open_imu(const std::string& uri) {
+  // KIND[:SERIAL], or provision's form KIND://[SERIAL].
   const auto colon = uri.find(':');
   const std::string kind = uri.substr(0, colon);
-  const std::string serial = colon == std::string::npos ? "" : uri.substr(colon + 1);
+  std::string serial = colon == std::string::npos ? "" : uri.substr(colon + 1);
+  if (serial.rfind("//", 0) == 0) serial = serial.substr(2);
   if (kind == "ft232h") {
     auto bus = std::make_unique<Ft232hBus>(open_libftdi(mpsse::kVid, mpsse::kPid, serial));
     bus->configure();

@@ -17,8 +17,11 @@ namespace calbench::db {
 namespace {
 constexpr Oid kBoolOid = 16, kTimestamptzOid = 1184, kTimestampOid = 1114;
 
-// One line: libpq's messages end in a newline and may continue on tab-indented lines.
+// One line: libpq's messages end in a newline and may continue on tab-indented lines ("…refused\n\t
+// Is the server running…" becomes "…refused; Is the server running…").
 std::string trim(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
+  for (std::size_t p = s.find("\n\t"); p != std::string::npos; p = s.find("\n\t", p)) s.replace(p, 2, "; ");
   for (char& c : s)
     if (c == '\n' || c == '\t') c = ' ';
   std::string out;
@@ -215,12 +218,20 @@ void PgConnection::connect() {
                       why.find("authentication failed") != std::string::npos;
     if (conn_) PQfinish(conn_);
     conn_ = nullptr;
-    if (auth)
-      throw PermissionError(0, path_ + ": the server refused the credentials (" + why +
-                                   "; the password comes from PGPASSFILE, ~/.pgpass or PGPASSWORD)", "28P01");
+    if (auth) {
+      const bool none = why.find("no password supplied") != std::string::npos;
+      throw PermissionError(0, path_ + ": the server refused the credentials (" + why + "; " +
+                                   (none ? "no password found: a PGPASSFILE or ~/.pgpass line must match "
+                                           "HOST:PORT:DATABASE:USER of the URI (* matches any), or set PGPASSWORD"
+                                         : "the password comes from PGPASSFILE, ~/.pgpass or PGPASSWORD") + ")",
+                            "28P01");
+    }
     if (why.find("does not exist") != std::string::npos) throw DbError(0, path_ + ": " + why, "3D000");
     throw ConnectionLost(0, path_ + ": cannot reach the database server (" + why + ")", "08001");
   }
+  // The server's notices and warnings (e.g. "no privileges could be revoked" while roles.sql runs as
+  // a role that may not) are not the user's business: errors say what matters.
+  PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);
   // Timestamps in UTC (written and read back as ISO 8601 with Z); messages only when they matter.
   exec("SET TimeZone = 'UTC'; SET DateStyle = 'ISO'; SET client_min_messages = warning");
   PGresult* r = PQexec(conn_, "SELECT session_user");

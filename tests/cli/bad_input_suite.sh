@@ -247,6 +247,7 @@ t db-pg-sslmode 2 "sslmode 'sometimes' is not one of" "$CALBENCH" db devices --d
 t db-pg-bad-param 2 "not a valid PostgreSQL URI \(invalid URI query parameter" "$CALBENCH" db devices --db "postgresql://st@h/c?colour=blue"
 t db-pg-bad-escape 2 "^calbench: error: postgresql://st@h/c: not a valid PostgreSQL URI \(invalid password part|invalid percent" "$CALBENCH" db devices --db "postgresql://st:pa%zzss@h/c"
 grep -q "pa%zzss\|zzss" "$T/err.txt" && FAILED+=("db-pg-bad-escape: the password was echoed")
+t db-pg-scheme-typo 2 "postgressql://st@h/c: not a database: neither a SQLite file nor a postgresql:// \\(or postgres://\\) URI" "$CALBENCH" db devices --db "postgressql://st@h/c"
 t db-pg-unreachable 1 "postgresql://st@127\.0\.0\.1:1/c: cannot reach the database server" "$CALBENCH" db devices --db "postgresql://st:Hunter2pw@127.0.0.1:1/c"
 grep -q "Hunter2pw" "$T/err.txt" "$T/out.txt" && FAILED+=("db-pg-unreachable: the password was echoed")
 LEFT="j.db" t db-pg-store-bench-malformed 2 "not a valid PostgreSQL URI" "$CALBENCH" db store-bench --db "postgresql://st@h:0/c" --coeffs bench/truth.json --sha256 "$SHA" --journal j.db
@@ -315,7 +316,7 @@ t prov-both-targets 2 "--to-device.*--export|--export.*--to-device" "$CALBENCH" 
 t prov-no-target 2 "give --to-device IMU-URI or --export FILE" "$CALBENCH" provision "$SERIAL" --db d.db
 t prov-draft-set 1 "set 1 is draft: only approved sets are provisioned" "$CALBENCH" provision "$SERIAL" --db d.db --set 1 --export p.json
 t prov-set-zero 2 "--set: .*'0'" "$CALBENCH" provision "$SERIAL" --db d.db --set 0 --export p.json
-t prov-uri-no-scheme 2 "--to-device: expected emu://SERIAL" "$CALBENCH" provision "$SERIAL" --db d.db --to-device /dev/spidev0
+t prov-uri-no-scheme 2 "--to-device: expected emu://SERIAL, mcp2210\[:USB-SERIAL\] or ft232h\[:USB-SERIAL\]" "$CALBENCH" provision "$SERIAL" --db d.db --to-device /dev/spidev0
 t prov-uri-scheme 2 "--to-device: unknown IMU URI scheme 'usb'" "$CALBENCH" provision "$SERIAL" --db d.db --to-device usb://1
 t prov-uri-serial 2 "--to-device: SERIAL_NUM is 16-bit" "$CALBENCH" provision "$SERIAL" --db d.db --to-device emu://70000
 t prov-uri-option 2 "--to-device: unknown emulator option 'speed'" "$CALBENCH" provision "$SERIAL" --db d.db --to-device 'emu://3?speed=2'

@@ -43,6 +43,7 @@ export CALBENCH_STATION=line-3 CALBENCH_JOURNAL="$T/journal.db"
 grep -q "forwarded to postgresql://station3@127.0.0.1:$port/calbench: 1005 run 1 (pass) -> central run" st.txt || { cat st.txt; fail "station did not forward"; }
 set_id=$(sed -n 's/^next: calbench db approve \([0-9]*\) --db postgresql.*/\1/p' st.txt)
 [ -n "$set_id" ] || { cat st.txt; fail "no central set in the next-step hint"; }
+grep -q "^next: calbench db approve $set_id --db postgresql://QC_USER@127.0.0.1:$port/calbench" st.txt || { cat st.txt; fail "the hint does not say QC approves"; }
 [ "$(admin -d calbench -c "SELECT s.status || ' ' || s.created_by || ' ' || s.created_by_role || ' ' || st.name FROM coefficient_sets s JOIN bench_runs r ON r.id = s.bench_run_id JOIN stations st ON st.id = r.station_id WHERE s.id = $set_id")" = "draft sam@line-3 station3 line-3" ] \
   || fail "central set not recorded as the station's draft"
 
@@ -119,6 +120,12 @@ set +e; "$CALBENCH" db devices --db "postgresql://station3:Sup3rSecret9@127.0.0.
 set +e; "$CALBENCH" db devices --db "postgresql://station3:Wr0ngPass7@127.0.0.1:$port/calbench" > out.txt 2> err.txt; rc=$?; set -e
 [ "$rc" = 1 ] && grep -q "refused the credentials" err.txt || { cat err.txt; fail "wrong password: exit $rc"; }
 ! grep -q "Wr0ngPass7" err.txt out.txt || fail "password echoed (wrong password)"
+# No password file line for this database (a typo in its name): said so, not "wrong password".
+set +e; "$CALBENCH" db devices --db "postgresql://station3@127.0.0.1:$port/calbnch" > out.txt 2> err.txt; rc=$?; set -e
+[ "$rc" = 1 ] && grep -q "no password found: a PGPASSFILE or ~/.pgpass line must match HOST:PORT:DATABASE:USER" err.txt || { cat err.txt; fail "no pgpass line: exit $rc"; }
+# A role that may not grant runs db init --roles: one error line, no flood of server warnings.
+set +e; "$CALBENCH" db init --db "$ST" --roles 2> err.txt; rc=$?; set -e
+[ "$rc" = 1 ] && [ "$(wc -l < err.txt)" = 1 ] && ! grep -q WARNING err.txt || { head -5 err.txt; fail "db init --roles as a station: exit $rc, $(wc -l < err.txt) lines"; }
 set +e; "$CALBENCH" db devices --db "postgresql://station3:bad%zzpw@127.0.0.1:$port/calbench" > out.txt 2> err.txt; rc=$?; set -e
 [ "$rc" = 2 ] || { cat err.txt; fail "bad percent-encoding: exit $rc"; }
 ! grep -q "zzpw" err.txt out.txt || fail "password echoed (malformed)"
