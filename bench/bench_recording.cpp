@@ -5,7 +5,7 @@
 #include <ctime>
 #include <sstream>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/units.hpp"
 

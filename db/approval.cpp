@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "bench/io/input_error.hpp"
-#include "bench/io/json_parse.hpp"
+#include "common/input_error.hpp"
+#include "common/json_parse.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench::db {

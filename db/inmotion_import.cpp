@@ -4,8 +4,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "bench/io/input_error.hpp"
-#include "bench/io/json_parse.hpp"
+#include "common/input_error.hpp"
+#include "common/json_parse.hpp"
 
 namespace calbench::db {
 namespace {

@@ -2,7 +2,7 @@
 #pragma once
 #include <string>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench::db {
 inline InputError arg_error(const std::string& what, const std::string& message) {

@@ -1,6 +1,6 @@
 #include "db/sqlite.hpp"
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 #include <sqlite3.h>
 #include <unistd.h>

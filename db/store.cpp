@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "db/input_errors.hpp"
 #include "db/postgres/pg_connection.hpp"
 #include "db/postgres/pg_schema.hpp"

@@ -11,7 +11,7 @@
 
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "devices/table_emulator.hpp"
 

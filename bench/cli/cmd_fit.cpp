@@ -7,7 +7,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "calibration/bench_fit_effects.hpp"

@@ -19,7 +19,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
 #include "calibration/identification/allan.hpp"

@@ -9,7 +9,7 @@
 #include "bench/cli/operator_option.hpp"
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "db/input_errors.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/noise_spec.hpp"

@@ -6,7 +6,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/drive/qc_drive.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "calibration/effects/effect_compensation.hpp"
 
 namespace calbench::cli {

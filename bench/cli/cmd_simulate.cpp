@@ -8,7 +8,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/coefficients_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "bench/io/recording.hpp"
 #include "calibration/bench_sim.hpp"

@@ -12,7 +12,7 @@
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "db/store.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/station/station.hpp"
 #include "db/connection.hpp"
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "bench/cli/registry.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench::cli {
 namespace {

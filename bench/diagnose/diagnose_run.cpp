@@ -12,7 +12,7 @@
 #include "bench/bench_recording.hpp"
 #include "bench/diagnose/finding_text.hpp"
 #include "bench/diagnose/effects_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/bench_fit_effects.hpp"
 #include "calibration/units.hpp"

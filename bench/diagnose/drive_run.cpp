@@ -11,7 +11,7 @@
 #include "bench/drive/fit_drive.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "bench/drive/route_toml.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/report/gnuplot.hpp"

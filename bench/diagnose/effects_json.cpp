@@ -3,7 +3,7 @@
 #include <map>
 #include <sstream>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/diagnosis/catalogue.hpp"
 

@@ -1,6 +1,6 @@
 #include "bench/drive/drive_stream.hpp"
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {

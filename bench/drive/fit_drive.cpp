@@ -12,7 +12,7 @@
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/input_warning.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/json_util.hpp"

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <vector>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/recording.hpp"

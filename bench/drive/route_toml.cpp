@@ -5,7 +5,7 @@
 #include <toml++/toml.h>
 
 #include "bench/io/toml_text.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
 #include "calibration/units.hpp"
 

@@ -1,6 +1,6 @@
 #include "bench/io/coefficients_json.hpp"
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 
 namespace calbench {

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/input_warning.hpp"
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/units.hpp"
 

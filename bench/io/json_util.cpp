@@ -9,8 +9,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "bench/io/input_error.hpp"
-#include "bench/io/json_parse.hpp"
+#include "common/input_error.hpp"
+#include "common/json_parse.hpp"
 
 namespace calbench {
 

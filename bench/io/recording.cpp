@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
 

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench {
 namespace {

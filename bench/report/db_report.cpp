@@ -6,7 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/report/gnuplot.hpp"
 #include "bench/report/html_parts.hpp"
 #include "bench/report/inmotion_section.hpp"

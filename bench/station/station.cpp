@@ -11,7 +11,7 @@
 
 #include "bench/bench_recording.hpp"
 #include "bench/io/coefficients_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "bench/io/recording.hpp"

@@ -10,7 +10,7 @@
 #include <cstring>
 #include <vector>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench::db {
 

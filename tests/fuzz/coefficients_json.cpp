@@ -10,7 +10,7 @@
 #include "bench/drive/qc_drive.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/drift_models_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "tests/fuzz/fuzz_util.hpp"
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 
 #include "bench/io/csv.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "tests/fuzz/fuzz_util.hpp"
 
 using namespace calbench;

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "db/approval.hpp"
 #include "db/inmotion_import.hpp"
 #include "db/store.hpp"

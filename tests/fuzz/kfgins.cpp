@@ -7,7 +7,7 @@
 #include <cstdio>
 
 #include "bench/drive/import_kfgins.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/recording.hpp"
 #include "tests/fuzz/fuzz_util.hpp"
 

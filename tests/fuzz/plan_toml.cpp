@@ -2,7 +2,7 @@
 // before toml++ sees the text). Input: the file.
 #include <cstdint>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "tests/fuzz/fuzz_util.hpp"
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 
 #include "bench/bench_recording.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/recording.hpp"
 #include "tests/fuzz/fuzz_util.hpp"
 

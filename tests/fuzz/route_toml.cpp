@@ -3,7 +3,7 @@
 #include <cstdint>
 
 #include "bench/drive/route_toml.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "tests/fuzz/fuzz_util.hpp"
 
 using namespace calbench;

@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "bench/io/csv.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace fs = std::filesystem;
 using namespace calbench;

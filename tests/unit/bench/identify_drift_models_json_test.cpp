@@ -4,7 +4,7 @@
 
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/drift_models_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench {
 namespace {

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/io/drift_models_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "calibration/units.hpp"
 
 namespace calbench {

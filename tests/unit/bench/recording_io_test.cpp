@@ -6,7 +6,7 @@
 #include <random>
 
 #include "bench/io/coefficients_json.hpp"
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "bench/io/recording.hpp"
 
 namespace calbench {

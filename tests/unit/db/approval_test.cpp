@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "calibration/units.hpp"
 #include "db/approval.hpp"
 #include "db_test_util.hpp"

@@ -2,7 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "db/inmotion_import.hpp"
 #include "db_test_util.hpp"
 

@@ -3,7 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 #include "db/approval.hpp"
 #include "db/schema.hpp"
 #include "db_test_util.hpp"

@@ -1,11 +1,11 @@
 // Parse JSON text from a file; a syntax error becomes an InputError naming the file and the line.
-// Header-only so that db/ (which does not link bench/) shares it with bench/io.
+// Header-only, in the common base below calibration, devices, db and bench (all of them use it).
 #pragma once
 #include <algorithm>
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "bench/io/input_error.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench {
 
