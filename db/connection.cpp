@@ -33,27 +33,13 @@ std::optional<double> Statement::opt_real(int col) const {
   return p_->real(col);
 }
 
-void Connection::transaction(bool write, const std::function<void()>& body) {
-  if (in_tx_) {  // nested: part of the enclosing transaction
-    body();
-    return;
-  }
+void Connection::with_retries(const std::function<void()>& attempt) {
   const auto start = std::chrono::steady_clock::now();
   std::minstd_rand rng(static_cast<unsigned>(::getpid()) ^ static_cast<unsigned>(start.time_since_epoch().count()));
   int delay_ms = 2;
   for (;;) {
     try {
-      begin(write);
-      in_tx_ = true;
-      try {
-        body();
-        commit();
-        in_tx_ = false;
-      } catch (...) {
-        in_tx_ = false;
-        rollback();
-        throw;
-      }
+      attempt();
       return;
     } catch (const BusyError& e) {
       const bool lost = dynamic_cast<const ConnectionLost*>(&e) != nullptr;
@@ -75,6 +61,26 @@ void Connection::transaction(bool write, const std::function<void()>& body) {
       }
     }
   }
+}
+
+void Connection::transaction(bool write, const std::function<void()>& body) {
+  if (in_tx_) {  // nested: part of the enclosing transaction
+    body();
+    return;
+  }
+  with_retries([&] {
+    begin(write);
+    in_tx_ = true;
+    try {
+      body();
+      commit();
+      in_tx_ = false;
+    } catch (...) {
+      in_tx_ = false;
+      rollback();
+      throw;
+    }
+  });
 }
 
 void Connection::write_transaction(const std::function<void()>& body) { transaction(true, body); }

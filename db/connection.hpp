@@ -147,6 +147,9 @@ class Connection {
   virtual void rollback() noexcept = 0;
   // Called before a retry after ConnectionLost: re-open (may throw ConnectionLost again).
   virtual void reconnect() {}
+  // Run `attempt` again after a jittered exponential back-off while it throws BusyError (after a
+  // ConnectionLost, reconnect() first), until the retry budget is spent: then the BusyError says so.
+  void with_retries(const std::function<void()>& attempt);
   std::string path_;
   OpenOptions opt_;
 

@@ -74,6 +74,10 @@ std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values)
   return out;
 }
 
+std::string station_verdict(const StationStats& s) {
+  return !s.tested ? "not compared (too few units)" : s.flagged ? "DRIFTS APART: check its table and fixture" : "consistent";
+}
+
 std::vector<StationStats> station_stats(const std::vector<FleetValue>& values) {
   // station → coefficient → values; station → serials
   std::map<std::string, std::map<std::string, std::vector<double>>> by;

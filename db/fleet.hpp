@@ -58,5 +58,7 @@ struct StationStats {
   std::vector<std::string> serials;
 };
 std::vector<StationStats> station_stats(const std::vector<FleetValue>& values);
+// "consistent", "DRIFTS APART: check its table and fixture" or "not compared (too few units)".
+std::string station_verdict(const StationStats& s);
 
 }  // namespace calbench::db

@@ -97,11 +97,7 @@ SyncOutcome sync_journal(Store& journal, const std::string& central, const OpenO
         std::string why = detail.rfind(head, 0) == 0 ? detail.substr(head.size()) : detail;
         if (why.rfind(": ", 0) == 0) why = why.substr(2);
         if (const auto p = why.find("; partial recording "); p != std::string::npos) why = why.substr(0, p);
-        if (detail.rfind(head + "; partial recording ", 0) == 0) why.clear();
-        auto q = c->connection().prepare("SELECT id FROM bench_runs WHERE uid = ?");
-        q.bind(1, it.uid);
-        existed = q.step();
-        central_id = c->store_bench_run(dev, in, why);
+        central_id = c->store_bench_run(dev, in, why, &existed);
         line += " -> central run " + std::to_string(central_id);
       }
     } catch (const ConnectionLost& e) {

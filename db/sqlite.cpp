@@ -9,8 +9,6 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <random>
-#include <thread>
 
 namespace calbench::db {
 
@@ -68,26 +66,6 @@ class SqliteStatement : public StatementImpl {
   sqlite3_stmt* st_ = nullptr;
 };
 
-// Retry `fn` on BusyError with jittered exponential back-off until `budget` is spent.
-template <class F>
-void with_busy_retry(std::chrono::milliseconds budget, const std::string& path, F&& fn) {
-  const auto start = std::chrono::steady_clock::now();
-  std::minstd_rand rng(static_cast<unsigned>(::getpid()) ^
-                       static_cast<unsigned>(start.time_since_epoch().count()));
-  int delay_ms = 2;
-  for (;;) {
-    try {
-      fn();
-      return;
-    } catch (const BusyError& e) {
-      if (std::chrono::steady_clock::now() - start > budget)
-        throw BusyError(e.code(), path + ": another process kept the database busy for more than " +
-                                      std::to_string(budget.count() / 1000) + " s; nothing was written");
-      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms / 2 + static_cast<int>(rng() % (delay_ms + 1))));
-      delay_ms = std::min(delay_ms * 2, 200);
-    }
-  }
-}
 }  // namespace
 
 SqliteConnection::SqliteConnection(const std::string& path, const OpenOptions& opt) : Connection(path, opt) {
@@ -124,7 +102,7 @@ SqliteConnection::SqliteConnection(const std::string& path, const OpenOptions& o
   sqlite3_extended_result_codes(db_, 1);
   sqlite3_busy_timeout(db_, static_cast<int>(opt.busy_timeout.count()));
   try {
-    with_busy_retry(opt_.retry_budget, path_, [&] {
+    with_retries([&] {
       exec("PRAGMA foreign_keys = ON");
       if (!opt_.create) {
         // Reads the header (another kind of file fails here, named below). Schema version 0 is another

@@ -392,10 +392,11 @@ static void check_bench_run(const BenchRunInput& run) {
 
 // The bench run's row, its audit entry (`detail`) and its QC results, inside the caller's transaction.
 // A run whose uid is already stored is not stored again: its id is returned with *existed = true.
+// run.uid is set (the callers draw it before their transaction).
 static std::int64_t insert_bench_run_locked(Store& store, Connection& c, std::int64_t device_id, const BenchRunInput& run,
                                             const std::string& detail, bool* existed = nullptr) {
   if (existed) *existed = false;
-  if (!run.uid.empty()) {
+  {
     auto q = c.prepare("SELECT id FROM bench_runs WHERE uid = ?");
     q.bind(1, run.uid);
     if (q.step()) {
@@ -410,7 +411,7 @@ static std::int64_t insert_bench_run_locked(Store& store, Connection& c, std::in
       "outcome, created_at, uid) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + c.now_sql() + ", ?) RETURNING id");
   st.bind(1, device_id).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
       .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome)
-      .bind(9, run.uid.empty() ? new_uid() : run.uid);
+      .bind(9, run.uid);
   st.step();
   const std::int64_t id = st.int64(0);
   store.audit_locked("bench_run", id, "create", detail);
@@ -463,7 +464,8 @@ StoredSet Store::store_set(const DeviceInfo& d, SetSource source, const std::str
   return out;
 }
 
-std::int64_t Store::store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason) {
+std::int64_t Store::store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason,
+                                    bool* existed) {
   if (run.outcome != "fail" && run.outcome != "aborted")
     throw arg_error("outcome", "a run without a set is 'fail' or 'aborted', got '" + run.outcome + "'");
   check_bench_run(run);
@@ -476,7 +478,8 @@ std::int64_t Store::store_bench_run(const DeviceInfo& d, const BenchRunInput& ru
   conn_->write_transaction([&] {
     id = insert_bench_run_locked(*this, *conn_, ensure_device_locked(d), r,
                                  "plan " + run.plan + ", outcome " + run.outcome + (why.empty() ? "" : ": " + why) +
-                                     (run.recording_path.empty() ? "" : "; partial recording " + run.recording_path));
+                                     (run.recording_path.empty() ? "" : "; partial recording " + run.recording_path),
+                                 existed);
   });
   return id;
 }

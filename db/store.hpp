@@ -228,7 +228,9 @@ class Store {
   void audit(const std::string& entity, std::int64_t entity_id, const std::string& action, const std::string& detail);
   // A bench run that produced no set (outcome "aborted" or "fail"), with why, so that `db history`
   // shows it. Returns the run id.
-  std::int64_t store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason);
+  // *existed (if given): the run's uid was already stored (the id is that run's).
+  std::int64_t store_bench_run(const DeviceInfo& d, const BenchRunInput& run, const std::string& reason,
+                               bool* existed = nullptr);
   // Settings (see kFourEyes). set_setting() needs a named operator and a known key and value.
   void set_setting(const std::string& key, const std::string& value);
   std::string setting(const std::string& key);  // the value, or the built-in default

@@ -346,8 +346,7 @@ void cmd_fleet(const DbArgs& a) {
   for (const auto& st : stations) {
     std::cout << "  " << std::left << std::setw(20) << (st.station.empty() ? "(unknown)" : st.station) << std::right
               << std::setw(4) << st.devices << " unit(s)  "
-              << (!st.tested ? "not compared (too few units)" : st.flagged ? "DRIFTS APART: check its table and fixture" : "consistent")
-              << "\n";
+              << station_verdict(st) << "\n";
     for (const auto& c : st.coefficients)
       if (c.offset_flag || c.spread_flag)
         std::cout << "      " << c.name << ": median " << fmt(c.median * c.to_display) << " here, "

@@ -315,9 +315,8 @@ static std::string station_section_html(const std::vector<StationStats>& ss) {
                  num(c.spread_ratio, 3);
     std::string serials;
     for (const auto& x : s.serials) serials += (serials.empty() ? "" : ", ") + x;
-    const char* verdict = !s.tested ? "not compared (too few units)" : s.flagged ? "DRIFTS APART: check its table and fixture" : "consistent";
     b << "<tr><td class=\"l\">" << html_escape(s.station.empty() ? "(unknown)" : s.station) << "</td><td>" << s.devices
-      << "</td><td class=\"l " << (s.flagged ? "fail" : "") << "\">" << verdict << "</td><td class=\"l\">"
+      << "</td><td class=\"l " << (s.flagged ? "fail" : "") << "\">" << station_verdict(s) << "</td><td class=\"l\">"
       << html_escape(flags.empty() ? "–" : flags) << "</td><td class=\"l\">" << html_escape(serials) << "</td></tr>\n";
   }
   b << "</table>\n";

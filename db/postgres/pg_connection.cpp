@@ -239,13 +239,7 @@ void PgConnection::connect() {
   PQclear(r);
 }
 
-void PgConnection::reconnect() {
-  try {
-    connect();
-  } catch (const ConnectionLost&) {
-    throw;
-  }
-}
+void PgConnection::reconnect() { connect(); }
 
 void PgConnection::throw_result(PGresult* r, std::string_view context) {
   const char* ss = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : nullptr;

@@ -31,6 +31,14 @@ inline const std::filesystem::path& scratch() {
   return dir;
 }
 
+// scratch()/name, emptied: the folder one input's files are written to.
+inline std::filesystem::path fresh_folder(const char* name) {
+  const std::filesystem::path dir = scratch() / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
 inline void write_file(const std::filesystem::path& p, std::string_view bytes) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));

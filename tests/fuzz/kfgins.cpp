@@ -22,9 +22,7 @@ namespace {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const fuzz::FdCheck fds;
-  const fs::path dir = fuzz::scratch() / "kf";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fuzz::fresh_folder("kf");
   const auto parts = fuzz::split_files(data, size, 3);
   ImportKfGinsArgs a;
   a.imu = (dir / "imu.txt").string();

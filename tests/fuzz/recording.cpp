@@ -13,9 +13,7 @@ using namespace calbench;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const fuzz::FdCheck fds;
-  const fs::path dir = fuzz::scratch() / "rec";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fuzz::fresh_folder("rec");
   const auto parts = fuzz::split_files(data, size, 4);
   static const char* names[] = {"meta.json", "imu.csv", "reference.csv", "gnss.csv"};
   for (std::size_t i = 0; i < parts.size(); ++i) fuzz::write_file(dir / names[i], parts[i]);
