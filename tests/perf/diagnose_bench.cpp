@@ -1,0 +1,52 @@
+// One diagnosis each, timed (issue 19: the refactoring may not make them slower): the bench
+// diagnosis of a simulated bench/plans/diagnose.toml run with a concealed g-sensitivity and lever
+// arm, and the drive diagnosis (with its innovation part) of a simulated
+// tests/data/drive_diag_route.toml drive with a concealed time offset and lever arm. The inputs are
+// simulated once, outside the timed loop.
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "bench/diagnose/diagnose_run.hpp"
+#include "bench/diagnose/drive_run.hpp"
+#include "bench/io/plan_toml.hpp"
+#include "calibration/gauss_markov_window.hpp"
+
+namespace calbench {
+namespace {
+
+void BM_Diagnose_Bench(benchmark::State& state) {
+  const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
+  BenchSimOptions so;
+  so.seed = 3;
+  so.effects.g_sensitivity(0, 2) = 1.5e-4;
+  so.effects.lever_arm_m(1) = 0.02;
+  const DiagInput in = simulate_diag_input(plan, draw_random_unit(5003), so);
+  std::size_t findings = 0;
+  for (auto _ : state) {
+    const DiagRun r = run_diagnosis(in, nullptr, plan.table);
+    findings = r.result.findings.size();
+    benchmark::DoNotOptimize(findings);
+  }
+  state.counters["findings"] = static_cast<double>(findings);
+}
+BENCHMARK(BM_Diagnose_Bench)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(5);
+
+void BM_Diagnose_Drive(benchmark::State& state) {
+  EffectTerms fx;
+  fx.time_offset_s = 0.002;
+  fx.lever_arm_m(1) = -0.04;
+  const DriveDiagInput in =
+      simulate_drive_diag_input(std::string(CALBENCH_SOURCE_DIR) + "/tests/data/drive_diag_route.toml", 41, fx);
+  std::size_t findings = 0;
+  for (auto _ : state) {
+    const DriveDiagRun r = run_drive_diagnosis(in, nullptr);
+    findings = r.result.core.findings.size();
+    benchmark::DoNotOptimize(findings);
+  }
+  state.counters["findings"] = static_cast<double>(findings);
+}
+BENCHMARK(BM_Diagnose_Drive)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(5);
+
+}  // namespace
+}  // namespace calbench
