@@ -5,12 +5,21 @@
 # 40) and every drive catalogue effect × 3 magnitudes around its detection limit ×
 # DIAGNOSE_DRIVE_SWEEP_SEEDS seeds, axes and signs (default 5), plus two effects at once: detection,
 # right sensor/axis, value error, cut of the systematic residual, other findings, unexplained.
-# Prints one row per benchmark with its counters, then (with jq) the same as a markdown table;
-# runs that miss a criterion are listed on stderr with seed and --inject options.
+# Prints one row per benchmark with its counters, then (with jq) writes the same as Markdown, stamped
+# with the commit, date and command, to docs/validation/diagnose-drive-sweep.md (with
+# DIAGNOSE_DRIVE_COEFFS=bench: diagnose-drive-sweep-factory-coeffs.md; VALIDATION_NAME=OTHER.md for a
+# partial run); runs that miss a criterion are listed on stderr with seed and --inject options.
 # DIAGNOSE_DRIVE_COEFFS=bench: each unit first fitted on the simulated factory plan, the drive
-# diagnosed with those coefficients (--coeffs; docs/diagnosis.md "With the factory coefficients").
+# diagnosed with those coefficients (--coeffs; docs/validation/diagnosis-drive-log.md).
 # Usage: bench/diagnose/drive_sweep.sh [BUILD_DIR] [extra benchmark args, e.g. --benchmark_filter=lever_arm]
 set -euo pipefail
+here="$(cd "$(dirname "$0")/../.." && pwd)"
+command="$(env | { grep -E '^DIAGNOSE_' || true; } | sort | tr '\n' ' ')bench/diagnose/drive_sweep.sh $*"
+name=diagnose-drive-sweep.md title="Diagnosis sweep on drives (\`bench/diagnose/drive_sweep.sh\`)"
+if [ "${DIAGNOSE_DRIVE_COEFFS:-}" = bench ]; then
+  name=diagnose-drive-sweep-factory-coeffs.md
+  title="Diagnosis sweep on drives with the factory coefficients (\`DIAGNOSE_DRIVE_COEFFS=bench\`)"
+fi
 BUILD=${1:-build}
 shift || true
 cmake --build "$BUILD" --target calbench_perf >/dev/null
@@ -19,8 +28,9 @@ trap 'rm -f "$json"' EXIT
 DIAGNOSE_DRIVE_SWEEP=1 "$BUILD/tests/calbench_perf" \
   --benchmark_filter="${DIAGNOSE_DRIVE_SWEEP_FILTER:-BM_DiagnoseDrive_Sweep}" \
   --benchmark_counters_tabular=true --benchmark_out="$json" --benchmark_out_format=json "$@"
-command -v jq >/dev/null || exit 0
-echo
+command -v jq >/dev/null || { echo "no jq: docs/validation/ not written" >&2; exit 0; }
+# The columns are those docs/validation/diagnosis-*-log.md and scripts/check-docs read (cells by row and header).
+{
 jq -r '
   def pct: if . == null or (type == "number" and isnan) then "–" else (. * 10 | round / 10 | tostring) end;
   [.benchmarks[] | select(.name | test("SweepClean"))][] |
@@ -34,3 +44,4 @@ jq -r '
   .benchmarks[] | select(.name | test("SweepClean") | not) | select(.runs != null) |
     "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "") | sub("/iterations:1$"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_within_2sigma_pct | pct) % | \(.random_walk_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.scale_factor_companion_runs // 0) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
 ' "$json"
+} | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-$name}" "$title" "$command"
