@@ -24,7 +24,8 @@ BUILD=${1:-build}
 shift || true
 cmake --build "$BUILD" --target calbench_perf >/dev/null
 json=$(mktemp /tmp/drive_sweep.XXXXXX.json)
-trap 'rm -f "$json"' EXIT
+md=$(mktemp /tmp/sweep.XXXXXX.md)
+trap 'rm -f "$json" "$md"' EXIT
 DIAGNOSE_DRIVE_SWEEP=1 "$BUILD/tests/calbench_perf" \
   --benchmark_filter="${DIAGNOSE_DRIVE_SWEEP_FILTER:-BM_DiagnoseDrive_Sweep}" \
   --benchmark_counters_tabular=true --benchmark_out="$json" --benchmark_out_format=json "$@"
@@ -44,4 +45,6 @@ jq -r '
   .benchmarks[] | select(.name | test("SweepClean") | not) | select(.runs != null) |
     "| \(.name | sub("^BM_DiagnoseDrive_Sweep/"; "") | sub("/iterations:1$"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_within_2sigma_pct | pct) % | \(.random_walk_within20_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable) | \(.other_findings_runs) | \(.scale_factor_companion_runs // 0) | \(.unexplained_runs) | \(.all_criteria_pct | pct) % |"
 ' "$json"
-} | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-$name}" "$title" "$command"
+} > "$md"
+# Only a table made whole is written (set -e stops here when jq fails).
+"$here/scripts/validation-stamp" "${VALIDATION_NAME:-$name}" "$title" "$command" < "$md"

@@ -14,7 +14,8 @@ BUILD=${1:-build}
 shift || true
 cmake --build "$BUILD" --target calbench_perf >/dev/null
 json=$(mktemp /tmp/sweep.XXXXXX.json)
-trap 'rm -f "$json"' EXIT
+md=$(mktemp /tmp/sweep.XXXXXX.md)
+trap 'rm -f "$json" "$md"' EXIT
 DIAGNOSE_SWEEP=1 "$BUILD/tests/calbench_perf" --benchmark_filter="${DIAGNOSE_SWEEP_FILTER:-BM_Diagnose_Sweep}" \
   --benchmark_counters_tabular=true --benchmark_out="$json" --benchmark_out_format=json "$@"
 command -v jq >/dev/null || { echo "no jq: docs/validation/ not written" >&2; exit 0; }
@@ -36,5 +37,7 @@ jq -r '
   .benchmarks[] | select(.name | test("SweepClean") | not) | select(.runs != null) |
     "| \(.name | sub("^BM_Diagnose_Sweep/"; "") | sub("/iterations:1$"; "")) | \(.runs) | \(.detected_pct | pct) % | \(.right_axis_pct | pct) % | \(.value_within20_pct | pct) % | \(.value_within_2sigma_pct | pct) % | \(.value_err_median_pct | pct) / \(.value_err_max_pct | pct) % | \(.cut_ge80_pct | pct) % | \(.cut_not_measurable_runs) | \(.other_findings_runs) | \(.detected_ambiguous_runs // 0) / \(.missed_but_alternative_runs // 0) | \(.all_criteria_pct | pct) % |"
 ' "$json"
-} | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-diagnose-bench-sweep.md}" \
-      "Diagnosis sweep on the bench (\`bench/diagnose/sweep.sh\`)" "$command"
+} > "$md"
+# Only a table made whole is written (set -e stops here when jq fails).
+"$here/scripts/validation-stamp" "${VALIDATION_NAME:-diagnose-bench-sweep.md}" \
+      "Diagnosis sweep on the bench (\`bench/diagnose/sweep.sh\`)" "$command" < "$md"

@@ -14,7 +14,8 @@ command="$(env | { grep -E '^INMOTION_' || true; } | sort | tr '\n' ' ')bench/dr
 BUILD=${1:-build}
 cmake --build "$BUILD" --target calbench_perf >/dev/null
 json=$(mktemp /tmp/acceptance.XXXXXX.json)
-trap 'rm -f "$json"' EXIT
+md=$(mktemp /tmp/acceptance.XXXXXX.md)
+trap 'rm -f "$json" "$md"' EXIT
 INMOTION_ACCEPTANCE=1 "$BUILD/tests/calbench_perf" --benchmark_filter='BM_InMotion_' --benchmark_counters_tabular=true \
   --benchmark_out="$json" --benchmark_out_format=json
 command -v jq >/dev/null || { echo "no jq: docs/validation/ not written" >&2; exit 0; }
@@ -25,5 +26,6 @@ jq -r '
     ([to_entries[] | select(.value | type == "number") |
       select(.key | test("^(real_time|cpu_time|iterations|repetitions|repetition_index|threads|family_index|per_family_instance_index)$") | not) |
       "| \(.key) | \(.value) |"] | join("\n")) + "\n"
-' "$json" | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-inmotion-acceptance-counters.md}" \
-  "In-motion acceptance counters (\`bench/drive/acceptance.sh\`)" "$command"
+' "$json" > "$md"
+"$here/scripts/validation-stamp" "${VALIDATION_NAME:-inmotion-acceptance-counters.md}" \
+  "In-motion acceptance counters (\`bench/drive/acceptance.sh\`)" "$command" < "$md"
