@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 
