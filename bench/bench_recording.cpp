@@ -7,7 +7,7 @@
 
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

@@ -5,7 +5,7 @@
 #pragma once
 #include <vector>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -17,7 +17,7 @@
 
 #include "calibration/bench_blocks.hpp"
 #include "calibration/bench_plan.hpp"
-#include "calibration/noise_spec.hpp"
+#include "common/noise_spec.hpp"
 
 namespace calbench {
 

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "calibration/bench_fit.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace bench_fit_detail {

@@ -1,7 +1,7 @@
 #include <cmath>
 
 #include "calibration/bench_plan.hpp"
-#include "calibration/table_motion.hpp"
+#include "common/table_motion.hpp"
 
 namespace calbench {
 namespace {

@@ -3,7 +3,7 @@
 #pragma once
 #include "calibration/bench_plan.hpp"
 #include "calibration/earth.hpp"
-#include "calibration/table_motion.hpp"
+#include "common/table_motion.hpp"
 
 namespace calbench {
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

@@ -7,8 +7,8 @@
 
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/effects/effect_terms.hpp"
-#include "calibration/imu_error_sim.hpp"
-#include "calibration/noise_spec.hpp"
+#include "common/imu_error_sim.hpp"
+#include "common/noise_spec.hpp"
 
 namespace calbench {
 

@@ -3,7 +3,7 @@
 #include <GeographicLib/NormalGravity.hpp>
 #include <cmath>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

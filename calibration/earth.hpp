@@ -1,7 +1,7 @@
 // Earth model at a site: WGS-84 normal gravity (GeographicLib) and Earth rotation in NED.
 #pragma once
 #include "calibration/bench_plan.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -7,7 +7,7 @@
 
 #include "common/input_error.hpp"
 #include "common/json_parse.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::db {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <map>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::db {
 

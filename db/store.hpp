@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 #include "db/connection.hpp"
 
 namespace calbench::db {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 #include "devices/adis16488a_regs.hpp"
 #include "devices/spi_bus.hpp"
 

@@ -10,7 +10,7 @@
 #include <memory>
 #include <mutex>
 
-#include "calibration/imu_error_sim.hpp"
+#include "common/imu_error_sim.hpp"
 #include "devices/adis16488a_regs.hpp"
 #include "devices/emu_clock.hpp"
 #include "devices/spi_bus.hpp"

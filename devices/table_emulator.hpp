@@ -12,7 +12,7 @@
 #include <string>
 #include <thread>
 
-#include "calibration/table_motion.hpp"
+#include "common/table_motion.hpp"
 #include "devices/emu_clock.hpp"
 #include "devices/table_map.hpp"
 

@@ -9,7 +9,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/drive/fit_drive.hpp"
 #include "calibration/inmotion/priors.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::cli {
 namespace {

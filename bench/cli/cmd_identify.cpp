@@ -25,7 +25,7 @@
 #include "calibration/identification/allan.hpp"
 #include "calibration/identification/correlation_fit.hpp"
 #include "calibration/identification/shaping_filter.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::cli {
 namespace {

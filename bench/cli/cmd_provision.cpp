@@ -12,7 +12,7 @@
 #include "common/input_error.hpp"
 #include "db/input_errors.hpp"
 #include "bench/io/json_util.hpp"
-#include "calibration/noise_spec.hpp"
+#include "common/noise_spec.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"

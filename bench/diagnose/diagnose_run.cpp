@@ -15,7 +15,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/bench_fit_effects.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

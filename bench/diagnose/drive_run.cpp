@@ -18,9 +18,9 @@
 #include "calibration/bench_blocks.hpp"
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_sim.hpp"
-#include "calibration/imu_error_sim.hpp"
+#include "common/imu_error_sim.hpp"
 #include "calibration/ins/strapdown.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

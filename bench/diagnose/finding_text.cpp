@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "calibration/gauss_markov_window.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -1,7 +1,7 @@
 #include "bench/drive/drive_stream.hpp"
 
 #include "common/input_error.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

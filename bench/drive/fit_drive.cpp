@@ -17,7 +17,7 @@
 #include "bench/io/recording.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

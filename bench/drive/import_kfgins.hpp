@@ -7,7 +7,7 @@
 #pragma once
 #include <string>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -11,7 +11,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/qc/inertial_qc.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

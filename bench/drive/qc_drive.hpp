@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "calibration/effects/effect_terms.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

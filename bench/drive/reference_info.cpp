@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -6,7 +6,7 @@
 #include "bench/io/toml_text.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

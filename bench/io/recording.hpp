@@ -11,7 +11,7 @@
 
 #include "bench/io/csv.hpp"
 #include "calibration/bench_plan.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -1,5 +1,5 @@
 #include "bench/station/station.hpp"
-#include "calibration/noise_spec.hpp"
+#include "common/noise_spec.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -18,8 +18,8 @@
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/earth.hpp"
-#include "calibration/imu_error_sim.hpp"
-#include "calibration/units.hpp"
+#include "common/imu_error_sim.hpp"
+#include "common/units.hpp"
 #include "db/journal.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"

@@ -7,7 +7,7 @@
 #include <limits>
 #include <vector>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -21,7 +21,7 @@
 
 #include "calibration/bench_plan.hpp"
 #include "calibration/diagnosis/catalogue.hpp"
-#include "calibration/noise_spec.hpp"
+#include "common/noise_spec.hpp"
 
 namespace calbench {
 

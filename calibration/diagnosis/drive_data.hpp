@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "calibration/diagnosis/diag_data.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

@@ -16,9 +16,9 @@
 
 #include "calibration/drive_sim/route.hpp"
 #include "calibration/effects/effect_terms.hpp"
-#include "calibration/imu_error_sim.hpp"
+#include "common/imu_error_sim.hpp"
 #include "calibration/ins/nav_math.hpp"
-#include "calibration/noise_spec.hpp"
+#include "common/noise_spec.hpp"
 
 namespace calbench::drivesim {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::drivesim {
 namespace {

@@ -25,7 +25,7 @@
 #include <array>
 #include <cmath>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

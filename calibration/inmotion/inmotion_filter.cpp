@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::inmotion {
 

@@ -15,8 +15,8 @@
 #include "calibration/inmotion/error_model.hpp"
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/inmotion/priors.hpp"
-#include "calibration/noise_spec.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/noise_spec.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench::inmotion {
 

@@ -4,7 +4,7 @@
 #include <limits>
 
 #include "calibration/ins/nav_math.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::inmotion {
 namespace {

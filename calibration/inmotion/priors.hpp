@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench::inmotion {
 

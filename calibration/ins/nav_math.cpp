@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "calibration/earth.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::ins {
 

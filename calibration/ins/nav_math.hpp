@@ -5,7 +5,7 @@
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench::ins {
 

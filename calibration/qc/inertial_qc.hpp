@@ -7,7 +7,7 @@
 #pragma once
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/ins/strapdown.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench::qc {
 

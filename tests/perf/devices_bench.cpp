@@ -9,7 +9,7 @@
 
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/earth.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"
 

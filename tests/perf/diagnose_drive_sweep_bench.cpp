@@ -32,7 +32,7 @@
 #include "bench/drive/route_toml.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/gauss_markov_window.hpp"
-#include "calibration/imu_error_sim.hpp"
+#include "common/imu_error_sim.hpp"
 
 namespace calbench {
 namespace {

@@ -30,7 +30,7 @@
 #include "bench/drive/route_toml.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/qc/inertial_qc.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 using namespace calbench;
 using units::kDeg;

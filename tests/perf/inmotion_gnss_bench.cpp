@@ -33,7 +33,7 @@
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 using namespace calbench;
 using units::kDeg;

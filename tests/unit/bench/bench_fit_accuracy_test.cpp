@@ -7,7 +7,7 @@
 #include "bench/io/plan_toml.hpp"
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_sim.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -12,7 +12,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "calibration/bench_fit_effects.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -5,7 +5,7 @@
 
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_sim.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -13,7 +13,7 @@
 
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/io/plan_toml.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

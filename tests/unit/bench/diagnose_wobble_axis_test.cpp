@@ -12,7 +12,7 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/diagnosis/catalogue.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

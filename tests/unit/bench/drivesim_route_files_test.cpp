@@ -11,7 +11,7 @@
 
 #include "bench/drive/route_toml.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -5,7 +5,7 @@
 
 #include "bench/io/drift_models_json.hpp"
 #include "common/input_error.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -7,7 +7,7 @@
 #include "calibration/diagnosis/drive_data.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/ins/strapdown.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/ins/strapdown.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 using namespace calbench;
 using namespace calbench::drivesim;

@@ -10,7 +10,7 @@
 
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/effects/effect_compensation.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 using namespace calbench;
 using namespace calbench::drivesim;

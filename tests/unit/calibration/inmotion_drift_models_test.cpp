@@ -21,7 +21,7 @@
 #include "calibration/identification/noise_processes.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/qc/inertial_qc.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 #include "inmotion_test_drive.hpp"
 
 using namespace calbench;

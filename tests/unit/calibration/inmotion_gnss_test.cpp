@@ -12,7 +12,7 @@
 
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 #include "inmotion_test_drive.hpp"
 
 using namespace calbench;

@@ -8,10 +8,10 @@
 #include <random>
 
 #include "calibration/drive_sim/drive_simulator.hpp"
-#include "calibration/imu_error_sim.hpp"
+#include "common/imu_error_sim.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/inmotion/priors.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 #include "inmotion_test_drive.hpp"
 
 using namespace calbench;

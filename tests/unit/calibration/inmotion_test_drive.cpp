@@ -1,8 +1,8 @@
 // The simulated test drive of the in-motion filter tests (inmotion_test_drive.hpp).
 #include "inmotion_test_drive.hpp"
 
-#include "calibration/imu_error_sim.hpp"
-#include "calibration/units.hpp"
+#include "common/imu_error_sim.hpp"
+#include "common/units.hpp"
 
 namespace calbench::inmotion_test {
 

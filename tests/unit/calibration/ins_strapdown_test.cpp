@@ -4,7 +4,7 @@
 #include <functional>
 
 #include "calibration/ins/strapdown.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 using namespace calbench;
 using namespace calbench::ins;

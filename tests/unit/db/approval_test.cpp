@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "common/input_error.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 #include "db/approval.hpp"
 #include "db_test_util.hpp"
 

@@ -1,4 +1,4 @@
-// Composition of two successive corrections (calibration/sensor_model.hpp), as the store uses it
+// Composition of two successive corrections (common/sensor_model.hpp), as the store uses it
 // to build combined sets: M = (I+M1)(I+M2) − I, b = b1 + (I+M1)·b2.
 #include <gtest/gtest.h>
 

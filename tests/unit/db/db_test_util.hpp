@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db::test {

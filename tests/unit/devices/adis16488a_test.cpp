@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"
 

@@ -1,4 +1,4 @@
-#include "calibration/sensor_model.hpp"
+#include "common/sensor_model.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "calibration/table_motion.hpp"
+#include "common/table_motion.hpp"
 
 #include <algorithm>
 #include <cmath>

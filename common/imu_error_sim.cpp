@@ -1,8 +1,8 @@
-#include "calibration/imu_error_sim.hpp"
+#include "common/imu_error_sim.hpp"
 
 #include <cmath>
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 namespace {

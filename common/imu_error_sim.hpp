@@ -5,8 +5,8 @@
 #pragma once
 #include <random>
 
-#include "calibration/noise_spec.hpp"
-#include "calibration/sensor_model.hpp"
+#include "common/noise_spec.hpp"
+#include "common/sensor_model.hpp"
 
 namespace calbench {
 

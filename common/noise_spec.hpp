@@ -1,7 +1,7 @@
 // Stochastic error levels of an IMU, as a data sheet states them, converted to SI.
 // Used by the simulators (to make noise) and, as prior knowledge, by the estimators.
 #pragma once
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 

@@ -1,0 +1,31 @@
+// The one codec of coefficients.json (spec: "Sensor error model and coefficients.json"), used by
+// the bench (files), the store (payloads in the database) and the in-motion import. Reading is
+// strict about the keys the spec defines and keeps every other key (extra model terms, the effect
+// catalogue's keys) untouched in `extra`, so they pass through a read/write unchanged. File I/O is
+// the caller's (bench/io/coefficients_json.hpp); the codec works on parsed JSON.
+#pragma once
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "common/sensor_model.hpp"
+
+namespace calbench {
+
+inline constexpr const char* kCoefficientsFormat = "calbench-coefficients/1";
+
+struct CoefficientSet {
+  DeviceId device;
+  SensorErrors errors;
+  // Top-level keys beyond format/device/gyro/accel, and unknown keys inside gyro/accel
+  // (as extra["gyro"][...] / extra["accel"][...]), preserved on write.
+  nlohmann::json extra = nlohmann::json::object();
+};
+
+// "format" and "device" only: lets a caller check the device before the coefficients (the store
+// refuses a payload for another device before it looks at the numbers).
+DeviceId coefficients_device(const nlohmann::json& j, const std::string& file);
+// The whole set; InputError(file, line, key, …) naming the key on anything malformed.
+CoefficientSet coefficients_from_json(const nlohmann::json& j, const std::string& file);
+nlohmann::json coefficients_to_json(const CoefficientSet& c);
+
+}  // namespace calbench
