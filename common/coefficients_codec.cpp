@@ -1,5 +1,8 @@
 #include "common/coefficients_codec.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 #include "common/input_error.hpp"
 #include "common/json_fields.hpp"
 
@@ -63,6 +66,58 @@ nlohmann::json coefficients_to_json(const CoefficientSet& c) {
   for (auto it = c.extra.begin(); it != c.extra.end(); ++it)
     if (it.key() != "gyro" && it.key() != "accel") j[it.key()] = it.value();
   return j;
+}
+
+namespace {
+const char* const kAxes = "xyz";
+}  // namespace
+
+const std::vector<std::string>& coefficient_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const char* s : {"gyro", "accel"}) {
+      for (int i = 0; i < 3; ++i) n.push_back(std::string(s) + ".bias." + kAxes[i]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) n.push_back(std::string(s) + ".M." + kAxes[i] + kAxes[j]);
+    }
+    return n;
+  }();
+  return names;
+}
+
+namespace {
+// name → (triad, is_bias, i, j); throws std::invalid_argument on an unknown name.
+struct Where {
+  bool gyro, bias;
+  int i, j;
+};
+Where locate(const std::string& name) {
+  const auto& n = coefficient_names();
+  const auto it = std::find(n.begin(), n.end(), name);
+  if (it == n.end()) throw std::invalid_argument("unknown coefficient name '" + name + "'");
+  int k = static_cast<int>(it - n.begin());
+  Where w{k < 12, false, 0, 0};
+  k %= 12;
+  if (k < 3) {
+    w.bias = true;
+    w.i = k;
+  } else {
+    w.i = (k - 3) / 3;
+    w.j = (k - 3) % 3;
+  }
+  return w;
+}
+}  // namespace
+
+double coefficient_value(const SensorErrors& e, const std::string& name) {
+  const Where w = locate(name);
+  const TriadErrors& t = w.gyro ? e.gyro : e.accel;
+  return w.bias ? t.bias(w.i) : t.M(w.i, w.j);
+}
+double coefficient_sigma(const SensorErrors& e, const std::string& name) {
+  const Where w = locate(name);
+  const TriadErrors& t = w.gyro ? e.gyro : e.accel;
+  return w.bias ? t.sigma_bias(w.i) : t.sigma_M(w.i, w.j);
 }
 
 }  // namespace calbench

@@ -6,6 +6,7 @@
 #pragma once
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "common/sensor_model.hpp"
 
@@ -27,5 +28,12 @@ DeviceId coefficients_device(const nlohmann::json& j, const std::string& file);
 // The whole set; InputError(file, line, key, …) naming the key on anything malformed.
 CoefficientSet coefficients_from_json(const nlohmann::json& j, const std::string& file);
 nlohmann::json coefficients_to_json(const CoefficientSet& c);
+
+// Names of the 24 indexed coefficients (the store's coefficient_values, the fleet, the reports), in
+// a fixed order: gyro.bias.{x,y,z}, gyro.M.{xx..zz}, accel.bias.{x,y,z}, accel.M.{xx..zz}.
+const std::vector<std::string>& coefficient_names();
+// value/σ of a named coefficient of a set of errors; std::invalid_argument on an unknown name.
+double coefficient_value(const SensorErrors& e, const std::string& name);
+double coefficient_sigma(const SensorErrors& e, const std::string& name);
 
 }  // namespace calbench

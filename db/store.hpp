@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "common/sensor_model.hpp"
+#include "common/coefficients_codec.hpp"  // the 24 indexed coefficients, CoefficientSet
 #include "db/connection.hpp"
 
 namespace calbench::db {
@@ -167,14 +167,10 @@ struct FleetValue {
   std::string station;  // the station of the bench run behind the set (or its parent's); "" unknown
 };
 
-// Names of the 24 indexed coefficients, in a fixed order: gyro.bias.{x,y,z}, gyro.M.{xx..zz},
-// accel.bias.{x,y,z}, accel.M.{xx..zz}.
-const std::vector<std::string>& coefficient_names();
+// The 24 indexed coefficients (coefficient_names, coefficient_value, coefficient_sigma) are named
+// by the codec, common/coefficients_codec.hpp.
 // A new random id for a run or set (32 hex digits).
 std::string new_uid();
-// value/σ of a named coefficient of a set of errors.
-double coefficient_value(const SensorErrors& e, const std::string& name);
-double coefficient_sigma(const SensorErrors& e, const std::string& name);
 
 // Parse and validate a coefficients.json text (spec schema; σ null = unknown). Throws InputError
 // naming `file` and the key. `expect_serial` (if not empty) must equal device.serial.

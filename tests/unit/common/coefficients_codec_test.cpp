@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 #include "common/input_error.hpp"
 
@@ -99,6 +100,20 @@ TEST(CoefficientsCodec, TheDeviceIsReadWithoutTheNumbers) {
   const DeviceId d = coefficients_device(j, "c.json");
   EXPECT_EQ(d.serial, "4711");
   EXPECT_THROW(coefficients_from_json(j, "c.json"), InputError);
+}
+
+TEST(CoefficientsCodec, TheIndexedCoefficientsAddressTheSet) {
+  const CoefficientSet c = coefficients_from_json(sample(), "c.json");
+  const auto& names = coefficient_names();
+  ASSERT_EQ(names.size(), 24u);
+  EXPECT_EQ(names.front(), "gyro.bias.x");
+  EXPECT_EQ(names[12], "accel.bias.x");
+  EXPECT_EQ(names.back(), "accel.M.zz");
+  EXPECT_DOUBLE_EQ(coefficient_value(c.errors, "gyro.M.xy"), 2e-4);
+  EXPECT_DOUBLE_EQ(coefficient_value(c.errors, "accel.bias.z"), -0.03);
+  EXPECT_DOUBLE_EQ(coefficient_sigma(c.errors, "accel.M.yy"), 1e-5);
+  EXPECT_TRUE(std::isinf(coefficient_sigma(c.errors, "gyro.bias.y")));
+  EXPECT_THROW(coefficient_value(c.errors, "gyro.M.xw"), std::invalid_argument);
 }
 
 }  // namespace
