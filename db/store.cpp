@@ -99,8 +99,16 @@ Actor Actor::from_environment(const std::string& operator_option) {
 }
 
 std::string new_uid() {
-  static thread_local std::mt19937_64 rng(std::random_device{}() ^ (static_cast<std::uint64_t>(::getpid()) << 32) ^
-                                          static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()));
+  // Seeded per process: a process forked after a draw (a station's writer workers) would otherwise
+  // go on with its parent's generator state and draw the same uids, and one run would be taken for
+  // another's already-forwarded copy.
+  static thread_local std::mt19937_64 rng;
+  static thread_local pid_t seeded_for = 0;
+  if (seeded_for != ::getpid()) {
+    seeded_for = ::getpid();
+    rng.seed(std::random_device{}() ^ (static_cast<std::uint64_t>(seeded_for) << 32) ^
+             static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()));
+  }
   char buf[33];
   std::snprintf(buf, sizeof buf, "%016llx%016llx", static_cast<unsigned long long>(rng()),
                 static_cast<unsigned long long>(rng()));
