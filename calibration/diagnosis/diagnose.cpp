@@ -208,14 +208,10 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   res.base_before = current;
 
   const BenchProblem problem{data, D, opt};
-  GreedyPolicy policy;
-  policy.min_delta_chi2 = opt.min_delta_chi2;
-  policy.penalty_per_param = opt.penalty_per_param;
-  policy.max_findings = opt.max_findings;
-  policy.drift_competes = true;  // correlated_drift competes with the best linear term every round
-  const double drift_sigma[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  const double drift_tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  GreedySearch<BenchProblem> search(problem, policy, drift_sigma, drift_tau);
+  const diag::DriftPrior prior_drift = diag::drift_prior(opt.noise);
+  const double(&drift_sigma)[2] = prior_drift.sigma;
+  const double(&drift_tau)[2] = prior_drift.tau;
+  GreedySearch<BenchProblem> search(problem, diag::search_policy(opt), drift_sigma, drift_tau);
   const std::vector<Dataset>& all = search.all;
   const double* ds = search.ds;
   const double* tau = search.tau;
@@ -249,10 +245,8 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
       te.sigma_M(i, c) = std::sqrt(std::max(cur.cov(a * kBase + 1 + c, a * kBase + 1 + c), 0.0));
     }
   }
-  for (int triad = 0; triad < 2; ++triad) {
-    res.drift_sigma[triad] = ds[triad];
-    res.drift_tau[triad] = tau[triad];
-  }
+  std::copy(ds, ds + 2, res.drift_sigma);
+  std::copy(tau, tau + 2, res.drift_tau);
   Eigen::VectorXd r_after[kAxes];
   const int np = model_params(D, model);
   for (int a = 0; a < kAxes; ++a) {

@@ -65,6 +65,27 @@ inline EffectTerms unit_term(const Term& t, int p, double t0_c) {
   return unit;
 }
 
+// The catalogue search's policy from a diagnosis' options (bench or drive). A drift larger than
+// the data sheet says (correlated_drift) competes with the linear terms in every round: a
+// wandering bias would otherwise be half-explained by spurious linear terms.
+template <class Options>
+GreedyPolicy search_policy(const Options& opt) {
+  GreedyPolicy policy;
+  policy.min_delta_chi2 = opt.min_delta_chi2;
+  policy.penalty_per_param = opt.penalty_per_param;
+  policy.max_findings = opt.max_findings;
+  policy.drift_competes = true;
+  return policy;
+}
+
+// The data-sheet drift (first-order Gauss–Markov σ, τ) per triad (0 gyro, 1 accel).
+struct DriftPrior {
+  double sigma[2], tau[2];
+};
+inline DriftPrior drift_prior(const NoiseSpec& n) {
+  return {{n.gyro.drift_sigma, n.accel.drift_sigma}, {n.gyro.drift_tau_s, n.accel.drift_tau_s}};
+}
+
 // Whiten parent-level z and X by the Cholesky factor of R into S (L, G, g, zz, logdet, n_low).
 // A covariance that is not positive definite gets its diagonal raised by 5 % up to `retries`
 // times (the drive's estimated banded noise can be borderline; the bench's never is).

@@ -173,9 +173,9 @@ Vec3 base_mounting_delta(const DriveDiagData& data, const SensorErrors& current,
                          const DriveDiagnoseOptions& opt) {
   const Design D = build_design(data, current, carried, true);
   std::vector<Dataset> sets;
-  const double ds[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  const double tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  for (int a = 0; a < kAxes; ++a) sets.push_back(build_dataset(data, D, a, kSubsetAll, ds[a / 3], tau[a / 3]));
+  const diag::DriftPrior prior = diag::drift_prior(opt.noise);
+  for (int a = 0; a < kAxes; ++a)
+    sets.push_back(build_dataset(data, D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
   std::vector<const Dataset*> ptrs;
   for (const auto& S : sets) ptrs.push_back(&S);
   return fit_model(D, {}, ptrs).theta.segment<3>(6);
@@ -225,17 +225,10 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   res.base_before = current;
 
   const DriveProblem problem{data, D};
-  GreedyPolicy policy;
-  policy.min_delta_chi2 = opt.min_delta_chi2;
-  policy.penalty_per_param = opt.penalty_per_param;
-  policy.max_findings = opt.max_findings;
-  // A drift larger than the data sheet says (correlated_drift) competes with the linear terms in
-  // every round: a wandering bias would otherwise be half-explained by spurious linear terms.
-  policy.drift_competes = true;
+  GreedyPolicy policy = diag::search_policy(opt);
   policy.skip_untouched = true;
-  const double drift_sigma[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  const double drift_tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  GreedySearch<DriveProblem> search(problem, policy, drift_sigma, drift_tau);
+  const diag::DriftPrior prior_drift = diag::drift_prior(opt.noise);
+  GreedySearch<DriveProblem> search(problem, policy, prior_drift.sigma, prior_drift.tau);
   const std::vector<Dataset>& all = search.all;
 
   // Before: the base model (bias, and M or the mounting) refitted, no catalogue term.
@@ -287,10 +280,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       }
     v.scale.setZero();
   }
-  for (int triad = 0; triad < 2; ++triad) {
-    res.drift_sigma[triad] = ds[triad];
-    res.drift_tau[triad] = tau[triad];
-  }
+  std::copy(ds, ds + 2, res.drift_sigma);
+  std::copy(tau, tau + 2, res.drift_tau);
   Eigen::VectorXd r_after[kAxes], rn_after[kAxes];
   const int np = static_cast<int>(model_params(D, model).size());
   for (int a = 0; a < kAxes; ++a) {
