@@ -127,13 +127,8 @@ Design build_design(const DiagData& d, const EffectTerms& carried) {
 
 Dataset build_dataset(const DiagData& d, const Design& D, int a, int subset, double ds, double tau,
                       const DiagnoseOptions& opt) {
-  Dataset S;
-  S.axis = a;
-  S.subset = subset;
-  S.drift_sigma = ds;
-  S.drift_tau = tau;
-  for (int p = 0; p < static_cast<int>(d.parents.size()); ++p)
-    if (in_subset(d, p, subset)) S.parents.push_back(p);
+  Dataset S = diag::subset_dataset(a, subset, ds, tau, static_cast<int>(d.parents.size()),
+                                   [&](int p) { return in_subset(d, p, subset); });
   const int N = static_cast<int>(S.parents.size());
   const int C = D.ncols[a];
   Eigen::VectorXd zP(N);

@@ -86,6 +86,20 @@ inline DriftPrior drift_prior(const NoiseSpec& n) {
   return {{n.gyro.drift_sigma, n.accel.drift_sigma}, {n.gyro.drift_tau_s, n.accel.drift_tau_s}};
 }
 
+// An empty dataset of `axis` (held-out `subset`) under the drift (ds, tau), holding the parents
+// 0..n_parents−1 that keep(p) admits; whiten() fills it.
+template <class Keep>
+LinearDataset subset_dataset(int axis, int subset, double ds, double tau, int n_parents, Keep keep) {
+  LinearDataset S;
+  S.axis = axis;
+  S.subset = subset;
+  S.drift_sigma = ds;
+  S.drift_tau = tau;
+  for (int p = 0; p < n_parents; ++p)
+    if (keep(p)) S.parents.push_back(p);
+  return S;
+}
+
 // Whiten parent-level z and X by the Cholesky factor of R into S (L, G, g, zz, logdet, n_low).
 // A covariance that is not positive definite gets its diagonal raised by 5 % up to `retries`
 // times (the drive's estimated banded noise can be borderline; the bench's never is).

@@ -283,13 +283,8 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
 }
 
 Dataset build_dataset(const DriveDiagData& d, const Design& D, int a, int subset, double ds, double tau) {
-  Dataset S;
-  S.axis = a;
-  S.subset = subset;
-  S.drift_sigma = ds;
-  S.drift_tau = tau;
-  for (int p = 0; p < static_cast<int>(d.parents.size()); ++p)
-    if (in_subset(d.parents[p], subset)) S.parents.push_back(p);
+  Dataset S = diag::subset_dataset(a, subset, ds, tau, static_cast<int>(d.parents.size()),
+                                   [&](int p) { return in_subset(d.parents[p], subset); });
   const int N = static_cast<int>(S.parents.size());
   Eigen::VectorXd z(N);
   Eigen::MatrixXd X(N, D.P);
