@@ -2,7 +2,6 @@
 // Identification of sensor-drift models (paper section IV, eqs 16–38; issue 6): correlation
 // function, the paper's log-linear estimates, NLS fits with evidence-based structure choice,
 // shaping filters, Allan deviation and noise terms. See docs/identification.md.
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +21,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
+#include "bench/report/gnuplot.hpp"
 #include "calibration/identification/allan.hpp"
 #include "calibration/identification/correlation_fit.hpp"
 #include "calibration/identification/shaping_filter.hpp"
@@ -329,37 +329,25 @@ std::string quote(const std::string& s) {
   return o + "'";
 }
 
-void run_gnuplot(const fs::path& script) {
-  const std::string cmd = "gnuplot " + quote(script.string()) + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) throw std::runtime_error("cannot run gnuplot");
-  std::string out;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  const int rc = pclose(p);
-  if (rc != 0) throw std::runtime_error("gnuplot failed (is gnuplot installed?): " + out);
-}
-
+// The plots go through the report's gnuplot runner (bench/report/gnuplot.hpp): data files by name
+// in its temporary folder, the PNGs written straight to their absolute paths.
 void write_plots(const std::vector<Result>& res, const std::string& out_png) {
-  char tmpl[] = "/tmp/calbench-identify-XXXXXX";
-  const char* d = mkdtemp(tmpl);
-  if (!d) throw std::runtime_error("cannot create a temporary folder for gnuplot");
-  const fs::path tmp(d);
+  std::map<std::string, std::string> files;
   const std::size_t n = res.size();
   const int cols = n <= 1 ? 1 : n <= 4 ? 2 : 3;
   const int rows = static_cast<int>((n + static_cast<std::size_t>(cols) - 1) / static_cast<std::size_t>(cols));
-  const fs::path out(out_png);
+  const fs::path out = fs::absolute(out_png);
   fs::path allan_png = out;
   allan_png.replace_filename(out.stem().string() + "-allan" + out.extension().string());
-  std::ofstream gp(tmp / "plot.gp");
+  std::ostringstream gp;
   gp << "set terminal pngcairo size " << 640 * cols << "," << 420 * rows << " font ',9'\n";
   gp << "set output " << quote(out.string()) << "\nset multiplot layout " << rows << "," << cols << "\n";
   gp << "set grid\nset xlabel 'tau, s'\nset ylabel 'normalised correlation'\nset key top right\n";
   for (std::size_t i = 0; i < n; ++i) {
     const auto& r = res[i];
     const auto& I = r.ident;
-    const fs::path data = tmp / ("corr" + std::to_string(i) + ".dat");
-    std::ofstream f(data);
+    const std::string data = "corr" + std::to_string(i) + ".dat";
+    std::ostringstream f;
     f.precision(10);
     const double K0 = I.K[0];
     const auto best = I.best().model();
@@ -371,7 +359,8 @@ void write_plots(const std::vector<Result>& res, const std::string& out_png) {
       f << tau << ' ' << I.K[j] / K0 << ' ' << ra1 << ' ' << ra2 << ' ' << rm << '\n';
     }
     gp << "set title " << quote(r.s->name + ": r_m = " + id::drift_model_name(I.chosen) + " (NLS)") << " noenhanced\n";
-    gp << "plot " << quote(data.string()) << " u 1:2 w l lw 1 lc rgb '#777777' t 'r_e experimental', "
+    files[data] = f.str();
+    gp << "plot " << quote(data) << " u 1:2 w l lw 1 lc rgb '#777777' t 'r_e experimental', "
        << "'' u 1:3 w l lw 2 dt 2 lc rgb '#1f77b4' t 'ra_1 exponential (paper)', "
        << "'' u 1:4 w l lw 2 dt 3 lc rgb '#2ca02c' t 'ra_2 exp-cosine (paper)', "
        << "'' u 1:5 w l lw 2 lc rgb '#d62728' t 'r_m model in use', 0 w l lc rgb 'black' notitle\n";
@@ -385,8 +374,8 @@ void write_plots(const std::vector<Result>& res, const std::string& out_png) {
     for (std::size_t i = 0; i < n; ++i) {
       const auto& r = res[i];
       if (r.allan.empty()) continue;
-      const fs::path data = tmp / ("allan" + std::to_string(i) + ".dat");
-      std::ofstream f(data);
+      const std::string data = "allan" + std::to_string(i) + ".dat";
+      std::ostringstream f;
       f.precision(10);
       const auto& F = r.allan_fit;
       for (const auto& p : r.allan) {
@@ -400,22 +389,14 @@ void write_plots(const std::vector<Result>& res, const std::string& out_png) {
           << std::sqrt(gm) << '\n';
       }
       gp << "set title " << quote(r.s->name + " (" + units_for(r.s->q).signal + ")") << " noenhanced\n";
-      gp << "plot " << quote(data.string()) << " u 1:2:3:4 w yerrorbars pt 7 ps 0.6 lc rgb '#1f77b4' t 'overlapping ADEV, 68% CI', "
+      files[data] = f.str();
+      gp << "plot " << quote(data) << " u 1:2:3:4 w yerrorbars pt 7 ps 0.6 lc rgb '#1f77b4' t 'overlapping ADEV, 68% CI', "
          << "'' u 1:5 w l lw 2 lc rgb '#d62728' t 'fit Q+N+B+K+R', "
          << "'' u 1:6 w l lw 2 dt 2 lc rgb '#2ca02c' t 'fit with Gauss-Markov (T = " << F.gm_T << " s)'\n";
     }
     gp << "unset multiplot\n";
   }
-  gp.close();
-  try {
-    run_gnuplot(tmp / "plot.gp");
-  } catch (...) {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    throw;
-  }
-  std::error_code ec;
-  fs::remove_all(tmp, ec);
+  report::run_gnuplot(gp.str(), files, "");
 }
 
 // ---------------------------------------------------------------------------------------- run

@@ -12,7 +12,8 @@
 namespace calbench::report {
 namespace fs = std::filesystem;
 
-std::string run_gnuplot(const std::string& script, const std::map<std::string, std::string>& files) {
+std::string run_gnuplot(const std::string& script, const std::map<std::string, std::string>& files,
+                        const std::string& output) {
   char tmpl[] = "/tmp/calbench_plot_XXXXXX";
   if (!::mkdtemp(tmpl)) throw std::runtime_error("cannot create a temporary folder for gnuplot");
   const fs::path dir = tmpl;
@@ -45,11 +46,12 @@ std::string run_gnuplot(const std::string& script, const std::map<std::string, s
   msg << std::ifstream(err).rdbuf();
   if (!WIFEXITED(status) || WEXITSTATUS(status) == 127)
     throw std::runtime_error("gnuplot not found or crashed (install gnuplot-nox): " + msg.str());
-  std::ifstream png(dir / "plot.png", std::ios::binary);
+  if (WEXITSTATUS(status) != 0) throw std::runtime_error("gnuplot failed: " + msg.str());
+  if (output.empty()) return {};
+  std::ifstream out(dir / output, std::ios::binary);
   std::stringstream bytes;
-  bytes << png.rdbuf();
-  if (WEXITSTATUS(status) != 0 || bytes.str().size() < 8)
-    throw std::runtime_error("gnuplot failed: " + msg.str());
+  bytes << out.rdbuf();
+  if (bytes.str().size() < 8) throw std::runtime_error("gnuplot failed: " + msg.str());
   return bytes.str();
 }
 
@@ -82,21 +84,5 @@ std::string base64(const std::string& in) {
 }
 
 std::string png_data_uri(const std::string& png) { return "data:image/png;base64," + base64(png); }
-
-std::string html_escape(const std::string& s) {
-  std::string o;
-  o.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&#39;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
 
 }  // namespace calbench::report

@@ -9,6 +9,27 @@
 
 namespace calbench::report {
 
+std::string html_escape(const std::string& s) {
+  std::string o;
+  o.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      case '\'': o += "&#39;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+std::string html_page_start(const std::string& title, const std::string& css) {
+  return "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>" + html_escape(title) + "</title><style>" + css +
+         "</style></head><body>\n";
+}
+
 namespace {
 std::string fixed(double v, int decimals) {
   char b[64];

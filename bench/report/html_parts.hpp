@@ -1,4 +1,5 @@
-// Pieces shared by the report pages: number formatting in display units, QC tables, digests.
+// Pieces shared by the report pages (the one HTML helper): escaping, page head, number formatting
+// in display units, QC tables, digests.
 #pragma once
 #include <string>
 #include <vector>
@@ -6,6 +7,11 @@
 #include "db/store.hpp"
 
 namespace calbench::report {
+
+// Text for HTML content and attribute values: & < > " ' escaped.
+std::string html_escape(const std::string& s);
+// "<!DOCTYPE html>…<title>title</title><style>css</style></head><body>\n" (title escaped).
+std::string html_page_start(const std::string& title, const std::string& css);
 
 // v with `sig` significant digits, fixed-point between 1e-4 and 1e7 (else exponent), whole numbers
 // without decimals; "–" if not finite.

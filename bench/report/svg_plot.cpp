@@ -6,7 +6,7 @@
 #include <limits>
 #include <sstream>
 
-#include "bench/report/gnuplot.hpp"
+#include "bench/report/html_parts.hpp"
 
 namespace calbench::report {
 namespace {

@@ -6,421 +6,28 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "calibration/diagnosis/condition_correlation.hpp"
+#include "calibration/diagnosis/drive_design.hpp"
 #include "calibration/diagnosis/greedy_search.hpp"
-#include "calibration/gauss_markov_window.hpp"
+#include "calibration/diagnosis/residual_stats.hpp"
 #include "calibration/ins/nav_math.hpp"
+
+// The drive side of the diagnosis: the design and its datasets come from drive_design.cpp, the
+// linear problem from diagnosis_engine.cpp; here the drive's residual statistics (systematic RMS
+// of grouped blocks against the banded short-range noise), the catalogue search with the
+// mounting, and the report of its findings.
 
 namespace calbench {
 
 namespace {
 
-constexpr int kAxes = 6;
-constexpr int kLags = 3;
-
-bool in_subset(const ParentBlock& p, int subset) {
-  if (subset == kSubsetAll) return true;
-  const bool even = (p.step % 2 + 2) % 2 == 0;
-  return even == (subset == kSubsetEven);
-}
-
-bool drive_term(const Term& t, bool temperature, bool fixed_scale) {
-  switch (t.effect) {
-    case EffectId::scale_factor: return fixed_scale;  // M free: it is M_ii
-    case EffectId::temperature_bias:
-    case EffectId::temperature_scale: return temperature;
-    case EffectId::temperature_rate:  // not applicable on drives: no dT/dt is derived from a drive (simulated drives have no temperature)
-    case EffectId::misalignment:
-    case EffectId::table_wobble:
-    case EffectId::correlated_drift: return false;
-    default: return true;
-  }
-}
-
-// Weighted mean of x over element i and up to h neighbours on each side within i's contiguous
-// run (adjacent(l): elements l − 1 and l are contiguous); summed centre first, then backwards,
-// then forwards.
-template <class T, class X, class Wt, class Adj>
-T run_window_mean(int N, int i, int h, X x, Wt wt, Adj adjacent) {
-  T s = x(i) * wt(i);
-  double sw = wt(i);
-  for (int l = i - 1; l >= std::max(0, i - h) && adjacent(l + 1); --l) {
-    s += x(l) * wt(l);
-    sw += wt(l);
-  }
-  for (int l = i + 1; l < std::min(N, i + h + 1) && adjacent(l); ++l) {
-    s += x(l) * wt(l);
-    sw += wt(l);
-  }
-  return s / sw;
-}
-
-// Global parameters: 6 biases, then 18 ΔM (M free) or 3 mounting angles (M fixed), then the
-// candidate terms' parameters.
-struct Design {
-  bool fixed = false;
-  int n_base = 0;
-  std::vector<Term> terms;
-  std::vector<int> term_off;  // global index of each term's first parameter
-  int P = 0;
-  std::vector<Eigen::VectorXd> z;  // per axis, per sub
-  std::vector<Eigen::VectorXd> zp;  // per axis, per parent
-  std::vector<Eigen::MatrixXd> Xp;  // per axis: Nparent × P
-  std::vector<std::vector<int>> touched;  // per term: axes with a non-zero column
-  std::vector<char> contig;  // sub j follows sub j−1 without a gap
-  // Short-range noise per axis: sub-level autocovariance (lags 0..3), and the parent-level
-  // banded covariance (variance, covariance with the next parent).
-  double gamma[kAxes][kLags + 1] = {};
-  double endpoint_var[kAxes] = {};
-  double white_scale[kAxes] = {1, 1, 1, 1, 1, 1};
-  std::vector<double> prior_sigma;  // per term parameter
-  std::vector<double> pvar[kAxes], pcov[kAxes];
-};
-
-Design build_design(const DriveDiagData& d, const SensorErrors& cur, const EffectTerms& carried, bool fixed) {
-  Design D;
-  D.fixed = fixed;
-  D.n_base = 6 + (fixed ? 3 : 18);
-  for (const Term& t : candidate_terms())
-    if (drive_term(t, d.has_temperature, fixed)) D.terms.push_back(t);
-  D.P = D.n_base;
-  for (const Term& t : D.terms) {
-    D.term_off.push_back(D.P);
-    D.P += t.nparams();
-    double ps = 1;
-    switch (t.effect) {
-      case EffectId::g_sensitivity: ps = 2e-4; break;                       // ~0.1 °/s/g
-      case EffectId::scale_nonlinearity: ps = t.sensor == 0 ? 1e-2 : 1e-3; break;
-      case EffectId::scale_asymmetry: ps = 1e-2; break;
-      case EffectId::scale_factor: ps = 1e-2; break;  // the data sheet's initial scale tolerance, ±1 %
-      case EffectId::time_offset: ps = 0.05; break;
-      case EffectId::lever_arm: ps = 0.3; break;
-      case EffectId::temperature_bias: ps = t.sensor == 0 ? 1e-4 : 1e-2; break;
-      case EffectId::temperature_scale: ps = 1e-3; break;
-      default: ps = 1;
-    }
-    for (int p = 0; p < t.nparams(); ++p) D.prior_sigma.push_back(ps);
-  }
-  const int N = static_cast<int>(d.subs.size());
-  const int NP = static_cast<int>(d.parents.size());
-  D.z.assign(kAxes, Eigen::VectorXd::Zero(N));
-  // Regressors are accumulated straight into the ~1 s parent means (duration-weighted): an
-  // interval-level matrix would take N·P·6 doubles (0.5 GB for a 35-minute drive at 100 Hz).
-  D.Xp.assign(kAxes, Eigen::MatrixXd::Zero(NP, D.P));
-  Eigen::MatrixXd X(kAxes, D.P);
-  D.contig.assign(N, 0);
-  D.touched.assign(D.terms.size(), {});
-  std::vector<std::vector<char>> touch(D.terms.size(), std::vector<char>(kAxes, 0));
-  const bool carry = carried.any();
-  for (int j = 1; j < N; ++j) {
-    const SubBlock &p = d.subs[j - 1], &s = d.subs[j];
-    D.contig[j] = std::abs((p.t_mid + 0.5 * p.duration) - (s.t_mid - 0.5 * s.duration)) < 1e-6;
-  }
-  // Input of the terms nonlinear in it (|x|, x·|x|): the reference over ~0.2 s. A reference
-  // interval's own rate or force carries the reference's error of its ends divided by its length
-  // (a 50 Hz reference: ≈ 0.4 m/s² on a simulated drive's specific force), and |x + e| is not
-  // |x| — near x = 0 it is ≈ 0.8σ_e, so the regressor's variation is compressed and the fitted
-  // asymmetry inflated (accelerometer: ≈ +7 %, outside its own 2σ with factory coefficients). The
-  // error telescopes, so the mean over W intervals has 1/W of it. Linear terms take the interval's
-  // own input (their block means are the same either way).
-  const int Wnl = std::max(1, static_cast<int>(std::round(0.1 / std::max(d.mean_sub_s, 1e-4))));
-  std::vector<Vec3> w_nl(N), f_nl(N);
-  {
-    auto dur = [&](int l) { return d.subs[l].duration; };
-    auto adjacent = [&](int l) { return D.contig[l] != 0; };
-    for (int j = 0; j < N; ++j) {
-      w_nl[j] = run_window_mean<Vec3>(N, j, Wnl, [&](int l) { return d.subs[l].w; }, dur, adjacent);
-      f_nl[j] = run_window_mean<Vec3>(N, j, Wnl, [&](int l) { return d.subs[l].f; }, dur, adjacent);
-    }
-  }
-  for (int j = 0; j < N; ++j) {
-    const SubBlock& s = d.subs[j];
-    SubBlock s_nl = s;
-    s_nl.w = w_nl[j];
-    s_nl.f = f_nl[j];
-    Vec3 cg = Vec3::Zero(), ca = Vec3::Zero();
-    if (carry) predict_extra(carried, s, cg, ca);
-    const Vec3 pg = cur.gyro.measure(s.w), pa = cur.accel.measure(s.f);
-    X.setZero();
-    for (int a = 0; a < kAxes; ++a) {
-      const int i = a % 3;
-      D.z[a](j) = a < 3 ? s.gyro(i) - pg(i) - cg(i) : s.accel(i) - pa(i) - ca(i);
-      X(a, a) = 1.0;
-      const Vec3& x = a < 3 ? s.w : s.f;
-      if (!fixed) {
-        for (int c = 0; c < 3; ++c) X(a, 6 + 3 * a + c) = x(c);
-      } else {
-        // measured ideal output with the MEMS turned by δ: Exp(−δ)·x = x + x×δ = skew(x)·δ + x.
-        const Mat3 S = ins::skew(x);
-        for (int c = 0; c < 3; ++c) X(a, 6 + c) = S(i, c);
-      }
-    }
-    for (std::size_t t = 0; t < D.terms.size(); ++t) {
-      const Term& term = D.terms[t];
-      for (int p = 0; p < term.nparams(); ++p) {
-        EffectTerms unit;
-        unit.t0_c = carried.t0_c;
-        term.add_param(unit, p, 1.0);
-        Vec3 dg, da;
-        if (term.effect == EffectId::scale_nonlinearity || term.effect == EffectId::scale_asymmetry) {
-          // h(x_s) + h'(x_s)·(x − x_s): the curvature taken at the smoothed input, the interval's
-          // own deviation kept to first order — otherwise h(x_s) alone differs from the block's
-          // h(x) by a linear leak at its ends (h' ≈ 2g for x·|x| of the vertical accelerometer),
-          // which correlates with the reference error in the residual (a false accel z
-          // nonlinearity of 4e-3 on seed 1267).
-          constexpr double eps = 1e-3;
-          SubBlock s_eps = s_nl;
-          s_eps.w += eps * (s.w - s_nl.w);
-          s_eps.f += eps * (s.f - s_nl.f);
-          Vec3 dg1, da1;
-          predict_extra(unit, s_nl, dg, da);
-          predict_extra(unit, s_eps, dg1, da1);
-          dg += (dg1 - dg) / eps;
-          da += (da1 - da) / eps;
-        } else {
-          predict_extra(unit, s, dg, da);
-        }
-        for (int a = 0; a < kAxes; ++a) {
-          const double v = a < 3 ? dg(a) : da(a - 3);
-          if (v != 0) {
-            X(a, D.term_off[t] + p) = v;
-            touch[t][a] = 1;
-          }
-        }
-      }
-    }
-    if (s.parent >= 0) {
-      const double w = s.duration / d.parents[s.parent].duration;
-      for (int a = 0; a < kAxes; ++a) D.Xp[a].row(s.parent) += w * X.row(a);
-    }
-  }
-  for (std::size_t t = 0; t < D.terms.size(); ++t)
-    for (int a = 0; a < kAxes; ++a)
-      if (touch[t][a]) D.touched[t].push_back(a);
-  // Parent means of z (duration-weighted).
-  D.zp.assign(kAxes, Eigen::VectorXd::Zero(NP));
-  for (int k = 0; k < NP; ++k) {
-    const ParentBlock& pb = d.parents[k];
-    for (int j = pb.first; j < pb.first + pb.count; ++j) {
-      const double w = d.subs[j].duration / pb.duration;
-      for (int a = 0; a < kAxes; ++a) D.zp[a](k) += w * D.z[a](j);
-    }
-  }
-  // Short-range noise: autocovariance of high-pass residuals (z minus a centred moving average of
-  // ~2 s over contiguous intervals), corrected for the removed mean.
-  const int W = std::max(9, 2 * static_cast<int>(std::round(1.0 / std::max(d.mean_sub_s, 1e-3))) + 1);
-  std::vector<int> run_id(N, 0);
-  for (int j = 1; j < N; ++j) run_id[j] = D.contig[j] ? run_id[j - 1] : run_id[j - 1] + 1;
-  for (int a = 0; a < kAxes; ++a) {
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(N);
-    std::vector<char> ok(N, 0);
-    for (int j = 0; j < N; ++j) {
-      const int lo = j - W / 2, hi = j + W / 2;
-      if (lo < 0 || hi >= N || run_id[lo] != run_id[j] || run_id[hi] != run_id[j]) continue;
-      e(j) = D.z[a](j) - D.z[a].segment(lo, W).mean();
-      ok[j] = 1;
-    }
-    double g[kLags + 1] = {};
-    for (int l = 0; l <= kLags; ++l) {
-      double s = 0;
-      long n = 0;
-      for (int j = 0; j + l < N; ++j)
-        if (ok[j] && ok[j + l] && run_id[j] == run_id[j + l]) {
-          s += e(j) * e(j + l);
-          ++n;
-        }
-      g[l] = n > 0 ? s / n : 0;
-    }
-    // Structural model of a block mean: the IMU's white noise (σ²/n, from its sample-to-sample
-    // differences) plus the reference's errors at the interval ends, which telescope: a block of
-    // length T gets (x_end − x_start)/T with var(x) = v, i.e. variance 2v/T² and covariance −v/(T·T')
-    // with the next block. v from the sub-level autocovariance of a telescoping process:
-    // v = −T_s²·Σ_l l·γ_l (exact for x of short memory; γ dominated by the reference at lag ≤ 3).
-    double sl = 0;
-    for (int l = 1; l <= kLags; ++l) sl += l * g[l];
-    const double v_end = std::max(0.0, -sl * d.mean_sub_s * d.mean_sub_s);
-    for (int l = 0; l <= kLags; ++l) D.gamma[a][l] = g[l];
-    D.endpoint_var[a] = v_end;
-    // The IMU's sample-to-sample scatter overstates its block noise when it is vibration (a real
-    // car: high-frequency, averages out faster than white noise). Check against the blocks: the
-    // variance V of a block's residual after an unweighted base fit, from first differences
-    // (a = E δ², b = E δ_k δ_k+1, V = a + b; slow signals and drift cancel). Only a clear
-    // overstatement (V below half the model) scales the white part down; never up, so an
-    // unexplained effect cannot hide itself in the noise model.
-    double white_scale = 1;
-    {
-      std::vector<int> base_cols = {a};
-      for (int c = 6; c < D.n_base; ++c)
-        if (D.Xp[a].col(c).squaredNorm() > 0) base_cols.push_back(c);
-      Eigen::MatrixXd Xb(NP, base_cols.size());
-      for (std::size_t c = 0; c < base_cols.size(); ++c) Xb.col(c) = D.Xp[a].col(base_cols[c]);
-      const Eigen::VectorXd r = D.zp[a] - Xb * Xb.colPivHouseholderQr().solve(D.zp[a]);
-      double sa = 0, sb = 0, white = 0, endp = 0;
-      int na = 0, nb = 0;
-      for (int k = 0; k + 1 < NP; ++k) {
-        if (!D.contig[d.parents[k + 1].first]) continue;
-        const double dk = r(k + 1) - r(k);
-        sa += dk * dk;
-        ++na;
-        if (k + 2 < NP && D.contig[d.parents[k + 2].first]) {
-          sb += dk * (r(k + 2) - r(k + 1));
-          ++nb;
-        }
-      }
-      for (int k = 0; k < NP; ++k) {
-        white += d.sample_white_var[a] / std::max(d.parents[k].n, 1);
-        endp += 2 * v_end / (d.parents[k].duration * d.parents[k].duration);
-      }
-      white /= NP;
-      endp /= NP;
-      if (na > 20 && nb > 20 && white > 0) {
-        const double V = sa / na + sb / nb;
-        if (V < 0.5 * (white + endp)) white_scale = std::clamp((V - endp) / white, 0.05, 1.0);
-      }
-    }
-    D.white_scale[a] = white_scale;
-    // Parent-level banded covariance.
-    D.pvar[a].assign(NP, 0);
-    D.pcov[a].assign(NP, 0);
-    for (int k = 0; k < NP; ++k) {
-      const ParentBlock& pk = d.parents[k];
-      D.pvar[a][k] = white_scale * d.sample_white_var[a] / std::max(pk.n, 1) + 2 * v_end / (pk.duration * pk.duration);
-      if (k + 1 < NP) {
-        const ParentBlock& pl = d.parents[k + 1];
-        const bool adjacent = D.contig[pl.first] != 0;
-        if (adjacent) D.pcov[a][k] = -v_end / (pk.duration * pl.duration);
-      }
-    }
-  }
-  return D;
-}
-
-struct Dataset {
-  int axis = 0;
-  std::vector<int> parents;
-  Eigen::MatrixXd L;
-  Eigen::MatrixXd G;
-  Eigen::VectorXd g;
-  double zz = 0, logdet = 0;
-  int n = 0;
-  double ds = 0, tau = 1;
-};
-
-Eigen::MatrixXd parent_cov(const DriveDiagData& d, const Design& D, const std::vector<int>& P, int a, double ds,
-                           double tau, bool with_drift) {
-  const int N = static_cast<int>(P.size());
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(N, N);
-  for (int k = 0; k < N; ++k) {
-    R(k, k) = D.pvar[a][P[k]];
-    if (k + 1 < N && P[k + 1] == P[k] + 1) R(k, k + 1) = R(k + 1, k) = D.pcov[a][P[k]];
-    if (with_drift)
-      for (int l = 0; l <= k; ++l) {
-        const ParentBlock &pk = d.parents[P[k]], &pl = d.parents[P[l]];
-        const double v = ds * ds * gm_window_correlation(pk.t_mid, pk.duration, pl.t_mid, pl.duration, tau);
-        R(k, l) += v;
-        if (l != k) R(l, k) += v;
-      }
-  }
-  return R;
-}
-
-Dataset build_dataset(const DriveDiagData& d, const Design& D, int a, int subset, double ds, double tau) {
-  Dataset S;
-  S.axis = a;
-  S.ds = ds;
-  S.tau = tau;
-  for (int p = 0; p < static_cast<int>(d.parents.size()); ++p)
-    if (in_subset(d.parents[p], subset)) S.parents.push_back(p);
-  const int N = static_cast<int>(S.parents.size());
-  Eigen::VectorXd z(N);
-  Eigen::MatrixXd X(N, D.P);
-  for (int k = 0; k < N; ++k) {
-    z(k) = D.zp[a](S.parents[k]);
-    X.row(k) = D.Xp[a].row(S.parents[k]);
-  }
-  Eigen::MatrixXd R = parent_cov(d, D, S.parents, a, ds, tau, true);
-  Eigen::LLT<Eigen::MatrixXd> llt(R);
-  for (int tries = 0; llt.info() != Eigen::Success && tries < 8; ++tries) {
-    R.diagonal() *= 1.05;
-    llt.compute(R);
-  }
-  S.L = llt.matrixL();
-  const Eigen::VectorXd zl = S.L.triangularView<Eigen::Lower>().solve(z);
-  const Eigen::MatrixXd Xl = S.L.triangularView<Eigen::Lower>().solve(X);
-  S.G = Xl.transpose() * Xl;
-  S.g = Xl.transpose() * zl;
-  S.zz = zl.squaredNorm();
-  S.logdet = 2 * S.L.diagonal().array().log().sum();
-  S.n = N;
-  return S;
-}
-
-struct FitOut {
-  Eigen::VectorXd theta;  // global, zeros outside the model
-  Eigen::MatrixXd cov;    // global (model rows/cols filled)
-  double chi2 = 0;
-  double chi2_axis[kAxes] = {};
-  double logdet_info = 0;  // ln det(Xᵀ R⁻¹ X + priors): the restricted-likelihood (REML) term
-};
-
-std::vector<int> model_params(const Design& D, const std::vector<int>& terms) {
-  std::vector<int> idx(D.n_base);
-  std::iota(idx.begin(), idx.end(), 0);
-  for (int t : terms)
-    for (int p = 0; p < D.terms[t].nparams(); ++p) idx.push_back(D.term_off[t] + p);
-  return idx;
-}
-
-double axis_chi2(const Dataset& S, const std::vector<int>& idx, const Eigen::VectorXd& theta) {
-  double c = S.zz;
-  for (int p : idx) {
-    c -= 2 * theta(p) * S.g(p);
-    for (int q : idx) c += theta(p) * S.G(p, q) * theta(q);
-  }
-  return c;
-}
-
-FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vector<const Dataset*>& sets) {
-  const std::vector<int> idx = model_params(D, terms);
-  const int K = static_cast<int>(idx.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(K, K);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(K);
-  for (const Dataset* S : sets)
-    for (int u = 0; u < K; ++u) {
-      b(u) += S->g(idx[u]);
-      for (int v = 0; v < K; ++v) A(u, v) += S->G(idx[u], idx[v]);
-    }
-  // Weak zero-mean priors on the catalogue parameters: a component a drive cannot see (e.g. the
-  // g-sensitivity to the always-vertical gravity, which the bias absorbs, or the lever arm along
-  // the yaw axis) stays at zero with σ ≈ its prior instead of trading off against the bias.
-  for (int u = D.n_base; u < K; ++u) A(u, u) += 1.0 / std::pow(D.prior_sigma[idx[u] - D.n_base], 2);
-  Eigen::VectorXd s(K);
-  for (int i = 0; i < K; ++i) s(i) = A(i, i) > 0 ? 1.0 / std::sqrt(A(i, i)) : 1.0;
-  Eigen::MatrixXd As = s.asDiagonal() * A * s.asDiagonal();
-  As.diagonal().array() += 1e-9;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(As);
-  const Eigen::VectorXd th = s.asDiagonal() * ldlt.solve(s.asDiagonal() * b);
-  const Eigen::MatrixXd C = s.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(K, K)) * s.asDiagonal();
-  FitOut out;
-  out.logdet_info = ldlt.vectorD().array().log().sum() - 2 * s.array().log().sum();
-  out.theta = Eigen::VectorXd::Zero(D.P);
-  out.cov = Eigen::MatrixXd::Zero(D.P, D.P);
-  for (int u = 0; u < K; ++u) {
-    out.theta(idx[u]) = th(u);
-    for (int v = 0; v < K; ++v) out.cov(idx[u], idx[v]) = C(u, v);
-  }
-  for (const Dataset* S : sets) {
-    const double c = axis_chi2(*S, idx, out.theta);
-    out.chi2_axis[S->axis] += c;
-    out.chi2 += c;
-  }
-  return out;
-}
+using namespace drive_diag;
 
 // The drive as a problem of the catalogue search (greedy_search.hpp): global parameters; a term
 // with no column on any axis is no candidate; a term's penalty counts the parent rows of the axes
 // it touches, correlated_drift's the parents.
 struct DriveProblem {
-  using Dataset = calbench::Dataset;
+  using Dataset = drive_diag::Dataset;
   using Fit = FitOut;
   const DriveDiagData& d;
   const Design& D;
@@ -429,29 +36,13 @@ struct DriveProblem {
   Dataset build(int a, int subset, double ds, double tau) const { return build_dataset(d, D, a, subset, ds, tau); }
   Fit fit(const std::vector<int>& m, const std::vector<const Dataset*>& sets) const { return fit_model(D, m, sets); }
   double chi2(const Dataset& S, const std::vector<int>& m, const Fit& f) const {
-    return axis_chi2(S, model_params(D, m), f.theta);
+    return diag::quadratic_chi2(S.G, S.g, S.zz, global_map(model_params(D, m)), f.theta);
   }
   bool touches(int t, int a) const { return std::find(D.touched[t].begin(), D.touched[t].end(), a) != D.touched[t].end(); }
-  int rows(const Dataset& S) const { return S.n; }
-  int drift_rows(const Dataset& S) const { return S.n; }
+  int rows(const Dataset& S) const { return S.n_low; }
+  int drift_rows(const Dataset& S) const { return S.n_low; }
   int param_index(const Fit& /*f*/, std::size_t /*k*/, int t) const { return D.term_off[t]; }
 };
-
-// Parent-level residual of axis a for global parameters theta.
-Eigen::VectorXd residual(const Design& D, int a, const Eigen::VectorXd& theta) { return D.zp[a] - D.Xp[a] * theta; }
-
-// The drift the noise model attributes to a residual (GLS smoother), per parent.
-Eigen::VectorXd smoothed_drift(const DriveDiagData& d, const Dataset& S, const Eigen::VectorXd& r) {
-  const int N = S.n;
-  const Eigen::VectorXd w = S.L.triangularView<Eigen::Lower>().solve(r);
-  const Eigen::VectorXd v = S.L.transpose().triangularView<Eigen::Upper>().solve(w);
-  std::vector<double> centre(N), duration(N);
-  for (int k = 0; k < N; ++k) {
-    centre[k] = d.parents[S.parents[k]].t_mid;
-    duration[k] = d.parents[S.parents[k]].duration;
-  }
-  return gm_window_smoothed(centre, duration, S.ds, S.tau, v);
-}
 
 // Systematic RMS of residual r (drift removed) over groups of parents: each group's mean squared
 // minus the short-range noise variance of that mean.
@@ -553,84 +144,38 @@ std::vector<std::vector<int>> quantile_groups(const Eigen::VectorXd& key, int bi
 AxisStats axis_stats(const DriveDiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& r, int nparams,
                      Eigen::VectorXd& r_nodrift) {
   AxisStats st;
-  const int N = S.n;
-  const Eigen::VectorXd rw = S.L.triangularView<Eigen::Lower>().solve(r);
-  st.chi2_dof = rw.squaredNorm() / std::max(1, N - nparams / kAxes);
-  std::vector<double> rv(rw.data(), rw.data() + rw.size());
-  ljung_box(rv, std::min(10, std::max(1, N / 5)), st.ljung_box_q, st.ljung_box_p);
-  r_nodrift = r - smoothed_drift(d, S, r);
+  const int N = S.n_low;
+  diag::whiteness(S, r, nparams, st);
+  r_nodrift = r - diag::smoothed_drift(d.parents, S, r);
   st.systematic_rms = grouped_systematic(D, S.axis, r_nodrift, time_groups(N, 10), &st.systematic_floor);
   st.step_rms = st.systematic_rms;
   return st;
 }
 
-double pearson(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
-  const double mx = x.mean(), my = y.mean();
-  const double sxy = ((x.array() - mx) * (y.array() - my)).sum();
-  const double sxx = (x.array() - mx).square().sum(), syy = (y.array() - my).square().sum();
-  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
-}
-
-std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eigen::VectorXd& r) {
-  std::vector<ConditionCorrelation> out;
-  const int N = static_cast<int>(d.parents.size());
-  for (const auto& name : drive_condition_names(d.has_temperature)) {
-    Eigen::VectorXd c(N);
-    for (int k = 0; k < N; ++k) c(k) = drive_condition_value(d, k, name);
-    out.push_back({name, pearson(c, r)});
+// Axis a finding is reported on: a lever arm with one dominant significant component on that one.
+void report_axis_of(const Term& t, DiagFinding& f) {
+  if (t.effect == EffectId::lever_arm) {
+    // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
+    // rolls or pitches, so the component along the yaw axis is poorly determined).
+    auto sig = [&](int i) { return std::abs(f.value[i]) > 3 * f.sigma[i] ? std::abs(f.value[i]) : 0.0; };
+    int imax = 0;
+    for (int i = 1; i < 3; ++i)
+      if (sig(i) > sig(imax)) imax = i;
+    double others = 0;
+    for (int i = 0; i < 3; ++i)
+      if (i != imax) others = std::max(others, sig(i));
+    f.report_axis = others < 0.3 * sig(imax) ? imax : -1;
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return std::abs(a.r) > std::abs(b.r); });
-  return out;
 }
-
-
-}  // namespace
-
-std::vector<std::string> drive_condition_names(bool with_temperature) {
-  std::vector<std::string> n = {"speed", "w_x", "w_y", "w_z", "f_x", "f_y", "f_z", "|w|", "|f|",
-                                "ang_accel", "turn_rate", "along_accel", "time"};
-  if (with_temperature) n.push_back("temperature");
-  return n;
-}
-
-double drive_condition_value(const DriveDiagData& d, int k, const std::string& name) {
-  const ParentBlock& p = d.parents[k];
-  const DriveParentInfo& i = d.info[k];
-  if (name == "speed") return i.speed;
-  if (name == "w_x") return p.w(0);
-  if (name == "w_y") return p.w(1);
-  if (name == "w_z") return p.w(2);
-  if (name == "f_x") return p.f(0);
-  if (name == "f_y") return p.f(1);
-  if (name == "f_z") return p.f(2);
-  if (name == "|w|") return p.w.norm();
-  if (name == "|f|") return p.f.norm();
-  if (name == "ang_accel") return i.ang_accel;
-  if (name == "turn_rate") return i.turn_rate;
-  if (name == "along_accel") return i.along_accel;
-  if (name == "time") return p.t_mid;
-  if (name == "temperature") {
-    double t = 0, w = 0;
-    for (int j = p.first; j < p.first + p.count; ++j)
-      if (std::isfinite(d.subs[j].temp_c)) {
-        t += d.subs[j].temp_c;
-        w += 1;
-      }
-    return w > 0 ? t / w : 0.0;
-  }
-  return 0.0;
-}
-
-namespace {
 
 // Mounting rotation δ of the base model (bias and δ, M fixed, data-sheet drift), MEMS axes.
 Vec3 base_mounting_delta(const DriveDiagData& data, const SensorErrors& current, const EffectTerms& carried,
                          const DriveDiagnoseOptions& opt) {
   const Design D = build_design(data, current, carried, true);
   std::vector<Dataset> sets;
-  const double ds[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  const double tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  for (int a = 0; a < kAxes; ++a) sets.push_back(build_dataset(data, D, a, kSubsetAll, ds[a / 3], tau[a / 3]));
+  const diag::DriftPrior prior = diag::drift_prior(opt.noise);
+  for (int a = 0; a < kAxes; ++a)
+    sets.push_back(build_dataset(data, D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
   std::vector<const Dataset*> ptrs;
   for (const auto& S : sets) ptrs.push_back(&S);
   return fit_model(D, {}, ptrs).theta.segment<3>(6);
@@ -680,17 +225,10 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   res.base_before = current;
 
   const DriveProblem problem{data, D};
-  GreedyPolicy policy;
-  policy.min_delta_chi2 = opt.min_delta_chi2;
-  policy.penalty_per_param = opt.penalty_per_param;
-  policy.max_findings = opt.max_findings;
-  // A drift larger than the data sheet says (correlated_drift) competes with the linear terms in
-  // every round: a wandering bias would otherwise be half-explained by spurious linear terms.
-  policy.drift_competes = true;
+  GreedyPolicy policy = diag::search_policy(opt);
   policy.skip_untouched = true;
-  const double drift_sigma[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
-  const double drift_tau[2] = {opt.noise.gyro.drift_tau_s, opt.noise.accel.drift_tau_s};
-  GreedySearch<DriveProblem> search(problem, policy, drift_sigma, drift_tau);
+  const diag::DriftPrior prior_drift = diag::drift_prior(opt.noise);
+  GreedySearch<DriveProblem> search(problem, policy, prior_drift.sigma, prior_drift.tau);
   const std::vector<Dataset>& all = search.all;
 
   // Before: the base model (bias, and M or the mounting) refitted, no catalogue term.
@@ -700,7 +238,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   for (int a = 0; a < kAxes; ++a) {
     r_before[a] = residual(D, a, base_fit.theta);
     res.before[a] = axis_stats(data, D, all[a], r_before[a], nbase, rn_before[a]);
-    res.correlations_before[a] = correlations(data, rn_before[a]);
+    res.correlations_before[a] = diag::correlations(data, rn_before[a]);
   }
 
   search.run();
@@ -742,16 +280,14 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       }
     v.scale.setZero();
   }
-  for (int triad = 0; triad < 2; ++triad) {
-    res.drift_sigma[triad] = ds[triad];
-    res.drift_tau[triad] = tau[triad];
-  }
+  std::copy(ds, ds + 2, res.drift_sigma);
+  std::copy(tau, tau + 2, res.drift_tau);
   Eigen::VectorXd r_after[kAxes], rn_after[kAxes];
   const int np = static_cast<int>(model_params(D, model).size());
   for (int a = 0; a < kAxes; ++a) {
     r_after[a] = residual(D, a, cur.theta);
     res.after[a] = axis_stats(data, D, all[a], r_after[a], np, rn_after[a]);
-    out.correlations_after[a] = correlations(data, rn_after[a]);
+    out.correlations_after[a] = diag::correlations(data, rn_after[a]);
     res.residual[a].before.assign(rn_before[a].data(), rn_before[a].data() + NP);
     res.residual[a].after.assign(rn_after[a].data(), rn_after[a].data() + NP);
   }
@@ -779,18 +315,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     // Another candidate in its place that fits within ambiguity_chi2 and itself explains the
     // residual (as on the bench): the drive does not tell them apart.
     f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, carried);
-    if (t.effect == EffectId::lever_arm) {
-      // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
-      // rolls or pitches, so the component along the yaw axis is poorly determined).
-      auto sig = [&](int i) { return std::abs(f.value[i]) > 3 * f.sigma[i] ? std::abs(f.value[i]) : 0.0; };
-      int imax = 0;
-      for (int i = 1; i < 3; ++i)
-        if (sig(i) > sig(imax)) imax = i;
-      double others = 0;
-      for (int i = 0; i < 3; ++i)
-        if (i != imax) others = std::max(others, sig(i));
-      f.report_axis = others < 0.3 * sig(imax) ? imax : -1;
-    }
+    report_axis_of(t, f);
     // Systematic residual along the finding's own signature, on each axis the term touches:
     // parents binned by the term's fitted contribution c; before = the final residual with the
     // term taken out (residual + c: what this drive shows without the term, other parameters as
@@ -838,7 +363,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       if (name == "time") continue;
       Eigen::VectorXd c(NP);
       for (int k = 0; k < NP; ++k) c(k) = drive_condition_value(data, k, name);
-      const double r = pearson(c, contrib_show);
+      const double r = diag::pearson(c, contrib_show);
       if (std::abs(r) > std::abs(best_r)) {
         best_r = r;
         f.condition = name;
@@ -855,27 +380,16 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   // Unexplained: an axis still far from its noise model.
   for (int a = 0; a < kAxes; ++a) {
     const AxisStats& s = res.after[a];
-    const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, all[a].n) / 2.0);
+    const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, all[a].n_low) / 2.0);
     if (z_low < 6 && s.ljung_box_p > 1e-4) continue;
-    DiagUnexplained u;
-    u.sensor = a / 3;
-    u.axis = a % 3;
-    u.chi2_dof = s.chi2_dof;
-    u.ljung_box_p = s.ljung_box_p;
-    u.systematic_rms = s.systematic_rms;
-    u.correlations = out.correlations_after[a];
-    if (u.correlations.size() > 4) u.correlations.resize(4);
+    DiagUnexplained u = diag::unexplained_axis(a, s, out.correlations_after[a]);
     std::map<int, std::pair<double, double>> win;
     for (int k = 0; k < NP; ++k) {
       auto& x = win[data.parents[k].step];
       x.first += rn_after[a](k);
       x.second += 1;
     }
-    std::vector<std::pair<double, int>> score;
-    const double sig = out.block_noise_sigma[a];
-    for (const auto& [w, x] : win) score.push_back({std::abs(x.first / x.second) * std::sqrt(x.second) / sig, w});
-    std::sort(score.rbegin(), score.rend());
-    for (std::size_t k = 0; k < score.size() && k < 3; ++k) u.worst_steps.push_back(score[k].second);
+    u.worst_steps = diag::worst_windows(win, out.block_noise_sigma[a]);
     res.unexplained.push_back(u);
   }
 

@@ -1,0 +1,234 @@
+#include <cmath>
+
+#include "bench/diagnose/diagnose_run.hpp"
+#include "bench/diagnose/diagnose_text.hpp"
+#include "bench/diagnose/drive_run.hpp"
+#include "bench/diagnose/effects_json.hpp"
+#include "bench/diagnose/finding_text.hpp"
+#include "bench/io/json_util.hpp"
+
+// The --json documents of `calbench diagnose`, bench and drive (docs/diagnosis.md: JSON schema).
+
+namespace calbench {
+
+namespace diagnose_out {
+
+void finding_value_json(const DiagFinding& f, nlohmann::json& value, nlohmann::json& sigma) {
+  if (f.value.size() == 1) {
+    value = f.value[0];
+    sigma = std::isfinite(f.sigma[0]) ? nlohmann::json(f.sigma[0]) : nlohmann::json(nullptr);
+  } else {
+    value = f.value;
+    sigma = f.sigma;
+  }
+}
+
+nlohmann::json finding_evidence_json(const DiagFinding& f) {
+  nlohmann::json ev = {{"delta_chi2", f.delta_chi2},
+                       {"delta_bic", f.delta_bic},
+                       {"heldout_delta_chi2", f.heldout_delta_chi2},
+                       {"revealing_condition", f.condition},
+                       {"correlation_before", f.condition_r}};
+  if (f.term.effect == EffectId::correlated_drift) add_drift_tau_evidence(f, ev);
+  ev["indistinguishable_from"] = alternatives_json(f);
+  return ev;
+}
+
+nlohmann::json correlations_json(const std::vector<ConditionCorrelation>& c, std::size_t most) {
+  nlohmann::json j = nlohmann::json::array();
+  for (std::size_t k = 0; k < c.size() && k < most; ++k) j.push_back({{"condition", c[k].condition}, {"r", c[k].r}});
+  return j;
+}
+
+void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohmann::json& diagnosis) {
+  for (const auto& k : effect_json_keys()) extra.erase(k);
+  effects_to_json(r.improved_terms, r.terms_sigma, extra);
+  extra["diagnosis"] = diagnosis;
+}
+
+}  // namespace diagnose_out
+
+using namespace diagnose_out;
+
+nlohmann::json diagnosis_json(const DiagRun& run) {
+  const DiagnoseResult& r = run.result;
+  nlohmann::json findings = nlohmann::json::array();
+  for (const auto& f : r.findings) {
+    nlohmann::json v, s;
+    finding_value_json(f, v, s);
+    const int ai = finding_axis_index(f, r);
+    nlohmann::json ev = finding_evidence_json(f);
+    ev["ljung_box_p_before"] = r.before[ai].ljung_box_p;
+    ev["ljung_box_p_after"] = r.after[ai].ljung_box_p;
+    findings.push_back({{"effect", effect_name(f.term.effect)},
+                        {"sensor", kSensor[f.report_sensor]},
+                        {"axis", f.report_axis >= 0 ? kAxis[f.report_axis] : "all"},
+                        {"value", v},
+                        {"unit", f.unit},
+                        {"sigma", s},
+                        {"evidence", ev},
+                        {"rms_before", f.rms_before},
+                        {"rms_after", f.rms_after},
+                        {"sentence", finding_sentence(f)}});
+  }
+  nlohmann::json unexplained = nlohmann::json::array();
+  for (const auto& u : r.unexplained) {
+    const nlohmann::json corr = correlations_json(u.correlations, u.correlations.size());
+    unexplained.push_back({{"sensor", kSensor[u.sensor]},
+                           {"axis", kAxis[u.axis]},
+                           {"chi2_per_dof", u.chi2_dof},
+                           {"within_step_chi2_per_dof", u.high_chi2_dof},
+                           {"ljung_box_p", u.ljung_box_p},
+                           {"systematic_rms", u.systematic_rms},
+                           {"worst_steps", u.worst_steps},
+                           {"correlations", corr},
+                           {"angle_harmonic", u.angle_harmonic},
+                           {"angle_harmonic_amplitude", u.angle_harmonic_amp}});
+  }
+  nlohmann::json axes = nlohmann::json::object();
+  for (int a = 0; a < 6; ++a) {
+    auto st = [](const AxisStats& s) {
+      return nlohmann::json{{"systematic_rms", s.systematic_rms}, {"step_rms", s.step_rms}, {"within_step_rms", s.within_rms},
+                            {"chi2_per_dof", s.chi2_dof},        {"within_step_chi2_per_dof", s.high_chi2_dof},
+                            {"ljung_box_q", s.ljung_box_q},      {"ljung_box_p", s.ljung_box_p},
+                            {"criterion", s.bic}};
+    };
+    const nlohmann::json corr = correlations_json(r.correlations_before[a], 4);
+    axes[std::string(kSensor[a / 3]) + "_" + kAxis[a % 3]] = {
+        {"before", st(r.before[a])}, {"after", st(r.after[a])}, {"white_sigma_per_sample", r.white_sigma[a]},
+        {"correlations_before", corr}};
+  }
+  return {{"findings", findings},
+          {"unexplained", unexplained},
+          {"withdrawn", withdrawn_json(r.withdrawn)},
+          {"axes", axes},
+          {"coefficients_tested", run.fitted_first ? "bench fit of this recording" : "given"},
+          {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
+}
+
+namespace {
+
+nlohmann::json innovation_stats_json(const InnovationStats& s) {
+  nlohmann::json w = nlohmann::json::array(), c = nlohmann::json::array();
+  for (const auto& x : s.worst_windows)
+    w.push_back({{"t0_s", x.t0}, {"t1_s", x.t1}, {"nis_per_dof", x.nis_per_dof}, {"epochs", x.epochs}});
+  for (std::size_t k = 0; k < s.correlations.size() && k < 5; ++k)
+    c.push_back({{"condition", s.correlations[k].condition}, {"r", s.correlations[k].r}});
+  return {{"epochs", s.epochs},
+          {"used", s.used},
+          {"rejected", s.rejected},
+          {"forced", s.forced},
+          {"nis_per_dof", s.nis_per_dof},
+          {"median_nis_per_dof", s.median_nis_per_dof},
+          {"fraction_within_95pct", s.fraction_within_95},
+          {"ljung_box_p", {s.ljung_box_p[0], s.ljung_box_p[1], s.ljung_box_p[2]}},
+          {"ljung_box_p_min", s.ljung_box_p_min},
+          {"lag1_autocorr", {s.lag1_autocorr[0], s.lag1_autocorr[1], s.lag1_autocorr[2]}},
+          {"worst_windows_s", w},
+          {"correlations", c},
+          {"correlation_blocks", s.correlation_blocks}};
+}
+
+}  // namespace
+
+nlohmann::json drive_innovations_json(const DriveDiagRun& run) {
+  if (!run.innovations) return {{"skipped", run.innovations_skipped}};
+  const DriveInnovations& v = *run.innovations;
+  nlohmann::json j;
+  j["method"] = "in-motion filter as `fit drive --coeffs` runs it (obs pos,vel,att); normalised innovation "
+                "ν_i/√S_ii per component (position, velocity: N, E, D; attitude: small-rotation axes)";
+  j["before"] = {{"coefficients", "the improved b and M with only the tested catalogue terms"},
+                 {"effects_applied", v.applied_before}};
+  j["after"] = {{"coefficients", v.compared ? "IMPROVED.json (the new terms too)" : "same as before (no new term)"},
+                {"effects_applied", v.applied_after}};
+  j["compared"] = v.compared;
+  j["cpu_s"] = v.cpu_s;
+  for (int k = 0; k < 3; ++k)
+    j[kObsName[k]] = {{"before", innovation_stats_json(v.before[k])}, {"after", innovation_stats_json(v.after[k])},
+                      {"sentence", innovation_sentence(k, v)}};
+  return j;
+}
+
+nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun& run) {
+  const DriveDiagnoseResult& R = run.result;
+  const DiagnoseResult& r = R.core;
+  nlohmann::json j;
+  j["kind"] = "drive";
+  nlohmann::json fs = nlohmann::json::array();
+  for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
+    const DiagFinding& f = r.findings[fi];
+    nlohmann::json x;
+    x["effect"] = effect_name(f.term.effect);
+    x["sensor"] = kSensor[f.term.sensor];
+    x["axis"] = f.report_axis >= 0 ? kAxis[f.report_axis] : "all";
+    finding_value_json(f, x["value"], x["sigma"]);
+    x["unit"] = f.unit;
+    nlohmann::json ev = finding_evidence_json(f);
+    if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
+    if (fi < R.shown_on.size() && f.term.effect != EffectId::correlated_drift) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
+    if (fi < R.rms_lowpass.size() && f.term.effect != EffectId::correlated_drift)
+      ev["rms_of"] = R.rms_lowpass[fi] ? "three-block means" : "blocks";
+    if (f.report_sensor < 2 && f.report_axis >= 0) {
+      const int a = f.report_sensor * 3 + f.report_axis;
+      ev["ljung_box_p_before"] = r.before[a].ljung_box_p;
+      ev["ljung_box_p_after"] = r.after[a].ljung_box_p;
+    }
+    x["evidence"] = ev;
+    x["rms_before"] = f.rms_before;
+    x["rms_after"] = f.rms_after;
+    x["sentence"] = drive_finding_sentence(f, fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1);
+    fs.push_back(x);
+  }
+  j["findings"] = fs;
+  nlohmann::json us = nlohmann::json::array();
+  for (const auto& u : r.unexplained) {
+    const nlohmann::json c = correlations_json(u.correlations, u.correlations.size());
+    nlohmann::json w = nlohmann::json::array();
+    for (int s : u.worst_steps) w.push_back({20.0 * s, 20.0 * (s + 1)});
+    us.push_back({{"sensor", kSensor[u.sensor]}, {"axis", kAxis[u.axis]}, {"chi2_per_dof", u.chi2_dof},
+                  {"ljung_box_p", u.ljung_box_p}, {"systematic_rms", u.systematic_rms}, {"worst_windows_s", w},
+                  {"correlations", c}});
+  }
+  j["unexplained"] = us;
+  j["withdrawn"] = withdrawn_json(r.withdrawn);
+  nlohmann::json axes;
+  for (int a = 0; a < 6; ++a) {
+    auto st = [](const AxisStats& s) {
+      return nlohmann::json{{"systematic_rms", s.systematic_rms}, {"chi2_per_dof", s.chi2_dof},
+                            {"ljung_box_p", s.ljung_box_p}};
+    };
+    const nlohmann::json cb = correlations_json(r.correlations_before[a], 5);
+    const nlohmann::json ca = correlations_json(R.correlations_after[a], 5);
+    axes[kAxisName[a]] = {{"before", st(r.before[a])}, {"after", st(r.after[a])},
+                          {"white_sigma_per_sample", r.white_sigma[a]}, {"white_scale", R.white_scale[a]},
+                          {"block_noise_sigma", R.block_noise_sigma[a]},
+                          {"correlations_before", cb}, {"correlations_after", ca}};
+  }
+  j["axes"] = axes;
+  nlohmann::json segs = nlohmann::json::array();
+  for (const auto& s : R.segments) {
+    nlohmann::json m;
+    for (int a = 0; a < 6; ++a)
+      m[kAxisName[a]] = {{"mean_before", s.mean_before[a]}, {"mean_after", s.mean_after[a]},
+                         {"z_before", s.z_before[a]}, {"z_after", s.z_after[a]}};
+    segs.push_back({{"motion", s.motion}, {"blocks", s.blocks}, {"seconds", s.seconds}, {"axes", m}});
+  }
+  j["segments"] = segs;
+  j["coefficients_tested"] = run.coeffs_given ? "given (M fixed; bias and mounting re-estimated)"
+                                              : "none given: bias and M fitted on this drive";
+  nlohmann::json mount = {{"tested_rpy_deg", to_json(in.mounting_rpy_deg)}, {"source", in.mounting_source},
+                          {"lever_arm_m", to_json(in.meta.mounting ? in.meta.mounting->lever_arm_m : Vec3::Zero())}};
+  if (run.coeffs_given) {
+    mount["correction_rad"] = to_json(R.mounting_delta);
+    mount["correction_sigma_rad"] = to_json(R.mounting_sigma);
+  }
+  j["mounting"] = mount;
+  j["noise_model"] = {{"gyro_drift_sigma_rad_s", r.drift_sigma[0]}, {"gyro_drift_tau_s", r.drift_tau[0]},
+                      {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]}};
+  j["data"] = {{"blocks", r.parents}, {"intervals", r.subs}, {"seconds", r.data_s},
+               {"imu_rate_hz", in.data.imu_rate_hz}, {"skipped_intervals", in.data.skipped_intervals}};
+  if (run.innovations || !run.innovations_skipped.empty()) j["innovations"] = drive_innovations_json(run);
+  return j;
+}
+
+}  // namespace calbench

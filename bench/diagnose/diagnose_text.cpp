@@ -1,0 +1,325 @@
+#include <cmath>
+#include <sstream>
+
+#include "bench/diagnose/diagnose_run.hpp"
+#include "bench/diagnose/diagnose_text.hpp"
+#include "bench/diagnose/drive_run.hpp"
+#include "bench/diagnose/finding_text.hpp"
+#include "common/units.hpp"
+
+// The text of `calbench diagnose`: the sentences of the findings and the summaries, bench and drive.
+
+namespace calbench {
+
+namespace diagnose_out {
+
+const char* const kSensor[3] = {"gyro", "accel", "reference"};
+const char* const kAxis[3] = {"x", "y", "z"};
+const char* const kAxisName[6] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"};
+
+double disp(double v, int sensor) { return sensor == 0 ? v / units::kDegPerHour : v / units::kMilliG; }
+const char* disp_unit(int sensor) { return sensor == 0 ? "°/h" : "mg"; }
+
+std::string correlations_text(const std::vector<ConditionCorrelation>& c) {
+  std::string s;
+  for (const auto& x : c) s += " " + x.condition + " (r " + fmt(x.r, 2) + ")";
+  return s;
+}
+
+std::string axis_table_text(const DiagnoseResult& r, const std::function<std::string(int, double)>& rms) {
+  std::ostringstream o;
+  o << "per axis (systematic RMS, χ²/dof, Ljung–Box p) before → after:\n";
+  for (int a = 0; a < 6; ++a) {
+    const int s = a / 3;
+    o << "  " << kSensor[s] << " " << kAxis[a % 3] << ": " << rms(s, r.before[a].systematic_rms) << " → "
+      << rms(s, r.after[a].systematic_rms) << ";  " << fmt(r.before[a].chi2_dof) << " → " << fmt(r.after[a].chi2_dof)
+      << ";  " << fmt(r.before[a].ljung_box_p, 2) << " → " << fmt(r.after[a].ljung_box_p, 2) << "\n";
+  }
+  return o.str();
+}
+
+// Value in the units people use, for sentences.
+std::string human_value(const DiagFinding& f, double v) {
+  using namespace units;
+  const bool g = f.term.sensor == 0;
+  switch (f.term.effect) {
+    case EffectId::temperature_bias: return g ? fmt(v / kDegPerHour) + " °/h/K" : fmt(v / kMilliG) + " mg/K";
+    case EffectId::temperature_scale: return fmt(v / kPpm) + " ppm/K";
+    case EffectId::temperature_rate:
+      return g ? fmt(v / kDegPerHour / 60.0) + " °/h per K/min" : fmt(v / kMilliG / 60.0) + " mg per K/min";
+    case EffectId::g_sensitivity: return fmt(v * kG0 / kDeg) + " °/s/g";
+    case EffectId::scale_nonlinearity: return g ? fmt(v * kDeg / kPpm) + " ppm/(°/s)" : fmt(v * kG0 / kPpm) + " ppm/g";
+    case EffectId::scale_asymmetry:
+    case EffectId::scale_factor: return fmt(v / kPpm) + " ppm";
+    case EffectId::time_offset: return fmt(v * 1e3) + " ms";
+    case EffectId::lever_arm: return fmt(v * 1e3) + " mm";
+    case EffectId::misalignment:
+    case EffectId::table_wobble: return fmt(v / kDeg * 3600) + " arcsec";
+    case EffectId::correlated_drift: return g ? fmt(v / kDegPerHour) + " °/h" : fmt(v / kMilliG) + " mg";
+  }
+  return fmt(v);
+}
+
+std::string human_rms(int sensor, double v) {
+  using namespace units;
+  return sensor == 0 ? fmt(v / kDegPerHour) + " °/h" : fmt(v / kMilliG, 3) + " mg";
+}
+
+int finding_axis_index(const DiagFinding& f, const DiagnoseResult& r) {
+  if (f.term.sensor < 2 && f.report_axis >= 0) return f.term.sensor * 3 + f.report_axis;
+  if (f.term.effect == EffectId::lever_arm && f.report_axis >= 0) return 3 + f.report_axis;
+  int best = 0;
+  for (int a = 1; a < 6; ++a)
+    if (r.before[a].systematic_rms > r.before[best].systematic_rms) best = a;
+  if (f.term.effect == EffectId::lever_arm || f.term.effect == EffectId::misalignment) {
+    best = 3;
+    for (int a = 4; a < 6; ++a)
+      if (r.before[a].systematic_rms > r.before[best].systematic_rms) best = a;
+  }
+  return best;
+}
+
+const char* condition_phrase(const std::string& c) {
+  if (c == "temperature") return "temperature";
+  if (c == "rate") return "rotation rate";
+  if (c == "angle") return "table angle";
+  if (c == "time") return "time";
+  if (c == "f_x") return "specific force along x";
+  if (c == "f_y") return "specific force along y";
+  if (c == "f_z") return "specific force along z";
+  if (c == "f") return "orientation (specific force)";
+  return c.c_str();
+}
+
+const char* const kObsName[3] = {"position", "velocity", "attitude"};
+
+// One sentence per observation type: NIS/dof, gating, whiteness, worst window, strongest condition.
+std::string innovation_sentence(int type, const DriveInnovations& v) {
+  const InnovationStats& b = v.before[type];
+  const InnovationStats& a = v.after[type];
+  auto arrow = [&](double x, double y, int prec = 3) { return v.compared ? fmt(x, prec) + " → " + fmt(y, prec) : fmt(x, prec); };
+  std::ostringstream o;
+  o << kObsName[type] << " innovations: NIS/dof " << arrow(b.nis_per_dof, a.nis_per_dof) << " (1 if consistent), gated "
+    << (v.compared ? std::to_string(b.rejected) + " → " + std::to_string(a.rejected) : std::to_string(b.rejected)) << " of "
+    << b.epochs << "; whiteness (Ljung–Box p, worst component) " << arrow(b.ljung_box_p_min, a.ljung_box_p_min, 2)
+    << (a.ljung_box_p_min < 0.05 ? " (not white at the 5 % level)" : " (white at the 5 % level)");
+  // Far from 1 either way is not "consistent": below, the assumed noise is too large (a smaller
+  // NIS after a correction is then no improvement); above, too small or a model error remains.
+  if (a.nis_per_dof < 0.5) o << "; NIS/dof " << fmt(a.nis_per_dof, 3) << " is far below 1: the assumed noise is too large";
+  else if (a.nis_per_dof > 2) o << "; NIS/dof " << fmt(a.nis_per_dof, 3) << " is far above 1: noise too small or a model error left";
+  if (!a.worst_windows.empty()) {
+    const auto& w = a.worst_windows[0];
+    o << "; worst 20 s window " << fmt(w.t0, 4) << "–" << fmt(w.t1, 4) << " s (NIS/dof " << fmt(w.nis_per_dof) << ")";
+  }
+  if (!a.correlations.empty()) {
+    const auto& c = a.correlations[0];
+    double rb = 0;
+    for (const auto& x : b.correlations)
+      if (x.condition == c.condition) rb = x.r;
+    o << "; normalised magnitude follows " << c.condition << " most (r "
+      << (v.compared ? fmt(rb, 2) + " → " + fmt(c.r, 2) : fmt(c.r, 2)) << ", " << a.correlation_blocks << " blocks)";
+  }
+  return o.str();
+}
+
+}  // namespace diagnose_out
+
+using namespace diagnose_out;
+
+namespace {
+
+// What the residual does and the effect's name, for the sentence of a bench finding.
+void sentence_head(std::ostringstream& o, const DiagFinding& f, const std::string& who) {
+  switch (f.term.effect) {
+    case EffectId::temperature_bias: o << who << " error grows with temperature: temperature-dependent bias, "; break;
+    case EffectId::temperature_scale: o << who << " scale factor changes with temperature: temperature-dependent scale factor, "; break;
+    case EffectId::temperature_rate: o << who << " error follows the rate of temperature change (opposite on heating and cooling): thermal lag (dT/dt), "; break;
+    case EffectId::g_sensitivity: o << who << " error grows with " << condition_phrase(f.condition) << ": g-sensitivity, "; break;
+    case EffectId::scale_nonlinearity: o << who << " scale error grows with |input|: quadratic scale-factor nonlinearity, "; break;
+    case EffectId::scale_asymmetry: o << who << " scale differs between positive and negative inputs: scale asymmetry, "; break;
+    case EffectId::scale_factor: o << who << " scale differs from the given coefficients: scale factor, "; break;  // drives only
+    case EffectId::time_offset: o << "IMU and reference are offset in time (errors follow the rate of change of the input): time offset, "; break;
+    case EffectId::lever_arm: o << "accelerometer error grows with the square of the table rate: IMU off the rotation centre (lever arm), "; break;
+    case EffectId::misalignment: o << "accelerometer error depends on the table orientation beyond any sensor model: table base tilted (misalignment), "; break;
+    case EffectId::table_wobble: o << "error periodic in the table angle (once per revolution): table wobble / encoder error, "; break;
+    case EffectId::correlated_drift: o << who << " residual wanders slowly beyond the data-sheet drift: correlated drift, "; break;
+  }
+}
+
+std::string value_text(const DiagFinding& f) {
+  using namespace units;
+  const Term& t = f.term;
+  auto list = [&](double scale, const char* unit) {
+    std::string s;
+    if (f.value.size() == 1) return fmt(f.value[0] * scale) + " " + unit;
+    s = "(";
+    for (std::size_t i = 0; i < f.value.size(); ++i) s += (i ? ", " : "") + fmt(f.value[i] * scale);
+    return s + ") " + unit;
+  };
+  switch (t.effect) {
+    case EffectId::g_sensitivity: return list(1.0 / kDeg * kG0, "°/s/g");
+    case EffectId::scale_nonlinearity: return t.sensor == 0 ? list(1e6 * kDeg, "ppm/(°/s)") : list(1e6 * kG0, "ppm/g");
+    case EffectId::scale_asymmetry:
+    case EffectId::scale_factor: return list(1e6, "ppm");
+    case EffectId::time_offset: return list(1e3, "ms");
+    case EffectId::lever_arm: return list(1e3, "mm (IMU axes)");
+    case EffectId::temperature_bias:
+      return t.sensor == 0 ? list(1.0 / kDegPerHour, "°/h/K") : list(1.0 / kMilliG, "mg/K");
+    case EffectId::temperature_scale: return list(1e6, "ppm/K");
+    case EffectId::correlated_drift:
+      return t.sensor == 0 ? fmt(f.value[0] / kDegPerHour) + " °/h, τ " + drift_tau_text(f)
+                           : fmt(f.value[0] / kMilliG) + " mg, τ " + drift_tau_text(f);
+    default: return list(1.0, f.unit.c_str());
+  }
+}
+
+std::string condition_text(const std::string& c) {
+  if (c.size() == 3 && c[1] == '_' && (c[0] == 'w' || c[0] == 'f'))
+    return std::string(c[0] == 'w' ? "angular rate about " : "specific force along ") + c[2];
+  if (c == "ang_accel") return "angular acceleration";
+  if (c == "turn_rate") return "turn rate";
+  if (c == "along_accel") return "longitudinal acceleration";
+  if (c == "|w|") return "rotation rate magnitude";
+  if (c == "|f|") return "specific force magnitude";
+  return c;
+}
+
+// The effect's name as a drive finding's sentence gives it.
+std::string drive_effect_what(const Term& t) {
+  std::string what;
+  switch (t.effect) {
+    case EffectId::g_sensitivity: what = "g-sensitivity"; break;
+    case EffectId::scale_nonlinearity: what = "scale-factor nonlinearity"; break;
+    case EffectId::scale_asymmetry: what = "scale-factor asymmetry"; break;
+    case EffectId::scale_factor:
+      what = "scale factor differs from the given coefficients (changed since the calibration, or a scale that depends "
+             "on the input range — nonlinearity, asymmetry — set there at other rates; folded into M)";
+      break;
+    case EffectId::time_offset: what = "time offset between IMU and reference (IMU late by τ)"; break;
+    case EffectId::lever_arm: what = "lever arm: the MEMS sits elsewhere than meta.json says"; break;
+    case EffectId::temperature_bias: what = "temperature-dependent bias"; break;
+    case EffectId::temperature_scale: what = "temperature-dependent scale factor"; break;
+    case EffectId::correlated_drift: what = "bias drift larger than the data sheet's (run calbench identify)"; break;
+    default: what = effect_name(t.effect);
+  }
+  return what;
+}
+
+}  // namespace
+
+std::string finding_sentence(const DiagFinding& f) {
+  std::ostringstream o;
+  const std::string who = f.term.sensor == 2 ? std::string("the bench reference")
+                                             : std::string(kSensor[f.report_sensor]) +
+                                                   (f.report_axis >= 0 ? std::string(" ") + kAxis[f.report_axis] : "");
+  const int rs = f.term.effect == EffectId::lever_arm || f.term.effect == EffectId::misalignment ? 1 : f.report_sensor;
+  sentence_head(o, f, who);
+  if (f.value.size() == 1) {
+    o << human_value(f, f.value[0]);
+    if (std::isfinite(f.sigma[0])) o << " ± " << human_value(f, f.sigma[0]);
+  } else {
+    o << "(";
+    for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
+    o << ")";
+  }
+  if (f.term.effect == EffectId::correlated_drift) o << ", τ ≈ " << drift_tau_text(f);
+  o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
+  o << alternatives_text(f);
+  return o.str();
+}
+
+std::string diagnosis_text(const DiagRun& run) {
+  const DiagnoseResult& r = run.result;
+  std::ostringstream o;
+  o << "coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << "; " << r.parents
+    << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\n";
+  if (r.findings.empty())
+    o << (r.unexplained.empty() ? "no finding: the residual is consistent with the model and the sensor's noise\n"
+                                : "no catalogue finding, but the residual is NOT consistent: see unexplained below\n");
+  for (const auto& f : r.findings) o << "* " << finding_sentence(f) << "\n";
+  for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
+  for (const auto& u : r.unexplained) {
+    o << "? unexplained (no catalogue effect explains it): " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)
+      << " (within steps " << fmt(u.high_chi2_dof) << "), Ljung–Box p " << fmt(u.ljung_box_p) << "; worst steps";
+    for (int s : u.worst_steps) o << " " << s;
+    o << "; correlates with";
+    o << correlations_text(u.correlations);
+    if (u.angle_harmonic > 0) o << "; angle harmonic " << u.angle_harmonic << " amplitude " << fmt(u.angle_harmonic_amp);
+    o << "\n";
+  }
+  o << axis_table_text(r, human_rms);
+  return o.str();
+}
+
+std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
+  const Term& t = f.term;
+  const int s = f.report_sensor < 2 ? f.report_sensor : 0;
+  std::string who = std::string(kSensor[t.sensor < 2 ? t.sensor : s]);
+  if (t.sensor < 2 && f.report_axis >= 0) who += std::string(" ") + kAxis[f.report_axis];
+  const std::string what = drive_effect_what(t);
+  std::string head;
+  if (t.effect == EffectId::time_offset) head = "all axes follow the derivative of their input";
+  else if (t.effect == EffectId::lever_arm) head = "accelerometer error grows with rotation rate and angular acceleration";
+  else if (t.effect == EffectId::correlated_drift) head = who + " residual wanders slowly in time";
+  else head = who + " error grows with " + condition_text(f.condition);
+  const int rs = shown_sensor >= 0 ? shown_sensor : (f.report_sensor < 2 ? f.report_sensor : 0);
+  return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
+         disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs) + alternatives_text(f);
+}
+
+std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& run) {
+  const DriveDiagnoseResult& R = run.result;
+  const DiagnoseResult& r = R.core;
+  std::ostringstream o;
+  o << "drive: " << r.parents << " blocks, " << fmt(r.data_s, 4) << " s; reference intervals " << r.subs
+    << "; coefficients tested: "
+    << (run.coeffs_given ? "given (M fixed; bias and mounting re-estimated)" : "none (bias and M fitted on this drive)")
+    << "\n";
+  if (run.coeffs_given)
+    o << "mounting correction (MEMS axes): " << fmt(R.mounting_delta(0) / units::kDeg) << ", "
+      << fmt(R.mounting_delta(1) / units::kDeg) << ", " << fmt(R.mounting_delta(2) / units::kDeg) << " ° (σ "
+      << fmt(R.mounting_sigma.maxCoeff() / units::kDeg) << " °) relative to " << in.mounting_source << "\n";
+  int flagged = 0;  // motion classes whose mean residual is beyond 3σ after the fit
+  for (const auto& sg : R.segments)
+    for (int a = 0; a < 6; ++a) flagged += std::abs(sg.z_after[a]) > 3;
+  if (r.findings.empty()) {
+    if (r.unexplained.empty() && flagged == 0)
+      o << "no finding: the residual is consistent with the model and the noise (no axis unexplained, no motion class beyond 3σ)\n";
+    else
+      o << "no catalogue finding, but the residual is NOT consistent: " << r.unexplained.size() << " axis(es) unexplained, "
+        << flagged << " motion-class mean(s) beyond 3σ (marked ! below)\n";
+  }
+  for (std::size_t fi = 0; fi < r.findings.size(); ++fi)
+    o << "* " << drive_finding_sentence(r.findings[fi], fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1) << "\n";
+  for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
+  for (const auto& u : r.unexplained) {
+    o << "! unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " χ²/dof " << fmt(u.chi2_dof)
+      << ", Ljung–Box p " << fmt(u.ljung_box_p, 2) << "; strongest correlations:";
+    o << correlations_text(u.correlations);
+    o << "\n";
+  }
+  o << axis_table_text(r, [](int s, double v) { return fmt(disp(v, s)) + " " + disp_unit(s); });
+  o << "per motion class (mean residual z-score before → after, |z| > 3 marked):\n";
+  for (const auto& sg : R.segments) {
+    o << "  " << sg.motion << " (" << fmt(sg.seconds, 4) << " s):";
+    for (int a = 0; a < 6; ++a) {
+      o << " " << kAxisName[a] << " " << fmt(sg.z_before[a], 2) << "→" << fmt(sg.z_after[a], 2);
+      if (std::abs(sg.z_after[a]) > 3) o << "!";
+    }
+    o << "\n";
+  }
+  o << drive_innovations_text(run);
+  return o.str();
+}
+
+std::string drive_innovations_text(const DriveDiagRun& run) {
+  if (!run.innovations) return run.innovations_skipped.empty() ? "" : "in-motion filter innovations: " + run.innovations_skipped + "\n";
+  const DriveInnovations& v = *run.innovations;
+  std::ostringstream o;
+  o << "in-motion filter innovations (fit drive over the whole drive; " << (v.compared ? "without → with the new terms" : "no new term")
+    << ", " << fmt(v.cpu_s, 2) << " s CPU):\n";
+  for (int k = 0; k < 3; ++k) o << "  " << innovation_sentence(k, v) << "\n";
+  return o.str();
+}
+
+}  // namespace calbench

@@ -1,0 +1,62 @@
+// Parts of the `calbench diagnose` output shared by the bench (diagnose_run.hpp) and the drive
+// (drive_run.hpp): names, display units, the JSON of a finding's value and evidence, the per-axis
+// table of the text, the residual plot of the HTML report. The CLI side is split by what it makes:
+// diagnose_load.cpp (recordings in), diagnose_json.cpp, diagnose_text.cpp, diagnose_html.cpp;
+// diagnose_run.cpp and drive_run.cpp only run the diagnosis and build IMPROVED.json.
+#pragma once
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "calibration/diagnosis/diagnose.hpp"
+
+namespace calbench::diagnose_out {
+
+extern const char* const kSensor[3];    // gyro, accel, reference
+extern const char* const kAxis[3];      // x, y, z
+extern const char* const kAxisName[6];  // gyro_x … accel_z
+
+// Display units of a residual: gyro °/h, accel mg.
+double disp(double v, int sensor);
+const char* disp_unit(int sensor);
+
+// Bench: a value in the units people use, an RMS in °/h or mg; the axis (0..5) a finding's
+// figures are for.
+std::string human_value(const DiagFinding& f, double v);
+std::string human_rms(int sensor, double v);
+int finding_axis_index(const DiagFinding& f, const DiagnoseResult& r);
+
+// A finding's value and σ for the JSON: a number (σ null when not finite) or arrays.
+void finding_value_json(const DiagFinding& f, nlohmann::json& value, nlohmann::json& sigma);
+// evidence: Δχ², ΔBIC, held-out Δχ², revealing condition and its correlation, the drift's τ
+// (correlated_drift) and the candidates not told apart.
+nlohmann::json finding_evidence_json(const DiagFinding& f);
+// [{condition, r}] of the first `most` correlations.
+nlohmann::json correlations_json(const std::vector<ConditionCorrelation>& c, std::size_t most);
+// " w_z (r 0.52) f_x (r -0.31)" for the text.
+std::string correlations_text(const std::vector<ConditionCorrelation>& c);
+// "per axis (systematic RMS, χ²/dof, Ljung–Box p) before → after:" and one line per axis, the RMS
+// as rms(sensor, value) writes it.
+std::string axis_table_text(const DiagnoseResult& r, const std::function<std::string(int, double)>& rms);
+// IMPROVED.json's extra: the catalogue keys replaced by the improved terms, and "diagnosis".
+void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohmann::json& diagnosis);
+
+}  // namespace calbench::diagnose_out
+
+namespace calbench {
+struct DriveInnovations;
+}
+
+namespace calbench::diagnose_out {
+
+// Drive: the observation types of the innovations and one sentence per type.
+extern const char* const kObsName[3];  // position, velocity, attitude
+std::string innovation_sentence(int type, const DriveInnovations& v);
+
+// A before/after residual plot (columns x, before, after in `data`) through the report's gnuplot
+// runner: inline SVG (svg) or a PNG <img>; on failure a note saying why.
+std::string residual_plot_html(const std::string& data, const std::string& xlabel, const std::string& ylabel,
+                               bool svg);
+
+}  // namespace calbench::diagnose_out

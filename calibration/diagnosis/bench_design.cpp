@@ -1,0 +1,241 @@
+#include "calibration/diagnosis/bench_design.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "calibration/bench_fit.hpp"
+
+namespace calbench::bench_diag {
+
+namespace {
+
+// Halves for the held-out check: the first and the second half of every plan step (splitting by
+// whole steps would leave one half without the ±rate pairs or magnitudes a term needs).
+bool in_subset(const DiagData& d, int p, int subset) {
+  if (subset == kSubsetAll) return true;
+  int first = p, last = p;
+  while (first > 0 && d.parents[first - 1].step == d.parents[p].step) --first;
+  while (last + 1 < static_cast<int>(d.parents.size()) && d.parents[last + 1].step == d.parents[p].step) ++last;
+  const bool early = 2 * (p - first) < (last - first + 1);
+  return early == (subset == kSubsetEven);
+}
+
+double sensor_ref(const SubBlock& s, int a, int c) {
+  const Vec3& ref = a < 3 ? s.w : s.f;
+  return ref(c);
+}
+
+double bench_sigma(const ParentBlock& p, int a, const TableSpec& table) {
+  BenchBlock b;
+  b.w = p.w;
+  b.f = p.f;
+  return bench_fit_detail::bench_error_sigma(b, a < 3 ? TriadId::gyro : TriadId::accel, a % 3, table);
+}
+
+// Parent-level raw means of z and columns.
+void parent_means(const DiagData& d, const Design& D, int a, int p, double& z, Eigen::RowVectorXd& x) {
+  const ParentBlock& pb = d.parents[p];
+  z = 0;
+  x = Eigen::RowVectorXd::Zero(D.ncols[a]);
+  for (int j = pb.first; j < pb.first + pb.count; ++j) {
+    const double w = static_cast<double>(d.subs[j].n) / pb.n;
+    z += w * D.z[a](j);
+    x += w * D.X[a].row(j);
+  }
+}
+
+Eigen::MatrixXd parent_cov(const DiagData& d, const std::vector<int>& P, int a, double white_var, double ds, double tau,
+                           const TableSpec& table) {
+  const int N = static_cast<int>(P.size());
+  Eigen::MatrixXd R(N, N);
+  std::vector<double> sb(N);
+  for (int k = 0; k < N; ++k) sb[k] = bench_sigma(d.parents[P[k]], a, table);
+  for (int k = 0; k < N; ++k)
+    for (int l = 0; l <= k; ++l) {
+      const ParentBlock &pk = d.parents[P[k]], &pl = d.parents[P[l]];
+      double v = diag::drift_covariance(pk, pl, ds, tau);
+      if (pk.step == pl.step) v += sb[k] * sb[l];
+      if (k == l) v += white_var / pk.n;
+      R(k, l) = R(l, k) = v;
+    }
+  return R;
+}
+
+}  // namespace
+
+Design build_design(const DiagData& d, const EffectTerms& carried) {
+  Design D;
+  // The bench refits M: a scale_factor term would be M_ii again.
+  for (const Term& t : candidate_terms())
+    if (t.effect != EffectId::scale_factor) D.terms.push_back(t);
+  for (int a = 0; a < kAxes; ++a) {
+    D.col_of[a].assign(D.terms.size(), -1);
+    int c = kBase;
+    for (std::size_t t = 0; t < D.terms.size(); ++t)
+      if (D.terms[t].touches(a / 3, a % 3)) {
+        D.col_of[a][t] = c;
+        c += D.terms[t].nparams();
+      }
+    D.ncols[a] = c;
+  }
+  for (const auto& t : D.terms) {
+    D.term_param_offset.push_back(D.n_term_params);
+    D.n_term_params += t.nparams();
+  }
+  const int N = static_cast<int>(d.subs.size());
+  D.z.assign(kAxes, Eigen::VectorXd(N));
+  D.X.resize(kAxes);
+  for (int a = 0; a < kAxes; ++a) D.X[a] = Eigen::MatrixXd::Zero(N, D.ncols[a]);
+  const bool carry = carried.any();
+  for (int j = 0; j < N; ++j) {
+    const SubBlock& s = d.subs[j];
+    Vec3 cg = Vec3::Zero(), ca = Vec3::Zero();
+    if (carry) predict_extra(carried, s, cg, ca);
+    for (int a = 0; a < kAxes; ++a) {
+      const int i = a % 3;
+      D.z[a](j) = a < 3 ? s.gyro(i) - s.w(i) - cg(i) : s.accel(i) - s.f(i) - ca(i);
+      D.X[a](j, 0) = 1.0;
+      for (int c = 0; c < 3; ++c) D.X[a](j, 1 + c) = sensor_ref(s, a, c);
+    }
+    for (std::size_t t = 0; t < D.terms.size(); ++t) {
+      const Term& term = D.terms[t];
+      for (int p = 0; p < term.nparams(); ++p) {
+        const EffectTerms unit = diag::unit_term(term, p, carried.t0_c);
+        Vec3 dg, da;
+        predict_extra(unit, s, dg, da);
+        for (int a = 0; a < kAxes; ++a)
+          if (D.col_of[a][t] >= 0) D.X[a](j, D.col_of[a][t] + p) = a < 3 ? dg(a) : da(a - 3);
+      }
+    }
+  }
+  // White noise per sample: pooled scatter inside static sub-blocks (all if none is static).
+  for (int a = 0; a < kAxes; ++a) {
+    double ss = 0, dof = 0, ss_all = 0, dof_all = 0;
+    for (const auto& s : d.subs) {
+      const double v = a < 3 ? s.gyro_ss(a) : s.accel_ss(a - 3);
+      ss_all += v;
+      dof_all += s.n - 1;
+      if (!s.rotating()) {
+        ss += v;
+        dof += s.n - 1;
+      }
+    }
+    D.white_var[a] = std::max(dof > 100 ? ss / dof : ss_all / std::max(dof_all, 1.0), 1e-30);
+  }
+  return D;
+}
+
+Dataset build_dataset(const DiagData& d, const Design& D, int a, int subset, double ds, double tau,
+                      const DiagnoseOptions& opt) {
+  Dataset S = diag::subset_dataset(a, subset, ds, tau, static_cast<int>(d.parents.size()),
+                                   [&](int p) { return in_subset(d, p, subset); });
+  const int N = static_cast<int>(S.parents.size());
+  const int C = D.ncols[a];
+  Eigen::VectorXd zP(N);
+  Eigen::MatrixXd XP(N, C);
+  for (int k = 0; k < N; ++k) {
+    double z;
+    Eigen::RowVectorXd x;
+    parent_means(d, D, a, S.parents[k], z, x);
+    zP(k) = z;
+    XP.row(k) = x;
+  }
+  diag::whiten(S, parent_cov(d, S.parents, a, D.white_var[a], ds, tau, opt.table), zP, XP, 0);
+  S.Gl = S.G;
+  S.gl = S.g;
+  S.zzl = S.zz;
+  // High level: sub-block deviations from their parent's mean, white noise only.
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    if (pb.count < 2) continue;
+    double zp;
+    Eigen::RowVectorXd xp;
+    parent_means(d, D, a, S.parents[k], zp, xp);
+    for (int j = pb.first; j < pb.first + pb.count; ++j) {
+      const double nj = d.subs[j].n;
+      const double var = D.white_var[a] / nj * (1.0 - nj / pb.n);
+      if (var <= 0) continue;
+      const double w = 1.0 / std::sqrt(var);
+      const double zh = (D.z[a](j) - zp) * w;
+      const Eigen::RowVectorXd xh = (D.X[a].row(j) - xp) * w;
+      S.G.noalias() += xh.transpose() * xh;
+      S.g += xh.transpose() * zh;
+      S.zz += zh * zh;
+      ++S.n_high;
+    }
+  }
+  return S;
+}
+
+// Local (column, global parameter) pairs of a model on axis a.
+diag::ColumnMap column_map(const Design& D, const Model& m, int a, std::vector<int>& offset) {
+  diag::ColumnMap cm;
+  for (int c = 0; c < kBase; ++c) cm.push_back({c, a * kBase + c});
+  offset.clear();
+  int off = kAxes * kBase;
+  for (int t : m) {
+    offset.push_back(off);
+    if (D.col_of[a][t] >= 0)
+      for (int p = 0; p < D.terms[t].nparams(); ++p) cm.push_back({D.col_of[a][t] + p, off + p});
+    off += D.terms[t].nparams();
+  }
+  return cm;
+}
+
+int model_params(const Design& D, const Model& m) {
+  int n = kAxes * kBase;
+  for (int t : m) n += D.terms[t].nparams();
+  return n;
+}
+
+FitOut fit_model(const Design& D, const Model& m, const std::vector<const Dataset*>& sets) {
+  const int P = model_params(D, m);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(P, P);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(P);
+  FitOut out;
+  for (const Dataset* S : sets) diag::accumulate_normal(A, b, *S, column_map(D, m, S->axis, out.offset));
+  // Jacobi scaling, tiny ridge for parameters the subset cannot see.
+  diag::solve_scaled(A, b, 1e-10, out.theta, out.cov, out.logdet_info);
+  for (const Dataset* S : sets) {
+    std::vector<int> off;
+    const auto cm = column_map(D, m, S->axis, off);
+    const double c2 = diag::quadratic_chi2(S->G, S->g, S->zz, cm, out.theta);
+    out.chi2_axis[S->axis] += c2;
+    out.chi2 += c2;
+  }
+  return out;
+}
+
+// Residual per sub-block of axis a for parameters theta of model m.
+Eigen::VectorXd residual(const Design& D, const Model& m, int a, const Eigen::VectorXd& theta) {
+  std::vector<int> off;
+  const auto cm = column_map(D, m, a, off);
+  Eigen::VectorXd r = D.z[a];
+  for (const auto& [c, p] : cm) r -= theta(p) * D.X[a].col(c);
+  return r;
+}
+
+// Residual of the given coefficients (b, M) on axis a.
+Eigen::VectorXd residual_coeffs(const Design& D, const SensorErrors& e, int a) {
+  const TriadErrors& te = a < 3 ? e.gyro : e.accel;
+  const int i = a % 3;
+  Eigen::VectorXd r = D.z[a];
+  r.array() -= te.bias(i);
+  for (int c = 0; c < 3; ++c) r -= te.M(i, c) * D.X[a].col(1 + c);
+  return r;
+}
+
+// Parent-block means of a sub-block residual series on one axis.
+Eigen::VectorXd parent_means(const DiagData& d, const Dataset& S, const Eigen::VectorXd& r) {
+  const int N = static_cast<int>(S.parents.size());
+  Eigen::VectorXd rP(N);
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    double z = 0;
+    for (int j = pb.first; j < pb.first + pb.count; ++j) z += d.subs[j].n * r(j);
+    rP(k) = z / pb.n;
+  }
+  return rP;
+}
+
+}  // namespace calbench::bench_diag

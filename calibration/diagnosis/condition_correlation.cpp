@@ -1,0 +1,175 @@
+#include "calibration/diagnosis/condition_correlation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace calbench {
+
+std::vector<std::string> condition_names() {
+  return {"rate", "w_x", "w_y", "w_z", "f_x", "f_y", "f_z", "temperature", "dT/dt", "time", "angle"};
+}
+
+double condition_value(const DiagData& d, const SubBlock& s, const std::string& name) {
+  if (name == "rate") return s.w.norm();
+  if (name == "w_x") return s.w(0);
+  if (name == "w_y") return s.w(1);
+  if (name == "w_z") return s.w(2);
+  if (name == "f_x") return s.f(0);
+  if (name == "f_y") return s.f(1);
+  if (name == "f_z") return s.f(2);
+  if (name == "temperature") return std::isfinite(s.temp_c) ? s.temp_c : 0.0;
+  if (name == "dT/dt") return s.parent >= 0 ? d.parents[s.parent].dtemp : 0.0;
+  if (name == "time") return s.t_mid;
+  if (name == "angle") {
+    if (!std::isfinite(s.angle)) return 0.0;
+    double u = std::fmod(s.angle * 180.0 / M_PI, 360.0);
+    return u < 0 ? u + 360.0 : u;
+  }
+  return 0.0;
+}
+
+std::string condition_axis_label(const std::string& name) {
+  static const std::vector<std::pair<std::string, std::string>> units = {
+      {"rate", "rad/s"},      {"|w|", "rad/s"},       {"w_x", "rad/s"},        {"w_y", "rad/s"},
+      {"w_z", "rad/s"},       {"turn_rate", "rad/s"}, {"f_x", "m/s²"},         {"f_y", "m/s²"},
+      {"f_z", "m/s²"},        {"f", "m/s²"},          {"|f|", "m/s²"},         {"along_accel", "m/s²"},
+      {"ang_accel", "rad/s²"}, {"speed", "m/s"},      {"temperature", "°C"},   {"dT/dt", "°C/s"},
+      {"time", "s"},          {"angle", "°"}};
+  for (const auto& [n, u] : units)
+    if (n == name) return name + " (" + u + ")";
+  return name;
+}
+
+std::vector<std::string> drive_condition_names(bool with_temperature) {
+  std::vector<std::string> n = {"speed", "w_x", "w_y", "w_z", "f_x", "f_y", "f_z", "|w|", "|f|",
+                                "ang_accel", "turn_rate", "along_accel", "time"};
+  if (with_temperature) n.push_back("temperature");
+  return n;
+}
+
+double drive_condition_value(const DriveDiagData& d, int k, const std::string& name) {
+  const ParentBlock& p = d.parents[k];
+  const DriveParentInfo& i = d.info[k];
+  if (name == "speed") return i.speed;
+  if (name == "w_x") return p.w(0);
+  if (name == "w_y") return p.w(1);
+  if (name == "w_z") return p.w(2);
+  if (name == "f_x") return p.f(0);
+  if (name == "f_y") return p.f(1);
+  if (name == "f_z") return p.f(2);
+  if (name == "|w|") return p.w.norm();
+  if (name == "|f|") return p.f.norm();
+  if (name == "ang_accel") return i.ang_accel;
+  if (name == "turn_rate") return i.turn_rate;
+  if (name == "along_accel") return i.along_accel;
+  if (name == "time") return p.t_mid;
+  if (name == "temperature") {
+    double t = 0, w = 0;
+    for (int j = p.first; j < p.first + p.count; ++j)
+      if (std::isfinite(d.subs[j].temp_c)) {
+        t += d.subs[j].temp_c;
+        w += 1;
+      }
+    return w > 0 ? t / w : 0.0;
+  }
+  return 0.0;
+}
+
+namespace diag {
+
+std::vector<double> parent_block_means(const DiagData& d, const Eigen::VectorXd& r) {
+  std::vector<double> rp(d.parents.size());
+  for (std::size_t p = 0; p < d.parents.size(); ++p) {
+    const ParentBlock& pb = d.parents[p];
+    double z = 0;
+    for (int j = pb.first; j < pb.first + pb.count; ++j) z += d.subs[j].n * r(j);
+    rp[p] = z / pb.n;
+  }
+  return rp;
+}
+
+double pearson(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = static_cast<double>(x.size());
+  if (n < 3) return 0.0;
+  const double mx = std::accumulate(x.begin(), x.end(), 0.0) / n, my = std::accumulate(y.begin(), y.end(), 0.0) / n;
+  double sxy = 0, sxx = 0, syy = 0;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    sxy += (x[k] - mx) * (y[k] - my);
+    sxx += (x[k] - mx) * (x[k] - mx);
+    syy += (y[k] - my) * (y[k] - my);
+  }
+  return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) : 0.0;
+}
+
+double pearson(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  const double mx = x.mean(), my = y.mean();
+  const double sxy = ((x.array() - mx) * (y.array() - my)).sum();
+  const double sxx = (x.array() - mx).square().sum(), syy = (y.array() - my).square().sum();
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+}
+
+std::vector<ConditionCorrelation> correlations(const DiagData& d, const Eigen::VectorXd& r) {
+  std::vector<ConditionCorrelation> out;
+  // Parent-level for slow conditions; sub-block deviations for the angle.
+  const std::vector<double> rp = parent_block_means(d, r);
+  for (const auto& name : condition_names()) {
+    if (name == "angle") continue;
+    std::vector<double> x(d.parents.size());
+    for (std::size_t p = 0; p < d.parents.size(); ++p) {
+      const ParentBlock& pb = d.parents[p];
+      x[p] = condition_value(d, d.subs[pb.first + pb.count / 2], name);
+      if (name == "dT/dt") x[p] = pb.dtemp;
+    }
+    out.push_back({name, pearson(x, rp)});
+  }
+  // Angle: amplitude-correlation of within-parent deviations with cos/sin of the angle (rotating).
+  std::vector<double> dev, c, s;
+  for (const auto& sb : d.subs)
+    if (sb.rotating() && std::isfinite(sb.angle)) {
+      dev.push_back(r(&sb - &d.subs[0]) - rp[sb.parent]);
+      c.push_back(std::cos(sb.angle));
+      s.push_back(std::sin(sb.angle));
+    }
+  if (dev.size() > 10) out.push_back({"angle", std::hypot(pearson(c, dev), pearson(s, dev))});
+  std::sort(out.begin(), out.end(), [](const auto& x, const auto& y) { return std::abs(x.r) > std::abs(y.r); });
+  return out;
+}
+
+std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eigen::VectorXd& r) {
+  std::vector<ConditionCorrelation> out;
+  const int N = static_cast<int>(d.parents.size());
+  for (const auto& name : drive_condition_names(d.has_temperature)) {
+    Eigen::VectorXd c(N);
+    for (int k = 0; k < N; ++k) c(k) = drive_condition_value(d, k, name);
+    out.push_back({name, pearson(c, r)});
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return std::abs(a.r) > std::abs(b.r); });
+  return out;
+}
+
+// Amplitude of harmonics 1..4 of the table angle in the within-parent residual (rotating sub-blocks).
+void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, double& best_amp) {
+  best_k = 0;
+  best_amp = 0;
+  const std::vector<double> rp = parent_block_means(d, r);
+  for (int k = 1; k <= 4; ++k) {
+    double sc = 0, ss = 0, n = 0;
+    for (const auto& sb : d.subs)
+      if (sb.rotating() && std::isfinite(sb.angle)) {
+        const double dev = r(&sb - &d.subs[0]) - rp[sb.parent];
+        sc += dev * std::cos(k * sb.angle);
+        ss += dev * std::sin(k * sb.angle);
+        ++n;
+      }
+    if (n < 10) return;
+    const double amp = 2 * std::hypot(sc, ss) / n;
+    if (amp > best_amp) {
+      best_amp = amp;
+      best_k = k;
+    }
+  }
+}
+
+}  // namespace diag
+}  // namespace calbench
