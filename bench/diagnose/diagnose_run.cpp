@@ -172,24 +172,9 @@ namespace {
 
 // Value in the units people use, for sentences.
 std::string human_value(const DiagFinding& f, double v) {
-  using namespace units;
-  const bool g = f.term.sensor == 0;
-  switch (f.term.effect) {
-    case EffectId::temperature_bias: return g ? fmt(v / kDegPerHour) + " °/h/K" : fmt(v / kMilliG) + " mg/K";
-    case EffectId::temperature_scale: return fmt(v / kPpm) + " ppm/K";
-    case EffectId::temperature_rate:
-      return g ? fmt(v / kDegPerHour / 60.0) + " °/h per K/min" : fmt(v / kMilliG / 60.0) + " mg per K/min";
-    case EffectId::g_sensitivity: return fmt(v * kG0 / kDeg) + " °/s/g";
-    case EffectId::scale_nonlinearity: return g ? fmt(v * kDeg / kPpm) + " ppm/(°/s)" : fmt(v * kG0 / kPpm) + " ppm/g";
-    case EffectId::scale_asymmetry:
-    case EffectId::scale_factor: return fmt(v / kPpm) + " ppm";
-    case EffectId::time_offset: return fmt(v * 1e3) + " ms";
-    case EffectId::lever_arm: return fmt(v * 1e3) + " mm";
-    case EffectId::misalignment:
-    case EffectId::table_wobble: return fmt(v / kDeg * 3600) + " arcsec";
-    case EffectId::correlated_drift: return g ? fmt(v / kDegPerHour) + " °/h" : fmt(v / kMilliG) + " mg";
-  }
-  return fmt(v);
+  const DisplayUnit& u = effect_spec(f.term.effect).bench_display;
+  const int k = f.term.sensor == 1 ? 1 : 0;
+  return fmt(u.value(v, k)) + " " + u.unit[k];
 }
 
 std::string human_rms(int sensor, double v) {
@@ -199,11 +184,12 @@ std::string human_rms(int sensor, double v) {
 
 int finding_axis_index(const DiagFinding& f, const DiagnoseResult& r) {
   if (f.term.sensor < 2 && f.report_axis >= 0) return f.term.sensor * 3 + f.report_axis;
-  if (f.term.effect == EffectId::lever_arm && f.report_axis >= 0) return 3 + f.report_axis;
+  const EffectSpec& x = effect_spec(f.term.effect);
+  if (x.dominant_component && f.report_axis >= 0) return x.sensor * 3 + f.report_axis;
   int best = 0;
   for (int a = 1; a < 6; ++a)
     if (r.before[a].systematic_rms > r.before[best].systematic_rms) best = a;
-  if (f.term.effect == EffectId::lever_arm || f.term.effect == EffectId::misalignment) {
+  if (x.shows_on == 1) {
     best = 3;
     for (int a = 4; a < 6; ++a)
       if (r.before[a].systematic_rms > r.before[best].systematic_rms) best = a;
@@ -230,21 +216,9 @@ std::string finding_sentence(const DiagFinding& f) {
   const std::string who = f.term.sensor == 2 ? std::string("the bench reference")
                                              : std::string(kSensor[f.report_sensor]) +
                                                    (f.report_axis >= 0 ? std::string(" ") + kAxis[f.report_axis] : "");
-  const int rs = f.term.effect == EffectId::lever_arm || f.term.effect == EffectId::misalignment ? 1 : f.report_sensor;
-  switch (f.term.effect) {
-    case EffectId::temperature_bias: o << who << " error grows with temperature: temperature-dependent bias, "; break;
-    case EffectId::temperature_scale: o << who << " scale factor changes with temperature: temperature-dependent scale factor, "; break;
-    case EffectId::temperature_rate: o << who << " error follows the rate of temperature change (opposite on heating and cooling): thermal lag (dT/dt), "; break;
-    case EffectId::g_sensitivity: o << who << " error grows with " << condition_phrase(f.condition) << ": g-sensitivity, "; break;
-    case EffectId::scale_nonlinearity: o << who << " scale error grows with |input|: quadratic scale-factor nonlinearity, "; break;
-    case EffectId::scale_asymmetry: o << who << " scale differs between positive and negative inputs: scale asymmetry, "; break;
-    case EffectId::scale_factor: o << who << " scale differs from the given coefficients: scale factor, "; break;  // drives only
-    case EffectId::time_offset: o << "IMU and reference are offset in time (errors follow the rate of change of the input): time offset, "; break;
-    case EffectId::lever_arm: o << "accelerometer error grows with the square of the table rate: IMU off the rotation centre (lever arm), "; break;
-    case EffectId::misalignment: o << "accelerometer error depends on the table orientation beyond any sensor model: table base tilted (misalignment), "; break;
-    case EffectId::table_wobble: o << "error periodic in the table angle (once per revolution): table wobble / encoder error, "; break;
-    case EffectId::correlated_drift: o << who << " residual wanders slowly beyond the data-sheet drift: correlated drift, "; break;
-  }
+  const EffectSpec& x = effect_spec(f.term.effect);
+  const int rs = x.shows_on >= 0 ? x.shows_on : f.report_sensor;
+  o << fill_sentence(x.bench_sentence, who, condition_phrase(f.condition));
   if (f.value.size() == 1) {
     o << human_value(f, f.value[0]);
     if (std::isfinite(f.sigma[0])) o << " ± " << human_value(f, f.sigma[0]);
@@ -253,7 +227,7 @@ std::string finding_sentence(const DiagFinding& f) {
     for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
     o << ")";
   }
-  if (f.term.effect == EffectId::correlated_drift) o << ", τ ≈ " << drift_tau_text(f);
+  if (x.shape == EffectShape::noise) o << ", τ ≈ " << drift_tau_text(f);
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
   o << alternatives_text(f);
   return o.str();
@@ -279,7 +253,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                          {"correlation_before", f.condition_r},
                          {"ljung_box_p_before", r.before[ai].ljung_box_p},
                          {"ljung_box_p_after", r.after[ai].ljung_box_p}};
-    if (f.term.effect == EffectId::correlated_drift) add_drift_tau_evidence(f, ev);
+    if (effect_spec(f.term.effect).shape == EffectShape::noise) add_drift_tau_evidence(f, ev);
     ev["indistinguishable_from"] = alternatives_json(f);
     findings.push_back({{"effect", effect_name(f.term.effect)},
                         {"sensor", kSensor[f.report_sensor]},

@@ -34,30 +34,14 @@ double disp(double v, int sensor) { return sensor == 0 ? v / units::kDegPerHour 
 const char* disp_unit(int sensor) { return sensor == 0 ? "°/h" : "mg"; }
 
 std::string value_text(const DiagFinding& f) {
-  using namespace units;
   const Term& t = f.term;
-  auto list = [&](double scale, const char* unit) {
-    std::string s;
-    if (f.value.size() == 1) return fmt(f.value[0] * scale) + " " + unit;
-    s = "(";
-    for (std::size_t i = 0; i < f.value.size(); ++i) s += (i ? ", " : "") + fmt(f.value[i] * scale);
-    return s + ") " + unit;
-  };
-  switch (t.effect) {
-    case EffectId::g_sensitivity: return list(1.0 / kDeg * kG0, "°/s/g");
-    case EffectId::scale_nonlinearity: return t.sensor == 0 ? list(1e6 * kDeg, "ppm/(°/s)") : list(1e6 * kG0, "ppm/g");
-    case EffectId::scale_asymmetry:
-    case EffectId::scale_factor: return list(1e6, "ppm");
-    case EffectId::time_offset: return list(1e3, "ms");
-    case EffectId::lever_arm: return list(1e3, "mm (IMU axes)");
-    case EffectId::temperature_bias:
-      return t.sensor == 0 ? list(1.0 / kDegPerHour, "°/h/K") : list(1.0 / kMilliG, "mg/K");
-    case EffectId::temperature_scale: return list(1e6, "ppm/K");
-    case EffectId::correlated_drift:
-      return t.sensor == 0 ? fmt(f.value[0] / kDegPerHour) + " °/h, τ " + drift_tau_text(f)
-                           : fmt(f.value[0] / kMilliG) + " mg, τ " + drift_tau_text(f);
-    default: return list(1.0, f.unit.c_str());
-  }
+  const EffectSpec& x = effect_spec(t.effect);
+  const int k = t.sensor == 1 ? 1 : 0;
+  std::string v = f.value.size() == 1 ? fmt(x.drive_display.value(f.value[0], k)) : "(";
+  for (std::size_t i = 0; f.value.size() != 1 && i < f.value.size(); ++i)
+    v += (i ? ", " : "") + fmt(x.drive_display.value(f.value[i], k));
+  v += std::string(f.value.size() == 1 ? " " : ") ") + x.drive_display.unit[k];
+  return x.shape == EffectShape::noise ? v + ", τ " + drift_tau_text(f) : v;
 }
 
 std::string condition_text(const std::string& c) {
@@ -383,27 +367,10 @@ std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
   const int s = f.report_sensor < 2 ? f.report_sensor : 0;
   std::string who = std::string(kSensor[t.sensor < 2 ? t.sensor : s]);
   if (t.sensor < 2 && f.report_axis >= 0) who += std::string(" ") + kAxis[f.report_axis];
-  std::string what;
-  switch (t.effect) {
-    case EffectId::g_sensitivity: what = "g-sensitivity"; break;
-    case EffectId::scale_nonlinearity: what = "scale-factor nonlinearity"; break;
-    case EffectId::scale_asymmetry: what = "scale-factor asymmetry"; break;
-    case EffectId::scale_factor:
-      what = "scale factor differs from the given coefficients (changed since the calibration, or a scale that depends "
-             "on the input range — nonlinearity, asymmetry — set there at other rates; folded into M)";
-      break;
-    case EffectId::time_offset: what = "time offset between IMU and reference (IMU late by τ)"; break;
-    case EffectId::lever_arm: what = "lever arm: the MEMS sits elsewhere than meta.json says"; break;
-    case EffectId::temperature_bias: what = "temperature-dependent bias"; break;
-    case EffectId::temperature_scale: what = "temperature-dependent scale factor"; break;
-    case EffectId::correlated_drift: what = "bias drift larger than the data sheet's (run calbench identify)"; break;
-    default: what = effect_name(t.effect);
-  }
-  std::string head;
-  if (t.effect == EffectId::time_offset) head = "all axes follow the derivative of their input";
-  else if (t.effect == EffectId::lever_arm) head = "accelerometer error grows with rotation rate and angular acceleration";
-  else if (t.effect == EffectId::correlated_drift) head = who + " residual wanders slowly in time";
-  else head = who + " error grows with " + condition_text(f.condition);
+  const EffectSpec& x = effect_spec(t.effect);
+  const std::string what = x.drive_what ? x.drive_what : x.key;
+  const std::string head = x.drive_head ? fill_sentence(x.drive_head, who, "")
+                                        : who + " error grows with " + condition_text(f.condition);
   const int rs = shown_sensor >= 0 ? shown_sensor : (f.report_sensor < 2 ? f.report_sensor : 0);
   return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
          disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs) + alternatives_text(f);
@@ -432,11 +399,11 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     nlohmann::json ev = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic},
                          {"heldout_delta_chi2", f.heldout_delta_chi2}, {"revealing_condition", f.condition},
                          {"correlation_before", f.condition_r}};
-    if (f.term.effect == EffectId::correlated_drift) add_drift_tau_evidence(f, ev);
+    if (effect_spec(f.term.effect).shape == EffectShape::noise) add_drift_tau_evidence(f, ev);
     ev["indistinguishable_from"] = alternatives_json(f);
     if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
-    if (fi < R.shown_on.size() && f.term.effect != EffectId::correlated_drift) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
-    if (fi < R.rms_lowpass.size() && f.term.effect != EffectId::correlated_drift)
+    if (fi < R.shown_on.size() && effect_spec(f.term.effect).shape != EffectShape::noise) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
+    if (fi < R.rms_lowpass.size() && effect_spec(f.term.effect).shape != EffectShape::noise)
       ev["rms_of"] = R.rms_lowpass[fi] ? "three-block means" : "blocks";
     if (f.report_sensor < 2 && f.report_axis >= 0) {
       const int a = f.report_sensor * 3 + f.report_axis;
@@ -569,12 +536,12 @@ void write_drive_diagnosis_report(const std::filesystem::path& html, const Drive
     << "</h1><pre>" << report::html_escape(drive_diagnosis_text(in, run)) << "</pre>";
   std::vector<std::pair<int, std::string>> plots;  // axis, condition
   for (const auto& f : r.findings) {
-    if (f.term.effect == EffectId::correlated_drift) {
+    if (effect_spec(f.term.effect).shape == EffectShape::noise) {
       plots.push_back({f.term.sensor * 3, "time"});
       continue;
     }
     int a = f.report_sensor * 3 + std::max(0, f.report_axis);
-    if (f.term.effect == EffectId::lever_arm || f.term.sensor == 2) {
+    if (effect_spec(f.term.effect).dominant_component || f.term.sensor == 2) {
       double worst = -1;
       for (int b = 0; b < 6; ++b)
         if ((f.term.sensor == 2 || b >= 3) && r.before[b].systematic_rms > worst) {

@@ -77,7 +77,7 @@ Design build_design(const DiagData& d, const EffectTerms& carried) {
   Design D;
   // The bench refits M: a scale_factor term would be M_ii again.
   for (const Term& t : candidate_terms())
-    if (t.effect != EffectId::scale_factor) D.terms.push_back(t);
+    if (effect_spec(t.effect).bench_candidate) D.terms.push_back(t);
   for (int a = 0; a < kAxes; ++a) {
     D.col_of[a].assign(D.terms.size(), -1);
     int c = kBase;
@@ -516,24 +516,7 @@ void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, do
   }
 }
 
-const char* revealing_condition(EffectId e) {
-  switch (e) {
-    case EffectId::temperature_bias: return "temperature";
-    case EffectId::temperature_scale: return "temperature";
-    case EffectId::temperature_rate: return "dT/dt";
-    case EffectId::g_sensitivity: return "f";
-    case EffectId::scale_nonlinearity: return "rate";
-    case EffectId::scale_asymmetry: return "rate";
-    case EffectId::scale_factor: return "rate";
-    case EffectId::time_offset: return "angle";
-    case EffectId::lever_arm: return "rate";
-    case EffectId::misalignment: return "f";
-    case EffectId::table_wobble: return "angle";
-    case EffectId::correlated_drift: return "time";
-  }
-  return "time";
-}
-
+const char* revealing_condition(EffectId e) { return effect_spec(e).condition; }
 
 }  // namespace
 
@@ -722,7 +705,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     std::vector<int> touched;
     for (int a = 0; a < kAxes; ++a)
       if (D.col_of[a][acc.term] >= 0) touched.push_back(a);
-    if (t.effect == EffectId::lever_arm) {
+    if (effect_spec(t.effect).dominant_component) {
       int imax = 0;
       for (int i = 1; i < 3; ++i)
         if (std::abs(f.value[i]) > std::abs(f.value[imax])) imax = i;
@@ -734,12 +717,12 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     double rb = 0, ra = 0;
     int n = 0;
     for (int a : touched) {
-      if (t.sensor < 2 && f.report_axis >= 0 && t.effect != EffectId::lever_arm && a != t.sensor * 3 + t.axis) continue;
+      if (t.sensor < 2 && f.report_axis >= 0 && !effect_spec(t.effect).dominant_component && a != t.sensor * 3 + t.axis) continue;
       rb += std::pow(res.before[a].systematic_rms, 2);
       ra += std::pow(res.after[a].systematic_rms, 2);
       ++n;
     }
-    if (t.effect == EffectId::lever_arm || t.sensor == 2) {
+    if (effect_spec(t.effect).dominant_component || t.sensor == 2) {
       // Report the worst-affected touched axis (largest systematic before).
       double worst = -1;
       for (int a : touched)
@@ -753,7 +736,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     f.rms_before = n ? std::sqrt(rb / n) : 0;
     f.rms_after = n ? std::sqrt(ra / n) : 0;
     f.condition = revealing_condition(t.effect);
-    if (t.effect == EffectId::g_sensitivity) {
+    if (effect_spec(t.effect).condition_by_column) {
       int jmax = 0;
       for (int j = 1; j < 3; ++j)
         if (std::abs(f.value[j]) > std::abs(f.value[jmax])) jmax = j;

@@ -24,16 +24,13 @@ bool in_subset(const ParentBlock& p, int subset) {
 }
 
 bool drive_term(const Term& t, bool temperature, bool fixed_scale) {
-  switch (t.effect) {
-    case EffectId::scale_factor: return fixed_scale;  // M free: it is M_ii
-    case EffectId::temperature_bias:
-    case EffectId::temperature_scale: return temperature;
-    case EffectId::temperature_rate:  // not applicable on drives: no dT/dt is derived from a drive (simulated drives have no temperature)
-    case EffectId::misalignment:
-    case EffectId::table_wobble:
-    case EffectId::correlated_drift: return false;
-    default: return true;
+  switch (effect_spec(t.effect).drive) {
+    case DriveDiagnosis::always: return true;
+    case DriveDiagnosis::with_temperature: return temperature;
+    case DriveDiagnosis::fixed_scale: return fixed_scale;  // M free: it is M_ii
+    case DriveDiagnosis::never: return false;
   }
+  return false;
 }
 
 // Weighted mean of x over element i and up to h neighbours on each side within i's contiguous
@@ -86,18 +83,7 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
   for (const Term& t : D.terms) {
     D.term_off.push_back(D.P);
     D.P += t.nparams();
-    double ps = 1;
-    switch (t.effect) {
-      case EffectId::g_sensitivity: ps = 2e-4; break;                       // ~0.1 °/s/g
-      case EffectId::scale_nonlinearity: ps = t.sensor == 0 ? 1e-2 : 1e-3; break;
-      case EffectId::scale_asymmetry: ps = 1e-2; break;
-      case EffectId::scale_factor: ps = 1e-2; break;  // the data sheet's initial scale tolerance, ±1 %
-      case EffectId::time_offset: ps = 0.05; break;
-      case EffectId::lever_arm: ps = 0.3; break;
-      case EffectId::temperature_bias: ps = t.sensor == 0 ? 1e-4 : 1e-2; break;
-      case EffectId::temperature_scale: ps = 1e-3; break;
-      default: ps = 1;
-    }
+    const double ps = effect_spec(t.effect).drive_prior[t.sensor == 0 ? 0 : 1];
     for (int p = 0; p < t.nparams(); ++p) D.prior_sigma.push_back(ps);
   }
   const int N = static_cast<int>(d.subs.size());
@@ -161,7 +147,7 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
         unit.t0_c = carried.t0_c;
         term.add_param(unit, p, 1.0);
         Vec3 dg, da;
-        if (term.effect == EffectId::scale_nonlinearity || term.effect == EffectId::scale_asymmetry) {
+        if (effect_spec(term.effect).curvature) {
           // h(x_s) + h'(x_s)·(x − x_s): the curvature taken at the smoothed input, the interval's
           // own deviation kept to first order — otherwise h(x_s) alone differs from the block's
           // h(x) by a linear leak at its ends (h' ≈ 2g for x·|x| of the vertical accelerometer),
@@ -518,16 +504,7 @@ std::vector<std::vector<int>> time_groups(int N, int size) {
 // of block k's: that is the key then. Terms driven by the other sensor's input (g-sensitivity:
 // gyro by force; lever arm: accelerometer by rate) keep c itself, which the neighbour mean would
 // blur (the lever arm's ω̇×r changes sign within seconds).
-bool own_input_term(const Term& t) {
-  switch (t.effect) {
-    case EffectId::scale_nonlinearity:
-    case EffectId::scale_asymmetry:
-    case EffectId::scale_factor:
-    case EffectId::temperature_scale:
-    case EffectId::time_offset: return true;
-    default: return false;
-  }
-}
+bool own_input_term(const Term& t) { return effect_spec(t.effect).own_input; }
 
 // Mean of c over each block and its contiguous neighbours.
 Eigen::VectorXd neighbour_mean(const DriveDiagData& d, const Design& D, const Eigen::VectorXd& c) {
@@ -779,7 +756,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     // Another candidate in its place that fits within ambiguity_chi2 and itself explains the
     // residual (as on the bench): the drive does not tell them apart.
     f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, carried);
-    if (t.effect == EffectId::lever_arm) {
+    if (effect_spec(t.effect).dominant_component) {
       // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
       // rolls or pitches, so the component along the yaw axis is poorly determined).
       auto sig = [&](int i) { return std::abs(f.value[i]) > 3 * f.sigma[i] ? std::abs(f.value[i]) : 0.0; };
