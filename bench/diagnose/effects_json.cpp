@@ -258,4 +258,127 @@ void replace_effect_keys(const EffectTerms& e, nlohmann::json& j) {
   effects_to_json(e, EffectTerms{}, j);
 }
 
+namespace {
+
+std::string md(const std::string& t) {  // a Markdown table cell
+  std::string o;
+  for (char c : t) {
+    if (c == '|') o += '\\';
+    o += c;
+  }
+  return o;
+}
+
+std::string sensors_text(const EffectSpec& x) {
+  if (x.shape == EffectShape::triad_axis || x.shape == EffectShape::noise)
+    return effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1) ? "gyro, accel" : effect_allows_sensor(x, 0) ? "gyro" : "accel";
+  return x.sensor == 2 ? "reference" : kSensorName[x.sensor];
+}
+
+std::string unit_text(const EffectSpec& x) {
+  std::string u;
+  for (int k = 0; k < 2; ++k) {
+    if (!effect_allows_sensor(x, k) && !(x.shape == EffectShape::vector || x.shape == EffectShape::gyro_matrix)) continue;
+    const std::string one = std::string(x.si_unit[k]) + " (shown in " + x.bench_display.unit[k] + ")";
+    if (!u.empty() && u.find(one) != std::string::npos) continue;
+    u += (u.empty() ? "" : "; ") + one;
+  }
+  return u;
+}
+
+std::string si_units(const EffectSpec& x) {
+  std::string u;
+  for (int k = 0; k < 2; ++k)
+    if ((effect_allows_sensor(x, k) || x.shape == EffectShape::vector || x.shape == EffectShape::gyro_matrix) &&
+        u.find(x.si_unit[k]) == std::string::npos)
+      u += (u.empty() ? "" : " (gyro), ") + std::string(x.si_unit[k]) + (u.empty() ? "" : " (accel)");
+  return u;
+}
+
+std::string json_text(const EffectSpec& x) {
+  std::string o = std::string("`\"") + x.key + "\": {";
+  switch (x.shape) {
+    case EffectShape::triad_axis:
+      if (x.json_t0) o += "\"t0_c\", ";
+      for (int k = 0, n = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k))
+          o += std::string(n++ ? ", " : "") + "\"" + x.json_value[k] + "\": [3], \"" + kSigmaKey[k] + "\": [3]";
+      break;
+    case EffectShape::gyro_matrix: o += std::string("\"") + x.json_value[0] + "\": 3×3, \"sigma\": 3×3"; break;
+    case EffectShape::vector:
+      o += std::string("\"") + x.json_value[0] + "\"" +
+           (x.nparams > 1 ? ": [" + std::to_string(x.nparams) + "], \"sigma\": [" + std::to_string(x.nparams) + "]" : ", \"sigma\"");
+      break;
+    case EffectShape::noise:
+      for (int k = 0, n = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k))
+          o += std::string(n++ ? ", " : "") + "\"" + x.json_value[k] + "\", \"" + kSensorName[k] + "_tau_s\"";
+      break;
+  }
+  return o + "}`";
+}
+
+std::string inject_text(const EffectSpec& x) {
+  const bool both = effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1);
+  const std::string sensor = both ? "sensor=gyro|accel," : std::string("[sensor=") + (effect_allows_sensor(x, 0) ? "gyro" : "accel") + ",]";
+  switch (x.shape) {
+    case EffectShape::triad_axis: return "`" + sensor + "axis=x|y|z,value=V`";
+    case EffectShape::gyro_matrix: return "`axis=` (gyro axis), `f=` (force axis), `value=`";
+    case EffectShape::vector: {
+      std::string k = x.inject_keys, o;
+      std::stringstream ss(k);
+      for (std::string p; std::getline(ss, p, ',');) o += (o.empty() ? "" : ",") + p + "=";
+      return "`" + o + "`";
+    }
+    case EffectShape::noise: return "`" + sensor + "sigma=,tau=` (τ default 300 s)";
+  }
+  return "";
+}
+
+const char* drive_text(const EffectSpec& x) {
+  switch (x.drive) {
+    case DriveDiagnosis::always: return "yes";
+    case DriveDiagnosis::with_temperature: return "with a temperature column";
+    case DriveDiagnosis::fixed_scale: return "with given coefficients (M fixed)";
+    case DriveDiagnosis::never: return x.shape == EffectShape::noise ? "yes (noise model)" : "no";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string effect_catalogue_markdown() {
+  std::string o =
+      "| effect ID | physics | model term | sensors | SI unit (shown in) | revealed on the bench by | on drives | extra JSON key |\n"
+      "|---|---|---|---|---|---|---|---|\n";
+  for (const EffectSpec& x : effect_specs())
+    o += "| `" + std::string(x.key) + "` | " + md(x.physics) + " | " + md(x.model) + " | " + sensors_text(x) + " | " +
+         md(unit_text(x)) + " | " + md(x.condition) + (x.bench_candidate || x.shape == EffectShape::noise ? "" : " (not a bench candidate: M is refitted)") +
+         " | " + drive_text(x) + " | " + md(json_text(x)) + " |\n";
+  o += "\n| effect | `--inject` keys | unit |\n|---|---|---|\n";
+  for (const EffectSpec& x : effect_specs())
+    o += "| `" + std::string(x.key) + "` | " + md(inject_text(x)) + " | " + md(si_units(x)) + " |\n";
+  return o;
+}
+
+nlohmann::json effect_catalogue_json() {
+  nlohmann::json a = nlohmann::json::array();
+  for (const EffectSpec& x : effect_specs())
+    a.push_back({{"id", x.key},
+                 {"index", static_cast<int>(x.id)},
+                 {"physics", x.physics},
+                 {"model", x.model},
+                 {"sensors", sensors_text(x)},
+                 {"parameters_per_term", x.nparams},
+                 {"si_unit", {x.si_unit[0], x.si_unit[1]}},
+                 {"display_unit", {x.bench_display.unit[0], x.bench_display.unit[1]}},
+                 {"bench_condition", x.condition},
+                 {"bench_candidate", x.bench_candidate},
+                 {"drives", drive_text(x)},
+                 {"drive_prior_sigma", {x.drive_prior[0], x.drive_prior[1]}},
+                 {"json", json_text(x)},
+                 {"inject", inject_text(x)}});
+  return a;
+}
+
 }  // namespace calbench

@@ -79,7 +79,8 @@ struct Term {
 struct EffectSpec {
   EffectId id;
   const char* key;      // ID, JSON key and `--inject` name
-  const char* physics;  // one line for the catalogue table
+  const char* physics;  // what happens physically (the catalogue table)
+  const char* model;    // the model term (the catalogue table)
   EffectShape shape;
   int sensor;           // triad_axis/noise: −1 (the sensors of `sensors`); else the term's sensor (0, 1, 2)
   unsigned sensors;     // triad_axis/noise: bit 0 gyro, bit 1 accel
@@ -123,6 +124,7 @@ struct EffectSpec {
 };
 
 const std::vector<EffectSpec>& effect_specs();  // in catalogue order (candidate order)
+std::vector<EffectSpec> make_effect_specs();      // the rows (effect_specs.cpp); use effect_specs()
 const EffectSpec& effect_spec(EffectId e);
 const char* effect_name(EffectId e);
 int effect_count();  // EffectId values are 0 … effect_count() − 1
