@@ -102,6 +102,10 @@ struct EffectSpec {
   const char* inject_keys;
   // Bench diagnosis.
   bool bench_candidate;      // false: the bench refits M, so a scale_factor term would be M_ii again
+  // −2 ln(prior odds) against the effect, added to its penalty in the search (both diagnoses): a
+  // newer effect that the plan may not separate from an established look-alike must explain the
+  // recording better by this much to be named instead of it. 0 for the established ones.
+  double prior_penalty = 0;
   const char* condition;     // the reference condition that reveals it on the bench
   bool condition_by_column;  // the condition names the dominant column (g-sensitivity: f_x, f_y, f_z)
   bool dominant_component;   // one vector in IMU axes: reported on its dominant component
