@@ -66,11 +66,11 @@ nlohmann::json alternatives_json(const DiagFinding& f) {
 std::string alternatives_text(const DiagFinding& f) {
   std::string o;
   for (const auto& a : f.alternatives) {
-    // A term with more parameters can fit a little better in its place and still lose on the
-    // penalised score that chose the finding.
+    // A term with more parameters, or a smaller prior (EffectSpec::prior_penalty), can fit a
+    // little better in its place and still lose on the penalised score that chose the finding.
     o += "; NOT told apart on this recording from " + a.term.label() +
          (a.chi2_worse >= 0 ? " (χ² only " + fmt(a.chi2_worse) + " worse)"
-                            : " (χ² " + fmt(-a.chi2_worse) + " better, but with more parameters)");
+                            : " (χ² " + fmt(-a.chi2_worse) + " better, but with a larger penalty: more parameters or a smaller prior)");
     if (const char* note = separation_note(f.term.effect, a.term.effect)) o += std::string(": ") + note;
   }
   return o;
