@@ -29,6 +29,7 @@ enum class EffectId {
   correlated_drift,
   temperature_rate,  // thermal lag: bias ∝ dT/dt (appended: the IDs above keep their indices)
   scale_factor,      // scale differs from the given coefficients (drives with --coeffs only)
+  scale_k2,          // even gyro scale term K2·ω² (IEEE 952/1431 scale-factor polynomial)
 };
 
 // How an effect's parameters are laid out, which decides its candidate terms, its JSON form and

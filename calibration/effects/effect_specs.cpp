@@ -262,6 +262,45 @@ std::vector<EffectSpec> make_effect_specs() {
   s.lookalike = -1;
   row(s);
 
+  // ---- scale_k2: the even term of the scale-factor polynomial (IEEE Std 952/1431), kept in
+  // EffectTerms::generic (no member of its own).
+  s = EffectSpec{};
+  s.id = EffectId::scale_k2;
+  s.key = "scale_k2";
+  s.physics =
+      "scale factor grows with the square of the rate, the same for both signs: the even K2 term of the IEEE "
+      "952/1431 scale-factor polynomial";
+  s.model = "K2,i·ω_i² (gyro)";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kGyro;
+  s.nparams = 1;
+  s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x * x; };
+  s.si_unit[0] = s.si_unit[1] = "1/(rad/s)";
+  s.bench_display = {[](double x, int) { return x * kDeg / kPpm; }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.drive_display = {[](double x, int) { return x * (1e6 * kDeg); }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.json_value[0] = "gyro_per_rad_s";
+  s.bench_candidate = true;
+  // With one rate magnitude (thermal_short.toml: ±300 °/s) ω² and |ω| are the same column: named
+  // only where it explains the recording better than scale_asymmetry by Δχ² 10.
+  s.prior_penalty = 10;
+  s.condition = "rate";
+  s.shows_on = -1;
+  // A car turns at < 1 rad/s: ω² barely differs from the bias and scale there; not a drive candidate
+  // (a set that carries it is still compensated on drives).
+  s.drive = DriveDiagnosis::never;
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;
+  s.own_input = true;
+  s.curvature = true;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} scale error grows with the square of the rate, the same for both signs: even scale-factor term K2, ";
+  s.drive_what = "even scale-factor term K2·ω²";
+  s.lookalike = static_cast<int>(EffectId::scale_asymmetry);
+  s.separation =
+      "both are even in the rate; only rates of several magnitudes (75, 150, 300 °/s in diagnose.toml) tell ω² "
+      "from |ω|";
+  row(s);
+
   // ---- time_offset
   s = EffectSpec{};
   s.id = EffectId::time_offset;
