@@ -197,10 +197,10 @@ void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro
     Vec3 d = Vec3::Zero();
     for (const EffectSpec* s : r.triad_rows) {
       if (!(s->sensors >> k & 1u)) continue;
-      for (int i = 0; i < 3; ++i) {
-        const double p = cparam(*s, e, k, i, 0);
-        if (p != 0) d(i) += s->axis_output(p, x(i), dT, c);  // a zero term adds nothing
-      }
+      // The three axes of a sensor are contiguous (a Vec3 member, or sensor·3 + axis in generic).
+      const double* p = effect_param(*s, const_cast<EffectTerms&>(e), k, 0, 0);
+      for (int i = 0; i < 3; ++i)
+        if (p[i] != 0) d(i) += s->axis_output(p[i], x(i), dT, c);  // a zero term adds nothing
     }
     return d;
   };

@@ -87,7 +87,9 @@ struct EffectSpec {
   unsigned sensors;     // triad_axis/noise: bit 0 gyro, bit 1 accel
   int nparams;          // parameters of one term
   // Where a value lives: the parameter p of the term on (sensor, axis), or nullptr outside the
-  // shape. nullptr here: the registry keeps the values in EffectTerms::generic (new effects).
+  // shape; a triad_axis effect keeps the three axes of a sensor contiguous (sensor_side_terms reads
+  // them through the axis-0 pointer). nullptr here: the registry keeps the values in
+  // EffectTerms::generic (new effects).
   double* (*param)(EffectTerms& e, int sensor, int axis, int p);
   // Per-axis sensor output d_i(p, x_i) of a triad_axis effect (x: the true input of the axis).
   double (*axis_output)(double p, double x, double dT, const EffectContext& c);
