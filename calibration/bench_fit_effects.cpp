@@ -51,14 +51,7 @@ std::vector<BenchBlock> blocks_without_effects(const DiagData& d, const EffectTe
 }
 
 BenchFitOptions options_with_effects(BenchFitOptions opt, const EffectTerms& e) {
-  auto apply = [](TriadNoise& n, const TriadEffectTerms& t) {
-    if (t.drift_sigma > 0) {
-      n.drift_sigma = t.drift_sigma;
-      if (t.drift_tau_s > 0) n.drift_tau_s = t.drift_tau_s;
-    }
-  };
-  apply(opt.noise.gyro, e.gyro);
-  apply(opt.noise.accel, e.accel);
+  opt.noise = noise_with_effects(opt.noise, e);
   return opt;
 }
 
@@ -97,24 +90,6 @@ BenchFitResult fit_bench_with_effects(const DiagData& d, const EffectTerms& e, c
     }
   }
   return r;
-}
-
-std::vector<std::string> effect_ids_present(const EffectTerms& e) {
-  std::vector<std::string> out;
-  auto nz = [](const Vec3& v) { return !v.isZero(0); };
-  if (nz(e.gyro.temp_bias) || nz(e.accel.temp_bias)) out.push_back(effect_name(EffectId::temperature_bias));
-  if (nz(e.gyro.temp_scale) || nz(e.accel.temp_scale)) out.push_back(effect_name(EffectId::temperature_scale));
-  if (nz(e.gyro.temp_rate) || nz(e.accel.temp_rate)) out.push_back(effect_name(EffectId::temperature_rate));
-  if (!e.g_sensitivity.isZero(0)) out.push_back(effect_name(EffectId::g_sensitivity));
-  if (nz(e.gyro.nonlinearity) || nz(e.accel.nonlinearity)) out.push_back(effect_name(EffectId::scale_nonlinearity));
-  if (nz(e.gyro.asymmetry) || nz(e.accel.asymmetry)) out.push_back(effect_name(EffectId::scale_asymmetry));
-  if (nz(e.gyro.scale) || nz(e.accel.scale)) out.push_back(effect_name(EffectId::scale_factor));
-  if (e.time_offset_s != 0) out.push_back(effect_name(EffectId::time_offset));
-  if (nz(e.lever_arm_m)) out.push_back(effect_name(EffectId::lever_arm));
-  if (!e.table_tilt_rad.isZero(0)) out.push_back(effect_name(EffectId::misalignment));
-  if (!e.wobble_rad.isZero(0)) out.push_back(effect_name(EffectId::table_wobble));
-  if (e.gyro.drift_sigma > 0 || e.accel.drift_sigma > 0) out.push_back(effect_name(EffectId::correlated_drift));
-  return out;
 }
 
 }  // namespace calbench

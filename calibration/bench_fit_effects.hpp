@@ -12,7 +12,7 @@
 
 #include "calibration/bench_fit.hpp"
 #include "calibration/diagnosis/diag_data.hpp"
-#include "calibration/effects/effect_terms.hpp"
+#include "calibration/effects/effect_registry.hpp"
 
 namespace calbench {
 
@@ -32,7 +32,6 @@ BenchFitOptions options_with_effects(BenchFitOptions opt, const EffectTerms& e);
 BenchFitResult fit_bench_with_effects(const DiagData& d, const EffectTerms& e, const BenchFitOptions& opt,
                                       const EffectTerms* sigma = nullptr);
 
-// Names (catalogue effect IDs) of the terms `e` carries, in catalogue order.
-std::vector<std::string> effect_ids_present(const EffectTerms& e);
+// effect_ids_present (the names of the terms `e` carries): effect_registry.hpp.
 
 }  // namespace calbench

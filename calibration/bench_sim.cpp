@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "calibration/effects/effect_registry.hpp"
 #include "common/units.hpp"
 
 namespace calbench {
@@ -96,14 +97,7 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
   const SiteEarth earth(site);
   const EffectTerms& fx = opt.effects;
   NoiseSpec noise = opt.noise;
-  if (fx.gyro.drift_sigma > 0) {
-    noise.gyro.drift_sigma = fx.gyro.drift_sigma;
-    if (fx.gyro.drift_tau_s > 0) noise.gyro.drift_tau_s = fx.gyro.drift_tau_s;
-  }
-  if (fx.accel.drift_sigma > 0) {
-    noise.accel.drift_sigma = fx.accel.drift_sigma;
-    if (fx.accel.drift_tau_s > 0) noise.accel.drift_tau_s = fx.accel.drift_tau_s;
-  }
+  noise = noise_with_effects(noise, fx);  // a correlated_drift term replaces the drift prior
   const bool effects = fx.any();
   const Mat3 gyro_inv = (Mat3::Identity() + truth.gyro.M).inverse();
   const Mat3 accel_inv = (Mat3::Identity() + truth.accel.M).inverse();

@@ -7,6 +7,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/drive_run.hpp"
+#include "bench/diagnose/effects_json.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
@@ -18,6 +19,7 @@ struct DiagnoseArgs {
   std::string dir, coeffs, report, out, plan;
   bool json = false;
   bool no_innovations = false;
+  bool list_effects = false;
 };
 
 // Drive recordings (meta.json kind "drive"): bench/diagnose/drive_run.hpp, docs/diagnosis.md "Drives".
@@ -84,7 +86,10 @@ const bool registered = add_command(60, [](CLI::App& app) {
   auto* d = app.add_subcommand("diagnose",
                                "Physics discovery: locate where recording and model disagree, name the missing effect, "
                                "model it, show the fit improve (bench and drive recordings)");
-  d->add_option("dir", a->dir, "recording folder (bench or drive)")->required()->check(CLI::ExistingDirectory);
+  d->add_option("dir", a->dir, "recording folder (bench or drive)")->check(CLI::ExistingDirectory);
+  d->add_flag("--list-effects", a->list_effects,
+              "print the catalogue of effects (docs/diagnosis.md, generated from the effect registry) and exit; "
+              "with --json as JSON");
   d->add_option("--coeffs", a->coeffs, "coefficients to test (default: fit them first with the bench fit; on a drive: b and M fitted on "
                 "the drive; a drive also takes an in-motion RESULT.json, mounting included)")
       ->check(CLI::ExistingFile);
@@ -96,7 +101,15 @@ const bool registered = add_command(60, [](CLI::App& app) {
   d->add_flag("--no-innovations", a->no_innovations,
               "drives: skip the in-motion filter runs whose innovation statistics are reported (before/after the "
               "new terms)");
-  d->callback([a] { run_diagnose(*a); });
+  d->callback([a] {
+    if (a->list_effects) {
+      if (a->json) print_json(effect_catalogue_json().dump(2));
+      else std::cout << effect_catalogue_markdown();
+      return;
+    }
+    if (a->dir.empty()) throw CLI::RequiredError("dir");
+    run_diagnose(*a);
+  });
 });
 
 }  // namespace

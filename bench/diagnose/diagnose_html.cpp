@@ -141,12 +141,12 @@ void write_drive_diagnosis_report(const std::filesystem::path& html, const Drive
     << "</h1><pre>" << report::html_escape(drive_diagnosis_text(in, run)) << "</pre>";
   std::vector<std::pair<int, std::string>> plots;  // axis, condition
   for (const auto& f : r.findings) {
-    if (f.term.effect == EffectId::correlated_drift) {
+    if (effect_spec(f.term.effect).shape == EffectShape::noise) {
       plots.push_back({f.term.sensor * 3, "time"});
       continue;
     }
     int a = f.report_sensor * 3 + std::max(0, f.report_axis);
-    if (f.term.effect == EffectId::lever_arm || f.term.sensor == 2) {
+    if (effect_spec(f.term.effect).dominant_component || f.term.sensor == 2) {
       double worst = -1;
       for (int b = 0; b < 6; ++b)
         if ((f.term.sensor == 2 || b >= 3) && r.before[b].systematic_rms > worst) {

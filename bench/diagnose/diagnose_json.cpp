@@ -29,7 +29,7 @@ nlohmann::json finding_evidence_json(const DiagFinding& f) {
                        {"heldout_delta_chi2", f.heldout_delta_chi2},
                        {"revealing_condition", f.condition},
                        {"correlation_before", f.condition_r}};
-  if (f.term.effect == EffectId::correlated_drift) add_drift_tau_evidence(f, ev);
+  if (effect_spec(f.term.effect).shape == EffectShape::noise) add_drift_tau_evidence(f, ev);
   ev["indistinguishable_from"] = alternatives_json(f);
   return ev;
 }
@@ -165,8 +165,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     x["unit"] = f.unit;
     nlohmann::json ev = finding_evidence_json(f);
     if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
-    if (fi < R.shown_on.size() && f.term.effect != EffectId::correlated_drift) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
-    if (fi < R.rms_lowpass.size() && f.term.effect != EffectId::correlated_drift)
+    if (fi < R.shown_on.size() && effect_spec(f.term.effect).shape != EffectShape::noise) ev["rms_axis"] = kAxisName[R.shown_on[fi]];
+    if (fi < R.rms_lowpass.size() && effect_spec(f.term.effect).shape != EffectShape::noise)
       ev["rms_of"] = R.rms_lowpass[fi] ? "three-block means" : "blocks";
     if (f.report_sensor < 2 && f.report_axis >= 0) {
       const int a = f.report_sensor * 3 + f.report_axis;

@@ -40,24 +40,9 @@ std::string axis_table_text(const DiagnoseResult& r, const std::function<std::st
 
 // Value in the units people use, for sentences.
 std::string human_value(const DiagFinding& f, double v) {
-  using namespace units;
-  const bool g = f.term.sensor == 0;
-  switch (f.term.effect) {
-    case EffectId::temperature_bias: return g ? fmt(v / kDegPerHour) + " °/h/K" : fmt(v / kMilliG) + " mg/K";
-    case EffectId::temperature_scale: return fmt(v / kPpm) + " ppm/K";
-    case EffectId::temperature_rate:
-      return g ? fmt(v / kDegPerHour / 60.0) + " °/h per K/min" : fmt(v / kMilliG / 60.0) + " mg per K/min";
-    case EffectId::g_sensitivity: return fmt(v * kG0 / kDeg) + " °/s/g";
-    case EffectId::scale_nonlinearity: return g ? fmt(v * kDeg / kPpm) + " ppm/(°/s)" : fmt(v * kG0 / kPpm) + " ppm/g";
-    case EffectId::scale_asymmetry:
-    case EffectId::scale_factor: return fmt(v / kPpm) + " ppm";
-    case EffectId::time_offset: return fmt(v * 1e3) + " ms";
-    case EffectId::lever_arm: return fmt(v * 1e3) + " mm";
-    case EffectId::misalignment:
-    case EffectId::table_wobble: return fmt(v / kDeg * 3600) + " arcsec";
-    case EffectId::correlated_drift: return g ? fmt(v / kDegPerHour) + " °/h" : fmt(v / kMilliG) + " mg";
-  }
-  return fmt(v);
+  const DisplayUnit& u = effect_spec(f.term.effect).bench_display;
+  const int k = f.term.sensor == 1 ? 1 : 0;
+  return fmt(u.value(v, k)) + " " + u.unit[k];
 }
 
 std::string human_rms(int sensor, double v) {
@@ -67,11 +52,12 @@ std::string human_rms(int sensor, double v) {
 
 int finding_axis_index(const DiagFinding& f, const DiagnoseResult& r) {
   if (f.term.sensor < 2 && f.report_axis >= 0) return f.term.sensor * 3 + f.report_axis;
-  if (f.term.effect == EffectId::lever_arm && f.report_axis >= 0) return 3 + f.report_axis;
+  const EffectSpec& x = effect_spec(f.term.effect);
+  if (x.dominant_component && f.report_axis >= 0) return x.sensor * 3 + f.report_axis;
   int best = 0;
   for (int a = 1; a < 6; ++a)
     if (r.before[a].systematic_rms > r.before[best].systematic_rms) best = a;
-  if (f.term.effect == EffectId::lever_arm || f.term.effect == EffectId::misalignment) {
+  if (x.shows_on == 1) {
     best = 3;
     for (int a = 4; a < 6; ++a)
       if (r.before[a].systematic_rms > r.before[best].systematic_rms) best = a;
@@ -130,47 +116,18 @@ namespace {
 
 // What the residual does and the effect's name, for the sentence of a bench finding.
 void sentence_head(std::ostringstream& o, const DiagFinding& f, const std::string& who) {
-  switch (f.term.effect) {
-    case EffectId::temperature_bias: o << who << " error grows with temperature: temperature-dependent bias, "; break;
-    case EffectId::temperature_scale: o << who << " scale factor changes with temperature: temperature-dependent scale factor, "; break;
-    case EffectId::temperature_rate: o << who << " error follows the rate of temperature change (opposite on heating and cooling): thermal lag (dT/dt), "; break;
-    case EffectId::g_sensitivity: o << who << " error grows with " << condition_phrase(f.condition) << ": g-sensitivity, "; break;
-    case EffectId::scale_nonlinearity: o << who << " scale error grows with |input|: quadratic scale-factor nonlinearity, "; break;
-    case EffectId::scale_asymmetry: o << who << " scale differs between positive and negative inputs: scale asymmetry, "; break;
-    case EffectId::scale_factor: o << who << " scale differs from the given coefficients: scale factor, "; break;  // drives only
-    case EffectId::time_offset: o << "IMU and reference are offset in time (errors follow the rate of change of the input): time offset, "; break;
-    case EffectId::lever_arm: o << "accelerometer error grows with the square of the table rate: IMU off the rotation centre (lever arm), "; break;
-    case EffectId::misalignment: o << "accelerometer error depends on the table orientation beyond any sensor model: table base tilted (misalignment), "; break;
-    case EffectId::table_wobble: o << "error periodic in the table angle (once per revolution): table wobble / encoder error, "; break;
-    case EffectId::correlated_drift: o << who << " residual wanders slowly beyond the data-sheet drift: correlated drift, "; break;
-  }
+  o << fill_sentence(effect_spec(f.term.effect).bench_sentence, who, condition_phrase(f.condition));
 }
 
 std::string value_text(const DiagFinding& f) {
-  using namespace units;
   const Term& t = f.term;
-  auto list = [&](double scale, const char* unit) {
-    std::string s;
-    if (f.value.size() == 1) return fmt(f.value[0] * scale) + " " + unit;
-    s = "(";
-    for (std::size_t i = 0; i < f.value.size(); ++i) s += (i ? ", " : "") + fmt(f.value[i] * scale);
-    return s + ") " + unit;
-  };
-  switch (t.effect) {
-    case EffectId::g_sensitivity: return list(1.0 / kDeg * kG0, "°/s/g");
-    case EffectId::scale_nonlinearity: return t.sensor == 0 ? list(1e6 * kDeg, "ppm/(°/s)") : list(1e6 * kG0, "ppm/g");
-    case EffectId::scale_asymmetry:
-    case EffectId::scale_factor: return list(1e6, "ppm");
-    case EffectId::time_offset: return list(1e3, "ms");
-    case EffectId::lever_arm: return list(1e3, "mm (IMU axes)");
-    case EffectId::temperature_bias:
-      return t.sensor == 0 ? list(1.0 / kDegPerHour, "°/h/K") : list(1.0 / kMilliG, "mg/K");
-    case EffectId::temperature_scale: return list(1e6, "ppm/K");
-    case EffectId::correlated_drift:
-      return t.sensor == 0 ? fmt(f.value[0] / kDegPerHour) + " °/h, τ " + drift_tau_text(f)
-                           : fmt(f.value[0] / kMilliG) + " mg, τ " + drift_tau_text(f);
-    default: return list(1.0, f.unit.c_str());
-  }
+  const EffectSpec& x = effect_spec(t.effect);
+  const int k = t.sensor == 1 ? 1 : 0;
+  std::string v = f.value.size() == 1 ? fmt(x.drive_display.value(f.value[0], k)) : "(";
+  for (std::size_t i = 0; f.value.size() != 1 && i < f.value.size(); ++i)
+    v += (i ? ", " : "") + fmt(x.drive_display.value(f.value[i], k));
+  v += std::string(f.value.size() == 1 ? " " : ") ") + x.drive_display.unit[k];
+  return x.shape == EffectShape::noise ? v + ", τ " + drift_tau_text(f) : v;
 }
 
 std::string condition_text(const std::string& c) {
@@ -186,23 +143,8 @@ std::string condition_text(const std::string& c) {
 
 // The effect's name as a drive finding's sentence gives it.
 std::string drive_effect_what(const Term& t) {
-  std::string what;
-  switch (t.effect) {
-    case EffectId::g_sensitivity: what = "g-sensitivity"; break;
-    case EffectId::scale_nonlinearity: what = "scale-factor nonlinearity"; break;
-    case EffectId::scale_asymmetry: what = "scale-factor asymmetry"; break;
-    case EffectId::scale_factor:
-      what = "scale factor differs from the given coefficients (changed since the calibration, or a scale that depends "
-             "on the input range — nonlinearity, asymmetry — set there at other rates; folded into M)";
-      break;
-    case EffectId::time_offset: what = "time offset between IMU and reference (IMU late by τ)"; break;
-    case EffectId::lever_arm: what = "lever arm: the MEMS sits elsewhere than meta.json says"; break;
-    case EffectId::temperature_bias: what = "temperature-dependent bias"; break;
-    case EffectId::temperature_scale: what = "temperature-dependent scale factor"; break;
-    case EffectId::correlated_drift: what = "bias drift larger than the data sheet's (run calbench identify)"; break;
-    default: what = effect_name(t.effect);
-  }
-  return what;
+  const EffectSpec& x = effect_spec(t.effect);
+  return x.drive_what ? x.drive_what : x.key;
 }
 
 }  // namespace
@@ -212,7 +154,8 @@ std::string finding_sentence(const DiagFinding& f) {
   const std::string who = f.term.sensor == 2 ? std::string("the bench reference")
                                              : std::string(kSensor[f.report_sensor]) +
                                                    (f.report_axis >= 0 ? std::string(" ") + kAxis[f.report_axis] : "");
-  const int rs = f.term.effect == EffectId::lever_arm || f.term.effect == EffectId::misalignment ? 1 : f.report_sensor;
+  const EffectSpec& x = effect_spec(f.term.effect);
+  const int rs = x.shows_on >= 0 ? x.shows_on : f.report_sensor;
   sentence_head(o, f, who);
   if (f.value.size() == 1) {
     o << human_value(f, f.value[0]);
@@ -222,7 +165,7 @@ std::string finding_sentence(const DiagFinding& f) {
     for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
     o << ")";
   }
-  if (f.term.effect == EffectId::correlated_drift) o << ", τ ≈ " << drift_tau_text(f);
+  if (x.shape == EffectShape::noise) o << ", τ ≈ " << drift_tau_text(f);
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
   o << alternatives_text(f);
   return o.str();
@@ -257,11 +200,9 @@ std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
   std::string who = std::string(kSensor[t.sensor < 2 ? t.sensor : s]);
   if (t.sensor < 2 && f.report_axis >= 0) who += std::string(" ") + kAxis[f.report_axis];
   const std::string what = drive_effect_what(t);
-  std::string head;
-  if (t.effect == EffectId::time_offset) head = "all axes follow the derivative of their input";
-  else if (t.effect == EffectId::lever_arm) head = "accelerometer error grows with rotation rate and angular acceleration";
-  else if (t.effect == EffectId::correlated_drift) head = who + " residual wanders slowly in time";
-  else head = who + " error grows with " + condition_text(f.condition);
+  const EffectSpec& x = effect_spec(t.effect);
+  const std::string head = x.drive_head ? fill_sentence(x.drive_head, who, "")
+                                        : who + " error grows with " + condition_text(f.condition);
   const int rs = shown_sensor >= 0 ? shown_sensor : (f.report_sensor < 2 ? f.report_sensor : 0);
   return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
          disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs) + alternatives_text(f);

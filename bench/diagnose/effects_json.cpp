@@ -5,7 +5,7 @@
 
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
-#include "calibration/diagnosis/catalogue.hpp"
+#include "calibration/effects/effect_registry.hpp"
 
 namespace calbench {
 
@@ -23,26 +23,104 @@ Vec3 optsig3(const nlohmann::json& o, const char* k, const std::string& f, const
   return o.contains(k) ? jsigma3(o[k], f, pre + "." + k) : Vec3::Zero();
 }
 
-// The per-axis terms of a triad, as data: JSON key, the gyro and accel value keys, whether the
-// key carries the reference temperature, and the member they fill. Sigma keys are gyro_sigma,
-// accel_sigma.
-struct TriadKey {
-  const char* key;
-  const char* gyro;
-  const char* accel;
-  bool t0;
-  Vec3 TriadEffectTerms::*member;
-};
-constexpr TriadKey kTriadKeys[] = {
-    {"temperature_bias", "gyro_rad_s_per_K", "accel_m_s2_per_K", true, &TriadEffectTerms::temp_bias},
-    {"temperature_scale", "gyro_per_K", "accel_per_K", true, &TriadEffectTerms::temp_scale},
-    {"temperature_rate", "gyro_rad_s_per_K_per_s", "accel_m_s2_per_K_per_s", false, &TriadEffectTerms::temp_rate},
-    {"scale_nonlinearity", "gyro_per_rad_s", "accel_per_m_s2", false, &TriadEffectTerms::nonlinearity},
-    {"scale_asymmetry", "gyro", "accel", false, &TriadEffectTerms::asymmetry},
-    // A change of M_ii (a simulation's injected shift since the calibration, or terms handed over
-    // by hand); the diagnosis folds what it finds into M instead.
-    {"scale_factor", "gyro", "accel", false, &TriadEffectTerms::scale},
-};
+const char* const kSigmaKey[2] = {"gyro_sigma", "accel_sigma"};
+const char* const kSensorName[2] = {"gyro", "accel"};
+
+// Values of a vector-shaped effect (its parameters on its sensor) as Eigen vectors of n.
+Eigen::VectorXd get_vec(const EffectSpec& x, const EffectTerms& e) {
+  Eigen::VectorXd v(x.nparams);
+  for (int p = 0; p < x.nparams; ++p) v(p) = effect_value(x, e, x.sensor, -1, p);
+  return v;
+}
+void set_vec(const EffectSpec& x, EffectTerms& e, const Eigen::VectorXd& v) {
+  for (int p = 0; p < x.nparams; ++p) *effect_param(x, e, x.sensor, -1, p) = v(p);
+}
+Vec3 get_axes(const EffectSpec& x, const EffectTerms& e, int sensor) {
+  return {effect_value(x, e, sensor, 0, 0), effect_value(x, e, sensor, 1, 0), effect_value(x, e, sensor, 2, 0)};
+}
+void set_axes(const EffectSpec& x, EffectTerms& e, int sensor, const Vec3& v) {
+  for (int a = 0; a < 3; ++a) *effect_param(x, e, sensor, a, 0) = v(a);
+}
+Mat3 get_mat(const EffectSpec& x, const EffectTerms& e) {
+  Mat3 m;
+  for (int a = 0; a < 3; ++a)
+    for (int p = 0; p < 3; ++p) m(a, p) = effect_value(x, e, x.sensor, a, p);
+  return m;
+}
+void set_mat(const EffectSpec& x, EffectTerms& e, const Mat3& m) {
+  for (int a = 0; a < 3; ++a)
+    for (int p = 0; p < 3; ++p) *effect_param(x, e, x.sensor, a, p) = m(a, p);
+}
+
+// The JSON form of one effect, by the shape of its parameters (docs/diagnosis.md).
+void read_effect(const EffectSpec& x, const nlohmann::json& o, const std::string& f, EffectTerms& e, EffectTerms& s) {
+  const std::string key = x.key;
+  const std::string vk = x.json_value[0] ? x.json_value[0] : "";
+  switch (x.shape) {
+    case EffectShape::triad_axis:
+      if (x.json_t0 && o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, key + ".t0_c");
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k)) {
+          set_axes(x, e, k, opt3(o, x.json_value[k], f, key));
+          set_axes(x, s, k, optsig3(o, kSigmaKey[k], f, key));
+        }
+      break;
+    case EffectShape::gyro_matrix:
+      set_mat(x, e, jmat3(jreq(o, vk.c_str(), f, key), f, key + "." + vk));
+      if (o.contains("sigma")) set_mat(x, s, jsigmamat3(o["sigma"], f, key + ".sigma"));
+      break;
+    case EffectShape::vector:
+      if (x.nparams == 1) {
+        *effect_param(x, e, x.sensor, -1, 0) = jnum(jreq(o, vk.c_str(), f, key), f, key + "." + vk);
+        if (o.contains("sigma") && !o["sigma"].is_null()) *effect_param(x, s, x.sensor, -1, 0) = jnum(o["sigma"], f, key + ".sigma");
+      } else if (x.nparams == 2) {
+        set_vec(x, e, jvec2(jreq(o, vk.c_str(), f, key), f, key + "." + vk));
+        if (o.contains("sigma")) set_vec(x, s, jvec2(o["sigma"], f, key + ".sigma"));
+      } else {
+        set_vec(x, e, jvec3(jreq(o, vk.c_str(), f, key), f, key + "." + vk));
+        set_vec(x, s, optsig3(o, "sigma", f, key));
+      }
+      break;
+    case EffectShape::noise:
+      for (int k = 0; k < 2; ++k) {
+        if (!effect_allows_sensor(x, k)) continue;
+        const std::string sk = x.json_value[k], tk = std::string(kSensorName[k]) + "_tau_s";
+        if (o.contains(sk)) *effect_param(x, e, k, -1, 0) = jnum(o[sk], f, key + "." + sk);
+        if (o.contains(tk)) *effect_param(x, e, k, -1, 1) = jnum(o[tk], f, key + "." + tk);
+      }
+      break;
+  }
+}
+
+nlohmann::json write_effect(const EffectSpec& x, const EffectTerms& e, const EffectTerms& s) {
+  nlohmann::json o = nlohmann::json::object();
+  const std::string vk = x.json_value[0] ? x.json_value[0] : "";
+  switch (x.shape) {
+    case EffectShape::triad_axis:
+      if (x.json_t0) o["t0_c"] = e.t0_c;
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k)) {
+          o[x.json_value[k]] = to_json(get_axes(x, e, k));
+          o[kSigmaKey[k]] = sigma_json(get_axes(x, s, k));
+        }
+      break;
+    case EffectShape::gyro_matrix: o = {{vk, to_json(get_mat(x, e))}, {"sigma", sigma_json(get_mat(x, s))}}; break;
+    case EffectShape::vector:
+      if (x.nparams == 1) o = {{vk, effect_value(x, e, x.sensor, -1, 0)}, {"sigma", effect_value(x, s, x.sensor, -1, 0)}};
+      else if (x.nparams == 2) o = {{vk, arr2(Eigen::Vector2d(get_vec(x, e)))}, {"sigma", arr2(Eigen::Vector2d(get_vec(x, s)))}};
+      else o = {{vk, to_json(Vec3(get_vec(x, e)))}, {"sigma", sigma_json(Vec3(get_vec(x, s)))}};
+      break;
+    case EffectShape::noise:
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k) && effect_value(x, e, k, -1, 0) > 0) {
+          o[x.json_value[k]] = effect_value(x, e, k, -1, 0);
+          o[std::string(kSensorName[k]) + "_tau_s"] = effect_value(x, e, k, -1, 1);
+        }
+      o["note"] = "in-run drift beyond the data-sheet prior; identify it with `calbench identify`";
+      break;
+  }
+  return o;
+}
 
 }  // namespace
 
@@ -59,85 +137,15 @@ const std::vector<std::string>& effect_json_keys() {
 EffectTerms effects_from_json(const nlohmann::json& j, const std::string& f, EffectTerms* sigma) {
   EffectTerms e, s;
   if (!j.is_object()) return e;
-  for (const TriadKey& t : kTriadKeys) {
-    if (!j.contains(t.key)) continue;
-    const auto& o = j[t.key];
-    if (t.t0 && o.contains("t0_c")) e.t0_c = jnum(o["t0_c"], f, std::string(t.key) + ".t0_c");
-    e.gyro.*t.member = opt3(o, t.gyro, f, t.key);
-    e.accel.*t.member = opt3(o, t.accel, f, t.key);
-    s.gyro.*t.member = optsig3(o, "gyro_sigma", f, t.key);
-    s.accel.*t.member = optsig3(o, "accel_sigma", f, t.key);
-  }
-  if (j.contains("g_sensitivity")) {
-    const auto& o = j["g_sensitivity"];
-    e.g_sensitivity = jmat3(jreq(o, "gyro_rad_s_per_m_s2", f, "g_sensitivity"), f, "g_sensitivity.gyro_rad_s_per_m_s2");
-    if (o.contains("sigma")) s.g_sensitivity = jsigmamat3(o["sigma"], f, "g_sensitivity.sigma");
-  }
-  if (j.contains("time_offset")) {
-    const auto& o = j["time_offset"];
-    e.time_offset_s = jnum(jreq(o, "s", f, "time_offset"), f, "time_offset.s");
-    if (o.contains("sigma") && !o["sigma"].is_null()) s.time_offset_s = jnum(o["sigma"], f, "time_offset.sigma");
-  }
-  if (j.contains("lever_arm")) {
-    const auto& o = j["lever_arm"];
-    e.lever_arm_m = jvec3(jreq(o, "m", f, "lever_arm"), f, "lever_arm.m");
-    s.lever_arm_m = optsig3(o, "sigma", f, "lever_arm");
-  }
-  if (j.contains("misalignment")) {
-    const auto& o = j["misalignment"];
-    e.table_tilt_rad = jvec2(jreq(o, "table_tilt_rad", f, "misalignment"), f, "misalignment.table_tilt_rad");
-    if (o.contains("sigma")) s.table_tilt_rad = jvec2(o["sigma"], f, "misalignment.sigma");
-  }
-  if (j.contains("table_wobble")) {
-    const auto& o = j["table_wobble"];
-    e.wobble_rad = jvec2(jreq(o, "encoder_rad", f, "table_wobble"), f, "table_wobble.encoder_rad");
-    if (o.contains("sigma")) s.wobble_rad = jvec2(o["sigma"], f, "table_wobble.sigma");
-  }
-  if (j.contains("correlated_drift")) {
-    const auto& o = j["correlated_drift"];
-    if (o.contains("gyro_sigma_rad_s")) e.gyro.drift_sigma = jnum(o["gyro_sigma_rad_s"], f, "correlated_drift.gyro_sigma_rad_s");
-    if (o.contains("gyro_tau_s")) e.gyro.drift_tau_s = jnum(o["gyro_tau_s"], f, "correlated_drift.gyro_tau_s");
-    if (o.contains("accel_sigma_m_s2"))
-      e.accel.drift_sigma = jnum(o["accel_sigma_m_s2"], f, "correlated_drift.accel_sigma_m_s2");
-    if (o.contains("accel_tau_s")) e.accel.drift_tau_s = jnum(o["accel_tau_s"], f, "correlated_drift.accel_tau_s");
-  }
+  for (const EffectSpec& x : effect_specs())
+    if (j.contains(x.key)) read_effect(x, j[x.key], f, e, s);
   if (sigma) *sigma = s;
   return e;
 }
 
 void effects_to_json(const EffectTerms& e, const EffectTerms& s, nlohmann::json& j) {
-  auto nz = [](const Vec3& v) { return !v.isZero(0); };
-  for (const TriadKey& t : kTriadKeys) {
-    if (!nz(e.gyro.*t.member) && !nz(e.accel.*t.member)) continue;
-    nlohmann::json o = nlohmann::json::object();
-    if (t.t0) o["t0_c"] = e.t0_c;
-    o[t.gyro] = to_json(e.gyro.*t.member);
-    o["gyro_sigma"] = sigma_json(s.gyro.*t.member);
-    o[t.accel] = to_json(e.accel.*t.member);
-    o["accel_sigma"] = sigma_json(s.accel.*t.member);
-    j[t.key] = o;
-  }
-  if (!e.g_sensitivity.isZero(0))
-    j["g_sensitivity"] = {{"gyro_rad_s_per_m_s2", to_json(e.g_sensitivity)}, {"sigma", sigma_json(s.g_sensitivity)}};
-  if (e.time_offset_s != 0) j["time_offset"] = {{"s", e.time_offset_s}, {"sigma", s.time_offset_s}};
-  if (nz(e.lever_arm_m)) j["lever_arm"] = {{"m", to_json(e.lever_arm_m)}, {"sigma", sigma_json(s.lever_arm_m)}};
-  if (!e.table_tilt_rad.isZero(0))
-    j["misalignment"] = {{"table_tilt_rad", arr2(e.table_tilt_rad)}, {"sigma", arr2(s.table_tilt_rad)}};
-  if (!e.wobble_rad.isZero(0))
-    j["table_wobble"] = {{"encoder_rad", arr2(e.wobble_rad)}, {"sigma", arr2(s.wobble_rad)}};
-  if (e.gyro.drift_sigma > 0 || e.accel.drift_sigma > 0) {
-    nlohmann::json o = nlohmann::json::object();
-    if (e.gyro.drift_sigma > 0) {
-      o["gyro_sigma_rad_s"] = e.gyro.drift_sigma;
-      o["gyro_tau_s"] = e.gyro.drift_tau_s;
-    }
-    if (e.accel.drift_sigma > 0) {
-      o["accel_sigma_m_s2"] = e.accel.drift_sigma;
-      o["accel_tau_s"] = e.accel.drift_tau_s;
-    }
-    o["note"] = "in-run drift beyond the data-sheet prior; identify it with `calbench identify`";
-    j["correlated_drift"] = o;
-  }
+  for (const EffectSpec& x : effect_specs())
+    if (effect_present(x, e)) j[x.key] = write_effect(x, e, s);
 }
 
 void apply_inject_option(const std::string& opt, EffectTerms& e) {
@@ -177,52 +185,55 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
     if (v == "z") return 2;
     throw InputError(where, 0, k, "expected x, y or z, got '" + v + "'");
   };
-  auto triad = [&]() -> TriadEffectTerms& {
-    if (!kv.count("sensor")) throw InputError(where, 0, "sensor", "missing key (gyro or accel)");
+  EffectId id;
+  if (!effect_from_name(name, id)) {
+    std::string names;
+    for (int k = 0; k < effect_count(); ++k) names += std::string(k ? ", " : "") + effect_name(static_cast<EffectId>(k));
+    throw InputError(where, 0, "effect", "unknown effect '" + name + "' (" + names + ")");
+  }
+  const EffectSpec& x = effect_spec(id);
+  // The sensor of a per-triad effect: required where both are allowed.
+  auto sensor = [&]() {
+    const bool both = effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1);
+    if (!kv.count("sensor")) {
+      if (!both) return effect_allows_sensor(x, 0) ? 0 : 1;
+      throw InputError(where, 0, "sensor", "missing key (gyro or accel)");
+    }
     used["sensor"] = true;
-    if (kv["sensor"] == "gyro") return e.gyro;
-    if (kv["sensor"] == "accel") return e.accel;
-    throw InputError(where, 0, "sensor", "expected gyro or accel, got '" + kv["sensor"] + "'");
+    for (int k = 0; k < 2; ++k)
+      if (kv["sensor"] == kSensorName[k] && effect_allows_sensor(x, k)) return k;
+    throw InputError(where, 0, "sensor",
+                     std::string("expected ") + (both ? "gyro or accel" : effect_allows_sensor(x, 0) ? "gyro" : "accel") +
+                         ", got '" + kv["sensor"] + "'");
   };
-  if (name == "temperature_bias") {
-    auto& t = triad();
-    t.temp_bias(axis("axis")) += num("value");
-  } else if (name == "temperature_scale") {
-    auto& t = triad();
-    t.temp_scale(axis("axis")) += num("value");
-  } else if (name == "temperature_rate") {
-    auto& t = triad();
-    t.temp_rate(axis("axis")) += num("value");
-  } else if (name == "scale_nonlinearity") {
-    auto& t = triad();
-    t.nonlinearity(axis("axis")) += num("value");
-  } else if (name == "scale_asymmetry") {
-    auto& t = triad();
-    t.asymmetry(axis("axis")) += num("value");
-  } else if (name == "scale_factor") {
-    auto& t = triad();
-    t.scale(axis("axis")) += num("value");
-  } else if (name == "g_sensitivity") {
-    const int i = axis("axis"), k = axis("f");
-    e.g_sensitivity(i, k) += num("value");
-  } else if (name == "time_offset") {
-    e.time_offset_s += num("value");
-  } else if (name == "lever_arm") {
-    e.lever_arm_m += Vec3(num_or("x", 0), num_or("y", 0), num_or("z", 0));
-  } else if (name == "misalignment") {
-    e.table_tilt_rad += Eigen::Vector2d(num_or("north", 0), num_or("east", 0));
-  } else if (name == "table_wobble") {
-    e.wobble_rad += Eigen::Vector2d(num_or("sin", 0), num_or("cos", 0));
-  } else if (name == "correlated_drift") {
-    auto& t = triad();
-    t.drift_sigma = num("sigma");
-    t.drift_tau_s = num_or("tau", 300.0);
-    if (t.drift_sigma <= 0 || t.drift_tau_s <= 0) throw InputError(where, 0, "sigma", "sigma and tau must be positive");
-  } else {
-    throw InputError(where, 0, "effect",
-                     "unknown effect '" + name +
-                         "' (temperature_bias, temperature_scale, temperature_rate, g_sensitivity, scale_nonlinearity, scale_asymmetry, "
-                         "time_offset, lever_arm, misalignment, table_wobble, correlated_drift, scale_factor)");
+  switch (x.shape) {
+    case EffectShape::triad_axis: {
+      const int k = sensor();
+      const double v = num("value");
+      *effect_param(x, e, k, axis("axis"), 0) += v;
+      break;
+    }
+    case EffectShape::gyro_matrix: {
+      const int i = axis("axis"), k = axis("f");
+      *effect_param(x, e, x.sensor, i, k) += num("value");
+      break;
+    }
+    case EffectShape::vector: {
+      std::stringstream ss(x.inject_keys);
+      std::string k;
+      for (int p = 0; std::getline(ss, k, ','); ++p)
+        *effect_param(x, e, x.sensor, -1, p) += x.nparams == 1 ? num(k) : num_or(k, 0);
+      break;
+    }
+    case EffectShape::noise: {
+      const int k = sensor();
+      double& sigma = *effect_param(x, e, k, -1, 0);
+      double& tau = *effect_param(x, e, k, -1, 1);
+      sigma = num("sigma");
+      tau = num_or("tau", 300.0);
+      if (sigma <= 0 || tau <= 0) throw InputError(where, 0, "sigma", "sigma and tau must be positive");
+      break;
+    }
   }
   for (const auto& [k, v] : kv)
     if (!used.count(k)) throw InputError(where, 0, k, "unknown key for " + name);
@@ -245,6 +256,129 @@ EffectTerms simulation_effects(const nlohmann::json& truth_extra, const std::str
 void replace_effect_keys(const EffectTerms& e, nlohmann::json& j) {
   for (const auto& k : effect_json_keys()) j.erase(k);
   effects_to_json(e, EffectTerms{}, j);
+}
+
+namespace {
+
+std::string md(const std::string& t) {  // a Markdown table cell
+  std::string o;
+  for (char c : t) {
+    if (c == '|') o += '\\';
+    o += c;
+  }
+  return o;
+}
+
+std::string sensors_text(const EffectSpec& x) {
+  if (x.shape == EffectShape::triad_axis || x.shape == EffectShape::noise)
+    return effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1) ? "gyro, accel" : effect_allows_sensor(x, 0) ? "gyro" : "accel";
+  return x.sensor == 2 ? "reference" : kSensorName[x.sensor];
+}
+
+std::string unit_text(const EffectSpec& x) {
+  std::string u;
+  for (int k = 0; k < 2; ++k) {
+    if (!effect_allows_sensor(x, k) && !(x.shape == EffectShape::vector || x.shape == EffectShape::gyro_matrix)) continue;
+    const std::string one = std::string(x.si_unit[k]) + " (shown in " + x.bench_display.unit[k] + ")";
+    if (!u.empty() && u.find(one) != std::string::npos) continue;
+    u += (u.empty() ? "" : "; ") + one;
+  }
+  return u;
+}
+
+std::string si_units(const EffectSpec& x) {
+  std::string u;
+  for (int k = 0; k < 2; ++k)
+    if ((effect_allows_sensor(x, k) || x.shape == EffectShape::vector || x.shape == EffectShape::gyro_matrix) &&
+        u.find(x.si_unit[k]) == std::string::npos)
+      u += (u.empty() ? "" : " (gyro), ") + std::string(x.si_unit[k]) + (u.empty() ? "" : " (accel)");
+  return u;
+}
+
+std::string json_text(const EffectSpec& x) {
+  std::string o = std::string("`\"") + x.key + "\": {";
+  switch (x.shape) {
+    case EffectShape::triad_axis:
+      if (x.json_t0) o += "\"t0_c\", ";
+      for (int k = 0, n = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k))
+          o += std::string(n++ ? ", " : "") + "\"" + x.json_value[k] + "\": [3], \"" + kSigmaKey[k] + "\": [3]";
+      break;
+    case EffectShape::gyro_matrix: o += std::string("\"") + x.json_value[0] + "\": 3×3, \"sigma\": 3×3"; break;
+    case EffectShape::vector:
+      o += std::string("\"") + x.json_value[0] + "\"" +
+           (x.nparams > 1 ? ": [" + std::to_string(x.nparams) + "], \"sigma\": [" + std::to_string(x.nparams) + "]" : ", \"sigma\"");
+      break;
+    case EffectShape::noise:
+      for (int k = 0, n = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k))
+          o += std::string(n++ ? ", " : "") + "\"" + x.json_value[k] + "\", \"" + kSensorName[k] + "_tau_s\"";
+      break;
+  }
+  return o + "}`";
+}
+
+std::string inject_text(const EffectSpec& x) {
+  const bool both = effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1);
+  const std::string sensor = both ? "sensor=gyro|accel," : std::string("[sensor=") + (effect_allows_sensor(x, 0) ? "gyro" : "accel") + ",]";
+  switch (x.shape) {
+    case EffectShape::triad_axis: return "`" + sensor + "axis=x|y|z,value=V`";
+    case EffectShape::gyro_matrix: return "`axis=` (gyro axis), `f=` (force axis), `value=`";
+    case EffectShape::vector: {
+      std::string k = x.inject_keys, o;
+      std::stringstream ss(k);
+      for (std::string p; std::getline(ss, p, ',');) o += (o.empty() ? "" : ",") + p + "=";
+      return "`" + o + "`";
+    }
+    case EffectShape::noise: return "`" + sensor + "sigma=,tau=` (τ default 300 s)";
+  }
+  return "";
+}
+
+const char* drive_text(const EffectSpec& x) {
+  switch (x.drive) {
+    case DriveDiagnosis::always: return "yes";
+    case DriveDiagnosis::with_temperature: return "with a temperature column";
+    case DriveDiagnosis::fixed_scale: return "with given coefficients (M fixed)";
+    case DriveDiagnosis::never: return x.shape == EffectShape::noise ? "yes (noise model)" : "no";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string effect_catalogue_markdown() {
+  std::string o =
+      "| effect ID | physics | model term | sensors | SI unit (shown in) | revealed on the bench by | on drives | extra JSON key |\n"
+      "|---|---|---|---|---|---|---|---|\n";
+  for (const EffectSpec& x : effect_specs())
+    o += "| `" + std::string(x.key) + "` | " + md(x.physics) + " | " + md(x.model) + " | " + sensors_text(x) + " | " +
+         md(unit_text(x)) + " | " + md(x.condition) + (x.bench_candidate || x.shape == EffectShape::noise ? "" : " (not a bench candidate: M is refitted)") +
+         " | " + drive_text(x) + " | " + md(json_text(x)) + " |\n";
+  o += "\n| effect | `--inject` keys | unit |\n|---|---|---|\n";
+  for (const EffectSpec& x : effect_specs())
+    o += "| `" + std::string(x.key) + "` | " + md(inject_text(x)) + " | " + md(si_units(x)) + " |\n";
+  return o;
+}
+
+nlohmann::json effect_catalogue_json() {
+  nlohmann::json a = nlohmann::json::array();
+  for (const EffectSpec& x : effect_specs())
+    a.push_back({{"id", x.key},
+                 {"index", static_cast<int>(x.id)},
+                 {"physics", x.physics},
+                 {"model", x.model},
+                 {"sensors", sensors_text(x)},
+                 {"parameters_per_term", x.nparams},
+                 {"si_unit", {x.si_unit[0], x.si_unit[1]}},
+                 {"display_unit", {x.bench_display.unit[0], x.bench_display.unit[1]}},
+                 {"bench_condition", x.condition},
+                 {"bench_candidate", x.bench_candidate},
+                 {"drives", drive_text(x)},
+                 {"drive_prior_sigma", {x.drive_prior[0], x.drive_prior[1]}},
+                 {"json", json_text(x)},
+                 {"inject", inject_text(x)}});
+  return a;
 }
 
 }  // namespace calbench

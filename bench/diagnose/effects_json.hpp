@@ -28,4 +28,10 @@ EffectTerms simulation_effects(const nlohmann::json& truth_extra, const std::str
 // Replace every catalogue key of `j` by the non-zero terms of `e` (written without σ).
 void replace_effect_keys(const EffectTerms& e, nlohmann::json& j);
 
+// The catalogue as documentation, from the registry (`calbench diagnose --list-effects`,
+// scripts/gen-docs): the catalogue table and the --inject keys table (Markdown, separated by one
+// empty line), or one JSON object per effect.
+std::string effect_catalogue_markdown();
+nlohmann::json effect_catalogue_json();
+
 }  // namespace calbench

@@ -66,16 +66,12 @@ nlohmann::json alternatives_json(const DiagFinding& f) {
 std::string alternatives_text(const DiagFinding& f) {
   std::string o;
   for (const auto& a : f.alternatives) {
-    // A term with more parameters can fit a little better in its place and still lose on the
-    // penalised score that chose the finding.
+    // A term with more parameters, or a smaller prior (EffectSpec::prior_penalty), can fit a
+    // little better in its place and still lose on the penalised score that chose the finding.
     o += "; NOT told apart on this recording from " + a.term.label() +
          (a.chi2_worse >= 0 ? " (χ² only " + fmt(a.chi2_worse) + " worse)"
-                            : " (χ² " + fmt(-a.chi2_worse) + " better, but with more parameters)");
-    const bool temperature_pair = (a.term.effect == EffectId::temperature_rate && f.term.effect == EffectId::temperature_bias) ||
-                                  (a.term.effect == EffectId::temperature_bias && f.term.effect == EffectId::temperature_rate);
-    if (temperature_pair)
-      o += ": on a warm-up alone a bias ∝ T and one ∝ dT/dt look alike; a plan that heats and cools over the "
-           "same range (thermal_updown) tells them apart";
+                            : " (χ² " + fmt(-a.chi2_worse) + " better, but with a larger penalty: more parameters or a smaller prior)");
+    if (const char* note = separation_note(f.term.effect, a.term.effect)) o += std::string(": ") + note;
   }
   return o;
 }
@@ -92,10 +88,17 @@ nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& ws) {
 
 std::string withdrawn_text(const DiagWithdrawn& w) {
   std::string o = "- withdrawn: " + w.term.label() + " (accepted with Δχ² " + fmt(w.delta_chi2_when_accepted);
-  if (w.term.effect == EffectId::correlated_drift)
+  if (effect_spec(w.term.effect).shape == EffectShape::noise)
     return o + ", but the catalogue terms explain the recording better without it: penalised −2 ln L " +
            fmt(w.delta_chi2_final) + ")";
   return o + ", but in the final model it explains only Δχ² " + fmt(w.delta_chi2_final) + ")";
+}
+
+std::string fill_sentence(const char* tmpl, const std::string& who, const std::string& condition) {
+  std::string s = tmpl;
+  for (const auto& [k, v] : {std::pair<std::string, std::string>{"{who}", who}, {"{condition}", condition}})
+    for (auto at = s.find(k); at != std::string::npos; at = s.find(k, at + v.size())) s.replace(at, k.size(), v);
+  return s;
 }
 
 }  // namespace calbench

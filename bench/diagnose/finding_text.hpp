@@ -33,4 +33,7 @@ nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& w);
 // "- withdrawn: … (accepted with Δχ² …, but …)" without the newline.
 std::string withdrawn_text(const DiagWithdrawn& w);
 
+// A spec's sentence (effect_registry.hpp) with {who} and {condition} filled in.
+std::string fill_sentence(const char* tmpl, const std::string& who, const std::string& condition);
+
 }  // namespace calbench

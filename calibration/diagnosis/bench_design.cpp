@@ -67,7 +67,7 @@ Design build_design(const DiagData& d, const EffectTerms& carried) {
   Design D;
   // The bench refits M: a scale_factor term would be M_ii again.
   for (const Term& t : candidate_terms())
-    if (t.effect != EffectId::scale_factor) D.terms.push_back(t);
+    if (effect_spec(t.effect).bench_candidate) D.terms.push_back(t);
   for (int a = 0; a < kAxes; ++a) {
     D.col_of[a].assign(D.terms.size(), -1);
     int c = kBase;

@@ -1,110 +1,8 @@
 #include "calibration/diagnosis/catalogue.hpp"
 
 #include <cmath>
-#include <iterator>
 
 namespace calbench {
-
-namespace {
-constexpr const char* kNames[] = {"temperature_bias", "temperature_scale", "g_sensitivity", "scale_nonlinearity",
-                                  "scale_asymmetry",  "time_offset",       "lever_arm",     "misalignment",
-                                  "table_wobble",     "correlated_drift",  "temperature_rate", "scale_factor"};
-TriadEffectTerms& triad(EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
-const TriadEffectTerms& triad(const EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
-}  // namespace
-
-static_assert(std::size(kNames) == static_cast<std::size_t>(EffectId::scale_factor) + 1, "a name per EffectId");
-
-const char* effect_name(EffectId e) { return kNames[static_cast<int>(e)]; }
-int effect_count() { return static_cast<int>(std::size(kNames)); }
-
-bool effect_from_name(const std::string& s, EffectId& e) {
-  for (int k = 0; k < effect_count(); ++k)
-    if (s == kNames[k]) {
-      e = static_cast<EffectId>(k);
-      return true;
-    }
-  return false;
-}
-
-int Term::nparams() const {
-  switch (effect) {
-    case EffectId::g_sensitivity: return 3;
-    case EffectId::lever_arm: return 3;
-    case EffectId::misalignment: return 2;
-    case EffectId::table_wobble: return 2;
-    case EffectId::correlated_drift: return 0;
-    default: return 1;
-  }
-}
-
-bool Term::touches(int s, int a) const {
-  switch (effect) {
-    case EffectId::time_offset:
-    case EffectId::table_wobble: return true;
-    case EffectId::lever_arm:
-    case EffectId::misalignment: return s == 1;
-    case EffectId::correlated_drift: return false;
-    default: return s == sensor && a == axis;
-  }
-}
-
-std::string Term::label() const {
-  std::string l = effect_name(effect);
-  l += sensor == 0 ? " gyro" : sensor == 1 ? " accel" : " reference";
-  if (axis >= 0) l += std::string(" ") + "xyz"[axis];
-  return l;
-}
-
-void Term::add_param(EffectTerms& e, int p, double v) const {
-  switch (effect) {
-    case EffectId::temperature_bias: triad(e, sensor).temp_bias(axis) += v; break;
-    case EffectId::temperature_scale: triad(e, sensor).temp_scale(axis) += v; break;
-    case EffectId::temperature_rate: triad(e, sensor).temp_rate(axis) += v; break;
-    case EffectId::scale_nonlinearity: triad(e, sensor).nonlinearity(axis) += v; break;
-    case EffectId::scale_asymmetry: triad(e, sensor).asymmetry(axis) += v; break;
-    case EffectId::scale_factor: triad(e, sensor).scale(axis) += v; break;
-    case EffectId::g_sensitivity: e.g_sensitivity(axis, p) += v; break;
-    case EffectId::time_offset: e.time_offset_s += v; break;
-    case EffectId::lever_arm: e.lever_arm_m(p) += v; break;
-    case EffectId::misalignment: e.table_tilt_rad(p) += v; break;
-    case EffectId::table_wobble: e.wobble_rad(p) += v; break;
-    case EffectId::correlated_drift: break;
-  }
-}
-
-double Term::get_param(const EffectTerms& e, int p) const {
-  switch (effect) {
-    case EffectId::temperature_bias: return triad(e, sensor).temp_bias(axis);
-    case EffectId::temperature_scale: return triad(e, sensor).temp_scale(axis);
-    case EffectId::temperature_rate: return triad(e, sensor).temp_rate(axis);
-    case EffectId::scale_nonlinearity: return triad(e, sensor).nonlinearity(axis);
-    case EffectId::scale_asymmetry: return triad(e, sensor).asymmetry(axis);
-    case EffectId::scale_factor: return triad(e, sensor).scale(axis);
-    case EffectId::g_sensitivity: return e.g_sensitivity(axis, p);
-    case EffectId::time_offset: return e.time_offset_s;
-    case EffectId::lever_arm: return e.lever_arm_m(p);
-    case EffectId::misalignment: return e.table_tilt_rad(p);
-    case EffectId::table_wobble: return e.wobble_rad(p);
-    case EffectId::correlated_drift: return 0;
-  }
-  return 0;
-}
-
-std::vector<Term> candidate_terms() {
-  std::vector<Term> out;
-  for (int s = 0; s < 2; ++s)
-    for (int a = 0; a < 3; ++a)
-      for (EffectId e : {EffectId::temperature_bias, EffectId::temperature_scale, EffectId::temperature_rate, EffectId::scale_nonlinearity,
-                         EffectId::scale_asymmetry, EffectId::scale_factor})
-        out.push_back({e, s, a});
-  for (int a = 0; a < 3; ++a) out.push_back({EffectId::g_sensitivity, 0, a});
-  out.push_back({EffectId::time_offset, 2, -1});
-  out.push_back({EffectId::lever_arm, 1, -1});
-  out.push_back({EffectId::misalignment, 2, -1});
-  out.push_back({EffectId::table_wobble, 2, -1});
-  return out;
-}
 
 bool static_attitude(const Vec3& w, const Vec3& f, Mat3& C) {
   if (w.norm() > 1e-3 || f.norm() < 1.0) return false;  // rotating, or no gravity reference
@@ -189,25 +87,6 @@ void predict_extra(const EffectTerms& e, const SubBlock& s, Vec3& dg, Vec3& da) 
         dg += table_tilt_force(e.table_tilt_rad, C, C.transpose() * Vec3(wl(0), 0.0, wl(2)));
     }
   }
-}
-
-std::string term_unit(const Term& t) {
-  const bool g = t.sensor == 0;
-  switch (t.effect) {
-    case EffectId::temperature_bias: return g ? "rad/s/K" : "m/s^2/K";
-    case EffectId::temperature_scale: return "1/K";
-    case EffectId::temperature_rate: return g ? "rad/s/(K/s)" : "m/s^2/(K/s)";
-    case EffectId::g_sensitivity: return "rad/s/(m/s^2)";
-    case EffectId::scale_nonlinearity: return g ? "1/(rad/s)" : "1/(m/s^2)";
-    case EffectId::scale_asymmetry: return "1";
-    case EffectId::scale_factor: return "1";
-    case EffectId::time_offset: return "s";
-    case EffectId::lever_arm: return "m";
-    case EffectId::misalignment: return "rad";
-    case EffectId::table_wobble: return "rad";
-    case EffectId::correlated_drift: return g ? "rad/s" : "m/s^2";
-  }
-  return "";
 }
 
 }  // namespace calbench

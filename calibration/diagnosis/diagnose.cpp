@@ -126,27 +126,11 @@ AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const
   return st;
 }
 
-const char* revealing_condition(EffectId e) {
-  switch (e) {
-    case EffectId::temperature_bias: return "temperature";
-    case EffectId::temperature_scale: return "temperature";
-    case EffectId::temperature_rate: return "dT/dt";
-    case EffectId::g_sensitivity: return "f";
-    case EffectId::scale_nonlinearity: return "rate";
-    case EffectId::scale_asymmetry: return "rate";
-    case EffectId::scale_factor: return "rate";
-    case EffectId::time_offset: return "angle";
-    case EffectId::lever_arm: return "rate";
-    case EffectId::misalignment: return "f";
-    case EffectId::table_wobble: return "angle";
-    case EffectId::correlated_drift: return "time";
-  }
-  return "time";
-}
+const char* revealing_condition(EffectId e) { return effect_spec(e).condition; }
 
 // Axis a finding is reported on: a lever arm with one dominant component on that component.
 void report_axis_of(const Term& t, DiagFinding& f) {
-  if (t.effect == EffectId::lever_arm) {
+  if (effect_spec(t.effect).dominant_component) {
     int imax = 0;
     for (int i = 1; i < 3; ++i)
       if (std::abs(f.value[i]) > std::abs(f.value[imax])) imax = i;
@@ -163,12 +147,12 @@ void finding_rms(const Term& t, const std::vector<int>& touched, const DiagnoseR
   double rb = 0, ra = 0;
   int n = 0;
   for (int a : touched) {
-    if (t.sensor < 2 && f.report_axis >= 0 && t.effect != EffectId::lever_arm && a != t.sensor * 3 + t.axis) continue;
+    if (t.sensor < 2 && f.report_axis >= 0 && !effect_spec(t.effect).dominant_component && a != t.sensor * 3 + t.axis) continue;
     rb += std::pow(res.before[a].systematic_rms, 2);
     ra += std::pow(res.after[a].systematic_rms, 2);
     ++n;
   }
-  if (t.effect == EffectId::lever_arm || t.sensor == 2) {
+  if (effect_spec(t.effect).dominant_component || t.sensor == 2) {
     // Report the worst-affected touched axis (largest systematic before).
     double worst = -1;
     for (int a : touched)
@@ -186,7 +170,7 @@ void finding_rms(const Term& t, const std::vector<int>& touched, const DiagnoseR
 // The condition that reveals a finding (g-sensitivity: the force component it follows most).
 void finding_condition(const Term& t, DiagFinding& f) {
   f.condition = revealing_condition(t.effect);
-  if (t.effect == EffectId::g_sensitivity) {
+  if (effect_spec(t.effect).condition_by_column) {
     int jmax = 0;
     for (int j = 1; j < 3; ++j)
       if (std::abs(f.value[j]) > std::abs(f.value[jmax])) jmax = j;

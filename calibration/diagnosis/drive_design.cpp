@@ -16,39 +16,20 @@ bool in_subset(const ParentBlock& p, int subset) {
 }
 
 bool drive_term(const Term& t, bool temperature, bool fixed_scale) {
-  switch (t.effect) {
-    case EffectId::scale_factor: return fixed_scale;  // M free: it is M_ii
-    case EffectId::temperature_bias:
-    case EffectId::temperature_scale: return temperature;
-    case EffectId::temperature_rate:  // not applicable on drives: no dT/dt is derived from a drive (simulated drives have no temperature)
-    case EffectId::misalignment:
-    case EffectId::table_wobble:
-    case EffectId::correlated_drift: return false;
-    default: return true;
+  switch (effect_spec(t.effect).drive) {
+    case DriveDiagnosis::always: return true;
+    case DriveDiagnosis::with_temperature: return temperature;
+    case DriveDiagnosis::fixed_scale: return fixed_scale;  // M free: it is M_ii
+    case DriveDiagnosis::never: return false;
   }
+  return false;
 }
 
 // σ of the weak zero-mean prior on a term's parameters (SI; see fit_model).
-double drive_prior_scale(const Term& t) {
-  double ps = 1;
-  switch (t.effect) {
-    case EffectId::g_sensitivity: ps = 2e-4; break;                       // ~0.1 °/s/g
-    case EffectId::scale_nonlinearity: ps = t.sensor == 0 ? 1e-2 : 1e-3; break;
-    case EffectId::scale_asymmetry: ps = 1e-2; break;
-    case EffectId::scale_factor: ps = 1e-2; break;  // the data sheet's initial scale tolerance, ±1 %
-    case EffectId::time_offset: ps = 0.05; break;
-    case EffectId::lever_arm: ps = 0.3; break;
-    case EffectId::temperature_bias: ps = t.sensor == 0 ? 1e-4 : 1e-2; break;
-    case EffectId::temperature_scale: ps = 1e-3; break;
-    default: ps = 1;
-  }
-  return ps;
-}
+double drive_prior_scale(const Term& t) { return effect_spec(t.effect).drive_prior[t.sensor == 0 ? 0 : 1]; }
 
 // Terms nonlinear in their input (|x|, x·|x|): their regressor is taken at the smoothed input.
-bool smoothed_input_term(const Term& term) {
-  return term.effect == EffectId::scale_nonlinearity || term.effect == EffectId::scale_asymmetry;
-}
+bool smoothed_input_term(const Term& term) { return effect_spec(term.effect).curvature; }
 
 // Short-range noise of the design's z per axis: gamma, endpoint_var, white_scale, pvar, pcov.
 void short_range_noise(const DriveDiagData& d, Design& D) {

@@ -109,16 +109,7 @@ std::vector<std::vector<int>> time_groups(int N, int size) {
 // of block k's: that is the key then. Terms driven by the other sensor's input (g-sensitivity:
 // gyro by force; lever arm: accelerometer by rate) keep c itself, which the neighbour mean would
 // blur (the lever arm's ω̇×r changes sign within seconds).
-bool own_input_term(const Term& t) {
-  switch (t.effect) {
-    case EffectId::scale_nonlinearity:
-    case EffectId::scale_asymmetry:
-    case EffectId::scale_factor:
-    case EffectId::temperature_scale:
-    case EffectId::time_offset: return true;
-    default: return false;
-  }
-}
+bool own_input_term(const Term& t) { return effect_spec(t.effect).own_input; }
 
 // Mean of c over each block and its contiguous neighbours.
 Eigen::VectorXd neighbour_mean(const DriveDiagData& d, const Design& D, const Eigen::VectorXd& c) {
@@ -154,7 +145,7 @@ AxisStats axis_stats(const DriveDiagData& d, const Design& D, const Dataset& S, 
 
 // Axis a finding is reported on: a lever arm with one dominant significant component on that one.
 void report_axis_of(const Term& t, DiagFinding& f) {
-  if (t.effect == EffectId::lever_arm) {
+  if (effect_spec(t.effect).dominant_component) {
     // Dominant component among the significant ones (|value| > 3σ; a land vehicle barely
     // rolls or pitches, so the component along the yaw axis is poorly determined).
     auto sig = [&](int i) { return std::abs(f.value[i]) > 3 * f.sigma[i] ? std::abs(f.value[i]) : 0.0; };

@@ -333,7 +333,8 @@ class GreedySearch {
       m.push_back(t);
       Fit f = P_.fit(m, ptrs(all));
       const double dchi2 = cur.chi2 - f.chi2;
-      const double penalty = greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param);
+      const double penalty =
+          greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param) + effect_spec(P_.term(t).effect).prior_penalty;
       const double score = dchi2 - penalty;
       if (dchi2 < pol_.min_delta_chi2 || score <= best.score) continue;
       const double held = heldout(m);

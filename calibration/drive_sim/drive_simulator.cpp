@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "calibration/effects/effect_registry.hpp"
+
 namespace calbench::drivesim {
 namespace {
 using ins::skew;
@@ -36,14 +38,7 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
   NoiseSpec noise = cfg.noise;
   noise.output_rate_hz = cfg.imu_rate_hz;
   const EffectTerms& fx = cfg.effects;
-  if (fx.gyro.drift_sigma > 0) {
-    noise.gyro.drift_sigma = fx.gyro.drift_sigma;
-    if (fx.gyro.drift_tau_s > 0) noise.gyro.drift_tau_s = fx.gyro.drift_tau_s;
-  }
-  if (fx.accel.drift_sigma > 0) {
-    noise.accel.drift_sigma = fx.accel.drift_sigma;
-    if (fx.accel.drift_tau_s > 0) noise.accel.drift_tau_s = fx.accel.drift_tau_s;
-  }
+  noise = noise_with_effects(noise, fx);  // a correlated_drift term replaces the drift prior
   const bool sensor_fx = fx.any_sensor_side();
   const Mat3 gyro_inv = (Mat3::Identity() + cfg.mems.gyro.M).inverse();
   const Mat3 accel_inv = (Mat3::Identity() + cfg.mems.accel.M).inverse();

@@ -2,39 +2,41 @@
 
 #include <cmath>
 
+#include "calibration/effects/effect_registry.hpp"
+
 namespace calbench {
 
-namespace {
-bool nz3(const Vec3& v) { return !v.isZero(0); }
-}  // namespace
-
 EffectUse drive_effect_use(const EffectTerms& e, bool has_temperature) {
+  // Output terms first, then the time-stamp corrections; the noise-model terms are the filter's
+  // drift prior (fit drive lists them itself).
   EffectUse u;
-  auto triad_any = [&](Vec3 TriadEffectTerms::*m) { return nz3(e.gyro.*m) || nz3(e.accel.*m); };
-  for (const auto& [key, member] : {std::pair{"temperature_bias", &TriadEffectTerms::temp_bias},
-                                    std::pair{"temperature_scale", &TriadEffectTerms::temp_scale}}) {
-    if (!triad_any(member)) continue;
-    if (has_temperature) u.applied.push_back(key);
-    else u.ignored.push_back({key, "imu.csv has no temperature column"});
+  std::vector<std::string> stamps;
+  for (const EffectSpec& s : effect_specs()) {
+    if (!effect_present(s, e)) continue;
+    switch (s.compensation) {
+      case DriveCompensation::output: u.applied.push_back(s.key); break;
+      case DriveCompensation::time_stamp: stamps.push_back(s.key); break;
+      case DriveCompensation::with_temperature:
+        if (has_temperature) u.applied.push_back(s.key);
+        else u.ignored.push_back({s.key, s.drive_ignored_reason});
+        break;
+      case DriveCompensation::ignored: u.ignored.push_back({s.key, s.drive_ignored_reason}); break;
+      case DriveCompensation::noise_model: break;
+    }
   }
-  if (triad_any(&TriadEffectTerms::temp_rate))
-    u.ignored.push_back({"temperature_rate", "needs dT/dt, which the drive estimator does not derive"});
-  if (!e.g_sensitivity.isZero(0)) u.applied.push_back("g_sensitivity");
-  if (triad_any(&TriadEffectTerms::nonlinearity)) u.applied.push_back("scale_nonlinearity");
-  if (triad_any(&TriadEffectTerms::asymmetry)) u.applied.push_back("scale_asymmetry");
-  if (triad_any(&TriadEffectTerms::scale)) u.applied.push_back("scale_factor");
-  if (nz3(e.lever_arm_m)) u.applied.push_back("lever_arm");
-  if (e.time_offset_s != 0) u.applied.push_back("time_offset");
-  if (!e.table_tilt_rad.isZero(0)) u.ignored.push_back({"misalignment", "a rate-table term (bench only)"});
-  if (!e.wobble_rad.isZero(0)) u.ignored.push_back({"table_wobble", "a rate-table term (bench only)"});
+  u.applied.insert(u.applied.end(), stamps.begin(), stamps.end());
   return u;
 }
 
 ImuEffectCompensator::ImuEffectCompensator(const EffectTerms& e, const SensorErrors& set)
     : e_(e), cg_(set.gyro), ca_(set.accel) {
-  // temperature_rate needs dT/dt: not applied on a stream (drive_effect_use says so).
-  e_.gyro.temp_rate.setZero();
-  e_.accel.temp_rate.setZero();
+  // Terms a stream cannot apply (temperature_rate needs dT/dt; drive_effect_use says so) are zeroed.
+  for (const EffectSpec& s : effect_specs())
+    if (s.compensation == DriveCompensation::ignored && (s.axis_output || s.sensor_output))
+      for (int k = 0; k < 3; ++k)
+        for (int a = -1; a < 3; ++a)
+          for (int p = 0; p < 9; ++p)
+            if (double* v = effect_param(s, e_, k, a, p)) *v = 0;
   active_ = e_.any_sensor_side();
 }
 

@@ -1,6 +1,9 @@
 // The physics catalogue of `calbench diagnose` (docs/diagnosis.md): error terms beyond the spec's
 // measured = (I + M)·true + b. One struct holds the value of every term; the bench simulator
 // injects them (truth side) and the diagnosis/predictors apply them (model side). All SI.
+// Everything else about an effect (units, JSON, physics hooks, sentences) is its spec in
+// effect_registry.hpp, which addresses these values; effects added since the registry keep their
+// values in `generic`, laid out by their spec, and need no member here.
 //
 // Sensor-side terms (added to the output of a triad, evaluated at the true input x = ω or f):
 //   temperature_bias    b_T,i·(T − T0)                       gyro rad/s/K, accel m/s²/K
@@ -48,6 +51,7 @@ struct EffectTerms {
   Vec3 lever_arm_m = Vec3::Zero();
   Eigen::Vector2d table_tilt_rad = Eigen::Vector2d::Zero();  // (about north, about east)
   Eigen::Vector2d wobble_rad = Eigen::Vector2d::Zero();      // (a: sin θ, c: cos θ)
+  std::array<double, 24> generic{};  // values of the effects without a member (effect_param)
 
   bool any() const;
   bool any_sensor_side() const;
@@ -61,7 +65,8 @@ struct EffectContext {
   double dtemp_k_s = 0.0;  // dT/dt (K/s)
 };
 
-// Sensor-side extra output (added to (I+M)·x + b): gyro and accel.
+// Sensor-side extra output (added to (I+M)·x + b): gyro and accel, summed over the registry's
+// effects (effect_registry.cpp).
 void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel);
 
 // Lever-arm specific force at the IMU relative to the rotation centre: ω×(ω×r) + ω̇×r.

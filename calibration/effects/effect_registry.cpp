@@ -1,0 +1,212 @@
+#include "calibration/effects/effect_registry.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+
+namespace calbench {
+
+namespace {
+
+// Slots of an effect in EffectTerms::generic, by shape.
+int generic_slots(const EffectSpec& s) {
+  switch (s.shape) {
+    case EffectShape::triad_axis: return 6;   // sensor·3 + axis
+    case EffectShape::gyro_matrix: return 9;  // axis·3 + p
+    case EffectShape::vector: return s.nparams;
+    case EffectShape::noise: return 4;  // sensor·2 + p
+  }
+  return 0;
+}
+
+struct Registry {
+  std::vector<EffectSpec> specs = make_effect_specs();
+  std::vector<const EffectSpec*> by_id;
+  std::vector<const EffectSpec*> triad_rows, output_rows;
+  Registry() {
+    by_id.assign(specs.size(), nullptr);
+    int next = 0;
+    for (EffectSpec& s : specs)
+      if (!s.param) {
+        s.generic_offset = next;
+        next += generic_slots(s);
+      }
+    if (next > static_cast<int>(std::tuple_size<decltype(EffectTerms::generic)>::value))
+      throw std::logic_error("effect registry: EffectTerms::generic is too small for the new effects");
+    for (const EffectSpec& s : specs) {
+      by_id.at(static_cast<std::size_t>(s.id)) = &s;
+      if (s.axis_output) triad_rows.push_back(&s);
+      if (s.sensor_output) output_rows.push_back(&s);
+    }
+    for (const EffectSpec* s : by_id)
+      if (!s) throw std::logic_error("effect registry: an EffectId without a spec");
+  }
+};
+
+const Registry& registry() {
+  static const Registry r;
+  return r;
+}
+
+double cparam(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p) {
+  const double* v = effect_param(s, const_cast<EffectTerms&>(e), sensor, axis, p);
+  return v ? *v : 0.0;
+}
+
+}  // namespace
+
+double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, int p) {
+  if (s.param) return s.param(e, sensor, axis, p);
+  if (!effect_allows_sensor(s, sensor)) return nullptr;
+  int k = -1;
+  switch (s.shape) {
+    case EffectShape::triad_axis: k = axis >= 0 && axis < 3 && p == 0 ? sensor * 3 + axis : -1; break;
+    case EffectShape::gyro_matrix: k = axis >= 0 && axis < 3 && p >= 0 && p < 3 ? axis * 3 + p : -1; break;
+    case EffectShape::vector: k = p >= 0 && p < s.nparams ? p : -1; break;
+    case EffectShape::noise: k = p >= 0 && p < 2 ? sensor * 2 + p : -1; break;
+  }
+  return k < 0 ? nullptr : &e.generic[static_cast<std::size_t>(s.generic_offset + k)];
+}
+
+double effect_value(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p) {
+  return cparam(s, e, sensor, axis, p);
+}
+
+const std::vector<EffectSpec>& effect_specs() { return registry().specs; }
+const EffectSpec& effect_spec(EffectId e) { return *registry().by_id.at(static_cast<std::size_t>(e)); }
+const char* effect_name(EffectId e) { return effect_spec(e).key; }
+int effect_count() { return static_cast<int>(registry().specs.size()); }
+
+bool effect_from_name(const std::string& s, EffectId& e) {
+  for (const EffectSpec& x : effect_specs())
+    if (s == x.key) {
+      e = x.id;
+      return true;
+    }
+  return false;
+}
+
+bool effect_allows_sensor(const EffectSpec& s, int sensor) {
+  if (s.shape == EffectShape::triad_axis || s.shape == EffectShape::noise)
+    return sensor >= 0 && sensor < 2 && (s.sensors >> sensor & 1u);
+  return sensor == s.sensor;
+}
+
+bool effect_present(const EffectSpec& s, const EffectTerms& e) {
+  switch (s.shape) {
+    case EffectShape::triad_axis:
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(s, k))
+          for (int a = 0; a < 3; ++a)
+            if (cparam(s, e, k, a, 0) != 0) return true;
+      return false;
+    case EffectShape::gyro_matrix:
+      for (int a = 0; a < 3; ++a)
+        for (int p = 0; p < 3; ++p)
+          if (cparam(s, e, s.sensor, a, p) != 0) return true;
+      return false;
+    case EffectShape::vector:
+      for (int p = 0; p < s.nparams; ++p)
+        if (cparam(s, e, s.sensor, -1, p) != 0) return true;
+      return false;
+    case EffectShape::noise:
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(s, k) && cparam(s, e, k, -1, 0) > 0) return true;
+      return false;
+  }
+  return false;
+}
+
+std::vector<std::string> effect_ids_present(const EffectTerms& e) {
+  std::vector<std::string> out;
+  for (const EffectSpec& s : effect_specs())
+    if (effect_present(s, e)) out.push_back(s.key);
+  return out;
+}
+
+int Term::nparams() const { return effect_spec(effect).nparams; }
+
+bool Term::touches(int s, int a) const {
+  const EffectSpec& x = effect_spec(effect);
+  switch (x.shape) {
+    case EffectShape::triad_axis:
+    case EffectShape::gyro_matrix: return s == sensor && a == axis;
+    case EffectShape::vector: return x.shows_on < 0 || s == x.shows_on;
+    case EffectShape::noise: return false;
+  }
+  return false;
+}
+
+std::string Term::label() const {
+  std::string l = effect_name(effect);
+  l += sensor == 0 ? " gyro" : sensor == 1 ? " accel" : " reference";
+  if (axis >= 0) l += std::string(" ") + "xyz"[axis];
+  return l;
+}
+
+void Term::add_param(EffectTerms& e, int p, double v) const {
+  if (double* x = effect_param(effect_spec(effect), e, sensor, axis, p)) *x += v;
+}
+
+double Term::get_param(const EffectTerms& e, int p) const { return cparam(effect_spec(effect), e, sensor, axis, p); }
+
+std::vector<Term> candidate_terms() {
+  std::vector<Term> out;
+  for (int s = 0; s < 2; ++s)
+    for (int a = 0; a < 3; ++a)
+      for (const EffectSpec& x : effect_specs())
+        if (x.shape == EffectShape::triad_axis && effect_allows_sensor(x, s)) out.push_back({x.id, s, a});
+  for (const EffectSpec& x : effect_specs()) {
+    if (x.shape == EffectShape::gyro_matrix)
+      for (int a = 0; a < 3; ++a) out.push_back({x.id, x.sensor, a});
+    if (x.shape == EffectShape::vector) out.push_back({x.id, x.sensor, -1});
+  }
+  return out;
+}
+
+std::string term_unit(const Term& t) { return effect_spec(t.effect).si_unit[t.sensor == 0 ? 0 : 1]; }
+
+NoiseSpec noise_with_effects(NoiseSpec n, const EffectTerms& e) {
+  for (const EffectSpec& s : effect_specs()) {
+    if (s.compensation != DriveCompensation::noise_model) continue;
+    for (int k = 0; k < 2; ++k) {
+      TriadNoise& t = k == 0 ? n.gyro : n.accel;
+      const double sigma = cparam(s, e, k, -1, 0), tau = cparam(s, e, k, -1, 1);
+      if (sigma > 0) {
+        t.drift_sigma = sigma;
+        if (tau > 0) t.drift_tau_s = tau;
+      }
+    }
+  }
+  return n;
+}
+
+const char* separation_note(EffectId finding, EffectId alternative) {
+  const EffectSpec& f = effect_spec(finding);
+  const EffectSpec& a = effect_spec(alternative);
+  if (a.lookalike == static_cast<int>(finding)) return a.separation;
+  if (f.lookalike == static_cast<int>(alternative)) return f.separation;
+  return nullptr;
+}
+
+// Sensor-side output of all effects: the per-axis triad terms in catalogue order, then the others.
+void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel) {
+  const double dT = c.temp_c - e.t0_c;
+  const Registry& r = registry();
+  auto triad_out = [&](int k, const Vec3& x) {
+    Vec3 d = Vec3::Zero();
+    for (const EffectSpec* s : r.triad_rows) {
+      if (!(s->sensors >> k & 1u)) continue;
+      // The three axes of a sensor are contiguous (a Vec3 member, or sensor·3 + axis in generic).
+      const double* p = effect_param(*s, const_cast<EffectTerms&>(e), k, 0, 0);
+      for (int i = 0; i < 3; ++i)
+        if (p[i] != 0) d(i) += s->axis_output(p[i], x(i), dT, c);  // a zero term adds nothing
+    }
+    return d;
+  };
+  dgyro = triad_out(0, c.w);
+  daccel = triad_out(1, c.f);
+  for (const EffectSpec* s : r.output_rows) s->sensor_output(e, c, dgyro, daccel);
+}
+
+}  // namespace calbench

@@ -1,0 +1,459 @@
+// The rows of the effect registry (effect_registry.hpp): one spec per effect. Adding an effect
+// is one row here (and its EffectId); nothing outside calibration/effects/ names it.
+#include <cmath>
+
+#include "calibration/effects/effect_registry.hpp"
+#include "common/units.hpp"
+
+namespace calbench {
+
+namespace {
+
+using namespace units;
+
+constexpr unsigned kBoth = 3, kGyro = 1;
+
+TriadEffectTerms& triad(EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
+
+// Storage of the per-axis triad terms: the member of TriadEffectTerms.
+template <Vec3 TriadEffectTerms::*M>
+double* triad_param(EffectTerms& e, int sensor, int axis, int p) {
+  if (sensor < 0 || sensor > 1 || axis < 0 || axis > 2 || p != 0) return nullptr;
+  return &(triad(e, sensor).*M)(axis);
+}
+
+double identity(double v, int) { return v; }
+
+// The rows: catalogue order, which is the order of the candidate terms (per sensor and axis the
+// triad_axis rows, then the others) and of every list of effects the programme prints.
+}  // namespace
+
+std::vector<EffectSpec> make_effect_specs() {
+  std::vector<EffectSpec> v;
+  EffectSpec s{};
+  auto row = [&](EffectSpec x) { v.push_back(x); };
+
+  // ---- temperature_bias
+  s = EffectSpec{};
+  s.id = EffectId::temperature_bias;
+  s.key = "temperature_bias";
+  s.physics =
+      "bias moves with die temperature (warm-up)";
+  s.model = "b_T,i·(T − T0)";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.param = triad_param<&TriadEffectTerms::temp_bias>;
+  s.axis_output = [](double p, double, double dT, const EffectContext&) { return p * dT; };
+  s.si_unit[0] = "rad/s/K";
+  s.si_unit[1] = "m/s^2/K";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x / kDegPerHour : x / kMilliG; }, {"°/h/K", "mg/K"}};
+  s.drive_display = {[](double x, int k) { return k == 0 ? x * (1.0 / kDegPerHour) : x * (1.0 / kMilliG); }, {"°/h/K", "mg/K"}};
+  s.json_value[0] = "gyro_rad_s_per_K";
+  s.json_value[1] = "accel_m_s2_per_K";
+  s.json_t0 = true;
+  s.bench_candidate = true;
+  s.condition = "temperature";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::with_temperature;
+  s.drive_prior[0] = 1e-4;
+  s.drive_prior[1] = 1e-2;
+  s.compensation = DriveCompensation::with_temperature;
+  s.drive_ignored_reason = "imu.csv has no temperature column";
+  s.bench_sentence = "{who} error grows with temperature: temperature-dependent bias, ";
+  s.drive_what = "temperature-dependent bias";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- temperature_scale
+  s = EffectSpec{};
+  s.id = EffectId::temperature_scale;
+  s.key = "temperature_scale";
+  s.physics =
+      "scale factor moves with temperature";
+  s.model = "s_T,i·(T − T0)·x_i";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.param = triad_param<&TriadEffectTerms::temp_scale>;
+  s.axis_output = [](double p, double x, double dT, const EffectContext&) { return p * dT * x; };
+  s.si_unit[0] = s.si_unit[1] = "1/K";
+  s.bench_display = {[](double x, int) { return x / kPpm; }, {"ppm/K", "ppm/K"}};
+  s.drive_display = {[](double x, int) { return x * 1e6; }, {"ppm/K", "ppm/K"}};
+  s.json_value[0] = "gyro_per_K";
+  s.json_value[1] = "accel_per_K";
+  s.json_t0 = true;
+  s.bench_candidate = true;
+  s.condition = "temperature";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::with_temperature;
+  s.drive_prior[0] = s.drive_prior[1] = 1e-3;
+  s.own_input = true;
+  s.compensation = DriveCompensation::with_temperature;
+  s.drive_ignored_reason = "imu.csv has no temperature column";
+  s.bench_sentence = "{who} scale factor changes with temperature: temperature-dependent scale factor, ";
+  s.drive_what = "temperature-dependent scale factor";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- temperature_rate
+  s = EffectSpec{};
+  s.id = EffectId::temperature_rate;
+  s.key = "temperature_rate";
+  s.physics =
+      "thermal lag: while the temperature changes the die is not isothermal, and the gradient (∝ dT/dt in a ramp or warm-up) shifts the bias — opposite while heating and cooling";
+  s.model = "r_T,i·dT/dt";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.param = triad_param<&TriadEffectTerms::temp_rate>;
+  s.axis_output = [](double p, double, double, const EffectContext& c) { return p * c.dtemp_k_s; };
+  s.si_unit[0] = "rad/s/(K/s)";
+  s.si_unit[1] = "m/s^2/(K/s)";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x / kDegPerHour / 60.0 : x / kMilliG / 60.0; },
+                     {"°/h per K/min", "mg per K/min"}};
+  s.drive_display = {identity, {"rad/s/(K/s)", "m/s^2/(K/s)"}};
+  s.json_value[0] = "gyro_rad_s_per_K_per_s";
+  s.json_value[1] = "accel_m_s2_per_K_per_s";
+  s.bench_candidate = true;
+  s.condition = "dT/dt";
+  s.shows_on = -1;
+  // Not on drives: no dT/dt is derived from a drive (simulated drives have no temperature).
+  s.drive = DriveDiagnosis::never;
+  s.drive_prior[0] = s.drive_prior[1] = 1;
+  s.compensation = DriveCompensation::ignored;
+  s.drive_ignored_reason = "needs dT/dt, which the drive estimator does not derive";
+  s.bench_sentence =
+      "{who} error follows the rate of temperature change (opposite on heating and cooling): thermal lag (dT/dt), ";
+  s.lookalike = static_cast<int>(EffectId::temperature_bias);
+  s.separation =
+      "on a warm-up alone a bias ∝ T and one ∝ dT/dt look alike; a plan that heats and cools over the "
+      "same range (thermal_updown) tells them apart";
+  row(s);
+
+  // ---- g_sensitivity
+  s = EffectSpec{};
+  s.id = EffectId::g_sensitivity;
+  s.key = "g_sensitivity";
+  s.physics =
+      "gyro proof-mass responds to linear acceleration";
+  s.model = "G·f (3×3, gyro)";
+  s.shape = EffectShape::gyro_matrix;
+  s.sensor = 0;
+  s.sensors = kGyro;
+  s.nparams = 3;
+  s.param = [](EffectTerms& e, int sensor, int axis, int p) -> double* {
+    return sensor == 0 && axis >= 0 && axis < 3 && p >= 0 && p < 3 ? &e.g_sensitivity(axis, p) : nullptr;
+  };
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3&) { dg += e.g_sensitivity * c.f; };
+  s.si_unit[0] = s.si_unit[1] = "rad/s/(m/s^2)";
+  s.bench_display = {[](double x, int) { return x * kG0 / kDeg; }, {"°/s/g", "°/s/g"}};
+  s.drive_display = {[](double x, int) { return x * (1.0 / kDeg * kG0); }, {"°/s/g", "°/s/g"}};
+  s.json_value[0] = s.json_value[1] = "gyro_rad_s_per_m_s2";
+  s.bench_candidate = true;
+  s.condition = "f";
+  s.condition_by_column = true;
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::always;
+  s.drive_prior[0] = s.drive_prior[1] = 2e-4;  // ~0.1 °/s/g
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} error grows with {condition}: g-sensitivity, ";
+  s.drive_what = "g-sensitivity";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- scale_nonlinearity
+  s = EffectSpec{};
+  s.id = EffectId::scale_nonlinearity;
+  s.key = "scale_nonlinearity";
+  s.physics =
+      "scale factor grows linearly with |input| (quadratic error)";
+  s.model = "k_i·x_i·|x_i|";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.param = triad_param<&TriadEffectTerms::nonlinearity>;
+  s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x * std::abs(x); };
+  s.si_unit[0] = "1/(rad/s)";
+  s.si_unit[1] = "1/(m/s^2)";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x * kDeg / kPpm : x * kG0 / kPpm; }, {"ppm/(°/s)", "ppm/g"}};
+  s.drive_display = {[](double x, int k) { return k == 0 ? x * (1e6 * kDeg) : x * (1e6 * kG0); }, {"ppm/(°/s)", "ppm/g"}};
+  s.json_value[0] = "gyro_per_rad_s";
+  s.json_value[1] = "accel_per_m_s2";
+  s.bench_candidate = true;
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::always;
+  s.drive_prior[0] = 1e-2;
+  s.drive_prior[1] = 1e-3;
+  s.own_input = true;
+  s.curvature = true;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} scale error grows with |input|: quadratic scale-factor nonlinearity, ";
+  s.drive_what = "scale-factor nonlinearity";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- scale_asymmetry
+  s = EffectSpec{};
+  s.id = EffectId::scale_asymmetry;
+  s.key = "scale_asymmetry";
+  s.physics =
+      "different scale for positive and negative input: M_ii ± a_i";
+  s.model = "a_i·|x_i|";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.param = triad_param<&TriadEffectTerms::asymmetry>;
+  s.axis_output = [](double p, double x, double, const EffectContext&) { return p * std::abs(x); };
+  s.si_unit[0] = s.si_unit[1] = "1";
+  s.bench_display = {[](double x, int) { return x / kPpm; }, {"ppm", "ppm"}};
+  s.drive_display = {[](double x, int) { return x * 1e6; }, {"ppm", "ppm"}};
+  s.json_value[0] = "gyro";
+  s.json_value[1] = "accel";
+  s.bench_candidate = true;
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::always;
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;
+  s.own_input = true;
+  s.curvature = true;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} scale differs between positive and negative inputs: scale asymmetry, ";
+  s.drive_what = "scale-factor asymmetry";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- scale_factor: a change of M_ii (a simulation's injected shift since the calibration, or
+  // terms handed over by hand); a diagnosis that refits M folds it into M instead.
+  s = EffectSpec{};
+  s.id = EffectId::scale_factor;
+  s.key = "scale_factor";
+  s.physics =
+      "the scale differs from the given coefficients' M_ii: changed since the calibration (ageing, shock), or set there at other rates (a nonlinearity the calibration model lacks). A candidate only where M is not refitted: drives with `--coeffs`";
+  s.model = "s_i·x_i";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.param = triad_param<&TriadEffectTerms::scale>;
+  s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x; };
+  s.si_unit[0] = s.si_unit[1] = "1";
+  s.bench_display = {[](double x, int) { return x / kPpm; }, {"ppm", "ppm"}};
+  s.drive_display = {[](double x, int) { return x * 1e6; }, {"ppm", "ppm"}};
+  s.json_value[0] = "gyro";
+  s.json_value[1] = "accel";
+  s.bench_candidate = false;  // the bench refits M: it would be M_ii again
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::fixed_scale;
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;  // the data sheet's initial scale tolerance, ±1 %
+  s.own_input = true;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} scale differs from the given coefficients: scale factor, ";
+  s.drive_what =
+      "scale factor differs from the given coefficients (changed since the calibration, or a scale that depends "
+      "on the input range — nonlinearity, asymmetry — set there at other rates; folded into M)";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- scale_k2: the even term of the scale-factor polynomial (IEEE Std 952/1431), kept in
+  // EffectTerms::generic (no member of its own).
+  s = EffectSpec{};
+  s.id = EffectId::scale_k2;
+  s.key = "scale_k2";
+  s.physics =
+      "scale factor grows with the square of the rate, the same for both signs: the even K2 term of the IEEE "
+      "952/1431 scale-factor polynomial";
+  s.model = "K2,i·ω_i² (gyro)";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kGyro;
+  s.nparams = 1;
+  s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x * x; };
+  s.si_unit[0] = s.si_unit[1] = "1/(rad/s)";
+  s.bench_display = {[](double x, int) { return x * kDeg / kPpm; }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.drive_display = {[](double x, int) { return x * (1e6 * kDeg); }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.json_value[0] = "gyro_per_rad_s";
+  s.bench_candidate = true;
+  // With one rate magnitude (thermal_short.toml: ±300 °/s) ω² and |ω| are the same column: named
+  // only where it explains the recording better than scale_asymmetry by Δχ² 10.
+  s.prior_penalty = 10;
+  s.condition = "rate";
+  s.shows_on = -1;
+  // A car turns at < 1 rad/s: ω² barely differs from the bias and scale there; not a drive candidate
+  // (a set that carries it is still compensated on drives).
+  s.drive = DriveDiagnosis::never;
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;
+  s.own_input = true;
+  s.curvature = true;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} scale error grows with the square of the rate, the same for both signs: even scale-factor term K2, ";
+  s.drive_what = "even scale-factor term K2·ω²";
+  s.lookalike = static_cast<int>(EffectId::scale_asymmetry);
+  s.separation =
+      "both are even in the rate; only rates of several magnitudes (75, 150, 300 °/s in diagnose.toml) tell ω² "
+      "from |ω|";
+  row(s);
+
+  // ---- time_offset
+  s = EffectSpec{};
+  s.id = EffectId::time_offset;
+  s.key = "time_offset";
+  s.physics =
+      "IMU timestamps late by τ: sample stamped t saw the truth at t − τ";
+  s.model = "−τ·ẋ (reference derivative)";
+  s.shape = EffectShape::vector;
+  s.sensor = 2;
+  s.nparams = 1;
+  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p == 0 ? &e.time_offset_s : nullptr; };
+  s.si_unit[0] = s.si_unit[1] = "s";
+  s.bench_display = {[](double x, int) { return x * 1e3; }, {"ms", "ms"}};
+  s.drive_display = {[](double x, int) { return x * 1e3; }, {"ms", "ms"}};
+  s.json_value[0] = s.json_value[1] = "s";
+  s.inject_keys = "value";
+  s.bench_candidate = true;
+  s.condition = "angle";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::always;
+  s.drive_prior[0] = s.drive_prior[1] = 0.05;
+  s.own_input = true;
+  s.compensation = DriveCompensation::time_stamp;
+  s.bench_sentence = "IMU and reference are offset in time (errors follow the rate of change of the input): time offset, ";
+  s.drive_what = "time offset between IMU and reference (IMU late by τ)";
+  s.drive_head = "all axes follow the derivative of their input";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- lever_arm
+  s = EffectSpec{};
+  s.id = EffectId::lever_arm;
+  s.key = "lever_arm";
+  s.physics =
+      "IMU origin at r from the rotation centre: centripetal and tangential acceleration (size effect)";
+  s.model = "accel: ω×(ω×r) + ω̇×r";
+  s.shape = EffectShape::vector;
+  s.sensor = 1;
+  s.nparams = 3;
+  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 3 ? &e.lever_arm_m(p) : nullptr; };
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3&, Vec3& da) {
+    da += lever_arm_force(e.lever_arm_m, c.w, c.dw);
+  };
+  s.si_unit[0] = s.si_unit[1] = "m";
+  s.bench_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
+  s.drive_display = {[](double x, int) { return x * 1e3; }, {"mm (IMU axes)", "mm (IMU axes)"}};
+  s.json_value[0] = s.json_value[1] = "m";
+  s.inject_keys = "x,y,z";
+  s.bench_candidate = true;
+  s.condition = "rate";
+  s.dominant_component = true;
+  s.shows_on = 1;
+  s.drive = DriveDiagnosis::always;
+  s.drive_prior[0] = s.drive_prior[1] = 0.3;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "accelerometer error grows with the square of the table rate: IMU off the rotation centre (lever arm), ";
+  s.drive_what = "lever arm: the MEMS sits elsewhere than meta.json says";
+  s.drive_head = "accelerometer error grows with rotation rate and angular acceleration";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- misalignment
+  s = EffectSpec{};
+  s.id = EffectId::misalignment;
+  s.key = "misalignment";
+  s.physics =
+      "table base not level: tilt ψ = (about north, about east)";
+  s.model = "Δf = −C_bLᵀ(ψ × C_bL f), Δω = −C_bLᵀ(ψ × ω_ie) (below)";
+  s.shape = EffectShape::vector;
+  s.sensor = 2;
+  s.nparams = 2;
+  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 2 ? &e.table_tilt_rad(p) : nullptr; };
+  s.si_unit[0] = s.si_unit[1] = "rad";
+  s.bench_display = {[](double x, int) { return x / kDeg * 3600; }, {"arcsec", "arcsec"}};
+  s.drive_display = {identity, {"rad", "rad"}};
+  s.json_value[0] = s.json_value[1] = "table_tilt_rad";
+  s.inject_keys = "north,east";
+  s.bench_candidate = true;
+  s.condition = "f";
+  s.shows_on = 1;
+  s.drive = DriveDiagnosis::never;
+  s.drive_prior[0] = s.drive_prior[1] = 1;
+  s.compensation = DriveCompensation::ignored;
+  s.drive_ignored_reason = "a rate-table term (bench only)";
+  s.bench_sentence =
+      "accelerometer error depends on the table orientation beyond any sensor model: table base tilted (misalignment), ";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- table_wobble
+  s = EffectSpec{};
+  s.id = EffectId::table_wobble;
+  s.key = "table_wobble";
+  s.physics =
+      "inner-axis encoder / wobble error periodic in the table angle: δ(θ) = a·sin θ + c·cos θ";
+  s.model = "gyro: δ'(θ)·ω_table; accel: δ(θ)·∂f/∂θ (rotating steps); static steps: Δf = δ(θ)·(f × u), Δω = δ(θ)·(ω × u), u the inner axis derived from the recording (below)";
+  s.shape = EffectShape::vector;
+  s.sensor = 2;
+  s.nparams = 2;
+  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 2 ? &e.wobble_rad(p) : nullptr; };
+  s.si_unit[0] = s.si_unit[1] = "rad";
+  s.bench_display = {[](double x, int) { return x / kDeg * 3600; }, {"arcsec", "arcsec"}};
+  s.drive_display = {identity, {"rad", "rad"}};
+  s.json_value[0] = s.json_value[1] = "encoder_rad";
+  s.inject_keys = "sin,cos";
+  s.bench_candidate = true;
+  s.condition = "angle";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;
+  s.drive_prior[0] = s.drive_prior[1] = 1;
+  s.compensation = DriveCompensation::ignored;
+  s.drive_ignored_reason = "a rate-table term (bench only)";
+  s.bench_sentence = "error periodic in the table angle (once per revolution): table wobble / encoder error, ";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- correlated_drift
+  s = EffectSpec{};
+  s.id = EffectId::correlated_drift;
+  s.key = "correlated_drift";
+  s.physics =
+      "bias drift larger / slower than the data-sheet prior: points to `calbench identify`";
+  s.model = "first-order Gauss–Markov σ, τ (noise model)";
+  s.shape = EffectShape::noise;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 0;
+  s.param = [](EffectTerms& e, int sensor, int, int p) -> double* {
+    if (sensor < 0 || sensor > 1) return nullptr;
+    TriadEffectTerms& t = triad(e, sensor);
+    return p == 0 ? &t.drift_sigma : p == 1 ? &t.drift_tau_s : nullptr;
+  };
+  s.si_unit[0] = "rad/s";
+  s.si_unit[1] = "m/s^2";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x / kDegPerHour : x / kMilliG; }, {"°/h", "mg"}};
+  s.drive_display = {[](double x, int k) { return k == 0 ? x / kDegPerHour : x / kMilliG; }, {"°/h", "mg"}};
+  s.json_value[0] = "gyro_sigma_rad_s";
+  s.json_value[1] = "accel_sigma_m_s2";
+  s.inject_keys = "sigma,tau";
+  s.bench_candidate = false;
+  s.condition = "time";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;  // found by the noise model, not as a linear term
+  s.drive_prior[0] = s.drive_prior[1] = 1;
+  s.compensation = DriveCompensation::noise_model;
+  s.bench_sentence = "{who} residual wanders slowly beyond the data-sheet drift: correlated drift, ";
+  s.drive_what = "bias drift larger than the data sheet's (run calbench identify)";
+  s.drive_head = "{who} residual wanders slowly in time";
+  s.lookalike = -1;
+  row(s);
+
+  return v;
+}
+
+
+}  // namespace calbench
