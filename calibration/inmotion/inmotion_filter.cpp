@@ -622,20 +622,11 @@ void InMotionFilterT<N>::totals(Vec& x, Vec& sig) const {
     x.template segment<3>(kDgAux) = xg0_ / kDegPerHour;
     x.template segment<3>(kDaAux) = xa0_ / kMilliG;
   }
-  Vec sd = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
-  sig = sd;
-  sig.template segment<3>(kAtt) = sd.template segment<3>(kAtt) / kDeg;
-  sig.template segment<3>(kBg) = sd.template segment<3>(kBg) / kDegPerHour;
-  sig.template segment<3>(kDg) = sd.template segment<3>(kDg) / kDegPerHour;
-  sig.template segment<3>(kBa) = sd.template segment<3>(kBa) / kMilliG;
-  sig.template segment<3>(kDa) = sd.template segment<3>(kDa) / kMilliG;
-  sig.template segment<9>(kMg) = sd.template segment<9>(kMg) / kPpm;
-  sig.template segment<9>(kMa) = sd.template segment<9>(kMa) / kPpm;
+  // σ in display units, each block by its declared factor; the mounting σ is of its Euler angles.
+  const Vec sd = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
+  for (const BlockSpec& b : block_specs())
+    if (offset_of(b.id) + b.size <= N) sig.segment(offset_of(b.id), b.size) = sd.segment(offset_of(b.id), b.size) / b.si_per_display;
   sig.template segment<3>(kMount) = ms / kDeg;
-  if constexpr (N == kStatesAug) {
-    sig.template segment<3>(kDgAux) = sd.template segment<3>(kDgAux) / kDegPerHour;
-    sig.template segment<3>(kDaAux) = sd.template segment<3>(kDaAux) / kMilliG;
-  }
 }
 
 namespace {
@@ -665,15 +656,12 @@ std::vector<typename InMotionFilterT<N>::SmoothedEpoch> InMotionFilterT<N>::smoo
   store_.back().dx_next = pending_dx_.template cast<float>();
   // Scale of each state between series units and SI (for the sensor blocks).
   Vec unit = Vec::Ones();
-  unit.template segment<3>(kBg).setConstant(1.0 / units::kDegPerHour);
-  unit.template segment<3>(kDg).setConstant(1.0 / units::kDegPerHour);
-  unit.template segment<3>(kBa).setConstant(1.0 / units::kMilliG);
-  unit.template segment<3>(kDa).setConstant(1.0 / units::kMilliG);
-  unit.template segment<9>(kMg).setConstant(1.0 / units::kPpm);
-  unit.template segment<9>(kMa).setConstant(1.0 / units::kPpm);
-  if constexpr (N == kStatesAug) {
-    unit.template segment<3>(kDgAux).setConstant(1.0 / units::kDegPerHour);
-    unit.template segment<3>(kDaAux).setConstant(1.0 / units::kMilliG);
+  std::array<bool, N> sensor{};  // the smoother corrects the sensor blocks' series values only
+  for (const BlockSpec& b : block_specs()) {
+    const int o = offset_of(b.id);
+    if (o + b.size > N || !b.sensor) continue;
+    unit.segment(o, b.size).setConstant(1.0 / b.si_per_display);
+    for (int i = 0; i < b.size; ++i) sensor[static_cast<std::size_t>(o + i)] = true;
   }
   Vec s = Vec::Zero();  // smoothed minus filtered totals (SI) at epoch k+1
   Mat Ps = P_;                // smoothed covariance at the final epoch
@@ -688,8 +676,8 @@ std::vector<typename InMotionFilterT<N>::SmoothedEpoch> InMotionFilterT<N>::smoo
     e.t = st.t;
     e.x = st.x_post;
     e.sigma = Ps.diagonal().cwiseMax(0.0).cwiseSqrt().cwiseProduct(unit);
-    for (int i = kBg; i < N; ++i)
-      if (i < kMount || i >= kDg) e.x(i) += s(i) * unit(i);
+    for (int i = 0; i < N; ++i)
+      if (sensor[static_cast<std::size_t>(i)]) e.x(i) += s(i) * unit(i);
     total_drift_of(e.x, Ps, e.total, e.total_sigma);
     out[static_cast<std::size_t>(k)] = e;
   }
