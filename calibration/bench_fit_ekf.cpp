@@ -3,34 +3,46 @@
 // no matrix is inverted, and the random errors of the rotary bench enter as a state that is
 // reset at every plan step (constant during the step, independent between steps).
 //
-// State of one triad (named offsets):
-//   kBias  b (3)        constant part of the drift / bias
-//   kM     M (9)        row-major: M[i][j] at kM + 3i + j (scale on the diagonal, skews off it)
-//   kDrift d (3)        in-run drift, first-order Gauss–Markov (data-sheet σ, τ)
-//   kBench e (3)        bench error during the current step
+// State of one triad, blocks in this order (offsets computed from the sizes, the same rule as
+// the in-motion filter's blocks, inmotion/state_blocks.hpp):
+//   bias  b (3)        constant part of the drift / bias
+//   M     M (9)        row-major: M[i][j] at M + 3i + j (scale on the diagonal, skews off it)
+//   drift d (3)        in-run drift, first-order Gauss–Markov (data-sheet σ, τ)
+//   bench e (3)        bench error during the current step
 // Observation of axis i (eq 4 generalised): z_i = b_i + Σ_j M_ij ref_j + d_i + e_i + v_i.
 #include <cmath>
 
 #include "calibration/bench_fit.hpp"
+#include "calibration/inmotion/state_blocks.hpp"
 
 namespace calbench {
 namespace {
 
-constexpr int kBias = 0;
-constexpr int kM = 3;
-constexpr int kDrift = 12;
-constexpr int kBench = 15;
-constexpr int kStates = 18;
+enum BenchState { kBiasBlock, kMBlock, kDriftBlock, kBenchBlock, kBlockCount };
+constexpr std::array<int, kBlockCount> kSizes = {3, 9, 3, 3};
+constexpr auto kOffsets = inmotion::offsets_from_sizes(kSizes);
+constexpr int kBias = kOffsets[kBiasBlock];
+constexpr int kM = kOffsets[kMBlock];
+constexpr int kDrift = kOffsets[kDriftBlock];
+constexpr int kBench = kOffsets[kBenchBlock];
+constexpr int kStates = kOffsets[kBlockCount];
+static_assert(kStates == 18, "b, M, d, e of one triad");
 using StateVec = Eigen::Matrix<double, kStates, 1>;
 using StateMat = Eigen::Matrix<double, kStates, kStates>;
 
-// Jacobian row of the observation of axis i w.r.t. the state (each block's part in its place).
+// Jacobian row of the observation of axis i w.r.t. the state: each block writes its own H part
+// (∂z_i/∂b_i = 1, ∂z_i/∂M_ij = ref_j, ∂z_i/∂d_i = 1, ∂z_i/∂e_i = 1).
+void bias_h(StateVec& h, const Vec3&, int i) { h(kBias + i) = 1.0; }
+void M_h(StateVec& h, const Vec3& ref, int i) {
+  for (int j = 0; j < 3; ++j) h(kM + 3 * i + j) = ref(j);
+}
+void drift_h(StateVec& h, const Vec3&, int i) { h(kDrift + i) = 1.0; }
+void bench_h(StateVec& h, const Vec3&, int i) { h(kBench + i) = 1.0; }
+constexpr void (*kBlockH[kBlockCount])(StateVec&, const Vec3&, int) = {bias_h, M_h, drift_h, bench_h};
+
 StateVec observation_row(const Vec3& ref, int i) {
   StateVec h = StateVec::Zero();
-  h(kBias + i) = 1.0;                                            // ∂z_i/∂b_i
-  for (int j = 0; j < 3; ++j) h(kM + 3 * i + j) = ref(j);        // ∂z_i/∂M_ij = ref_j
-  h(kDrift + i) = 1.0;                                           // ∂z_i/∂d_i
-  h(kBench + i) = 1.0;                                           // ∂z_i/∂e_i
+  for (auto* part : kBlockH) part(h, ref, i);
   return h;
 }
 

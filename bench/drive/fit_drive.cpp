@@ -6,11 +6,11 @@
 #include <sstream>
 
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/drive/drive_series.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "bench/drive/reference_info.hpp"
 #include "bench/io/coefficients_json.hpp"
-#include "bench/io/csv.hpp"
 #include "bench/io/drift_models_json.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/input_warning.hpp"
@@ -396,25 +396,11 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   constexpr int N = Filter::kN;
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
                  gnss ? Aiding::gnss : Aiding::reference);
+  const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};  // observations: position, velocity, attitude
   std::unique_ptr<Filter> f;
-  std::unique_ptr<CsvWriter> series;
-  // Series columns: t_s, every state (then the augmented ones), their sigma_, then the total
-  // drift per axis (constant + in-run state: what `calbench identify` identifies) and its sigma_.
-  std::vector<std::string> state_cols(inmotion::state_names().begin(), inmotion::state_names().end());
-  if constexpr (N == inmotion::kStatesAug)
-    state_cols.insert(state_cols.end(), inmotion::aux_state_names().begin(), inmotion::aux_state_names().end());
-  std::vector<std::string> cols;
-  auto series_columns = [&] {
-    cols.assign(1, "t_s");
-    for (const auto& n : state_cols) cols.push_back(n);
-    for (const auto& n : state_cols) cols.push_back("sigma_" + n);
-    for (const auto& n : inmotion::total_drift_names()) cols.push_back(n);
-    for (const auto& n : inmotion::total_drift_names()) cols.push_back("sigma_" + n);
-  };
-  if (!a.series.empty() && !a.smooth) {
-    series_columns();
-    series = std::make_unique<CsvWriter>(a.series, cols, "in-motion filter estimates (forward pass), totals and 1-sigma");
-  }
+  std::unique_ptr<DriveSeries> series;
+  if (!a.series.empty() && !a.smooth)
+    series = std::make_unique<DriveSeries>(a.series, N, "in-motion filter estimates (forward pass), totals and 1-sigma");
   auto override_sigma = [&](inmotion::RefObs& r) {
     if (a.sigma_pos > 0) r.sigma_pos = a.sigma_pos;
     if (a.sigma_vel > 0) r.sigma_vel = a.sigma_vel;
@@ -423,7 +409,6 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   double t_first = 0, t_last = 0, t_data_end = 0;
   long n_imu = 0;
   DriveStream::Event e;
-  std::vector<double> row(cols.size());
   while (st.next(e)) {
     t_data_end = std::max(t_data_end, e.t);
     if (e.t < t0 - 1e-9) continue;
@@ -437,7 +422,6 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
       }
       const bool took = f->reference(e.ref);
       if (took && a.on_innovation) {
-        const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};
         for (int k = 0; k < 3; ++k)
           if (used[k]) a.on_innovation(k, f->last_innovation(k));
       }
@@ -446,16 +430,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
         typename Filter::Vec6 tx, ts;
         f->totals(x, s);
         f->total_drift(tx, ts);
-        row[0] = e.t;
-        for (int i = 0; i < N; ++i) {
-          row[1 + i] = x(i);
-          row[1 + N + i] = s(i);
-        }
-        for (int i = 0; i < 6; ++i) {
-          row[1 + 2 * N + i] = tx(i);
-          row[1 + 2 * N + 6 + i] = ts(i);
-        }
-        series->row(row.data(), row.size());
+        series->row(e.t, x.data(), s.data(), tx.data(), ts.data());
       }
     } else if (f) {
       double dt = e.dt;
@@ -478,21 +453,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   if (a.smooth) {
     const auto sm = f->smooth();
     if (!a.series.empty()) {
-      series_columns();
-      CsvWriter w(a.series, cols, "in-motion estimates after the RTS smoother (sensor states smoothed; navigation states from the forward pass)");
-      row.resize(cols.size());
-      for (const auto& ep : sm) {
-        row[0] = ep.t;
-        for (int i = 0; i < N; ++i) {
-          row[1 + i] = ep.x(i);
-          row[1 + N + i] = ep.sigma(i);
-        }
-        for (int i = 0; i < 6; ++i) {
-          row[1 + 2 * N + i] = ep.total(i);
-          row[1 + 2 * N + 6 + i] = ep.total_sigma(i);
-        }
-        w.row(row.data(), row.size());
-      }
+      DriveSeries w(a.series, N, "in-motion estimates after the RTS smoother (sensor states smoothed; navigation states from the forward pass)");
+      for (const auto& ep : sm) w.row(ep.t, ep.x.data(), ep.sigma.data(), ep.total.data(), ep.total_sigma.data());
       w.close();
     }
   }
@@ -569,12 +531,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     input_warning(a.coeffs, 0, w);
     j["priors"]["warning"] = w;
   }
-  {
-    // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
-    const inmotion::ParameterPriors post =
-        inmotion::sigma_of(total, f->P().template block<3, 3>(inmotion::kMount, inmotion::kMount).diagonal().cwiseSqrt());
-    j["determined_by"] = determined_by(pc.report.sigma_raw, post, bench);
-  }
+  // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
+  const Vec3 mount_sigma = f->P().template block<3, 3>(inmotion::kMount, inmotion::kMount).diagonal().cwiseSqrt();
+  j["determined_by"] = determined_by(pc.report.sigma_raw, inmotion::sigma_of(total, mount_sigma), bench);
   if (fx.present) {
     // The catalogue terms are part of the sensor model of the result too (qc applies them).
     effects_to_json(fx.terms, fx.sigma, j["coefficients"]);
@@ -602,7 +561,6 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   nlohmann::json cons;
   const char* names[3] = {"position", "velocity", "attitude"};
   const char* eqs[3] = {"13", "14", "15"};
-  const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};
   for (int i = 0; i < 3; ++i) {
     if (!used[i]) continue;
     const auto& c = f->consistency(i);

@@ -2,34 +2,27 @@
 
 namespace calbench::inmotion {
 
+namespace {
+// Column names of the blocks with offsets in [from, to), from their declarations.
+template <std::size_t K>
+std::array<std::string, K> columns_of_range(int from, int to) {
+  std::array<std::string, K> n;
+  for (const BlockSpec& b : block_specs()) {
+    const int o = offset_of(b.id);
+    if (o < from || o >= to) continue;
+    for (int i = 0; i < b.size; ++i) n[static_cast<std::size_t>(o - from + i)] = b.columns[i];
+  }
+  return n;
+}
+}  // namespace
+
 const std::array<std::string, kStates>& state_names() {
-  static const std::array<std::string, kStates> names = [] {
-    std::array<std::string, kStates> n;
-    const char* ax = "xyz";
-    const char* ned[3] = {"n", "e", "d"};
-    for (int i = 0; i < 3; ++i) {
-      n[kPos + i] = i == 0 ? "lat_deg" : i == 1 ? "lon_deg" : "h_m";  // MEMS IMU position
-      n[kVel + i] = std::string("vel_") + ned[i] + "_m_s";
-      n[kAtt + i] = i == 0 ? "roll_deg" : i == 1 ? "pitch_deg" : "yaw_deg";
-      n[kBg + i] = std::string("gyro_bias_") + ax[i] + "_dph";
-      n[kBa + i] = std::string("accel_bias_") + ax[i] + "_mg";
-      n[kMount + i] = i == 0 ? "mount_roll_deg" : i == 1 ? "mount_pitch_deg" : "mount_yaw_deg";
-      n[kDg + i] = std::string("gyro_drift_") + ax[i] + "_dph";
-      n[kDa + i] = std::string("accel_drift_") + ax[i] + "_mg";
-      for (int j = 0; j < 3; ++j) {
-        n[kMg + 3 * i + j] = std::string("gyro_M_") + ax[i] + ax[j] + "_ppm";
-        n[kMa + 3 * i + j] = std::string("accel_M_") + ax[i] + ax[j] + "_ppm";
-      }
-    }
-    return n;
-  }();
+  static const std::array<std::string, kStates> names = columns_of_range<kStates>(0, kStates);
   return names;
 }
 
 const std::array<std::string, kStatesAug - kStates>& aux_state_names() {
-  static const std::array<std::string, kStatesAug - kStates> names = {
-      "gyro_drift_aux_x_dph_s", "gyro_drift_aux_y_dph_s", "gyro_drift_aux_z_dph_s",
-      "accel_drift_aux_x_mg_s", "accel_drift_aux_y_mg_s", "accel_drift_aux_z_mg_s"};
+  static const std::array<std::string, kStatesAug - kStates> names = columns_of_range<kStatesAug - kStates>(kStates, kStatesAug);
   return names;
 }
 

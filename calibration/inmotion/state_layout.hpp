@@ -19,25 +19,30 @@
 //   kDg / kDa as in the default layout; an axis with a first-order model leaves its aux unused.
 #pragma once
 #include <Eigen/Dense>
+
+#include "calibration/inmotion/state_blocks.hpp"
 #include <array>
 #include <string>
 
 namespace calbench::inmotion {
 
-inline constexpr int kPos = 0;
-inline constexpr int kVel = 3;
-inline constexpr int kAtt = 6;
-inline constexpr int kBg = 9;
-inline constexpr int kBa = 12;
-inline constexpr int kMg = 15;
-inline constexpr int kMa = 24;
-inline constexpr int kMount = 33;
-inline constexpr int kDg = 36;
-inline constexpr int kDa = 39;
-inline constexpr int kStates = 42;
-inline constexpr int kDgAux = 42;
-inline constexpr int kDaAux = 45;
-inline constexpr int kStatesAug = 48;
+// Offsets computed from the block declarations (state_blocks.hpp); the names stay for the
+// Jacobian code, which indexes by block.
+inline constexpr int kPos = offset_of(Block::pos);
+inline constexpr int kVel = offset_of(Block::vel);
+inline constexpr int kAtt = offset_of(Block::att);
+inline constexpr int kBg = offset_of(Block::bg);
+inline constexpr int kBa = offset_of(Block::ba);
+inline constexpr int kMg = offset_of(Block::Mg);
+inline constexpr int kMa = offset_of(Block::Ma);
+inline constexpr int kMount = offset_of(Block::mount);
+inline constexpr int kDg = offset_of(Block::dg);
+inline constexpr int kDa = offset_of(Block::da);
+inline constexpr int kStates = offset_of(Block::dg_aux);  // the default layout: every block before the aux ones
+inline constexpr int kDgAux = offset_of(Block::dg_aux);
+inline constexpr int kDaAux = offset_of(Block::da_aux);
+inline constexpr int kStatesAug = offset_of(Block::count);
+static_assert(kStates == 42 && kStatesAug == 48, "the paper's layout: 42 states, 48 with the exp-cosine aux states");
 
 using StateVec = Eigen::Matrix<double, kStates, 1>;
 using StateMat = Eigen::Matrix<double, kStates, kStates>;
