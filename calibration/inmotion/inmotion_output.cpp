@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "calibration/inmotion/inmotion_filter.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::inmotion {
 

@@ -1,6 +1,6 @@
 #include "calibration/inmotion/state_blocks.hpp"
 
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 namespace calbench::inmotion {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "calibration/inmotion/state_layout.hpp"
-#include "calibration/units.hpp"
+#include "common/units.hpp"
 
 using namespace calbench;
 using namespace calbench::inmotion;
