@@ -22,7 +22,7 @@ int generic_slots(const EffectSpec& s) {
 struct Registry {
   std::vector<EffectSpec> specs = make_effect_specs();
   std::vector<const EffectSpec*> by_id;
-  std::vector<const EffectSpec*> triad_rows, output_rows;
+  std::vector<const EffectSpec*> triad_rows, output_rows, reference_rows;
   Registry() {
     by_id.assign(specs.size(), nullptr);
     int next = 0;
@@ -37,6 +37,7 @@ struct Registry {
       by_id.at(static_cast<std::size_t>(s.id)) = &s;
       if (s.axis_output) triad_rows.push_back(&s);
       if (s.sensor_output) output_rows.push_back(&s);
+      if (s.reference_output) reference_rows.push_back(&s);
     }
     for (const EffectSpec* s : by_id)
       if (!s) throw std::logic_error("effect registry: an EffectId without a spec");
@@ -207,6 +208,10 @@ void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro
   dgyro = triad_out(0, c.w);
   daccel = triad_out(1, c.f);
   for (const EffectSpec* s : r.output_rows) s->sensor_output(e, c, dgyro, daccel);
+}
+
+void reference_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel) {
+  for (const EffectSpec* s : registry().reference_rows) s->reference_output(e, c, dgyro, daccel);
 }
 
 }  // namespace calbench

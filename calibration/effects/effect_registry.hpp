@@ -95,6 +95,9 @@ struct EffectSpec {
   double (*axis_output)(double p, double x, double dT, const EffectContext& c);
   // Other sensor-side output (added after the per-axis terms), or nullptr.
   void (*sensor_output)(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel);
+  // Reference-side output: the bench's true input differs from its nominal reference, and the IMU
+  // output by ≈ that difference (linearised; c holds the reference conditions), or nullptr.
+  void (*reference_output)(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel) = nullptr;
   const char* si_unit[2];     // gyro, accel (the same where the sensor does not matter)
   DisplayUnit bench_display;  // the bench report's sentences
   DisplayUnit drive_display;  // the drive report's sentences (multiplied per value)
@@ -141,6 +144,9 @@ bool effect_allows_sensor(const EffectSpec& s, int sensor);
 // shapes; noise: p 0 = σ, 1 = τ), or nullptr outside the effect's shape.
 double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, int p);
 double effect_value(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p);  // 0 outside
+
+// Reference-side output of all effects (added to dgyro, daccel): the bench reference's errors.
+void reference_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel);
 
 // Is any parameter of the effect set in e (noise: σ > 0)?
 bool effect_present(const EffectSpec& s, const EffectTerms& e);

@@ -2,6 +2,7 @@
 // is one row here (and its EffectId); nothing outside calibration/effects/ names it.
 #include <cmath>
 
+#include "calibration/effects/bench_attitude.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "common/units.hpp"
 
@@ -312,6 +313,12 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = 2;
   s.nparams = 1;
   s.param = [](EffectTerms& e, int, int, int p) -> double* { return p == 0 ? &e.time_offset_s : nullptr; };
+  // The true input differs from the reference by −τ·ẋ; the output by ≈ that.
+  s.reference_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
+    if (e.time_offset_s == 0) return;
+    dg -= e.time_offset_s * c.dw;
+    da -= e.time_offset_s * c.df;
+  };
   s.si_unit[0] = s.si_unit[1] = "s";
   s.bench_display = {[](double x, int) { return x * 1e3; }, {"ms", "ms"}};
   s.drive_display = {[](double x, int) { return x * 1e3; }, {"ms", "ms"}};
@@ -373,6 +380,20 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = 2;
   s.nparams = 2;
   s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 2 ? &e.table_tilt_rad(p) : nullptr; };
+  // The tilted base turns the level frame seen by the IMU: gravity and the Earth rate, both fixed
+  // in the level frame, reach the IMU through C_bLᵀ(I − [ψ×]) (the table's own rate is
+  // unaffected). Static and rotating steps alike; C_bL from the reference (bench_attitude).
+  s.reference_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
+    if (e.table_tilt_rad.isZero(0)) return;
+    Mat3 C;
+    if (!bench_attitude(c.w, c.f, C)) return;
+    da += table_tilt_force(e.table_tilt_rad, C, c.f);
+    // Earth-rate part (≤ Ω·|ψ|, 2e-8 rad/s at 60″): its vertical component is known from the
+    // reference only when the table is still or spins about a horizontal axis.
+    const Vec3 wl = C * c.w;
+    if (c.w.norm() <= 1e-3 || std::abs(C.row(2).dot(c.w.normalized())) < 1e-6)
+      dg += table_tilt_force(e.table_tilt_rad, C, C.transpose() * Vec3(wl(0), 0.0, wl(2)));
+  };
   s.si_unit[0] = s.si_unit[1] = "rad";
   s.bench_display = {[](double x, int) { return x / kDeg * 3600; }, {"arcsec", "arcsec"}};
   s.drive_display = {identity, {"rad", "rad"}};
@@ -401,6 +422,22 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = 2;
   s.nparams = 2;
   s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 2 ? &e.wobble_rad(p) : nullptr; };
+  s.reference_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
+    if (e.wobble_rad.isZero(0) || !std::isfinite(c.angle)) return;
+    if (std::abs(c.angle_rate) > 0.0174533) {
+      // True angle θ + δ(θ): rate scaled by 1 + δ'(θ), attitude advanced by δ about the rate axis
+      // (the Earth rate is negligible beside the table rate).
+      dg += wobble_slope(e.wobble_rad, c.angle) * c.w;
+      da += wobble_angle(e.wobble_rad, c.angle) * c.df / c.angle_rate;
+    } else if (!c.inner_axis.isZero(0)) {
+      // Static position: the table stands at θ + δ(θ). Everything fixed in the level frame —
+      // gravity and the Earth rate — turns in IMU axes by −δ about the axis u of the angle column
+      // (the same f × u = ∂f/∂θ as in a rotating step): Δf = δ·(f × u), Δω = δ·(ω × u).
+      const double d = wobble_angle(e.wobble_rad, c.angle);
+      dg += d * c.w.cross(c.inner_axis);
+      da += d * c.f.cross(c.inner_axis);
+    }
+  };
   s.si_unit[0] = s.si_unit[1] = "rad";
   s.bench_display = {[](double x, int) { return x / kDeg * 3600; }, {"arcsec", "arcsec"}};
   s.drive_display = {identity, {"rad", "rad"}};

@@ -27,6 +27,7 @@
 #pragma once
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "common/sensor_model.hpp"
 
@@ -63,6 +64,11 @@ struct EffectContext {
   Vec3 dw = Vec3::Zero(), df = Vec3::Zero();      // their time derivatives
   double temp_c = 25.0;
   double dtemp_k_s = 0.0;  // dT/dt (K/s)
+  // The bench reference (reference-side terms only): the inner-axis angle (rad; NaN unknown), its
+  // rate (rad/s), and in a static position the inner axis in IMU axes (zero: unknown).
+  double angle = std::numeric_limits<double>::quiet_NaN();
+  double angle_rate = 0.0;
+  Vec3 inner_axis = Vec3::Zero();
 };
 
 // Sensor-side extra output (added to (I+M)·x + b): gyro and accel, summed over the registry's
