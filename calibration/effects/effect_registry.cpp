@@ -49,11 +49,6 @@ const Registry& registry() {
   return r;
 }
 
-double cparam(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p) {
-  const double* v = effect_param(s, const_cast<EffectTerms&>(e), sensor, axis, p);
-  return v ? *v : 0.0;
-}
-
 }  // namespace
 
 double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, int p) {
@@ -70,7 +65,8 @@ double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, 
 }
 
 double effect_value(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p) {
-  return cparam(s, e, sensor, axis, p);
+  const double* v = effect_param(s, const_cast<EffectTerms&>(e), sensor, axis, p);
+  return v ? *v : 0.0;
 }
 
 const std::vector<EffectSpec>& effect_specs() { return registry().specs; }
@@ -99,20 +95,20 @@ bool effect_present(const EffectSpec& s, const EffectTerms& e) {
       for (int k = 0; k < 2; ++k)
         if (effect_allows_sensor(s, k))
           for (int a = 0; a < 3; ++a)
-            if (cparam(s, e, k, a, 0) != 0) return true;
+            if (effect_value(s, e, k, a, 0) != 0) return true;
       return false;
     case EffectShape::gyro_matrix:
       for (int a = 0; a < 3; ++a)
         for (int p = 0; p < 3; ++p)
-          if (cparam(s, e, s.sensor, a, p) != 0) return true;
+          if (effect_value(s, e, s.sensor, a, p) != 0) return true;
       return false;
     case EffectShape::vector:
       for (int p = 0; p < s.nparams; ++p)
-        if (cparam(s, e, s.sensor, -1, p) != 0) return true;
+        if (effect_value(s, e, s.sensor, -1, p) != 0) return true;
       return false;
     case EffectShape::noise:
       for (int k = 0; k < 2; ++k)
-        if (effect_allows_sensor(s, k) && cparam(s, e, k, -1, 0) > 0) return true;
+        if (effect_allows_sensor(s, k) && effect_value(s, e, k, -1, 0) > 0) return true;
       return false;
   }
   return false;
@@ -149,7 +145,7 @@ void Term::add_param(EffectTerms& e, int p, double v) const {
   if (double* x = effect_param(effect_spec(effect), e, sensor, axis, p)) *x += v;
 }
 
-double Term::get_param(const EffectTerms& e, int p) const { return cparam(effect_spec(effect), e, sensor, axis, p); }
+double Term::get_param(const EffectTerms& e, int p) const { return effect_value(effect_spec(effect), e, sensor, axis, p); }
 
 std::vector<Term> candidate_terms() {
   std::vector<Term> out;
@@ -172,7 +168,7 @@ NoiseSpec noise_with_effects(NoiseSpec n, const EffectTerms& e) {
     if (s.compensation != DriveCompensation::noise_model) continue;
     for (int k = 0; k < 2; ++k) {
       TriadNoise& t = k == 0 ? n.gyro : n.accel;
-      const double sigma = cparam(s, e, k, -1, 0), tau = cparam(s, e, k, -1, 1);
+      const double sigma = effect_value(s, e, k, -1, 0), tau = effect_value(s, e, k, -1, 1);
       if (sigma > 0) {
         t.drift_sigma = sigma;
         if (tau > 0) t.drift_tau_s = tau;
