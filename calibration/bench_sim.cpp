@@ -103,25 +103,18 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
   const Mat3 accel_inv = (Mat3::Identity() + truth.accel.M).inverse();
   // What the IMU really experiences at time t (effects on), in IMU axes.
   auto true_kinematics = [&](double t, int mount, Vec3& w, Vec3& f, Mat3& C) {
-    const double te = t - fx.time_offset_s;
+    // The effects' truth-side hooks (effect_specs.cpp: time offset, wobble, tilted base), exact.
+    const double te = truth_time(fx, t);
     const AxisState o = tl.outer(te);
     AxisState i = tl.inner(te);
-    if (!fx.wobble_rad.isZero(0)) {
-      const double th = i.angle;
-      i.angle += wobble_angle(fx.wobble_rad, th);
-      i.rate *= 1.0 + wobble_slope(fx.wobble_rad, th);
-    }
+    truth_table_angle(fx, i.angle, i.rate);
     const BenchKinematics k = bench_kinematics(earth, o, i, mount);
     w = k.w_ib_b;
     f = k.f_b;
     C = k.C_b_l;
-    if (!fx.table_tilt_rad.isZero(0)) {
-      // Tilted base: gravity and Earth rate reach the IMU through C_bLᵀ(I − [ψ×]); the table's own
-      // rate (relative to its base) is unchanged in IMU axes.
-      f += table_tilt_force(fx.table_tilt_rad, k.C_b_l, k.f_b);
-      w += table_tilt_force(fx.table_tilt_rad, k.C_b_l, k.C_b_l.transpose() * earth.w_ie_ned);
-    }
+    truth_level_frame(fx, k.C_b_l, k.f_b, k.C_b_l.transpose() * earth.w_ie_ned, f, w);
   };
+  const bool need_dw = needs_rate_derivative(fx);
   ImuErrorSimulator imu(truth, noise, opt.seed);
   ProfileTemperature profile(plan.temperature);
   auto temperature = [&](double t) { return plan.temperature.set ? profile.at(t) : simulated_temperature(t); };
@@ -147,7 +140,7 @@ void simulate_bench(const BenchPlan& plan, const Site& site, const SensorErrors&
       c.f = f_in;
       c.temp_c = temp;
       c.dtemp_k_s = plan.temperature.set ? profile.rate() : simulated_temperature_rate(t);
-      if (!fx.lever_arm_m.isZero(0)) {
+      if (need_dw) {
         constexpr double h = 2e-4;
         Vec3 wa, wb, fa, fb;
         Mat3 Ca, Cb;

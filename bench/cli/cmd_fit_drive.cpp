@@ -8,6 +8,7 @@
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/fit_drive.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/inmotion/priors.hpp"
 #include "common/units.hpp"
 
@@ -73,7 +74,10 @@ void print_summary(const nlohmann::json& j) {
     if (e["applied"].empty()) std::cout << " none";
     for (const auto& k : e["applied"]) {
       std::cout << ' ' << k.get<std::string>();
-      if (k == "time_offset") std::cout << " (" << e["time_offset_s"].get<double>() * 1e3 << " ms: stamps t -> t - τ)";
+      EffectId id;
+      if (effect_from_name(k.get<std::string>(), id) && effect_spec(id).compensation == DriveCompensation::time_stamp &&
+          e.contains("time_offset_s"))
+        std::cout << " (" << e["time_offset_s"].get<double>() * 1e3 << " ms: stamps t -> t - τ)";
     }
     std::cout << "\n";
     for (const auto& k : e["ignored"])

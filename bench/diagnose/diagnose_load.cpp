@@ -12,6 +12,7 @@
 #include "calibration/bench_blocks.hpp"
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_sim.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "common/imu_error_sim.hpp"
 #include "calibration/ins/strapdown.hpp"
 #include "common/units.hpp"
@@ -200,11 +201,10 @@ DriveCoeffs simulate_factory_coeffs(const std::string& plan_file, std::uint64_t 
   BenchSimOptions so;
   so.seed = bench_seed;
   so.effects = effects;
-  so.effects.time_offset_s = 0;
-  so.effects.lever_arm_m.setZero();
-  // An injected scale_factor is a shift since the calibration: the factory saw the unit without it.
-  so.effects.gyro.scale.setZero();
-  so.effects.accel.scale.setZero();
+  // The drive's installation (time offset, lever arm) and shifts since the calibration (an injected
+  // scale_factor): the factory saw the unit without them.
+  for (const EffectSpec& x : effect_specs())
+    if (x.drive_installation) effect_clear(x, so.effects);
   BenchBlockBuilder bb(1.0);
   const double dt = 1.0 / so.noise.output_rate_hz;
   simulate_bench(plan, plan.site, draw_random_unit(seed), so, [&](const BenchSample& x) {

@@ -1,5 +1,6 @@
 #include "bench/drive/drive_stream.hpp"
 
+#include "calibration/effects/effect_registry.hpp"
 #include "common/input_error.hpp"
 #include "common/units.hpp"
 
@@ -39,7 +40,7 @@ DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>&
     cg_ = TriadCorrector(pre->gyro);
     ca_ = TriadCorrector(pre->accel);
   }
-  if (effects && (effects->any_sensor_side() || effects->time_offset_s != 0))
+  if (effects && (effects->any_sensor_side() || time_stamp_offset(*effects) != 0))
     comp_.emplace(*effects, pre ? *pre : SensorErrors{});
   have_ref_ = read_epoch();
 }

@@ -12,6 +12,7 @@
 #include "bench/drive/reference_info.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/drift_models_json.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/input_warning.hpp"
 #include "bench/io/recording.hpp"
@@ -368,16 +369,17 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   if (!a.drift_models.empty()) models = apply_drift_models(a.drift_models, cfg);
   // correlated_drift (drift σ, τ beyond the data sheet's) becomes the filter's first-order drift
   // prior of that sensor, unless identified models were given.
+  const EffectSpec& drift = noise_effect_spec();
   for (int s = 0; s < 2; ++s) {
-    const TriadEffectTerms& t = s == 0 ? fx.terms.gyro : fx.terms.accel;
-    if (!(t.drift_sigma > 0)) continue;
+    const double sigma = effect_value(drift, fx.terms, s, -1, 0), tau = effect_value(drift, fx.terms, s, -1, 1);
+    if (!(sigma > 0)) continue;
     const char* sn = s == 0 ? "gyro" : "accel";
     if (!a.drift_models.empty()) {
-      fx.ignored.push_back({{"key", std::string("correlated_drift.") + sn}, {"reason", "--drift-models given: they set the drift model"}});
+      fx.ignored.push_back({{"key", std::string(drift.key) + "." + sn}, {"reason", "--drift-models given: they set the drift model"}});
       continue;
     }
     const TriadNoise& n = s == 0 ? cfg.noise.gyro : cfg.noise.accel;
-    inmotion::DriftPrior p{t.drift_sigma, t.drift_tau_s > 0 ? t.drift_tau_s : n.drift_tau_s};
+    inmotion::DriftPrior p{sigma, tau > 0 ? tau : n.drift_tau_s};
     (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
     fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
   }
@@ -540,13 +542,13 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     const EffectUse use = drive_effect_use(fx.terms, st.rows_with_temperature() > 0);
     nlohmann::json applied = use.applied, ignored = fx.ignored;
     for (const auto& [k, why] : use.ignored) ignored.push_back({{"key", k}, {"reason", why}});
-    if (fx.drift.contains("gyro") || fx.drift.contains("accel")) applied.push_back("correlated_drift");
+    if (fx.drift.contains("gyro") || fx.drift.contains("accel")) applied.push_back(noise_effect_spec().key);
     nlohmann::json ej = {{"source", a.coeffs.empty() ? "in memory" : a.coeffs},
                          {"applied", applied},
                          {"ignored", ignored},
                          {"how", "output terms removed from the raw IMU samples before the set's correction; time stamps "
                                  "t -> t - time_offset; correlated_drift as the filter's drift prior"}};
-    if (fx.terms.time_offset_s != 0) ej["time_offset_s"] = fx.terms.time_offset_s;
+    if (time_stamp_offset(fx.terms) != 0) ej["time_offset_s"] = time_stamp_offset(fx.terms);
     if (!fx.drift.is_null()) ej["drift_prior"] = fx.drift;
     j["effects"] = ej;
   }

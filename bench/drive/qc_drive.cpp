@@ -8,6 +8,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/io/coefficients_json.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/qc/inertial_qc.hpp"
@@ -47,9 +48,9 @@ namespace {
 // One pass over the recording for the sets `idx` (all with the same time offset).
 void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx,
                   std::optional<double> from_s, double horizon_s, QcOutcome& q) {
-  EffectTerms shift;  // the stream moves the time stamps; each set removes its own output terms
-  shift.time_offset_s = sets[idx[0]].effects.time_offset_s;
-  DriveStream st(dir, std::nullopt, shift.time_offset_s != 0 ? &shift : nullptr);
+  // The stream moves the time stamps; each set removes its own output terms.
+  const EffectTerms shift = time_stamp_terms(sets[idx[0]].effects);
+  DriveStream st(dir, std::nullopt, time_stamp_offset(shift) != 0 ? &shift : nullptr);
   const Mat3 C_nom = st.nominal_mounting();
   const Vec3 lever = st.lever_arm();
   std::vector<std::unique_ptr<qc::InertialRun>> runs(idx.size());
@@ -104,7 +105,7 @@ QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optio
   for (std::size_t i = 0; i < sets.size(); ++i) {
     bool placed = false;
     for (auto& g : groups)
-      if (sets[g[0]].effects.time_offset_s == sets[i].effects.time_offset_s) {
+      if (time_stamp_offset(sets[g[0]].effects) == time_stamp_offset(sets[i].effects)) {
         g.push_back(i);
         placed = true;
         break;

@@ -1,9 +1,9 @@
 #include "bench/drive/simulate_drive.hpp"
 
-
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "bench/io/coefficients_json.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
@@ -65,14 +65,8 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   const EffectTerms effects = simulation_effects(truth.extra, a.truth, a.effects, a.inject);
   {
     const std::string src = a.inject.empty() ? (a.effects.empty() ? a.truth : a.effects) : "--inject";
-    if (!effects.gyro.temp_bias.isZero(0) || !effects.accel.temp_bias.isZero(0) || !effects.gyro.temp_scale.isZero(0) ||
-        !effects.accel.temp_scale.isZero(0) || !effects.gyro.temp_rate.isZero(0) || !effects.accel.temp_rate.isZero(0))
-      throw InputError(src, 0, "temperature_bias/temperature_scale/temperature_rate",
-                       "a simulated drive has no temperature: temperature terms cannot be injected");
-    if (!effects.table_tilt_rad.isZero(0) || !effects.wobble_rad.isZero(0))
-      throw InputError(src, 0, "misalignment/table_wobble",
-                       "table terms belong to the bench; on a drive the mounting is drawn by --truth random "
-                       "(misalignment_sigma_deg) and estimated by fit drive");
+    for (const EffectSpec& x : effect_specs())
+      if (x.drive_sim_refusal && effect_present(x, effects)) throw InputError(src, 0, x.key, x.drive_sim_refusal);
   }
   if (effects.any()) replace_effect_keys(effects, truth.extra);
   // The true mounting (what the filter should find); meta.json carries the nominal one. A

@@ -262,10 +262,12 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
       const DiagFinding f = correlated_drift_finding(triad, ds[triad], tau[triad], search.drift_interval[triad],
                                                      acc.dchi2, acc.dbic, res.before, res.after);
       res.findings.push_back(f);
-      res.improved_terms.gyro.drift_sigma = ds[0] > opt.noise.gyro.drift_sigma ? ds[0] : 0;
-      res.improved_terms.gyro.drift_tau_s = ds[0] > opt.noise.gyro.drift_sigma ? tau[0] : 0;
-      res.improved_terms.accel.drift_sigma = ds[1] > opt.noise.accel.drift_sigma ? ds[1] : 0;
-      res.improved_terms.accel.drift_tau_s = ds[1] > opt.noise.accel.drift_sigma ? tau[1] : 0;
+      const EffectSpec& drift = noise_effect_spec();
+      const double prior[2] = {opt.noise.gyro.drift_sigma, opt.noise.accel.drift_sigma};
+      for (int k = 0; k < 2; ++k) {
+        *effect_param(drift, res.improved_terms, k, -1, 0) = ds[k] > prior[k] ? ds[k] : 0;
+        *effect_param(drift, res.improved_terms, k, -1, 1) = ds[k] > prior[k] ? tau[k] : 0;
+      }
       continue;
     }
     DiagFinding f = search.term_finding(acc, carried);

@@ -260,16 +260,20 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   }
   search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
   // A scale_factor finding is a change of the spec's coefficient M_ii: IMPROVED.json carries it there.
-  for (int triad = 0; triad < 2; ++triad) {
-    TriadErrors& te = triad == 0 ? res.improved.gyro : res.improved.accel;
-    TriadEffectTerms& v = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
-    const TriadEffectTerms& sg = triad == 0 ? res.terms_sigma.gyro : res.terms_sigma.accel;
-    for (int i = 0; i < 3; ++i)
-      if (v.scale(i) != 0) {
-        te.M(i, i) += v.scale(i);
-        if (sg.scale(i) > 0) te.sigma_M(i, i) = sg.scale(i);
-      }
-    v.scale.setZero();
+  for (const EffectSpec& x : effect_specs()) {
+    if (!x.folds_into_scale) continue;
+    for (int triad = 0; triad < 2; ++triad) {
+      if (!effect_allows_sensor(x, triad)) continue;
+      TriadErrors& te = triad == 0 ? res.improved.gyro : res.improved.accel;
+      Eigen::Map<Vec3> v = effect_triad(res.improved_terms, x.id, triad);
+      const Eigen::Map<const Vec3> sg = effect_triad(static_cast<const EffectTerms&>(res.terms_sigma), x.id, triad);
+      for (int i = 0; i < 3; ++i)
+        if (v(i) != 0) {
+          te.M(i, i) += v(i);
+          if (sg(i) > 0) te.sigma_M(i, i) = sg(i);
+        }
+      v.setZero();
+    }
   }
   std::copy(ds, ds + 2, res.drift_sigma);
   std::copy(tau, tau + 2, res.drift_tau);
@@ -295,9 +299,9 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
       out.rms_floor.push_back(std::sqrt(floor2));
       out.rms_lowpass.push_back(false);
       out.shown_on.push_back(triad * 3);
-      TriadEffectTerms& te = triad == 0 ? res.improved_terms.gyro : res.improved_terms.accel;
-      te.drift_sigma = ds[triad];
-      te.drift_tau_s = tau[triad];
+      const EffectSpec& drift = noise_effect_spec();
+      *effect_param(drift, res.improved_terms, triad, -1, 0) = ds[triad];
+      *effect_param(drift, res.improved_terms, triad, -1, 1) = tau[triad];
       res.findings.push_back(f);
       continue;
     }

@@ -254,7 +254,7 @@ class GreedySearch {
 
   // A withdrawn step (withdraw_weak, recheck_drift) as reported.
   DiagWithdrawn withdrawn_report(const Withdrawn& w) const {
-    const Term t = w.step.term >= 0 ? P_.term(w.step.term) : Term{EffectId::correlated_drift, -1 - w.step.term, -1};
+    const Term t = w.step.term >= 0 ? P_.term(w.step.term) : Term{noise_effect_spec().id, -1 - w.step.term, -1};
     return {t, w.step.dchi2, w.cost};
   }
 

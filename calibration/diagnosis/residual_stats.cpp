@@ -31,7 +31,7 @@ DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, cons
                                      double delta_chi2, double delta_bic, const AxisStats (&before)[6],
                                      const AxisStats (&after)[6]) {
   DiagFinding f;
-  f.term = Term{EffectId::correlated_drift, triad, -1};
+  f.term = Term{noise_effect_spec().id, triad, -1};
   f.value = {sigma};
   f.sigma = {0.5 * (interval.sigma_hi - interval.sigma_lo)};
   f.noise_tau_s = tau_s;

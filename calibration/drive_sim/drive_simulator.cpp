@@ -75,8 +75,9 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
     // MEMS: lever-arm specific force, then into MEMS axes, then the device's errors.
     // A time offset τ: the sample stamped t saw the motion at t − τ (position change over τ is
     // negligible for gravity and Earth rate).
-    const double ti = std::max(0.0, t - fx.time_offset_s);
-    const Body bi = fx.time_offset_s != 0 ? body_at(prof, ti, lat, h) : b;
+    const double t_seen = truth_time(fx, t);
+    const double ti = std::max(0.0, t_seen);
+    const Body bi = t_seen != t ? body_at(prof, ti, lat, h) : b;
     // ω̇ as the mean over the sample interval centred on the sample: (ω(t+T/2) − ω(t−T/2))/T is
     // exactly the mean of ω̇ there, so ω̇×r is the interval mean of the tangential lever-arm
     // acceleration (what an IMU's band-limited sample shows; for smooth motion it differs from the

@@ -32,13 +32,12 @@ ImuEffectCompensator::ImuEffectCompensator(const EffectTerms& e, const SensorErr
     : e_(e), cg_(set.gyro), ca_(set.accel) {
   // Terms a stream cannot apply (temperature_rate needs dT/dt; drive_effect_use says so) are zeroed.
   for (const EffectSpec& s : effect_specs())
-    if (s.compensation == DriveCompensation::ignored && (s.axis_output || s.sensor_output))
-      for (int k = 0; k < 3; ++k)
-        for (int a = -1; a < 3; ++a)
-          for (int p = 0; p < 9; ++p)
-            if (double* v = effect_param(s, e_, k, a, p)) *v = 0;
+    if (s.compensation == DriveCompensation::ignored && (s.axis_output || s.sensor_output)) effect_clear(s, e_);
   active_ = e_.any_sensor_side();
 }
+
+double ImuEffectCompensator::time_offset_s() const { return time_stamp_offset(e_); }
+double ImuEffectCompensator::corrected_time(double t) const { return truth_time(e_, t); }
 
 void ImuEffectCompensator::output_terms(const Vec3& w, const Vec3& f, const Vec3& dw, double temp_c, Vec3& dg,
                                         Vec3& da) const {

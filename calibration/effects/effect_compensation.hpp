@@ -40,9 +40,9 @@ class ImuEffectCompensator {
 
   // True when some output term is non-zero (time offset aside).
   bool active() const { return active_; }
-  double time_offset_s() const { return e_.time_offset_s; }
+  double time_offset_s() const;
   // Corrected time stamp of a sample stamped t.
-  double corrected_time(double t) const { return t - e_.time_offset_s; }
+  double corrected_time(double t) const;
 
   // One raw rate sample (rad/s, m/s²) ending a sample interval dt; temp_c NaN when unknown.
   // Returns y − d(x̂) in place. Samples must come in time order (ω̇ from the previous one).

@@ -1,5 +1,6 @@
 #include "calibration/effects/effect_registry.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -8,11 +9,11 @@ namespace calbench {
 
 namespace {
 
-// Slots of an effect in EffectTerms::generic, by shape.
-int generic_slots(const EffectSpec& s) {
+// Slots of an effect in EffectTerms::values, by shape.
+int value_slots(const EffectSpec& s) {
   switch (s.shape) {
     case EffectShape::triad_axis: return 6;   // sensor·3 + axis
-    case EffectShape::gyro_matrix: return 9;  // axis·3 + p
+    case EffectShape::gyro_matrix: return 9;  // p·3 + axis (column-major, as Mat3)
     case EffectShape::vector: return s.nparams;
     case EffectShape::noise: return 4;  // sensor·2 + p
   }
@@ -22,22 +23,24 @@ int generic_slots(const EffectSpec& s) {
 struct Registry {
   std::vector<EffectSpec> specs = make_effect_specs();
   std::vector<const EffectSpec*> by_id;
-  std::vector<const EffectSpec*> triad_rows, output_rows, reference_rows;
+  std::vector<const EffectSpec*> triad_rows, output_rows, reference_rows, time_rows, angle_rows, level_rows;
   Registry() {
     by_id.assign(specs.size(), nullptr);
     int next = 0;
-    for (EffectSpec& s : specs)
-      if (!s.param) {
-        s.generic_offset = next;
-        next += generic_slots(s);
-      }
-    if (next > static_cast<int>(std::tuple_size<decltype(EffectTerms::generic)>::value))
-      throw std::logic_error("effect registry: EffectTerms::generic is too small for the new effects");
+    for (EffectSpec& s : specs) {
+      s.offset = next;
+      next += value_slots(s);
+    }
+    if (next > static_cast<int>(std::tuple_size<decltype(EffectTerms::values)>::value))
+      throw std::logic_error("effect registry: EffectTerms::values is too small for the catalogue");
     for (const EffectSpec& s : specs) {
       by_id.at(static_cast<std::size_t>(s.id)) = &s;
       if (s.axis_output) triad_rows.push_back(&s);
       if (s.sensor_output) output_rows.push_back(&s);
       if (s.reference_output) reference_rows.push_back(&s);
+      if (s.truth_time) time_rows.push_back(&s);
+      if (s.truth_table_angle) angle_rows.push_back(&s);
+      if (s.truth_level_frame) level_rows.push_back(&s);
     }
     for (const EffectSpec* s : by_id)
       if (!s) throw std::logic_error("effect registry: an EffectId without a spec");
@@ -52,16 +55,86 @@ const Registry& registry() {
 }  // namespace
 
 double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, int p) {
-  if (s.param) return s.param(e, sensor, axis, p);
   if (!effect_allows_sensor(s, sensor)) return nullptr;
   int k = -1;
   switch (s.shape) {
     case EffectShape::triad_axis: k = axis >= 0 && axis < 3 && p == 0 ? sensor * 3 + axis : -1; break;
-    case EffectShape::gyro_matrix: k = axis >= 0 && axis < 3 && p >= 0 && p < 3 ? axis * 3 + p : -1; break;
+    case EffectShape::gyro_matrix: k = axis >= 0 && axis < 3 && p >= 0 && p < 3 ? p * 3 + axis : -1; break;
     case EffectShape::vector: k = p >= 0 && p < s.nparams ? p : -1; break;
     case EffectShape::noise: k = p >= 0 && p < 2 ? sensor * 2 + p : -1; break;
   }
-  return k < 0 ? nullptr : &e.generic[static_cast<std::size_t>(s.generic_offset + k)];
+  return k < 0 ? nullptr : &e.values[static_cast<std::size_t>(s.offset + k)];
+}
+
+namespace {
+// First value of a typed view, after checking that the effect has that shape and size.
+double* view_base(EffectTerms& e, EffectId id, EffectShape shape, int sensor, int n) {
+  const EffectSpec& s = effect_spec(id);
+  if (s.shape != shape || (shape == EffectShape::vector && s.nparams != n) || !effect_allows_sensor(s, sensor))
+    throw std::logic_error(std::string("effect registry: no such view of ") + s.key);
+  return effect_param(s, e, sensor, shape == EffectShape::vector ? -1 : 0, 0);
+}
+}  // namespace
+
+Eigen::Map<Vec3> effect_triad(EffectTerms& e, EffectId id, int sensor) {
+  return Eigen::Map<Vec3>(view_base(e, id, EffectShape::triad_axis, sensor, 3));
+}
+Eigen::Map<const Vec3> effect_triad(const EffectTerms& e, EffectId id, int sensor) {
+  return Eigen::Map<const Vec3>(view_base(const_cast<EffectTerms&>(e), id, EffectShape::triad_axis, sensor, 3));
+}
+template <int N>
+Eigen::Map<Eigen::Matrix<double, N, 1>> effect_vector(EffectTerms& e, EffectId id) {
+  return Eigen::Map<Eigen::Matrix<double, N, 1>>(view_base(e, id, EffectShape::vector, effect_spec(id).sensor, N));
+}
+template <int N>
+Eigen::Map<const Eigen::Matrix<double, N, 1>> effect_vector(const EffectTerms& e, EffectId id) {
+  return Eigen::Map<const Eigen::Matrix<double, N, 1>>(
+      view_base(const_cast<EffectTerms&>(e), id, EffectShape::vector, effect_spec(id).sensor, N));
+}
+template Eigen::Map<Eigen::Matrix<double, 1, 1>> effect_vector<1>(EffectTerms&, EffectId);
+template Eigen::Map<Eigen::Matrix<double, 2, 1>> effect_vector<2>(EffectTerms&, EffectId);
+template Eigen::Map<Eigen::Matrix<double, 3, 1>> effect_vector<3>(EffectTerms&, EffectId);
+template Eigen::Map<const Eigen::Matrix<double, 1, 1>> effect_vector<1>(const EffectTerms&, EffectId);
+template Eigen::Map<const Eigen::Matrix<double, 2, 1>> effect_vector<2>(const EffectTerms&, EffectId);
+template Eigen::Map<const Eigen::Matrix<double, 3, 1>> effect_vector<3>(const EffectTerms&, EffectId);
+Eigen::Map<Mat3> effect_matrix(EffectTerms& e, EffectId id) {
+  return Eigen::Map<Mat3>(view_base(e, id, EffectShape::gyro_matrix, 0, 9));
+}
+Eigen::Map<const Mat3> effect_matrix(const EffectTerms& e, EffectId id) {
+  return Eigen::Map<const Mat3>(view_base(const_cast<EffectTerms&>(e), id, EffectShape::gyro_matrix, 0, 9));
+}
+
+void effect_clear(const EffectSpec& s, EffectTerms& e) {
+  const auto first = e.values.begin() + s.offset;
+  std::fill(first, first + value_slots(s), 0.0);
+}
+
+double truth_time(const EffectTerms& e, double t) {
+  for (const EffectSpec* s : registry().time_rows) t = s->truth_time(e, t);
+  return t;
+}
+
+void truth_table_angle(const EffectTerms& e, double& angle, double& rate) {
+  for (const EffectSpec* s : registry().angle_rows) s->truth_table_angle(e, angle, rate);
+}
+
+void truth_level_frame(const EffectTerms& e, const Mat3& C_b_l, const Vec3& f_b, const Vec3& w_ie_b, Vec3& f, Vec3& w) {
+  for (const EffectSpec* s : registry().level_rows) s->truth_level_frame(e, C_b_l, f_b, w_ie_b, f, w);
+}
+
+bool needs_rate_derivative(const EffectTerms& e) {
+  for (const EffectSpec& s : effect_specs())
+    if (s.needs_rate_derivative && effect_present(s, e)) return true;
+  return false;
+}
+
+double time_stamp_offset(const EffectTerms& e) { return -truth_time(e, 0.0); }
+
+EffectTerms time_stamp_terms(const EffectTerms& e) {
+  EffectTerms out = e;
+  for (const EffectSpec& s : effect_specs())
+    if (s.compensation != DriveCompensation::time_stamp) effect_clear(s, out);
+  return out;
 }
 
 double effect_value(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p) {
@@ -163,6 +236,17 @@ std::vector<Term> candidate_terms() {
 
 std::string term_unit(const Term& t) { return effect_spec(t.effect).si_unit[t.sensor == 0 ? 0 : 1]; }
 
+const EffectSpec& noise_effect_spec() {
+  const EffectSpec* found = nullptr;
+  for (const EffectSpec& s : effect_specs())
+    if (s.shape == EffectShape::noise) {
+      if (found) throw std::logic_error("effect registry: more than one noise-model effect");
+      found = &s;
+    }
+  if (!found) throw std::logic_error("effect registry: no noise-model effect");
+  return *found;
+}
+
 NoiseSpec noise_with_effects(NoiseSpec n, const EffectTerms& e) {
   for (const EffectSpec& s : effect_specs()) {
     if (s.compensation != DriveCompensation::noise_model) continue;
@@ -194,8 +278,8 @@ void sensor_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro
     Vec3 d = Vec3::Zero();
     for (const EffectSpec* s : r.triad_rows) {
       if (!(s->sensors >> k & 1u)) continue;
-      // The three axes of a sensor are contiguous (a Vec3 member, or sensor·3 + axis in generic).
-      const double* p = effect_param(*s, const_cast<EffectTerms&>(e), k, 0, 0);
+      // The three axes of a sensor are contiguous (sensor·3 + axis).
+      const double* p = &e.values[static_cast<std::size_t>(s->offset + 3 * k)];
       for (int i = 0; i < 3; ++i)
         if (p[i] != 0) d(i) += s->axis_output(p[i], x(i), dT, c);  // a zero term adds nothing
     }

@@ -86,11 +86,6 @@ struct EffectSpec {
   int sensor;           // triad_axis/noise: −1 (the sensors of `sensors`); else the term's sensor (0, 1, 2)
   unsigned sensors;     // triad_axis/noise: bit 0 gyro, bit 1 accel
   int nparams;          // parameters of one term
-  // Where a value lives: the parameter p of the term on (sensor, axis), or nullptr outside the
-  // shape; a triad_axis effect keeps the three axes of a sensor contiguous (sensor_side_terms reads
-  // them through the axis-0 pointer). nullptr here: the registry keeps the values in
-  // EffectTerms::generic (new effects).
-  double* (*param)(EffectTerms& e, int sensor, int axis, int p);
   // Per-axis sensor output d_i(p, x_i) of a triad_axis effect (x: the true input of the axis).
   double (*axis_output)(double p, double x, double dT, const EffectContext& c);
   // Other sensor-side output (added after the per-axis terms), or nullptr.
@@ -98,6 +93,19 @@ struct EffectSpec {
   // Reference-side output: the bench's true input differs from its nominal reference, and the IMU
   // output by ≈ that difference (linearised; c holds the reference conditions), or nullptr.
   void (*reference_output)(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel) = nullptr;
+  bool needs_rate_derivative = false;  // its output uses ω̇ (EffectContext::dw): the simulators derive it
+  // Truth side of the simulators, exact (not linearised), or nullptr:
+  //   truth_time: the instant whose motion a sample stamped t saw (a drive's compensation re-stamps
+  //     the sample with it);
+  //   truth_table_angle: the bench's inner axis really stands at `angle` and turns at `rate` (in:
+  //     the nominal ones);
+  //   truth_level_frame: the bench's level frame as the IMU sees it: changes of the specific force
+  //     and the rate (C_b_l IMU → level, f_b the nominal specific force, w_ie_b the Earth rate in
+  //     IMU axes).
+  double (*truth_time)(const EffectTerms& e, double t) = nullptr;
+  void (*truth_table_angle)(const EffectTerms& e, double& angle, double& rate) = nullptr;
+  void (*truth_level_frame)(const EffectTerms& e, const Mat3& C_b_l, const Vec3& f_b, const Vec3& w_ie_b, Vec3& df,
+                            Vec3& dw) = nullptr;
   const char* si_unit[2];     // gyro, accel (the same where the sensor does not matter)
   DisplayUnit bench_display;  // the bench report's sentences
   DisplayUnit drive_display;  // the drive report's sentences (multiplied per value)
@@ -123,6 +131,14 @@ struct EffectSpec {
   bool curvature;            // nonlinear in the input: linearised about the smoothed input
   DriveCompensation compensation;
   const char* drive_ignored_reason;
+  // Why a simulated drive cannot carry it (nullptr: it can): `simulate drive` refuses it with this.
+  const char* drive_sim_refusal = nullptr;
+  // A property of the drive's installation or a change since the factory calibration (time offset,
+  // lever arm, scale shift): the simulated factory calibration of a drive's unit does not see it.
+  bool drive_installation = false;
+  // Its value is a change of the coefficient M_ii (triad_axis): a drive diagnosis's IMPROVED.json
+  // carries it in M, not as a term.
+  bool folds_into_scale = false;
   // Sentences: {who} = sensor and axis, {condition} = the condition phrase.
   const char* bench_sentence;
   const char* drive_what;
@@ -130,7 +146,7 @@ struct EffectSpec {
   // A look-alike the recording may not separate it from, and what separates them.
   int lookalike;             // EffectId index or −1
   const char* separation;
-  int generic_offset = -1;   // set by the registry for rows without `param`
+  int offset = -1;           // first slot of its values in EffectTerms::values (set by the registry)
 };
 
 const std::vector<EffectSpec>& effect_specs();  // in catalogue order (candidate order)
@@ -144,6 +160,29 @@ bool effect_allows_sensor(const EffectSpec& s, int sensor);
 // shapes; noise: p 0 = σ, 1 = τ), or nullptr outside the effect's shape.
 double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, int p);
 double effect_value(const EffectSpec& s, const EffectTerms& e, int sensor, int axis, int p);  // 0 outside
+// Typed views of the stored values (throw std::logic_error on a shape or size mismatch): the three
+// per-axis values of one sensor (triad_axis), the parameters of a vector effect, and the gyro
+// matrix (row: gyro axis, column: force axis).
+Eigen::Map<Vec3> effect_triad(EffectTerms& e, EffectId id, int sensor);
+Eigen::Map<const Vec3> effect_triad(const EffectTerms& e, EffectId id, int sensor);
+template <int N>
+Eigen::Map<Eigen::Matrix<double, N, 1>> effect_vector(EffectTerms& e, EffectId id);
+template <int N>
+Eigen::Map<const Eigen::Matrix<double, N, 1>> effect_vector(const EffectTerms& e, EffectId id);
+Eigen::Map<Mat3> effect_matrix(EffectTerms& e, EffectId id);
+Eigen::Map<const Mat3> effect_matrix(const EffectTerms& e, EffectId id);
+// Every value of the effect back to zero.
+void effect_clear(const EffectSpec& s, EffectTerms& e);
+
+// The truth side of all effects (the spec hooks, in catalogue order; identity where none is set).
+double truth_time(const EffectTerms& e, double t);
+void truth_table_angle(const EffectTerms& e, double& angle, double& rate);
+void truth_level_frame(const EffectTerms& e, const Mat3& C_b_l, const Vec3& f_b, const Vec3& w_ie_b, Vec3& f, Vec3& w);
+bool needs_rate_derivative(const EffectTerms& e);  // some effect set in e uses ω̇
+// The time-stamp terms: how late the IMU stamps are (τ: a sample stamped t saw t − τ), and a copy
+// of e with only the time-stamp terms.
+double time_stamp_offset(const EffectTerms& e);
+EffectTerms time_stamp_terms(const EffectTerms& e);
 
 // Reference-side output of all effects (added to dgyro, daccel): the bench reference's errors.
 void reference_side_terms(const EffectTerms& e, const EffectContext& c, Vec3& dgyro, Vec3& daccel);
@@ -158,6 +197,8 @@ std::vector<Term> candidate_terms();
 // SI unit of a term's parameters (as reported in findings and IMPROVED.json).
 std::string term_unit(const Term& t);
 
+// The effect of shape `noise` (the drift model beyond the data sheet: σ p 0, τ p 1 per triad).
+const EffectSpec& noise_effect_spec();
 // The noise spec with the triads' drift prior replaced where e carries a noise-model effect.
 NoiseSpec noise_with_effects(NoiseSpec n, const EffectTerms& e);
 

@@ -14,15 +14,6 @@ using namespace units;
 
 constexpr unsigned kBoth = 3, kGyro = 1;
 
-TriadEffectTerms& triad(EffectTerms& e, int sensor) { return sensor == 0 ? e.gyro : e.accel; }
-
-// Storage of the per-axis triad terms: the member of TriadEffectTerms.
-template <Vec3 TriadEffectTerms::*M>
-double* triad_param(EffectTerms& e, int sensor, int axis, int p) {
-  if (sensor < 0 || sensor > 1 || axis < 0 || axis > 2 || p != 0) return nullptr;
-  return &(triad(e, sensor).*M)(axis);
-}
-
 double identity(double v, int) { return v; }
 
 // The rows: catalogue order, which is the order of the candidate terms (per sensor and axis the
@@ -45,7 +36,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 1;
-  s.param = triad_param<&TriadEffectTerms::temp_bias>;
   s.axis_output = [](double p, double, double dT, const EffectContext&) { return p * dT; };
   s.si_unit[0] = "rad/s/K";
   s.si_unit[1] = "m/s^2/K";
@@ -62,6 +52,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_prior[1] = 1e-2;
   s.compensation = DriveCompensation::with_temperature;
   s.drive_ignored_reason = "imu.csv has no temperature column";
+  s.drive_sim_refusal = "a simulated drive has no temperature: temperature terms cannot be injected";
   s.bench_sentence = "{who} error grows with temperature: temperature-dependent bias, ";
   s.drive_what = "temperature-dependent bias";
   s.lookalike = -1;
@@ -78,7 +69,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 1;
-  s.param = triad_param<&TriadEffectTerms::temp_scale>;
   s.axis_output = [](double p, double x, double dT, const EffectContext&) { return p * dT * x; };
   s.si_unit[0] = s.si_unit[1] = "1/K";
   s.bench_display = {[](double x, int) { return x / kPpm; }, {"ppm/K", "ppm/K"}};
@@ -94,6 +84,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.own_input = true;
   s.compensation = DriveCompensation::with_temperature;
   s.drive_ignored_reason = "imu.csv has no temperature column";
+  s.drive_sim_refusal = "a simulated drive has no temperature: temperature terms cannot be injected";
   s.bench_sentence = "{who} scale factor changes with temperature: temperature-dependent scale factor, ";
   s.drive_what = "temperature-dependent scale factor";
   s.lookalike = -1;
@@ -110,7 +101,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 1;
-  s.param = triad_param<&TriadEffectTerms::temp_rate>;
   s.axis_output = [](double p, double, double, const EffectContext& c) { return p * c.dtemp_k_s; };
   s.si_unit[0] = "rad/s/(K/s)";
   s.si_unit[1] = "m/s^2/(K/s)";
@@ -127,6 +117,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_prior[0] = s.drive_prior[1] = 1;
   s.compensation = DriveCompensation::ignored;
   s.drive_ignored_reason = "needs dT/dt, which the drive estimator does not derive";
+  s.drive_sim_refusal = "a simulated drive has no temperature: temperature terms cannot be injected";
   s.bench_sentence =
       "{who} error follows the rate of temperature change (opposite on heating and cooling): thermal lag (dT/dt), ";
   s.lookalike = static_cast<int>(EffectId::temperature_bias);
@@ -146,10 +137,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = 0;
   s.sensors = kGyro;
   s.nparams = 3;
-  s.param = [](EffectTerms& e, int sensor, int axis, int p) -> double* {
-    return sensor == 0 && axis >= 0 && axis < 3 && p >= 0 && p < 3 ? &e.g_sensitivity(axis, p) : nullptr;
-  };
-  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3&) { dg += e.g_sensitivity * c.f; };
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3&) { dg += effect_matrix(e, EffectId::g_sensitivity) * c.f; };
   s.si_unit[0] = s.si_unit[1] = "rad/s/(m/s^2)";
   s.bench_display = {[](double x, int) { return x * kG0 / kDeg; }, {"°/s/g", "°/s/g"}};
   s.drive_display = {[](double x, int) { return x * (1.0 / kDeg * kG0); }, {"°/s/g", "°/s/g"}};
@@ -177,7 +165,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 1;
-  s.param = triad_param<&TriadEffectTerms::nonlinearity>;
   s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x * std::abs(x); };
   s.si_unit[0] = "1/(rad/s)";
   s.si_unit[1] = "1/(m/s^2)";
@@ -210,7 +197,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 1;
-  s.param = triad_param<&TriadEffectTerms::asymmetry>;
   s.axis_output = [](double p, double x, double, const EffectContext&) { return p * std::abs(x); };
   s.si_unit[0] = s.si_unit[1] = "1";
   s.bench_display = {[](double x, int) { return x / kPpm; }, {"ppm", "ppm"}};
@@ -242,7 +228,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 1;
-  s.param = triad_param<&TriadEffectTerms::scale>;
   s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x; };
   s.si_unit[0] = s.si_unit[1] = "1";
   s.bench_display = {[](double x, int) { return x / kPpm; }, {"ppm", "ppm"}};
@@ -250,6 +235,8 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = "gyro";
   s.json_value[1] = "accel";
   s.bench_candidate = false;  // the bench refits M: it would be M_ii again
+  s.drive_installation = true;  // a shift since the calibration: the factory saw the unit without it
+  s.folds_into_scale = true;
   s.condition = "rate";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::fixed_scale;
@@ -263,8 +250,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.lookalike = -1;
   row(s);
 
-  // ---- scale_k2: the even term of the scale-factor polynomial (IEEE Std 952/1431), kept in
-  // EffectTerms::generic (no member of its own).
+  // ---- scale_k2: the even term of the scale-factor polynomial (IEEE Std 952/1431).
   s = EffectSpec{};
   s.id = EffectId::scale_k2;
   s.key = "scale_k2";
@@ -312,13 +298,16 @@ std::vector<EffectSpec> make_effect_specs() {
   s.shape = EffectShape::vector;
   s.sensor = 2;
   s.nparams = 1;
-  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p == 0 ? &e.time_offset_s : nullptr; };
   // The true input differs from the reference by −τ·ẋ; the output by ≈ that.
   s.reference_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
-    if (e.time_offset_s == 0) return;
-    dg -= e.time_offset_s * c.dw;
-    da -= e.time_offset_s * c.df;
+    const double tau = effect_vector<1>(e, EffectId::time_offset)(0);
+    if (tau == 0) return;
+    dg -= tau * c.dw;
+    da -= tau * c.df;
   };
+  // The simulators: the sample stamped t saw the motion at t − τ (exact).
+  s.truth_time = [](const EffectTerms& e, double t) { return t - effect_vector<1>(e, EffectId::time_offset)(0); };
+  s.drive_installation = true;  // the stamping of the drive's logger, not the unit
   s.si_unit[0] = s.si_unit[1] = "s";
   s.bench_display = {[](double x, int) { return x * 1e3; }, {"ms", "ms"}};
   s.drive_display = {[](double x, int) { return x * 1e3; }, {"ms", "ms"}};
@@ -347,10 +336,11 @@ std::vector<EffectSpec> make_effect_specs() {
   s.shape = EffectShape::vector;
   s.sensor = 1;
   s.nparams = 3;
-  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 3 ? &e.lever_arm_m(p) : nullptr; };
   s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3&, Vec3& da) {
-    da += lever_arm_force(e.lever_arm_m, c.w, c.dw);
+    da += lever_arm_force(effect_vector<3>(e, EffectId::lever_arm), c.w, c.dw);
   };
+  s.needs_rate_derivative = true;
+  s.drive_installation = true;  // where the unit sits in the vehicle, not a property of the unit
   s.si_unit[0] = s.si_unit[1] = "m";
   s.bench_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
   s.drive_display = {[](double x, int) { return x * 1e3; }, {"mm (IMU axes)", "mm (IMU axes)"}};
@@ -379,20 +369,28 @@ std::vector<EffectSpec> make_effect_specs() {
   s.shape = EffectShape::vector;
   s.sensor = 2;
   s.nparams = 2;
-  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 2 ? &e.table_tilt_rad(p) : nullptr; };
   // The tilted base turns the level frame seen by the IMU: gravity and the Earth rate, both fixed
   // in the level frame, reach the IMU through C_bLᵀ(I − [ψ×]) (the table's own rate is
   // unaffected). Static and rotating steps alike; C_bL from the reference (bench_attitude).
   s.reference_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
-    if (e.table_tilt_rad.isZero(0)) return;
+    const Eigen::Vector2d psi = effect_vector<2>(e, EffectId::misalignment);
+    if (psi.isZero(0)) return;
     Mat3 C;
     if (!bench_attitude(c.w, c.f, C)) return;
-    da += table_tilt_force(e.table_tilt_rad, C, c.f);
+    da += table_tilt_force(psi, C, c.f);
     // Earth-rate part (≤ Ω·|ψ|, 2e-8 rad/s at 60″): its vertical component is known from the
     // reference only when the table is still or spins about a horizontal axis.
     const Vec3 wl = C * c.w;
     if (c.w.norm() <= 1e-3 || std::abs(C.row(2).dot(c.w.normalized())) < 1e-6)
-      dg += table_tilt_force(e.table_tilt_rad, C, C.transpose() * Vec3(wl(0), 0.0, wl(2)));
+      dg += table_tilt_force(psi, C, C.transpose() * Vec3(wl(0), 0.0, wl(2)));
+  };
+  // The simulator (exact): gravity and the Earth rate, fixed in the level frame, reach the IMU
+  // through C_bLᵀ(I − [ψ×]); the table's own rate (relative to its base) is unchanged in IMU axes.
+  s.truth_level_frame = [](const EffectTerms& e, const Mat3& C_b_l, const Vec3& f_b, const Vec3& w_ie_b, Vec3& f, Vec3& w) {
+    const Eigen::Vector2d psi = effect_vector<2>(e, EffectId::misalignment);
+    if (psi.isZero(0)) return;
+    f += table_tilt_force(psi, C_b_l, f_b);
+    w += table_tilt_force(psi, C_b_l, w_ie_b);
   };
   s.si_unit[0] = s.si_unit[1] = "rad";
   s.bench_display = {[](double x, int) { return x / kDeg * 3600; }, {"arcsec", "arcsec"}};
@@ -406,6 +404,9 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_prior[0] = s.drive_prior[1] = 1;
   s.compensation = DriveCompensation::ignored;
   s.drive_ignored_reason = "a rate-table term (bench only)";
+  s.drive_sim_refusal =
+      "table terms belong to the bench; on a drive the mounting is drawn by --truth random "
+      "(misalignment_sigma_deg) and estimated by fit drive";
   s.bench_sentence =
       "accelerometer error depends on the table orientation beyond any sensor model: table base tilted (misalignment), ";
   s.lookalike = -1;
@@ -421,22 +422,30 @@ std::vector<EffectSpec> make_effect_specs() {
   s.shape = EffectShape::vector;
   s.sensor = 2;
   s.nparams = 2;
-  s.param = [](EffectTerms& e, int, int, int p) -> double* { return p >= 0 && p < 2 ? &e.wobble_rad(p) : nullptr; };
   s.reference_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
-    if (e.wobble_rad.isZero(0) || !std::isfinite(c.angle)) return;
+    const Eigen::Vector2d ac = effect_vector<2>(e, EffectId::table_wobble);
+    if (ac.isZero(0) || !std::isfinite(c.angle)) return;
     if (std::abs(c.angle_rate) > 0.0174533) {
       // True angle θ + δ(θ): rate scaled by 1 + δ'(θ), attitude advanced by δ about the rate axis
       // (the Earth rate is negligible beside the table rate).
-      dg += wobble_slope(e.wobble_rad, c.angle) * c.w;
-      da += wobble_angle(e.wobble_rad, c.angle) * c.df / c.angle_rate;
+      dg += wobble_slope(ac, c.angle) * c.w;
+      da += wobble_angle(ac, c.angle) * c.df / c.angle_rate;
     } else if (!c.inner_axis.isZero(0)) {
       // Static position: the table stands at θ + δ(θ). Everything fixed in the level frame —
       // gravity and the Earth rate — turns in IMU axes by −δ about the axis u of the angle column
       // (the same f × u = ∂f/∂θ as in a rotating step): Δf = δ·(f × u), Δω = δ·(ω × u).
-      const double d = wobble_angle(e.wobble_rad, c.angle);
+      const double d = wobble_angle(ac, c.angle);
       dg += d * c.w.cross(c.inner_axis);
       da += d * c.f.cross(c.inner_axis);
     }
+  };
+  // The simulator (exact): the inner axis stands at θ + δ(θ) and turns at θ̇·(1 + δ'(θ)).
+  s.truth_table_angle = [](const EffectTerms& e, double& angle, double& rate) {
+    const Eigen::Vector2d ac = effect_vector<2>(e, EffectId::table_wobble);
+    if (ac.isZero(0)) return;
+    const double th = angle;
+    angle += wobble_angle(ac, th);
+    rate *= 1.0 + wobble_slope(ac, th);
   };
   s.si_unit[0] = s.si_unit[1] = "rad";
   s.bench_display = {[](double x, int) { return x / kDeg * 3600; }, {"arcsec", "arcsec"}};
@@ -450,6 +459,9 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_prior[0] = s.drive_prior[1] = 1;
   s.compensation = DriveCompensation::ignored;
   s.drive_ignored_reason = "a rate-table term (bench only)";
+  s.drive_sim_refusal =
+      "table terms belong to the bench; on a drive the mounting is drawn by --truth random "
+      "(misalignment_sigma_deg) and estimated by fit drive";
   s.bench_sentence = "error periodic in the table angle (once per revolution): table wobble / encoder error, ";
   s.lookalike = -1;
   row(s);
@@ -465,11 +477,6 @@ std::vector<EffectSpec> make_effect_specs() {
   s.sensor = -1;
   s.sensors = kBoth;
   s.nparams = 0;
-  s.param = [](EffectTerms& e, int sensor, int, int p) -> double* {
-    if (sensor < 0 || sensor > 1) return nullptr;
-    TriadEffectTerms& t = triad(e, sensor);
-    return p == 0 ? &t.drift_sigma : p == 1 ? &t.drift_tau_s : nullptr;
-  };
   s.si_unit[0] = "rad/s";
   s.si_unit[1] = "m/s^2";
   s.bench_display = {[](double x, int k) { return k == 0 ? x / kDegPerHour : x / kMilliG; }, {"°/h", "mg"}};

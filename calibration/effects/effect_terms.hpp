@@ -1,9 +1,8 @@
 // The physics catalogue of `calbench diagnose` (docs/diagnosis.md): error terms beyond the spec's
 // measured = (I + M)·true + b. One struct holds the value of every term; the bench simulator
 // injects them (truth side) and the diagnosis/predictors apply them (model side). All SI.
-// Everything else about an effect (units, JSON, physics hooks, sentences) is its spec in
-// effect_registry.hpp, which addresses these values; effects added since the registry keep their
-// values in `generic`, laid out by their spec, and need no member here.
+// Everything else about an effect (units, JSON, physics hooks, sentences, where its values sit in
+// EffectTerms::values) is its spec in effect_registry.hpp.
 //
 // Sensor-side terms (added to the output of a triad, evaluated at the true input x = ω or f):
 //   temperature_bias    b_T,i·(T − T0)                       gyro rad/s/K, accel m/s²/K
@@ -33,26 +32,13 @@
 
 namespace calbench {
 
-struct TriadEffectTerms {
-  Vec3 temp_bias = Vec3::Zero();    // per K
-  Vec3 temp_scale = Vec3::Zero();   // 1/K
-  Vec3 temp_rate = Vec3::Zero();    // per K/s (bias ∝ dT/dt)
-  Vec3 nonlinearity = Vec3::Zero(); // 1/(input unit)
-  Vec3 asymmetry = Vec3::Zero();    // dimensionless
-  Vec3 scale = Vec3::Zero();        // scale_factor: ΔM_ii, dimensionless
-  double drift_sigma = 0;           // correlated_drift (0 = the data-sheet prior applies)
-  double drift_tau_s = 0;
-};
-
+// The values of every effect, laid out by the registry (effect_registry.hpp: effect_param and the
+// typed views effect_triad, effect_vector, effect_matrix); no effect has a member of its own, so
+// adding one does not touch this struct (the static check in effect_registry.cpp keeps `values`
+// large enough).
 struct EffectTerms {
-  double t0_c = 25.0;               // reference temperature of the temperature terms
-  TriadEffectTerms gyro, accel;
-  Mat3 g_sensitivity = Mat3::Zero();  // gyro rad/s per m/s²
-  double time_offset_s = 0;
-  Vec3 lever_arm_m = Vec3::Zero();
-  Eigen::Vector2d table_tilt_rad = Eigen::Vector2d::Zero();  // (about north, about east)
-  Eigen::Vector2d wobble_rad = Eigen::Vector2d::Zero();      // (a: sin θ, c: cos θ)
-  std::array<double, 24> generic{};  // values of the effects without a member (effect_param)
+  double t0_c = 25.0;  // reference temperature of the temperature terms
+  std::array<double, 128> values{};
 
   bool any() const;
   bool any_sensor_side() const;

@@ -10,6 +10,7 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/io/plan_toml.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/gauss_markov_window.hpp"
 
 namespace calbench {
@@ -19,8 +20,8 @@ void BM_Diagnose_Bench(benchmark::State& state) {
   const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
   BenchSimOptions so;
   so.seed = 3;
-  so.effects.g_sensitivity(0, 2) = 1.5e-4;
-  so.effects.lever_arm_m(1) = 0.02;
+  effect_matrix(so.effects, EffectId::g_sensitivity)(0, 2) = 1.5e-4;
+  effect_vector<3>(so.effects, EffectId::lever_arm)(1) = 0.02;
   const DiagInput in = simulate_diag_input(plan, draw_random_unit(5003), so);
   std::size_t findings = 0;
   for (auto _ : state) {
@@ -34,8 +35,8 @@ BENCHMARK(BM_Diagnose_Bench)->Unit(benchmark::kMillisecond)->Iterations(1)->Repe
 
 void BM_Diagnose_Drive(benchmark::State& state) {
   EffectTerms fx;
-  fx.time_offset_s = 0.002;
-  fx.lever_arm_m(1) = -0.04;
+  effect_vector<1>(fx, EffectId::time_offset)(0) = 0.002;
+  effect_vector<3>(fx, EffectId::lever_arm)(1) = -0.04;
   const DriveDiagInput in =
       simulate_drive_diag_input(std::string(CALBENCH_SOURCE_DIR) + "/tests/data/drive_diag_route.toml", 41, fx);
   std::size_t findings = 0;

@@ -22,6 +22,7 @@
 
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/io/plan_toml.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/gauss_markov_window.hpp"
 #include "common/units.hpp"
 
@@ -129,7 +130,7 @@ void sweep_effect(benchmark::State& state, const std::string& name, const Maker&
       if (x.effect == EffectId::correlated_drift) {
         const DriftInterval& iv = f->noise_interval;
         within_2sigma += iv.sigma_within_2sigma(x.value);
-        const double tau = (x.sensor ? x.fx.accel : x.fx.gyro).drift_tau_s;
+        const double tau = effect_value(effect_spec(EffectId::correlated_drift), x.fx, x.sensor, -1, 1);
         if (tau > 0 && f->noise_tau_s > 0) {
           const double k_true = gm_random_walk_density(x.value, tau), k = gm_random_walk_density(f->value[0], f->noise_tau_s);
           ++rw_values;
@@ -227,23 +228,23 @@ struct Row {
 
 // A per-axis triad term (temperature bias/scale/rate, nonlinearity, asymmetry): axis (k + shift) % 3,
 // sign alternating with k.
-std::function<Expect(int, double)> triad_term(EffectId e, int sensor, int shift, Vec3 TriadEffectTerms::*member) {
+std::function<Expect(int, double)> triad_term(EffectId e, int sensor, int shift) {
   return [=](int k, double si) {
     Expect x;
     x.value = (k % 2 ? -si : si);
     x.effect = e;
     x.sensor = sensor, x.axis = (k + shift) % 3;
-    ((sensor ? x.fx.accel : x.fx.gyro).*member)(x.axis) = x.value;
+    effect_triad(x.fx, e, sensor)(x.axis) = x.value;
     return x;
   };
 }
 // A reference-side pair (table tilt ψN/ψE, wobble sin/cos): parameter k % 2, sign flips every 2.
-std::function<Expect(int, double)> table_term(EffectId e, Eigen::Vector2d EffectTerms::*member) {
+std::function<Expect(int, double)> table_term(EffectId e) {
   return [=](int k, double si) {
     Expect x;
     x.value = (k % 4 >= 2 ? -si : si);
     x.param = k % 2;
-    (x.fx.*member)(x.param) = x.value;
+    effect_vector<2>(x.fx, e)(x.param) = x.value;
     x.effect = e;
     x.sensor = 2, x.axis = -1;
     return x;
@@ -255,9 +256,8 @@ std::function<Expect(int, double)> drift_term(int sensor, double tau_s = 60) {
   return [=](int, double si) {
     Expect x;
     x.value = si;
-    TriadEffectTerms& t = sensor ? x.fx.accel : x.fx.gyro;
-    t.drift_sigma = si;
-    t.drift_tau_s = tau_s;
+    *effect_param(effect_spec(EffectId::correlated_drift), x.fx, sensor, -1, 0) = si;
+    *effect_param(effect_spec(EffectId::correlated_drift), x.fx, sensor, -1, 1) = tau_s;
     x.effect = EffectId::correlated_drift;
     x.sensor = sensor, x.axis = -1;
     return x;
@@ -274,24 +274,24 @@ std::vector<Row> sweep_rows() {
          Expect x;
          const int i = k % 3, j = (k + 1) % 3;
          x.value = (k % 2 ? -si : si);
-         x.fx.g_sensitivity(i, j) = x.value;
+         effect_matrix(x.fx, EffectId::g_sensitivity)(i, j) = x.value;
          x.effect = EffectId::g_sensitivity;
          x.sensor = 0, x.axis = i, x.param = j;
          return x;
        }},
       {"scale_nonlinearity/gyro_", "e-6_per_rad_s", {10, 20, 40}, 1e-6, Plan::diagnose,
-       triad_term(E::scale_nonlinearity, 0, 0, &TriadEffectTerms::nonlinearity)},
+       triad_term(E::scale_nonlinearity, 0, 0)},
       {"scale_nonlinearity/accel_", "e-6_per_m_s2", {30, 60}, 1e-6, Plan::diagnose,
-       triad_term(E::scale_nonlinearity, 1, 2, &TriadEffectTerms::nonlinearity)},
+       triad_term(E::scale_nonlinearity, 1, 2)},
       {"scale_asymmetry/gyro_", "ppm", {100, 200, 400}, kPpm, Plan::diagnose,
-       triad_term(E::scale_asymmetry, 0, 1, &TriadEffectTerms::asymmetry)},
+       triad_term(E::scale_asymmetry, 0, 1)},
       {"scale_asymmetry/accel_", "ppm", {150, 300}, kPpm, Plan::diagnose,
-       triad_term(E::scale_asymmetry, 1, 0, &TriadEffectTerms::asymmetry)},
+       triad_term(E::scale_asymmetry, 1, 0)},
       {"time_offset/", "ms", {0.1, 0.3, 1.0}, 1e-3, Plan::diagnose,
        [](int k, double si) {
          Expect x;
          x.value = k % 2 ? -si : si;
-         x.fx.time_offset_s = x.value;
+         effect_vector<1>(x.fx, EffectId::time_offset)(0) = x.value;
          x.effect = EffectId::time_offset;
          x.sensor = 2, x.axis = -1;
          return x;
@@ -300,27 +300,27 @@ std::vector<Row> sweep_rows() {
        [](int k, double si) {
          Expect x;
          x.value = k % 2 ? -si : si;
-         x.fx.lever_arm_m(k % 3) = x.value;
+         effect_vector<3>(x.fx, EffectId::lever_arm)(k % 3) = x.value;
          x.effect = EffectId::lever_arm;
          x.sensor = 1, x.axis = k % 3, x.param = k % 3;
          return x;
        }},
       {"misalignment/", "arcsec", {20, 40, 60}, kDeg / 3600, Plan::diagnose,
-       table_term(E::misalignment, &EffectTerms::table_tilt_rad)},
+       table_term(E::misalignment)},
       {"table_wobble/", "arcsec", {10, 20, 40}, kDeg / 3600, Plan::diagnose,
-       table_term(E::table_wobble, &EffectTerms::wobble_rad)},
+       table_term(E::table_wobble)},
       // Temperature terms on the short warm-up of the diagnosis plan (~2 K): gyro only.
       {"temperature_bias/gyro_", "dph_K_warmup", {100, 200}, kDegPerHour, Plan::diagnose,
-       triad_term(E::temperature_bias, 0, 0, &TriadEffectTerms::temp_bias)},
+       triad_term(E::temperature_bias, 0, 0)},
       // On the thermal CI plan (5 → 45 °C): data-sheet class and half of it.
       {"temperature_bias/gyro_", "dph_K_thermal", {4.5, 9}, kDegPerHour, Plan::thermal,
-       triad_term(E::temperature_bias, 0, 0, &TriadEffectTerms::temp_bias)},
+       triad_term(E::temperature_bias, 0, 0)},
       {"temperature_bias/accel_", "mg_K_thermal", {0.025, 0.05}, kMilliG, Plan::thermal,
-       triad_term(E::temperature_bias, 1, 1, &TriadEffectTerms::temp_bias)},
+       triad_term(E::temperature_bias, 1, 1)},
       {"temperature_scale/gyro_", "ppm_K_thermal", {10, 40}, kPpm, Plan::thermal,
-       triad_term(E::temperature_scale, 0, 2, &TriadEffectTerms::temp_scale)},
+       triad_term(E::temperature_scale, 0, 2)},
       {"temperature_scale/accel_", "ppm_K_thermal", {10, 40}, kPpm, Plan::thermal,
-       triad_term(E::temperature_scale, 1, 0, &TriadEffectTerms::temp_scale)},
+       triad_term(E::temperature_scale, 1, 0)},
       // Drift beyond the data sheet (first-order Gauss–Markov, τ 60 s) at multiples of the data-sheet σ
       // (detected on a ×2 grid, estimated off it; ×11 lies between cells).
       {"correlated_drift/gyro_x", "_sigma_tau60", {8, 11, 16}, adis16488a_noise().gyro.drift_sigma, Plan::diagnose,
@@ -341,9 +341,9 @@ std::vector<Row> sweep_rows() {
        drift_term(1, 30)},
       // Thermal lag on the up-and-down chamber plan (heating and cooling over the same range).
       {"temperature_rate/gyro_", "dph_per_K_min_updown", {4, 6, 10}, kDegPerHour * kPerKPerMin, Plan::updown,
-       triad_term(E::temperature_rate, 0, 1, &TriadEffectTerms::temp_rate)},
+       triad_term(E::temperature_rate, 0, 1)},
       {"temperature_rate/accel_", "mg_per_K_min_updown", {0.1, 0.3}, kMilliG * kPerKPerMin, Plan::updown,
-       triad_term(E::temperature_rate, 1, 2, &TriadEffectTerms::temp_rate)},
+       triad_term(E::temperature_rate, 1, 2)},
   };
 }
 

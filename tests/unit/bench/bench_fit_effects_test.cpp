@@ -11,6 +11,7 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/io/plan_toml.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/bench_fit_effects.hpp"
 #include "common/units.hpp"
 
@@ -60,14 +61,14 @@ struct Case {
 std::vector<Case> cases() {
   std::vector<Case> c;
   EffectTerms a;
-  a.lever_arm_m(2) = 0.004;
+  effect_vector<3>(a, EffectId::lever_arm)(2) = 0.004;
   c.push_back({"lever_arm z 4 mm", a, 3});
   EffectTerms b;
-  b.gyro.nonlinearity(1) = -2e-5;
+  effect_triad(b, EffectId::scale_nonlinearity, 0)(1) = -2e-5;
   c.push_back({"scale_nonlinearity gyro y", b, 4});
   EffectTerms d;
-  d.g_sensitivity(0, 1) = 0.009 * kDeg / kG0;
-  d.accel.asymmetry(0) = -300e-6;
+  effect_matrix(d, EffectId::g_sensitivity)(0, 1) = 0.009 * kDeg / kG0;
+  effect_triad(d, EffectId::scale_asymmetry, 1)(0) = -300e-6;
   c.push_back({"g_sensitivity x←y + accel asymmetry x", d, 5});
   return c;
 }
@@ -97,8 +98,8 @@ TEST(BenchFitEffects, HeldFixedTermsRemoveTheBiasOfAConcealedEffect) {
 // The real chain: diagnose finds the effect and writes IMPROVED.json; the fit reads its keys.
 TEST(BenchFitEffects, ImprovedJsonFromDiagnoseGivesUnbiasedFit) {
   EffectTerms fx;
-  fx.lever_arm_m(1) = -0.003;
-  fx.gyro.nonlinearity(2) = 3e-5;
+  effect_vector<3>(fx, EffectId::lever_arm)(1) = -0.003;
+  effect_triad(fx, EffectId::scale_nonlinearity, 0)(2) = 3e-5;
   BenchSimOptions so;
   so.seed = 9;
   so.effects = fx;
@@ -111,7 +112,7 @@ TEST(BenchFitEffects, ImprovedJsonFromDiagnoseGivesUnbiasedFit) {
   std::string list;
   for (const auto& id : ids) list += " " + id;
   ASSERT_EQ(ids.size(), 2u) << "diagnose should add lever_arm and scale_nonlinearity, added:" << list;
-  EXPECT_NEAR(found.lever_arm_m(1), -0.003, 0.2 * 0.003);
+  EXPECT_NEAR(effect_vector<3>(found, EffectId::lever_arm)(1), -0.003, 0.2 * 0.003);
   BenchFitOptions o;
   o.table = plan().table;
   std::string w_plain, w_fixed;
@@ -132,7 +133,7 @@ TEST(BenchFitEffects, ImprovedJsonFromDiagnoseGivesUnbiasedFit) {
 // wobble (2′): at 40″ the plain fit is biased by only 2σ.
 TEST(BenchFitEffects, TableWobbleHeldFixedIncludesStaticPositions) {
   EffectTerms fx;
-  fx.wobble_rad = Eigen::Vector2d(30.0, 120.0) / 3600 * kDeg;
+  effect_vector<2>(fx, EffectId::table_wobble) = Eigen::Vector2d(30.0, 120.0) / 3600 * kDeg;
   BenchSimOptions so;
   so.seed = 14;
   so.effects = fx;
@@ -184,8 +185,8 @@ TEST(BenchFitEffects, NoTermsAgreesWithThePlainFit) {
 
 TEST(BenchFitEffects, CorrelatedDriftKeyReplacesTheDriftPrior) {
   EffectTerms e;
-  e.accel.drift_sigma = 1e-2;
-  e.accel.drift_tau_s = 60;
+  *effect_param(effect_spec(EffectId::correlated_drift), e, 1, -1, 0) = 1e-2;
+  *effect_param(effect_spec(EffectId::correlated_drift), e, 1, -1, 1) = 60;
   BenchFitOptions o;
   const BenchFitOptions p = options_with_effects(o, e);
   EXPECT_EQ(p.noise.accel.drift_sigma, 1e-2);

@@ -143,7 +143,7 @@ TEST(DiagnoseDriveEffects, ImprovedCoefficientsExplainTheDrive) {
   DriveCoeffs c;
   c.set = first.improved;
   c.carried = effects_from_json(first.improved.extra, "IMPROVED.json");
-  EXPECT_NEAR(c.carried.lever_arm_m(1), -0.04, 0.008);
+  EXPECT_NEAR(effect_vector<3>(c.carried, EffectId::lever_arm)(1), -0.04, 0.008);
   const DriveDiagRun second = run_drive_diagnosis(in, &c);
   EXPECT_TRUE(second.result.core.findings.empty()) << describe(second);
 }
@@ -207,8 +207,8 @@ TEST(DiagnoseDriveEffects, ScaleChangedSinceTheFactoryCalibration) {
     const TriadErrors& im = k.sensor == 0 ? run.result.core.improved.gyro : run.result.core.improved.accel;
     EXPECT_DOUBLE_EQ(im.M(k.axis, k.axis), g.M(k.axis, k.axis) + f.value[0]);
     EXPECT_DOUBLE_EQ(im.sigma_M(k.axis, k.axis), f.sigma[0]);
-    EXPECT_TRUE(run.result.core.improved_terms.gyro.scale.isZero(0));
-    EXPECT_TRUE(run.result.core.improved_terms.accel.scale.isZero(0));
+    EXPECT_TRUE(effect_triad(run.result.core.improved_terms, EffectId::scale_factor, 0).isZero(0));
+    EXPECT_TRUE(effect_triad(run.result.core.improved_terms, EffectId::scale_factor, 1).isZero(0));
   }
 }
 

@@ -64,48 +64,48 @@ TEST(DiagnoseEffects, GSensitivity) {
     EffectTerms fx;
     const int i = 2 * k, j = (2 * k + 1) % 3;
     const double v = (k ? -1 : 1) * (0.007 + 0.004 * k) * kDeg / kG0;  // 0.007, −0.011 °/s/g
-    fx.g_sensitivity(i, j) = v;
+    effect_matrix(fx, EffectId::g_sensitivity)(i, j) = v;
     expect_found(fx, EffectId::g_sensitivity, 0, i, j, v, 11 + k);
   }
 }
 
 TEST(DiagnoseEffects, ScaleNonlinearity) {
   EffectTerms fx;
-  fx.gyro.nonlinearity(1) = -2e-5;
+  effect_triad(fx, EffectId::scale_nonlinearity, 0)(1) = -2e-5;
   expect_found(fx, EffectId::scale_nonlinearity, 0, 1, 0, -2e-5, 22);
   EffectTerms fa;
-  fa.accel.nonlinearity(2) = 6e-5;
+  effect_triad(fa, EffectId::scale_nonlinearity, 1)(2) = 6e-5;
   expect_found(fa, EffectId::scale_nonlinearity, 1, 2, 0, 6e-5, 23);
 }
 
 TEST(DiagnoseEffects, ScaleAsymmetry) {
   EffectTerms fx;
-  fx.gyro.asymmetry(1) = 200e-6;
+  effect_triad(fx, EffectId::scale_asymmetry, 0)(1) = 200e-6;
   expect_found(fx, EffectId::scale_asymmetry, 0, 1, 0, 200e-6, 31);
   EffectTerms fa;
-  fa.accel.asymmetry(0) = -300e-6;
+  effect_triad(fa, EffectId::scale_asymmetry, 1)(0) = -300e-6;
   expect_found(fa, EffectId::scale_asymmetry, 1, 0, 0, -300e-6, 32);
 }
 
 TEST(DiagnoseEffects, TemperatureBias) {
   // The short plan's warm-up spans only ~2 K: the gyro term must stand out of the 5 °/h drift.
   EffectTerms fx;
-  fx.gyro.temp_bias(2) = 100 * kDegPerHour;
-  expect_found(fx, EffectId::temperature_bias, 0, 2, 0, fx.gyro.temp_bias(2), 41);
+  effect_triad(fx, EffectId::temperature_bias, 0)(2) = 100 * kDegPerHour;
+  expect_found(fx, EffectId::temperature_bias, 0, 2, 0, effect_triad(fx, EffectId::temperature_bias, 0)(2), 41);
   // Accelerometer temperature bias is not required here: on this 2 K warm-up it does not stand out
   // of the 0.1 mg Gauss–Markov drift at 0.5 mg/K (docs/diagnosis.md, detection limits).
 }
 
 TEST(DiagnoseEffects, TemperatureScale) {
   EffectTerms fx;
-  fx.gyro.temp_scale(0) = 400e-6;
+  effect_triad(fx, EffectId::temperature_scale, 0)(0) = 400e-6;
   expect_found(fx, EffectId::temperature_scale, 0, 0, 0, 400e-6, 51);
 }
 
 TEST(DiagnoseEffects, TimeOffset) {
   for (double tau : {0.3e-3}) {
     EffectTerms fx;
-    fx.time_offset_s = tau;
+    effect_vector<1>(fx, EffectId::time_offset)(0) = tau;
     expect_found(fx, EffectId::time_offset, 2, -1, 0, tau, 61 + (tau > 0));
   }
 }
@@ -113,15 +113,15 @@ TEST(DiagnoseEffects, TimeOffset) {
 TEST(DiagnoseEffects, LeverArm) {
   for (int k = 1; k < 2; ++k) {
     EffectTerms fx;
-    fx.lever_arm_m(k * 2) = k ? 0.004 : -0.002;
-    expect_found(fx, EffectId::lever_arm, 1, k * 2, k * 2, fx.lever_arm_m(k * 2), 71 + k);
+    effect_vector<3>(fx, EffectId::lever_arm)(k * 2) = k ? 0.004 : -0.002;
+    expect_found(fx, EffectId::lever_arm, 1, k * 2, k * 2, effect_vector<3>(fx, EffectId::lever_arm)(k * 2), 71 + k);
   }
 }
 
 TEST(DiagnoseEffects, TableWobble) {
   EffectTerms fx;
-  fx.wobble_rad(0) = 20.0 / 3600 * kDeg;
-  expect_found(fx, EffectId::table_wobble, 2, -1, 0, fx.wobble_rad(0), 81);
+  effect_vector<2>(fx, EffectId::table_wobble)(0) = 20.0 / 3600 * kDeg;
+  expect_found(fx, EffectId::table_wobble, 2, -1, 0, effect_vector<2>(fx, EffectId::table_wobble)(0), 81);
 }
 
 // The static-position part of the wobble (the table stands at θ + δ(θ), gravity turns about the
@@ -135,8 +135,8 @@ TEST(DiagnoseEffects, TableWobbleStaticPositions) {
   } cases[] = {{40, 353}, {-40, 387}};
   for (const auto& c : cases) {
     EffectTerms fx;
-    fx.wobble_rad(1) = c.arcsec / 3600 * kDeg;
-    expect_found(fx, EffectId::table_wobble, 2, -1, 1, fx.wobble_rad(1), c.seed, 5000 + c.seed);
+    effect_vector<2>(fx, EffectId::table_wobble)(1) = c.arcsec / 3600 * kDeg;
+    expect_found(fx, EffectId::table_wobble, 2, -1, 1, effect_vector<2>(fx, EffectId::table_wobble)(1), c.seed, 5000 + c.seed);
   }
 }
 
@@ -151,8 +151,8 @@ TEST(DiagnoseEffects, Misalignment) {
   } cases[] = {{1, 60, 91}, {0, -30, 92}};
   for (const auto& c : cases) {
     EffectTerms fx;
-    fx.table_tilt_rad(c.axis) = c.arcsec / 3600 * kDeg;
-    expect_found(fx, EffectId::misalignment, 2, -1, c.axis, fx.table_tilt_rad(c.axis), c.seed);
+    effect_vector<2>(fx, EffectId::misalignment)(c.axis) = c.arcsec / 3600 * kDeg;
+    expect_found(fx, EffectId::misalignment, 2, -1, c.axis, effect_vector<2>(fx, EffectId::misalignment)(c.axis), c.seed);
   }
 }
 
@@ -171,14 +171,14 @@ TEST(DiagnoseEffects, CleanRecordingsHaveNoFinding) {
 
 TEST(DiagnoseEffects, TwoEffectsAtOnce) {
   EffectTerms fx;
-  fx.g_sensitivity(0, 2) = 0.008 * kDeg / kG0;
-  fx.lever_arm_m(1) = 0.003;
+  effect_matrix(fx, EffectId::g_sensitivity)(0, 2) = 0.008 * kDeg / kG0;
+  effect_vector<3>(fx, EffectId::lever_arm)(1) = 0.003;
   const DiagRun r = diagnose_sim(fx, 201);
   const DiagFinding* g = find(r, EffectId::g_sensitivity);
   const DiagFinding* l = find(r, EffectId::lever_arm);
   ASSERT_NE(g, nullptr) << summary(r);
   ASSERT_NE(l, nullptr) << summary(r);
-  EXPECT_NEAR(g->value[2], fx.g_sensitivity(0, 2), 0.2 * fx.g_sensitivity(0, 2));
+  EXPECT_NEAR(g->value[2], effect_matrix(fx, EffectId::g_sensitivity)(0, 2), 0.2 * effect_matrix(fx, EffectId::g_sensitivity)(0, 2));
   EXPECT_NEAR(l->value[1], 0.003, 0.2 * 0.003);
   EXPECT_EQ(r.result.findings.size(), 2u) << summary(r);
 }

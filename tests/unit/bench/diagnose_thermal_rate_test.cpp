@@ -129,24 +129,24 @@ TEST(DiagnoseThermalRate, DiagnosisDerivativeFollowsTheTrueRate) {
 // Gyro: 5 °/h per K/min on y (at 5 K/min: 25 °/h of extra bias while heating, −25 °/h cooling).
 TEST(DiagnoseThermalRate, GyroThermalLag) {
   EffectTerms fx;
-  fx.gyro.temp_rate(1) = 5 * kDegPerHour * kPerKPerMin;
-  expect_only(fx, EffectId::temperature_rate, 0, 1, fx.gyro.temp_rate(1), 1);
+  effect_triad(fx, EffectId::temperature_rate, 0)(1) = 5 * kDegPerHour * kPerKPerMin;
+  expect_only(fx, EffectId::temperature_rate, 0, 1, effect_triad(fx, EffectId::temperature_rate, 0)(1), 1);
 }
 
 // Accelerometer: −0.3 mg per K/min on x (±1.5 mg on the ramps; found by Δχ² from ~0.1 mg per K/min,
 // but the drift model absorbs the per-step figure below ~0.3).
 TEST(DiagnoseThermalRate, AccelThermalLag) {
   EffectTerms fx;
-  fx.accel.temp_rate(0) = -0.3 * kMilliG * kPerKPerMin;
-  expect_only(fx, EffectId::temperature_rate, 1, 0, fx.accel.temp_rate(0), 2);
+  effect_triad(fx, EffectId::temperature_rate, 1)(0) = -0.3 * kMilliG * kPerKPerMin;
+  expect_only(fx, EffectId::temperature_rate, 1, 0, effect_triad(fx, EffectId::temperature_rate, 1)(0), 2);
 }
 
 // A temperature-dependent bias alone on the same up-and-down plan is named temperature_bias, not
 // temperature_rate (and the rate terms above were not named temperature_bias: exactly one finding).
 TEST(DiagnoseThermalRate, TemperatureBiasIsNotTakenForThermalLag) {
   EffectTerms fx;
-  fx.gyro.temp_bias(2) = 9 * kDegPerHour;
-  expect_only(fx, EffectId::temperature_bias, 0, 2, fx.gyro.temp_bias(2), 3);
+  effect_triad(fx, EffectId::temperature_bias, 0)(2) = 9 * kDegPerHour;
+  expect_only(fx, EffectId::temperature_bias, 0, 2, effect_triad(fx, EffectId::temperature_bias, 0)(2), 3);
 }
 
 // On a warm-up alone (the diagnosis plan: ~2 K, rising exponentially) T − T_end ∝ dT/dt, so a bias
@@ -157,7 +157,7 @@ TEST(DiagnoseThermalRate, WarmUpAloneDeclaresBiasAndLagIndistinguishable) {
   for (std::uint64_t seed : {41, 42}) {
     EffectTerms fx;
     const int axis = static_cast<int>(seed % 3);
-    fx.gyro.temp_bias(axis) = 100 * kDegPerHour;
+    effect_triad(fx, EffectId::temperature_bias, 0)(axis) = 100 * kDegPerHour;
     BenchSimOptions so;
     so.seed = seed;
     so.effects = fx;
@@ -180,21 +180,21 @@ TEST(DiagnoseThermalRate, WarmUpAloneDeclaresBiasAndLagIndistinguishable) {
 // The JSON key round trip (IMPROVED.json, --effects) and the --inject option.
 TEST(DiagnoseThermalRate, JsonKeyAndInjectOption) {
   EffectTerms e, s;
-  e.gyro.temp_rate = Vec3(1e-3, -2e-3, 3e-3);
-  e.accel.temp_rate(2) = 4e-2;
-  s.gyro.temp_rate = Vec3(1e-4, 1e-4, 2e-4);
+  effect_triad(e, EffectId::temperature_rate, 0) = Vec3(1e-3, -2e-3, 3e-3);
+  effect_triad(e, EffectId::temperature_rate, 1)(2) = 4e-2;
+  effect_triad(s, EffectId::temperature_rate, 0) = Vec3(1e-4, 1e-4, 2e-4);
   nlohmann::json j = nlohmann::json::object();
   effects_to_json(e, s, j);
   ASSERT_TRUE(j.contains("temperature_rate"));
   EffectTerms s2;
   const EffectTerms e2 = effects_from_json(j, "test", &s2);
-  EXPECT_TRUE(e2.gyro.temp_rate.isApprox(e.gyro.temp_rate));
-  EXPECT_TRUE(e2.accel.temp_rate.isApprox(e.accel.temp_rate));
-  EXPECT_TRUE(s2.gyro.temp_rate.isApprox(s.gyro.temp_rate));
-  EXPECT_TRUE(e2.gyro.temp_bias.isZero(0));
+  EXPECT_TRUE(effect_triad(e2, EffectId::temperature_rate, 0).isApprox(effect_triad(e, EffectId::temperature_rate, 0)));
+  EXPECT_TRUE(effect_triad(e2, EffectId::temperature_rate, 1).isApprox(effect_triad(e, EffectId::temperature_rate, 1)));
+  EXPECT_TRUE(effect_triad(s2, EffectId::temperature_rate, 0).isApprox(effect_triad(s, EffectId::temperature_rate, 0)));
+  EXPECT_TRUE(effect_triad(e2, EffectId::temperature_bias, 0).isZero(0));
   EffectTerms k;
   apply_inject_option("temperature_rate:sensor=accel,axis=y,value=0.02", k);
-  EXPECT_DOUBLE_EQ(k.accel.temp_rate(1), 0.02);
+  EXPECT_DOUBLE_EQ(effect_triad(k, EffectId::temperature_rate, 1)(1), 0.02);
   EXPECT_TRUE(k.any_sensor_side());
   // The term adds r·dT/dt to the output.
   EffectContext c;

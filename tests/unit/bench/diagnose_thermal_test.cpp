@@ -81,20 +81,20 @@ TEST(DiagnoseThermal, PlanSweepsTheTemperature) {
 // Gyro: bias 0.0025 °/s/K on x and scale 40 ppm/K on z (the spinning axes of all three mounts).
 TEST(DiagnoseThermal, GyroTemperatureBiasAndScale) {
   EffectTerms fx;
-  fx.gyro.temp_bias(0) = 9 * kDegPerHour;
-  fx.gyro.temp_scale(2) = 40 * kPpm;
-  expect_found(fx, {{EffectId::temperature_bias, 0, 0, fx.gyro.temp_bias(0)},
-                    {EffectId::temperature_scale, 0, 2, fx.gyro.temp_scale(2)}}, 1);
+  effect_triad(fx, EffectId::temperature_bias, 0)(0) = 9 * kDegPerHour;
+  effect_triad(fx, EffectId::temperature_scale, 0)(2) = 40 * kPpm;
+  expect_found(fx, {{EffectId::temperature_bias, 0, 0, effect_triad(fx, EffectId::temperature_bias, 0)(0)},
+                    {EffectId::temperature_scale, 0, 2, effect_triad(fx, EffectId::temperature_scale, 0)(2)}}, 1);
 }
 
 // Accelerometers: bias −0.05 mg/K on y and scale −40 ppm/K on x. (A 2 mg ramp over the 11-minute
 // run is largely absorbed by the drift model in the systematic-residual figure: detection is by Δχ².)
 TEST(DiagnoseThermal, AccelTemperatureBiasAndScale) {
   EffectTerms fx;
-  fx.accel.temp_bias(1) = -0.05 * kMilliG;
-  fx.accel.temp_scale(0) = -40 * kPpm;
-  expect_found(fx, {{EffectId::temperature_bias, 1, 1, fx.accel.temp_bias(1)},
-                    {EffectId::temperature_scale, 1, 0, fx.accel.temp_scale(0)}}, 2);
+  effect_triad(fx, EffectId::temperature_bias, 1)(1) = -0.05 * kMilliG;
+  effect_triad(fx, EffectId::temperature_scale, 1)(0) = -40 * kPpm;
+  expect_found(fx, {{EffectId::temperature_bias, 1, 1, effect_triad(fx, EffectId::temperature_bias, 1)(1)},
+                    {EffectId::temperature_scale, 1, 0, effect_triad(fx, EffectId::temperature_scale, 1)(0)}}, 2);
 }
 
 TEST(DiagnoseThermal, CleanRecordingHasNoFinding) {

@@ -10,6 +10,7 @@
 
 #include "bench/bench_recording.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/diagnosis/catalogue.hpp"
 #include "common/units.hpp"
@@ -97,7 +98,7 @@ TEST(DiagnoseWobbleAxis, DerivedFromTheRecordingPerMounting) {
 TEST(DiagnoseWobbleAxis, StaticPredictionMatchesTheTurnedTable) {
   const SiteEarth earth(Site{55.75, 37.62, 150.0});
   EffectTerms e;
-  e.wobble_rad = Eigen::Vector2d(30.0, -20.0) / 3600 * kDeg;
+  effect_vector<2>(e, EffectId::table_wobble) = Eigen::Vector2d(30.0, -20.0) / 3600 * kDeg;
   int with_signal = 0;
   for (int mount = 0; mount < 3; ++mount)
     for (double outer : {0.0, 50.0, 90.0, 135.0})
@@ -107,7 +108,7 @@ TEST(DiagnoseWobbleAxis, StaticPredictionMatchesTheTurnedTable) {
         i.angle = inner * kDeg;
         const BenchKinematics nominal = bench_kinematics(earth, o, i, mount);
         AxisState it = i;
-        it.angle += wobble_angle(e.wobble_rad, i.angle);
+        it.angle += wobble_angle(effect_vector<2>(e, EffectId::table_wobble), i.angle);
         const BenchKinematics turned = bench_kinematics(earth, o, it, mount);
         SubBlock s;
         s.w = nominal.w_ib_b;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bench/drive/route_toml.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "common/units.hpp"
 
@@ -35,7 +36,7 @@ Jumps simulate_jumps(const RouteFile& rf, double time_offset_s, double until_s) 
   cfg.lever_arm = rf.lever_arm_m;
   cfg.reference.rate_hz = 0;
   cfg.gnss.rate_hz = 0;
-  cfg.effects.time_offset_s = time_offset_s;
+  effect_vector<1>(cfg.effects, EffectId::time_offset)(0) = time_offset_s;
   Jumps j;
   bool first = true;
   SimImu prev;

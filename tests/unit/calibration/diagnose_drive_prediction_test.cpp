@@ -6,6 +6,7 @@
 
 #include "calibration/diagnosis/drive_data.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/ins/strapdown.hpp"
 #include "common/units.hpp"
 
@@ -144,7 +145,7 @@ TEST(DiagnoseDrivePrediction, PerfectSensorAndReferenceMatchPrediction) {
 
 TEST(DiagnoseDrivePrediction, TimeOffsetShowsAsRateDerivative) {
   EffectTerms fx;
-  fx.time_offset_s = 0.01;
+  effect_vector<1>(fx, EffectId::time_offset)(0) = 0.01;
   DriveDiagData d;
   run(fx, true, &d);
   // measured − predicted ≈ −τ·ω̇ on every interval where the rate changes.
@@ -160,7 +161,7 @@ TEST(DiagnoseDrivePrediction, TimeOffsetShowsAsRateDerivative) {
 
 TEST(DiagnoseDrivePrediction, LeverArmOffsetShowsInAccelerometers) {
   EffectTerms fx;
-  fx.lever_arm_m = Vec3(0.0, 0.1, 0.0);
+  effect_vector<3>(fx, EffectId::lever_arm) = Vec3(0.0, 0.1, 0.0);
   DriveDiagData d;
   const Residual r = run(fx, true, &d);
   EXPECT_LT(r.gyro_max, 3 * units::kDegPerHour);  // the gyros do not see a lever arm

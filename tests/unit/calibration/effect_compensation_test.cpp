@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 
+#include "calibration/effects/effect_registry.hpp"
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/effects/effect_compensation.hpp"
 #include "common/units.hpp"
@@ -126,44 +127,44 @@ TEST(EffectCompensation, EachSimulatorTermIsRemoved) {
   std::map<std::string, EffectTerms> cases;
   {
     EffectTerms e;
-    e.g_sensitivity(0, 1) = 6e-5;
-    e.g_sensitivity(2, 0) = -8e-5;
-    e.g_sensitivity(1, 2) = 4e-5;
+    effect_matrix(e, EffectId::g_sensitivity)(0, 1) = 6e-5;
+    effect_matrix(e, EffectId::g_sensitivity)(2, 0) = -8e-5;
+    effect_matrix(e, EffectId::g_sensitivity)(1, 2) = 4e-5;
     cases["g_sensitivity"] = e;
   }
   {
     EffectTerms e;
-    e.gyro.nonlinearity = Vec3(2e-3, -3e-3, 4e-3);
-    e.accel.nonlinearity = Vec3(1e-3, -1e-3, 2e-4);
+    effect_triad(e, EffectId::scale_nonlinearity, 0) = Vec3(2e-3, -3e-3, 4e-3);
+    effect_triad(e, EffectId::scale_nonlinearity, 1) = Vec3(1e-3, -1e-3, 2e-4);
     cases["scale_nonlinearity"] = e;
   }
   {
     EffectTerms e;
-    e.gyro.asymmetry = Vec3(500e-6, -300e-6, 800e-6);
-    e.accel.asymmetry = Vec3(-2000e-6, 1000e-6, 300e-6);
+    effect_triad(e, EffectId::scale_asymmetry, 0) = Vec3(500e-6, -300e-6, 800e-6);
+    effect_triad(e, EffectId::scale_asymmetry, 1) = Vec3(-2000e-6, 1000e-6, 300e-6);
     cases["scale_asymmetry"] = e;
   }
   {
     EffectTerms e;
-    e.lever_arm_m = Vec3(0.03, -0.04, 0.02);
+    effect_vector<3>(e, EffectId::lever_arm) = Vec3(0.03, -0.04, 0.02);
     cases["lever_arm"] = e;
   }
   {
     EffectTerms e;  // all at once, with a time offset
-    e.g_sensitivity(0, 1) = 6e-5;
-    e.gyro.nonlinearity(2) = 4e-3;
-    e.gyro.asymmetry(2) = 800e-6;
-    e.accel.asymmetry(0) = 2000e-6;
-    e.lever_arm_m = Vec3(0.03, -0.04, 0.0);
-    e.time_offset_s = 3.0 / 200.0;
+    effect_matrix(e, EffectId::g_sensitivity)(0, 1) = 6e-5;
+    effect_triad(e, EffectId::scale_nonlinearity, 0)(2) = 4e-3;
+    effect_triad(e, EffectId::scale_asymmetry, 0)(2) = 800e-6;
+    effect_triad(e, EffectId::scale_asymmetry, 1)(0) = 2000e-6;
+    effect_vector<3>(e, EffectId::lever_arm) = Vec3(0.03, -0.04, 0.0);
+    effect_vector<1>(e, EffectId::time_offset)(0) = 3.0 / 200.0;
     cases["all"] = e;
   }
   for (const auto& [name, e] : cases) {
-    const int shift = static_cast<int>(std::lround(e.time_offset_s * 200.0));
+    const int shift = static_cast<int>(std::lround(effect_vector<1>(e, EffectId::time_offset)(0) * 200.0));
     Rms plain, comp;
     residuals(e, 200, shift, plain, comp);
     SCOPED_TRACE(name);
-    const bool gyro_terms = !e.g_sensitivity.isZero(0) || !e.gyro.nonlinearity.isZero(0) || !e.gyro.asymmetry.isZero(0);
+    const bool gyro_terms = !effect_matrix(e, EffectId::g_sensitivity).isZero(0) || !effect_triad(e, EffectId::scale_nonlinearity, 0).isZero(0) || !effect_triad(e, EffectId::scale_asymmetry, 0).isZero(0);
     // The injected term shows without compensation and is gone (to < 2 %) with it.
     if (gyro_terms) {
       EXPECT_GT(plain.gyro, 1e-5) << plain.gyro;
@@ -171,7 +172,7 @@ TEST(EffectCompensation, EachSimulatorTermIsRemoved) {
     } else {
       EXPECT_LT(comp.gyro, 1e-9);
     }
-    const bool accel_terms = !e.accel.nonlinearity.isZero(0) || !e.accel.asymmetry.isZero(0) || !e.lever_arm_m.isZero(0);
+    const bool accel_terms = !effect_triad(e, EffectId::scale_nonlinearity, 1).isZero(0) || !effect_triad(e, EffectId::scale_asymmetry, 1).isZero(0) || !effect_vector<3>(e, EffectId::lever_arm).isZero(0);
     if (accel_terms) {
       EXPECT_GT(plain.accel, 1e-4) << plain.accel;
       EXPECT_LT(comp.accel, 0.02 * plain.accel) << plain.accel << " -> " << comp.accel;
@@ -184,7 +185,7 @@ TEST(EffectCompensation, EachSimulatorTermIsRemoved) {
 TEST(EffectCompensation, TimeOffsetSignRoundTrips) {
   for (int shift : {4, -4}) {
     EffectTerms e;
-    e.time_offset_s = shift / 200.0;  // the simulator: the sample stamped t saw the motion at t − τ
+    effect_vector<1>(e, EffectId::time_offset)(0) = shift / 200.0;  // the simulator: the sample stamped t saw the motion at t − τ
     Rms plain, comp, wrong;
     residuals(e, 200, shift, plain, comp);
     SCOPED_TRACE(shift);
@@ -208,10 +209,10 @@ TEST(EffectCompensation, TimeOffsetSignRoundTrips) {
 TEST(EffectCompensation, TemperatureTermsNeedATemperature) {
   EffectTerms e;
   e.t0_c = 25;
-  e.gyro.temp_bias = Vec3(1e-5, -2e-5, 3e-5);
-  e.gyro.temp_scale = Vec3(40e-6, 0, -20e-6);
-  e.accel.temp_bias = Vec3(5e-4, 0, -5e-4);
-  e.gyro.temp_rate = Vec3(1e-3, 0, 0);  // needs dT/dt: never applied
+  effect_triad(e, EffectId::temperature_bias, 0) = Vec3(1e-5, -2e-5, 3e-5);
+  effect_triad(e, EffectId::temperature_scale, 0) = Vec3(40e-6, 0, -20e-6);
+  effect_triad(e, EffectId::temperature_bias, 1) = Vec3(5e-4, 0, -5e-4);
+  effect_triad(e, EffectId::temperature_rate, 0) = Vec3(1e-3, 0, 0);  // needs dT/dt: never applied
   const SensorErrors set = unit_errors();
   const TriadCorrector cg(set.gyro), ca(set.accel);
   ImuEffectCompensator c(e, set);
@@ -223,7 +224,7 @@ TEST(EffectCompensation, TemperatureTermsNeedATemperature) {
     ctx.f = f;
     ctx.temp_c = temp;
     EffectTerms inj = e;
-    inj.gyro.temp_rate.setZero();
+    effect_triad(inj, EffectId::temperature_rate, 0).setZero();
     Vec3 dg, da;
     sensor_side_terms(inj, ctx, dg, da);
     Vec3 yw = (Mat3::Identity() + set.gyro.M) * w + set.gyro.bias + dg;
@@ -243,8 +244,8 @@ TEST(EffectCompensation, TemperatureTermsNeedATemperature) {
 
 TEST(EffectCompensation, IncrementsEqualRatesTimesDt) {
   EffectTerms e;
-  e.gyro.nonlinearity = Vec3(2e-3, 0, 4e-3);
-  e.g_sensitivity(1, 0) = 5e-5;
+  effect_triad(e, EffectId::scale_nonlinearity, 0) = Vec3(2e-3, 0, 4e-3);
+  effect_matrix(e, EffectId::g_sensitivity)(1, 0) = 5e-5;
   ImuEffectCompensator a(e, unit_errors()), b(e, unit_errors());
   Vec3 w(0.4, 0.1, -0.6), f(1.0, 0.5, -9.7);
   Vec3 dth = w * 0.005, dv = f * 0.005;
@@ -256,12 +257,12 @@ TEST(EffectCompensation, IncrementsEqualRatesTimesDt) {
 
 TEST(EffectCompensation, DriveUseNamesAppliedAndIgnored) {
   EffectTerms e;
-  e.time_offset_s = -0.016;
-  e.lever_arm_m(0) = 0.01;
-  e.gyro.temp_bias(0) = 1e-5;
-  e.accel.temp_rate(1) = 1e-4;
-  e.table_tilt_rad(0) = 1e-4;
-  e.wobble_rad(1) = 1e-5;
+  effect_vector<1>(e, EffectId::time_offset)(0) = -0.016;
+  effect_vector<3>(e, EffectId::lever_arm)(0) = 0.01;
+  effect_triad(e, EffectId::temperature_bias, 0)(0) = 1e-5;
+  effect_triad(e, EffectId::temperature_rate, 1)(1) = 1e-4;
+  effect_vector<2>(e, EffectId::misalignment)(0) = 1e-4;
+  effect_vector<2>(e, EffectId::table_wobble)(1) = 1e-5;
   const EffectUse no_t = drive_effect_use(e, false);
   EXPECT_EQ(no_t.applied, (std::vector<std::string>{"lever_arm", "time_offset"}));
   std::vector<std::string> ign;
