@@ -4,7 +4,7 @@
 // reset at every plan step (constant during the step, independent between steps).
 //
 // State of one triad, blocks in this order (offsets computed from the sizes, the same rule as
-// the in-motion filter's blocks, inmotion/state_blocks.hpp):
+// the in-motion filter's blocks, calibration/filter/block_layout.hpp):
 //   bias  b (3)        constant part of the drift / bias
 //   M     M (9)        row-major: M[i][j] at M + 3i + j (scale on the diagonal, skews off it)
 //   drift d (3)        in-run drift, first-order Gauss–Markov (data-sheet σ, τ)
@@ -13,14 +13,14 @@
 #include <cmath>
 
 #include "calibration/bench_fit.hpp"
-#include "calibration/inmotion/state_blocks.hpp"
+#include "calibration/filter/block_layout.hpp"
 
 namespace calbench {
 namespace {
 
 enum BenchState { kBiasBlock, kMBlock, kDriftBlock, kBenchBlock, kBlockCount };
 constexpr std::array<int, kBlockCount> kSizes = {3, 9, 3, 3};
-constexpr auto kOffsets = inmotion::offsets_from_sizes(kSizes);
+constexpr auto kOffsets = filter::offsets_from_sizes(kSizes);
 constexpr int kBias = kOffsets[kBiasBlock];
 constexpr int kM = kOffsets[kMBlock];
 constexpr int kDrift = kOffsets[kDriftBlock];

@@ -7,10 +7,7 @@
 namespace calbench {
 
 namespace {
-std::vector<std::string> series_columns(int n_states) {
-  std::vector<std::string> state_cols(inmotion::state_names().begin(), inmotion::state_names().end());
-  if (n_states == inmotion::kStatesAug)
-    state_cols.insert(state_cols.end(), inmotion::aux_state_names().begin(), inmotion::aux_state_names().end());
+std::vector<std::string> series_columns(const std::vector<std::string>& state_cols) {
   std::vector<std::string> cols(1, "t_s");
   for (const auto& n : state_cols) cols.push_back(n);
   for (const auto& n : state_cols) cols.push_back("sigma_" + n);
@@ -20,8 +17,10 @@ std::vector<std::string> series_columns(int n_states) {
 }
 }  // namespace
 
-DriveSeries::DriveSeries(const std::string& path, int n_states, const std::string& comment)
-    : n_(n_states), w_(std::make_unique<CsvWriter>(path, series_columns(n_states), comment)), row_(w_->columns()) {}
+DriveSeries::DriveSeries(const std::string& path, const std::vector<std::string>& state_columns, const std::string& comment)
+    : n_(static_cast<int>(state_columns.size())),
+      w_(std::make_unique<CsvWriter>(path, series_columns(state_columns), comment)),
+      row_(w_->columns()) {}
 
 void DriveSeries::row(double t, const double* x, const double* sigma, const double* total, const double* total_sigma) {
   row_[0] = t;

@@ -13,9 +13,9 @@ namespace calbench {
 
 class DriveSeries {
  public:
-  // n_states: the filter's layout (inmotion::kStates, or kStatesAug with the exp-cosine aux blocks).
-  DriveSeries(const std::string& path, int n_states, const std::string& comment);
-  // x, sigma: n_states values; total, total_sigma: 6 values each.
+  // state_columns: the series names of the filter's layout (InMotionFilter::column_names()).
+  DriveSeries(const std::string& path, const std::vector<std::string>& state_columns, const std::string& comment);
+  // x, sigma: one value per state column; total, total_sigma: 6 values each.
   void row(double t, const double* x, const double* sigma, const double* total, const double* total_sigma);
   void close() { w_->close(); }
 

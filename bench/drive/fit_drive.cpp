@@ -298,7 +298,6 @@ nlohmann::json determined_by(const inmotion::ParameterPriors& prior, const inmot
           {"mounting", m}};
 }
 
-template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss);
@@ -383,26 +382,27 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
     fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
   }
-  if (inmotion::needs_augmented_layout(cfg))
-    return run_fit<inmotion::InMotionFilterAug>(args, cfg, bench, t0, t1, models, fx, pc, gnss);
-  return run_fit<inmotion::InMotionFilter>(args, cfg, bench, t0, t1, models, fx, pc, gnss);
+  return run_fit(args, cfg, bench, t0, t1, models, fx, pc, gnss);
 }
 
 namespace {
 
-template <class Filter>
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss) {
   using namespace units;
-  constexpr int N = Filter::kN;
+  using Filter = inmotion::InMotionFilter;
+  // The series columns of the layout this configuration gives (the filter builds the same one).
+  std::vector<std::string> columns;
+  for (const inmotion::BlockSpec* b : inmotion::make_layout(cfg).specs)
+    for (int i = 0; i < b->size; ++i) columns.push_back(b->columns[i]);
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
                  gnss ? Aiding::gnss : Aiding::reference);
   const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};  // observations: position, velocity, attitude
   std::unique_ptr<Filter> f;
   std::unique_ptr<DriveSeries> series;
   if (!a.series.empty() && !a.smooth)
-    series = std::make_unique<DriveSeries>(a.series, N, "in-motion filter estimates (forward pass), totals and 1-sigma");
+    series = std::make_unique<DriveSeries>(a.series, columns, "in-motion filter estimates (forward pass), totals and 1-sigma");
   auto override_sigma = [&](inmotion::RefObs& r) {
     if (a.sigma_pos > 0) r.sigma_pos = a.sigma_pos;
     if (a.sigma_vel > 0) r.sigma_vel = a.sigma_vel;
@@ -428,8 +428,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
           if (used[k]) a.on_innovation(k, f->last_innovation(k));
       }
       if (took && series) {
-        typename Filter::Vec x, s;
-        typename Filter::Vec6 tx, ts;
+        Filter::Vec x, s;
+        Filter::Vec6 tx, ts;
         f->totals(x, s);
         f->total_drift(tx, ts);
         series->row(e.t, x.data(), s.data(), tx.data(), ts.data());
@@ -455,7 +455,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   if (a.smooth) {
     const auto sm = f->smooth();
     if (!a.series.empty()) {
-      DriveSeries w(a.series, N, "in-motion estimates after the RTS smoother (sensor states smoothed; navigation states from the forward pass)");
+      DriveSeries w(a.series, columns, "in-motion estimates after the RTS smoother (sensor states smoothed; navigation states from the forward pass)");
       for (const auto& ep : sm) w.row(ep.t, ep.x.data(), ep.sigma.data(), ep.total.data(), ep.total_sigma.data());
       w.close();
     }
@@ -534,7 +534,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     j["priors"]["warning"] = w;
   }
   // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
-  const Vec3 mount_sigma = f->P().template block<3, 3>(inmotion::kMount, inmotion::kMount).diagonal().cwiseSqrt();
+  const int mo = f->offset(inmotion::Block::mount);
+  const Vec3 mount_sigma = mo >= 0 ? Vec3(f->P().block<3, 3>(mo, mo).diagonal().cwiseSqrt()) : Vec3::Zero();
   j["determined_by"] = determined_by(pc.report.sigma_raw, inmotion::sigma_of(total, mount_sigma), bench);
   if (fx.present) {
     // The catalogue terms are part of the sensor model of the result too (qc applies them).

@@ -8,13 +8,13 @@
 
 namespace calbench::inmotion {
 
-void expcos_drift_block(const identification::ShapingFilter& f, int aux, int drift, StateMatN<kStatesAug>& F) {
+void expcos_drift_block(const identification::ShapingFilter& f, int aux, int drift, FRef F) {
   const int idx[2] = {aux, drift};
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 2; ++c) F(idx[r], idx[c]) = f.A(r, c);
 }
 
-void expcos_drift_noise(const identification::DiscreteShapingFilter& d, int aux, int drift, StateMatN<kStatesAug>& Q) {
+void expcos_drift_noise(const identification::DiscreteShapingFilter& d, int aux, int drift, FRef Q) {
   const int idx[2] = {aux, drift};
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 2; ++c) Q(idx[r], idx[c]) = d.Qd(r, c);

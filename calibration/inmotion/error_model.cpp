@@ -27,19 +27,18 @@ void FAccumulator::add(const Mat3& C_nb, const Mat3& A_g, const Mat3& A_a, const
   T += dt;
 }
 
-template <int N>
-void nav_block(const NavBlockInputs& in, StateMatN<N>& F) {
+void nav_block(const NavBlockInputs& in, FRef F) {
   const ins::LocalEarth& e = in.earth;
   const double rm = e.r.RM + in.h, rn = e.r.RN + in.h;
   const Vec3 w_in = e.w_ie + e.w_en;
   // δṙ = δv (curvature terms of order v/R neglected).
-  F.template block<3, 3>(kPos, kVel) = Mat3::Identity();
+  F.block<3, 3>(kPos, kVel) = Mat3::Identity();
   // δv̇ = f^n×φ − (2ω_ie + ω_en)×δv + δg (vertical: ∂g/∂(down) = 2g/R) + C δf.
-  F.template block<3, 3>(kVel, kAtt) = skew(in.f_n);
-  F.template block<3, 3>(kVel, kVel) = -skew(2 * e.w_ie + e.w_en);
+  F.block<3, 3>(kVel, kAtt) = skew(in.f_n);
+  F.block<3, 3>(kVel, kVel) = -skew(2 * e.w_ie + e.w_en);
   F(kVel + 2, kPos + 2) = 2.0 * e.g(2) / std::sqrt(rm * rn);
   // φ̇ = −ω_in×φ + δω_in − C δω_ib; δω_en from δv.
-  F.template block<3, 3>(kAtt, kAtt) = -skew(w_in);
+  F.block<3, 3>(kAtt, kAtt) = -skew(w_in);
   F(kAtt + 0, kVel + 1) = 1.0 / rn;
   F(kAtt + 1, kVel + 0) = -1.0 / rm;
   F(kAtt + 2, kVel + 1) = -std::tan(in.lat) / rn;
@@ -49,41 +48,32 @@ void nav_block(const NavBlockInputs& in, StateMatN<N>& F) {
   F(kAtt + 2, kPos + 0) = -W * std::cos(in.lat) / rm;
 }
 
-template <int N>
-void gyro_blocks(const FAccumulator& acc, StateMatN<N>& F) {
+void gyro_bias_jacobian(const FAccumulator& acc, int col, FRef F) {
   if (!(acc.T > 0)) return;
   const double k = 1.0 / acc.T;
-  // φ̇ ∋ −C δω = +C A (δb + δd + δM ω).
-  F.template block<3, 3>(kAtt, kBg) = acc.att_bg * k;
-  F.template block<3, 3>(kAtt, kDg) = acc.att_bg * k;
-  F.template block<3, 9>(kAtt, kMg) = acc.att_mg * k;
+  F.block<3, 3>(kAtt, col) = acc.att_bg * k;
 }
 
-template <int N>
-void accel_blocks(const FAccumulator& acc, StateMatN<N>& F) {
+void gyro_M_jacobian(const FAccumulator& acc, int col, FRef F) {
   if (!(acc.T > 0)) return;
   const double k = 1.0 / acc.T;
-  // δv̇ ∋ C δf = −C A (δb + δd + δM f).
-  F.template block<3, 3>(kVel, kBa) = -acc.vel_ba * k;
-  F.template block<3, 3>(kVel, kDa) = -acc.vel_ba * k;
-  F.template block<3, 9>(kVel, kMa) = -acc.vel_ma * k;
+  F.block<3, 9>(kAtt, col) = acc.att_mg * k;
 }
 
-template <int N>
-void drift_blocks(const Vec3& alpha_g, const Vec3& alpha_a, StateMatN<N>& F) {
-  for (int i = 0; i < 3; ++i) {
-    F(kDg + i, kDg + i) = -alpha_g(i);
-    F(kDa + i, kDa + i) = -alpha_a(i);
-  }
+void accel_bias_jacobian(const FAccumulator& acc, int col, FRef F) {
+  if (!(acc.T > 0)) return;
+  const double k = 1.0 / acc.T;
+  F.block<3, 3>(kVel, col) = -acc.vel_ba * k;
 }
 
-#define CALBENCH_INSTANTIATE(N)                                                   \
-  template void nav_block<N>(const NavBlockInputs&, StateMatN<N>&);              \
-  template void gyro_blocks<N>(const FAccumulator&, StateMatN<N>&);              \
-  template void accel_blocks<N>(const FAccumulator&, StateMatN<N>&);             \
-  template void drift_blocks<N>(const Vec3&, const Vec3&, StateMatN<N>&);
-CALBENCH_INSTANTIATE(kStates)
-CALBENCH_INSTANTIATE(kStatesAug)
-#undef CALBENCH_INSTANTIATE
+void accel_M_jacobian(const FAccumulator& acc, int col, FRef F) {
+  if (!(acc.T > 0)) return;
+  const double k = 1.0 / acc.T;
+  F.block<3, 9>(kVel, col) = -acc.vel_ma * k;
+}
+
+void drift_jacobian(const Vec3& alpha, int off, FRef F) {
+  for (int i = 0; i < 3; ++i) F(off + i, off + i) = -alpha(i);
+}
 
 }  // namespace calbench::inmotion

@@ -37,24 +37,25 @@ struct NavBlockInputs {
   Vec3 f_n = Vec3::Zero();  // mean specific force over the interval
   ins::LocalEarth earth;
 };
-// Each takes the default (kStates) or the augmented (kStatesAug) layout's F.
-template <int N>
-void nav_block(const NavBlockInputs& in, StateMatN<N>& F);
-// Gyro: drift, in-run drift and M into the attitude rows (mean over the interval).
-template <int N>
-void gyro_blocks(const FAccumulator& acc, StateMatN<N>& F);
-// Accelerometer: bias, in-run drift and M into the velocity rows.
-template <int N>
-void accel_blocks(const FAccumulator& acc, StateMatN<N>& F);
-// Shaping filters of the in-run drifts (eq 22): δḋ = −α·δd + σ√(2α)·ξ.
-template <int N>
-void drift_blocks(const Vec3& alpha_g, const Vec3& alpha_a, StateMatN<N>& F);
+// Each writes its rows of F (any layout: the offsets of the blocks are fixed, the state may be longer).
+using FRef = Eigen::Ref<Eigen::MatrixXd>;
+void nav_block(const NavBlockInputs& in, FRef F);
+// The sensor blocks' columns, each block's own (called by its declaration, state_blocks.cpp), as
+// the mean over the interval of the accumulated sums:
+//   φ̇ ∋ −C δω = +C A (δb + δd + δM ω)      (gyro bias and in-run drift at `col`, M at `col`)
+//   δv̇ ∋ C δf = −C A (δb + δd + δM f)       (accelerometer likewise)
+void gyro_bias_jacobian(const FAccumulator& acc, int col, FRef F);
+void gyro_M_jacobian(const FAccumulator& acc, int col, FRef F);
+void accel_bias_jacobian(const FAccumulator& acc, int col, FRef F);
+void accel_M_jacobian(const FAccumulator& acc, int col, FRef F);
+// Shaping filter of a first-order in-run drift (eq 22): δḋ = −α·δd + σ√(2α)·ξ, the block at off.
+void drift_jacobian(const Vec3& alpha, int off, FRef F);
 // Exponential-cosine shaping filter of one axis (eqs 35–36, drift_expcos.cpp): the 2×2 A of
 // `f` on the states (aux, drift) = (x[0], x[1]); the drift seen by the navigation equations is
-// x[1] (H = [0 1]), so its Jacobian into the attitude/velocity rows is the kDg/kDa column that
-// gyro_blocks/accel_blocks already fill. Only in the augmented layout.
-void expcos_drift_block(const identification::ShapingFilter& f, int aux, int drift, StateMatN<kStatesAug>& F);
+// x[1] (H = [0 1]), so its Jacobian into the attitude/velocity rows is the drift block's column,
+// which the drift block fills. Only in the augmented layout.
+void expcos_drift_block(const identification::ShapingFilter& f, int aux, int drift, FRef F);
 // Its discrete process noise over a step (exact: Qd of shaping_filter.hpp discretise()) into Q.
-void expcos_drift_noise(const identification::DiscreteShapingFilter& d, int aux, int drift, StateMatN<kStatesAug>& Q);
+void expcos_drift_noise(const identification::DiscreteShapingFilter& d, int aux, int drift, FRef Q);
 
 }  // namespace calbench::inmotion

@@ -14,16 +14,11 @@ using ins::skew;
 namespace {
 constexpr double kChi2_3_95 = 7.814727903;
 
-template <int K, class M>
-void set_diag(M& P, int off, double sigma) {
-  for (int i = 0; i < K; ++i) P(off + i, off + i) = sigma * sigma;
-}
-
 // The measurement update shared by the observations of eqs (13)–(15) and the course update:
 // dx += K·ν, P −= K·(PHᵀ)ᵀ (K = PHᵀS⁻¹ computed by the caller), P kept symmetric.
-template <int N, int M>
-void apply_update(Eigen::Matrix<double, N, N>& P, Eigen::Matrix<double, N, 1>& dx, const Eigen::Matrix<double, N, M>& K,
-                  const Eigen::Matrix<double, N, M>& PHt, const Eigen::Matrix<double, M, 1>& nu) {
+template <int M>
+void apply_update(Eigen::MatrixXd& P, Eigen::VectorXd& dx, const Eigen::Matrix<double, Eigen::Dynamic, M>& K,
+                  const Eigen::Matrix<double, Eigen::Dynamic, M>& PHt, const Eigen::Matrix<double, M, 1>& nu) {
   dx += K * nu;
   P -= K * PHt.transpose();
   P = 0.5 * (P + P.transpose()).eval();
@@ -48,79 +43,52 @@ bool needs_augmented_layout(const InMotionConfig& cfg) {
   return false;
 }
 
-template <int N>
-InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
-    : cfg_(cfg), lever_(lever), C_mb_(C_mb) {
+const identification::DiscreteShapingFilter& DriftModels::discrete(int k, double T) const {
+  // The propagation step takes few distinct values (cov_dt plus whole IMU intervals, and the
+  // remainders at reference epochs); recompute only when it changes.
+  if (disc_[k].dt != T) disc_[k] = identification::discretise(sf[k], T);
+  return disc_[k];
+}
+
+InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
+    : cfg_(cfg), layout_(make_layout(cfg_)), N_(layout_.size()), lever_(lever) {
+  n_.nav = &nav_.state();
+  n_.C_mb = C_mb;
+  n_.extra = Vec::Zero(N_);
+  pending_dx_ = Vec::Zero(N_);
   for (int i = 0; i < 3; ++i) {
     const DriftPrior g = prior_of(cfg_.gyro_drift, i, cfg_.noise.gyro);
     const DriftPrior a = prior_of(cfg_.accel_drift, i, cfg_.noise.accel);
-    alpha_g_(i) = g.tau_s > 0 ? 1.0 / g.tau_s : 0.0;
-    alpha_a_(i) = a.tau_s > 0 ? 1.0 / a.tau_s : 0.0;
-    sig_dg_(i) = g.sigma;
-    sig_da_(i) = a.sigma;
+    drift_.alpha_g(i) = g.tau_s > 0 ? 1.0 / g.tau_s : 0.0;
+    drift_.alpha_a(i) = a.tau_s > 0 ? 1.0 / a.tau_s : 0.0;
+    drift_.sig_g(i) = g.sigma;
+    drift_.sig_a(i) = a.sigma;
     const DriftPrior* pr[2] = {&g, &a};
     for (int s = 0; s < 2; ++s) {
       if (!pr[s]->exp_cosine) continue;
-      if constexpr (N == kStatesAug) {
-        identification::DriftModel m;
-        m.kind = identification::DriftModelKind::exp_cosine;
-        m.sigma = pr[s]->sigma;
-        m.alpha = 1.0 / pr[s]->tau_s;
-        m.beta = pr[s]->beta;
-        sf_[3 * s + i] = identification::shaping_filter(m);
-        expcos_[3 * s + i] = true;
-      } else {
-        throw std::invalid_argument("InMotionFilter: an exponential-cosine drift model needs the augmented layout "
-                                    "(InMotionFilterT<kStatesAug>)");
-      }
+      identification::DriftModel m;
+      m.kind = identification::DriftModelKind::exp_cosine;
+      m.sigma = pr[s]->sigma;
+      m.alpha = 1.0 / pr[s]->tau_s;
+      m.beta = pr[s]->beta;
+      drift_.sf[3 * s + i] = identification::shaping_filter(m);
+      drift_.expcos[3 * s + i] = true;
     }
   }
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
-  nav_.reset(mems_state_from_reference(first, C_mb_, lever_));
+  nav_.reset(mems_state_from_reference(first, n_.C_mb, lever_));
 
-  P_.setZero();
-  const double sp = first.sigma_pos > 0 ? first.sigma_pos : cfg_.ref_sigma_pos;
-  const double sv = first.sigma_vel > 0 ? first.sigma_vel : cfg_.ref_sigma_vel;
-  const double sa = first.sigma_att > 0 ? first.sigma_att : cfg_.ref_sigma_att;
-  set_diag<3>(P_, kPos, std::hypot(sp, 0.05));
-  set_diag<3>(P_, kVel, std::hypot(sv, cfg_.sigma_vel0));
-  const ParameterPriors& pr = cfg_.prior;
-  for (int i = 0; i < 3; ++i) {
-    P_(kBg + i, kBg + i) = pr.gyro_bias(i) * pr.gyro_bias(i);
-    P_(kBa + i, kBa + i) = pr.accel_bias(i) * pr.accel_bias(i);
-    for (int j = 0; j < 3; ++j) {
-      P_(kMg + 3 * i + j, kMg + 3 * i + j) = pr.gyro_M(i, j) * pr.gyro_M(i, j);
-      P_(kMa + 3 * i + j, kMa + 3 * i + j) = pr.accel_M(i, j) * pr.accel_M(i, j);
-    }
-  }
-  for (int i = 0; i < 3; ++i) {
-    P_(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i);
-    P_(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i);
-  }
-  if constexpr (N == kStatesAug) {
-    // Exponential-cosine axes start from the stationary covariance P∞ of (x[0], x[1]).
-    for (int k = 0; k < 6; ++k) {
-      if (!expcos_[k]) continue;
-      const int idx[2] = {k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3};
-      for (int r = 0; r < 2; ++r)
-        for (int c = 0; c < 2; ++c) P_(idx[r], idx[c]) = sf_[k].P_inf(r, c);
-    }
-  }
-  // The initial MEMS attitude error is the mounting error seen in NED plus the reference's own:
-  // φ₀ = C_nb·δμ + ε_ref, so the two blocks start correlated.
-  const Mat3 Pm = pr.mount.cwiseProduct(pr.mount).asDiagonal();
-  P_.template block<3, 3>(kMount, kMount) = Pm;
-  if (first.has_att) {
-    P_.template block<3, 3>(kAtt, kAtt) = C_nb * Pm * C_nb.transpose() + Mat3::Identity() * (sa * sa);
-    P_.template block<3, 3>(kAtt, kMount) = C_nb * Pm;
-    P_.template block<3, 3>(kMount, kAtt) = (C_nb * Pm).transpose();
-  } else {
+  // Initial covariance: each block its own (state_blocks.cpp), in layout order.
+  P_.setZero(N_, N_);
+  const BlockInit in{cfg_, first, drift_, C_nb, first.sigma_pos > 0 ? first.sigma_pos : cfg_.ref_sigma_pos,
+                     first.sigma_vel > 0 ? first.sigma_vel : cfg_.ref_sigma_vel,
+                     first.sigma_att > 0 ? first.sigma_att : cfg_.ref_sigma_att};
+  for (const BlockSpec* b : layout_.specs)
+    if (b->init) b->init(in, layout_.L, layout_.L.offset(static_cast<int>(b->id)), P_);
+  if (!first.has_att) {
     // A GNSS fix: no attitude. The MEMS is levelled from its own specific force over the first
-    // align_level_s (tilt error = horizontal accelerometer bias / g, independent of the mounting);
-    // the heading is unknown (a placeholder 1 rad σ, re-initialised by the course over ground).
-    const double tilt = std::max(pr.accel_bias.maxCoeff(), 1e-3) / 9.8;
-    P_.template block<3, 3>(kAtt, kAtt) = Vec3(tilt * tilt, tilt * tilt, 1.0).asDiagonal();
+    // align_level_s; the heading is re-initialised by the course over ground.
     nav_.state().v = first.has_vel ? first.v_ned : Vec3::Zero();
     nav_.state().q_nb = ins::Quat::Identity();
     phase_ = Phase::levelling;
@@ -130,17 +98,15 @@ InMotionFilterT<N>::InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb,
   refresh_correctors();
 }
 
-template <int N>
-void InMotionFilterT<N>::refresh_correctors() {
-  Ag_ = (Mat3::Identity() + Mg_).inverse();
-  Aa_ = (Mat3::Identity() + Ma_).inverse();
+void InMotionFilter::refresh_correctors() {
+  Ag_ = (Mat3::Identity() + n_.Mg).inverse();
+  Aa_ = (Mat3::Identity() + n_.Ma).inverse();
 }
 
-template <int N>
-void InMotionFilterT<N>::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
+void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
   if (!(dt > 0) || t <= nav_.state().t) return;
-  const Vec3 dth = Ag_ * (dth_raw - (bg_ + dg_) * dt);
-  const Vec3 dv = Aa_ * (dv_raw - (ba_ + da_) * dt);
+  const Vec3 dth = Ag_ * (dth_raw - (n_.bg + n_.dg) * dt);
+  const Vec3 dv = Aa_ * (dv_raw - (n_.ba + n_.da) * dt);
   if (phase_ == Phase::levelling) {  // standing: accumulate for the levelling, no navigation yet
     lvl_dth_ += dth;
     lvl_dv_ += dv;
@@ -157,39 +123,23 @@ void InMotionFilterT<N>::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, 
   if (acc_.T >= cfg_.cov_dt) propagate();
 }
 
-template <int N>
-void InMotionFilterT<N>::propagate() {
+void InMotionFilter::propagate() {
   const double T = acc_.T;
   if (!(T > 0)) return;
-  Mat F = Mat::Zero();
+  Mat F = Mat::Zero(N_, N_);
+  Mat Q = Mat::Zero(N_, N_);
   NavBlockInputs in;
   in.lat = nav_.state().lat;
   in.h = nav_.state().h;
   in.v_ned = nav_.state().v;
   in.f_n = acc_.f_n / T;
   in.earth = ins::local_earth(in.lat, in.h, in.v_ned);
-  nav_block(in, F);
-  gyro_blocks(acc_, F);
-  accel_blocks(acc_, F);
-  drift_blocks(alpha_g_, alpha_a_, F);
-  if constexpr (N == kStatesAug)
-    for (int k = 0; k < 6; ++k)
-      if (expcos_[k]) expcos_drift_block(sf_[k], k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3, F);
+  // Each block's F entries and process noise (state_blocks.cpp), in layout order.
+  const BlockDynamics dyn{cfg_, acc_, in, T, drift_};
+  for (const BlockSpec* b : layout_.specs)
+    if (b->dynamics) b->dynamics(dyn, layout_.L, layout_.L.offset(static_cast<int>(b->id)), F, Q);
   const Mat FT = F * T;
-  const Mat Phi = Mat::Identity() + FT + 0.5 * FT * FT;
-
-  Mat Q = Mat::Zero();
-  const double qg = cfg_.noise.gyro.white_density, qa = cfg_.noise.accel.white_density;
-  for (int i = 0; i < 3; ++i) {
-    Q(kAtt + i, kAtt + i) = qg * qg * T;
-    Q(kVel + i, kVel + i) = qa * qa * T;
-    Q(kPos + i, kPos + i) = qa * qa * T * T * T / 3.0;
-    Q(kDg + i, kDg + i) = sig_dg_(i) * sig_dg_(i) * (1.0 - std::exp(-2.0 * alpha_g_(i) * T));
-    Q(kDa + i, kDa + i) = sig_da_(i) * sig_da_(i) * (1.0 - std::exp(-2.0 * alpha_a_(i) * T));
-  }
-  if constexpr (N == kStatesAug)
-    for (int k = 0; k < 6; ++k)
-      if (expcos_[k]) expcos_drift_noise(discrete(k, T), k < 3 ? kDgAux + k : kDaAux + k - 3, k < 3 ? kDg + k : kDa + k - 3, Q);
+  const Mat Phi = Mat::Identity(N_, N_) + FT + 0.5 * FT * FT;
   Mat P_next = Phi * P_ * Phi.transpose() + Q;
   P_next = 0.5 * (P_next + P_next.transpose()).eval();
 
@@ -200,20 +150,19 @@ void InMotionFilterT<N>::propagate() {
     s.P_post = P_.template cast<float>();
     s.Phi = Phi.template cast<float>();
     s.P_prior_next = P_next.template cast<float>();
-    s.dx_next.setZero();
+    s.dx_next.setZero(N_);
     Vec x, sig;
     totals(x, sig);
     s.x_post = x;
     store_.push_back(std::move(s));
-    pending_dx_.setZero();
+    pending_dx_.setZero(N_);
   }
   P_ = P_next;
   propagate_drift_nominal(T);
   acc_.clear();
 }
 
-template <int N>
-bool InMotionFilterT<N>::reference(const RefObs& r_in) {
+bool InMotionFilter::reference(const RefObs& r_in) {
   if (r_in.t < last_obs_t_ + 1.0 / cfg_.obs_rate_hz - 1e-6) return false;
   if (r_in.t > nav_.state().t + 1e-6) return false;  // not reached yet: caller's ordering error
   last_obs_t_ = r_in.t;
@@ -225,7 +174,7 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
   const double dt = nav_.state().t - r.t;
   if (dt > 0) {
     ins::geodetic_add_ned(r.lat, r.lon, r.h, r.v_ned * dt);
-    const Mat3 C_ref = ins::dcm_from_rpy(r.rpy) * ins::quat_from_rotvec(C_mb_ * w_last_ * dt).toRotationMatrix();
+    const Mat3 C_ref = ins::dcm_from_rpy(r.rpy) * ins::quat_from_rotvec(n_.C_mb * w_last_ * dt).toRotationMatrix();
     r.rpy = ins::rpy_from_dcm(C_ref);
   }
   if (!(r.sigma_pos > 0)) r.sigma_pos = cfg_.ref_sigma_pos;
@@ -234,7 +183,7 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
 
   // Heading from the course over ground: the fixes of the last align_window_s with the INS yaw.
   if (!cfg_.obs_att && cfg_.realign_heading) {
-    const double yaw = phase_ == Phase::levelling ? std::numeric_limits<double>::quiet_NaN() : ins::rpy_from_dcm(nav_.state().C_nb() * C_mb_.transpose())(2);
+    const double yaw = phase_ == Phase::levelling ? std::numeric_limits<double>::quiet_NaN() : ins::rpy_from_dcm(nav_.state().C_nb() * n_.C_mb.transpose())(2);
     fixes_.push_back(Fix{r.t, r.lat, r.lon, r.h, yaw, r.v_ned, r.has_vel && cfg_.obs_vel, r.sigma_pos, r.sigma_vel});
     while (!fixes_.empty() && fixes_.front().t < r.t - cfg_.align_window_s) fixes_.pop_front();
   }
@@ -275,25 +224,24 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
 
   ObsContext c;
   c.mems = &nav_.state();
-  c.C_mb = C_mb_;
+  c.C_mb = n_.C_mb;
   c.lever = lever_;
+  c.n_states = N_;
+  c.mount = off(Block::mount);
   const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
-  c.w_eb_b = C_mb_ * w_last_ - w_ie_b;
+  c.w_eb_b = n_.C_mb * w_last_ - w_ie_b;
 
-  Vec dx = Vec::Zero();
+  Vec dx = Vec::Zero(N_);
   const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};
   for (int type = 0; type < 3; ++type) {
     if (!use[type] || (type == 1 && !r.has_vel) || (type == 2 && !r.has_att)) continue;
     const Observation o = type == 0 ? position_observation(c, r) : type == 1 ? velocity_observation(c, r) : attitude_observation(c, r);
-    Eigen::Matrix<double, 3, N> H;
-    if constexpr (N == kStates) {
-      H = o.H;
-    } else {
-      H.setZero();
-      H.template leftCols<kStates>() = o.H;  // the augmented states are not observed directly
-    }
+    Eigen::Matrix<double, 3, Eigen::Dynamic> H = o.H;
+    // Blocks with observation columns of their own (declared outside eqs 13–15).
+    for (const BlockSpec* b : layout_.specs)
+      if (b->observe) b->observe(BlockObsInput{c, r}, type, layout_.L.offset(static_cast<int>(b->id)), H);
     const Vec3 nu = o.z - H * dx;
-    Eigen::Matrix<double, N, 3> PHt = P_ * H.transpose();
+    Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = P_ * H.transpose();
     Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
     const double nis = nu.dot(Sl.solve(nu));
     ConsistencyStats& st = stats_[type];
@@ -340,8 +288,8 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       st.nis_sum += nis;
       if (nis <= kChi2_3_95) ++st.within95;
     }
-    const Eigen::Matrix<double, N, 3> K = Sl.solve(PHt.transpose()).transpose();
-    apply_update<N, 3>(P_, dx, K, PHt, nu);
+    const Eigen::Matrix<double, Eigen::Dynamic, 3> K = Sl.solve(PHt.transpose()).transpose();
+    apply_update<3>(P_, dx, K, PHt, nu);
   }
   // The course over ground as a heading observation while the heading is poorly known.
   if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && cfg_.course_update_s > 0 &&
@@ -353,15 +301,15 @@ bool InMotionFilterT<N>::reference(const RefObs& r_in) {
       last_course_t_ = r.t;
       // Heading of the reference body: z = ψ_course − ψ̂ = e_Dᵀ(φ − C_nb·δμ) (the down row of eq 15).
       const Mat3 C_nb = predicted_body_attitude(c);
-      Eigen::Matrix<double, 1, N> H = Eigen::Matrix<double, 1, N>::Zero();
+      Eigen::Matrix<double, 1, Eigen::Dynamic> H = Eigen::Matrix<double, 1, Eigen::Dynamic>::Zero(N_);
       H(kAtt + 2) = 1;
-      H.template segment<3>(kMount) = -C_nb.row(2);
+      if (off(Block::mount) >= 0) H.template segment<3>(off(Block::mount)) = -C_nb.row(2);
       const double z = std::remainder(cog - ins::rpy_from_dcm(C_nb)(2), 2 * units::kPi);
       const double nu = z - (H * dx)(0);
       const Vec PHt = P_ * H.transpose();
       const double S = (H * PHt)(0) + sc * sc;
       if (nu * nu / S <= cfg_.gate_nis / 3) {  // the gate per degree of freedom
-        apply_update<N, 1>(P_, dx, PHt / S, PHt, Eigen::Matrix<double, 1, 1>(nu));
+        apply_update<1>(P_, dx, Eigen::Matrix<double, Eigen::Dynamic, 1>(PHt / S), PHt, Eigen::Matrix<double, 1, 1>(nu));
         ++align_.course_updates;
       } else {
         ++align_.course_rejected;
@@ -381,8 +329,7 @@ std::string fmt1(double v) {
 }
 }  // namespace
 
-template <int N>
-void InMotionFilterT<N>::finish_levelling(const RefObs& r) {
+void InMotionFilter::finish_levelling(const RefObs& r) {
   // Mean specific force over the standstill in MEMS axes → roll and pitch of the MEMS frame
   // (f = C_mn·(0, 0, −g)); the yaw is a placeholder until the course over ground.
   const Vec3 f = lvl_dv_ / lvl_T_;
@@ -393,18 +340,17 @@ void InMotionFilterT<N>::finish_levelling(const RefObs& r) {
   s.lat = r.lat;
   s.lon = r.lon;
   s.h = r.h;
-  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nm * C_mb_.transpose() * lever_);
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nm * n_.C_mb.transpose() * lever_);
   s.v = r.has_vel ? r.v_ned : Vec3::Zero();
   align_.level_t1 = r.t;
   align_.level_rpy = Vec3(roll, pitch, 0.0);
   align_.level_accel_std = std::sqrt(std::max(0.0, lvl_f2_ / lvl_T_ - f.squaredNorm()));
   align_.level_gyro_mean = (lvl_dth_ / lvl_T_).norm();
-  lvl_snap_ = Snapshot{P_, bg_, ba_, dg_, da_, xg0_, xa0_, Mg_, Ma_, C_mb_};
+  lvl_snap_ = Snapshot{P_, n_};
   phase_ = Phase::heading_unknown;
 }
 
-template <int N>
-bool InMotionFilterT<N>::moving() const {
+bool InMotionFilter::moving() const {
   if (fixes_.empty()) return false;
   const Fix& n = fixes_.back();
   if (n.has_vel && std::hypot(n.v(0), n.v(1)) >= 1.0) return true;
@@ -419,8 +365,7 @@ bool InMotionFilterT<N>::moving() const {
   return false;
 }
 
-template <int N>
-bool InMotionFilterT<N>::course(double& cog, double& sigma, std::string& how) const {
+bool InMotionFilter::course(double& cog, double& sigma, std::string& how) const {
   if (fixes_.empty()) return false;
   const Fix& n = fixes_.back();
   if (n.has_vel) {
@@ -447,29 +392,29 @@ bool InMotionFilterT<N>::course(double& cog, double& sigma, std::string& how) co
   return false;
 }
 
-template <int N>
-void InMotionFilterT<N>::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {
+void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {
   ins::NavState& s = nav_.state();
   if (phase_ == Phase::heading_unknown && cfg_.restart_at_heading) {
     // Keep the attitude (the standstill's tilt), forget the sensor-error states' standstill.
-    const Snapshot& k = lvl_snap_;
-    P_ = k.P;
-    bg_ = k.bg, ba_ = k.ba, dg_ = k.dg, da_ = k.da, xg0_ = k.xg0, xa0_ = k.xa0, Mg_ = k.Mg, Ma_ = k.Ma, C_mb_ = k.C_mb;
+    P_ = lvl_snap_.P;
+    ins::NavState* nav = n_.nav;
+    n_ = lvl_snap_.n;
+    n_.nav = nav;
     refresh_correctors();
   }
   const Mat3 C_nm = s.C_nb();
-  const double dpsi = std::remainder(cog - ins::rpy_from_dcm(C_nm * C_mb_.transpose())(2), 2 * units::kPi);
+  const double dpsi = std::remainder(cog - ins::rpy_from_dcm(C_nm * n_.C_mb.transpose())(2), 2 * units::kPi);
   Mat3 R;
   R << std::cos(dpsi), -std::sin(dpsi), 0, std::sin(dpsi), std::cos(dpsi), 0, 0, 0, 1;
   s.q_nb = ins::Quat(R * C_nm);
   s.q_nb.normalize();
-  const Mat3 C_nb = R * C_nm * C_mb_.transpose();
+  const Mat3 C_nb = R * C_nm * n_.C_mb.transpose();
   if (phase_ == Phase::heading_unknown && !cfg_.restart_at_heading) {
     // Standing with a placeholder heading, the INS took the Earth rate off the gyros in the wrong
     // axes, and the fixes made the gyro drift estimate take up the difference (the tilt stayed put):
     // b̂ − b = (C_nm − Ĉ_nm)ᵀ·ω_ie. With the heading known, that part is given back.
     const Vec3 w_ie = ins::earth_rate_ned_at(s.lat);
-    bg_ -= ((R * C_nm).transpose() - C_nm.transpose()) * w_ie;
+    n_.bg -= ((R * C_nm).transpose() - C_nm.transpose()) * w_ie;
     refresh_correctors();
   }
   const bool fix_vel = !fixes_.empty() && fixes_.back().has_vel;
@@ -484,8 +429,10 @@ void InMotionFilterT<N>::realign(const RefObs& r, double cog, double sigma, cons
   // Heading error of the MEMS = course error ⊕ mounting error seen about down: φ_D = ε + c·δμ,
   // c = e_Dᵀ·C_nb, so it correlates with the mounting and with what the mounting correlates with.
   const Eigen::Matrix<double, 1, 3> c = C_nb.row(2);
-  const Eigen::Matrix<double, 1, N> row = c * P_.template middleRows<3>(kMount);
-  const double var = sigma * sigma + (c * P_.template block<3, 3>(kMount, kMount) * c.transpose())(0, 0);
+  const int mo = off(Block::mount);  // without the mounting block the course error alone
+  const Eigen::Matrix<double, 1, Eigen::Dynamic> row =
+      mo >= 0 ? Eigen::Matrix<double, 1, Eigen::Dynamic>(c * P_.middleRows<3>(mo)) : Eigen::Matrix<double, 1, Eigen::Dynamic>::Zero(N_);
+  const double var = sigma * sigma + (mo >= 0 ? (c * P_.block<3, 3>(mo, mo) * c.transpose())(0, 0) : 0.0);
   P_.row(kAtt + 2) = row;
   P_.col(kAtt + 2) = row.transpose();
   P_(kAtt + 2, kAtt + 2) = var;
@@ -509,40 +456,14 @@ void InMotionFilterT<N>::realign(const RefObs& r, double cog, double sigma, cons
                              (fix_vel ? "the fix's" : "turned with the heading")});
 }
 
-template <int N>
-void InMotionFilterT<N>::feedback(const Vec& dx) {
-  ins::NavState& s = nav_.state();
-  ins::geodetic_add_ned(s.lat, s.lon, s.h, -dx.template segment<3>(kPos));
-  s.v -= dx.template segment<3>(kVel);
-  s.q_nb = ins::quat_from_rotvec(dx.template segment<3>(kAtt)) * s.q_nb;
-  s.q_nb.normalize();
-  bg_ -= dx.template segment<3>(kBg);
-  ba_ -= dx.template segment<3>(kBa);
-  dg_ -= dx.template segment<3>(kDg);
-  da_ -= dx.template segment<3>(kDa);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      Mg_(i, j) -= dx(kMg + 3 * i + j);
-      Ma_(i, j) -= dx(kMa + 3 * i + j);
-    }
-  if constexpr (N == kStatesAug) {
-    xg0_ -= dx.template segment<3>(kDgAux);
-    xa0_ -= dx.template segment<3>(kDaAux);
-  }
-  C_mb_ = ins::quat_from_rotvec(dx.template segment<3>(kMount)).toRotationMatrix() * C_mb_;
+void InMotionFilter::feedback(const Vec& dx) {
+  // Each block feeds its own estimate back (state_blocks.cpp).
+  for (const BlockSpec* b : layout_.specs)
+    if (b->feedback) b->feedback(n_, layout_.L.offset(static_cast<int>(b->id)), dx);
   refresh_correctors();
 }
 
-template <int N>
-const identification::DiscreteShapingFilter& InMotionFilterT<N>::discrete(int k, double T) {
-  // The propagation step takes few distinct values (cov_dt plus whole IMU intervals, and the
-  // remainders at reference epochs); recompute only when it changes.
-  if (disc_[k].dt != T) disc_[k] = identification::discretise(sf_[k], T);
-  return disc_[k];
-}
-
-template <int N>
-void InMotionFilterT<N>::propagate_drift_nominal(double T) {
+void InMotionFilter::propagate_drift_nominal(double T) {
   // Between updates the drift estimates move with their shaping filters: x̂ ← Φ·x̂, the filter's
   // prediction (for a first-order axis d̂ ← e^{−αT}·d̂). The error state's F (δḋ = −α·δd,
   // error_model.hpp) assumes the estimate decays with the drift; held constant instead, the real
@@ -550,19 +471,17 @@ void InMotionFilterT<N>::propagate_drift_nominal(double T) {
   // be overconfident about the drift (before 2026-11-23 the estimates were held: with a reference
   // INS always, GNSS-only until 3f38af4; docs/in-motion.md, "GNSS-only drives").
   for (int k = 0; k < 6; ++k) {
-    double& d = k < 3 ? dg_(k) : da_(k - 3);
-    if (expcos_[k]) {
-      double& x0 = k < 3 ? xg0_(k) : xa0_(k - 3);
-      const Eigen::Vector2d x = discrete(k, T).Phi * Eigen::Vector2d(x0, d);
+    double& d = k < 3 ? n_.dg(k) : n_.da(k - 3);
+    if (drift_.expcos[k]) {
+      double& x0 = k < 3 ? n_.xg0(k) : n_.xa0(k - 3);
+      const Eigen::Vector2d x = drift_.discrete(k, T).Phi * Eigen::Vector2d(x0, d);
       x0 = x(0);
       d = x(1);
     } else {
-      d *= std::exp(-(k < 3 ? alpha_g_(k) : alpha_a_(k - 3)) * T);
+      d *= std::exp(-(k < 3 ? drift_.alpha_g(k) : drift_.alpha_a(k - 3)) * T);
     }
   }
 }
 
-template class InMotionFilterT<kStates>;
-template class InMotionFilterT<kStatesAug>;
 
 }  // namespace calbench::inmotion

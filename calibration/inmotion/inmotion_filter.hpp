@@ -86,6 +86,10 @@ struct InMotionConfig {
   // levelling). With the heading unknown the filter's model of that standstill is wrong (the Earth
   // rate in the wrong axes, linearised 100°+ from the truth), so what it learnt is not information.
   bool restart_at_heading = true;
+  // Optional blocks (state_blocks.hpp): the mounting misalignment (off: the nominal mounting is
+  // taken as exact), and blocks declared outside the filter's files, appended to the layout.
+  bool mounting = true;
+  std::vector<BlockSpec> extra_blocks;
 };
 
 // How the filter got (and kept) its heading: for RESULT.json and the summary.
@@ -124,23 +128,64 @@ struct InnovationRecord {
   Status status = used;
 };
 
-// True when some axis carries an exponential-cosine model: use InMotionFilterT<kStatesAug>.
+// True when some axis carries an exponential-cosine model: the layout then has the aux blocks.
 bool needs_augmented_layout(const InMotionConfig& cfg);
 
-// N = kStates (default layout) or kStatesAug (with the exponential-cosine auxiliary states).
-template <int N>
-class InMotionFilterT {
-  static_assert(N == kStates || N == kStatesAug, "layouts: kStates or kStatesAug");
+// In-run drift models of the six axes (0–2 gyro, 3–5 accel): first-order rate α and σ, or the
+// exponential-cosine shaping filter (with its discretisation cached per step length).
+struct DriftModels {
+  Vec3 alpha_g = Vec3::Zero(), alpha_a = Vec3::Zero(), sig_g = Vec3::Zero(), sig_a = Vec3::Zero();
+  bool expcos[6] = {false, false, false, false, false, false};
+  identification::ShapingFilter sf[6];
+  const identification::DiscreteShapingFilter& discrete(int k, double T) const;
 
+ private:
+  mutable identification::DiscreteShapingFilter disc_[6];
+};
+
+// The nominal state the error state is relative to: the MEMS INS, the sensor model, the mounting,
+// the drift shaping states, and the values of blocks declared outside (at their layout offsets).
+struct Nominal {
+  ins::NavState* nav = nullptr;
+  Vec3 bg = Vec3::Zero(), ba = Vec3::Zero(), dg = Vec3::Zero(), da = Vec3::Zero();
+  Vec3 xg0 = Vec3::Zero(), xa0 = Vec3::Zero();  // exp-cosine first states (the drift x[1] is dg/da)
+  Mat3 Mg = Mat3::Zero(), Ma = Mat3::Zero(), C_mb = Mat3::Identity();
+  Eigen::VectorXd extra;
+};
+
+struct BlockInit {
+  const InMotionConfig& cfg;
+  const RefObs& first;
+  const DriftModels& drift;
+  Mat3 C_nb;              // reference body attitude at the first epoch
+  double sp, sv, sa;      // the first epoch's position, velocity, attitude σ
+};
+
+struct BlockDynamics {
+  const InMotionConfig& cfg;
+  const FAccumulator& acc;
+  const NavBlockInputs& nav;
+  double T;
+  const DriftModels& drift;
+};
+
+struct BlockObsInput {
+  const ObsContext& c;
+  const RefObs& r;
+};
+
+// The in-motion filter. Its layout (state_blocks.hpp) follows the configuration: the paper's 42
+// states, 48 with exp-cosine drift models, fewer without the mounting block, more with blocks
+// declared in InMotionConfig::extra_blocks.
+class InMotionFilter {
  public:
-  static constexpr int kN = N;
-  using Vec = StateVecN<N>;
-  using Mat = StateMatN<N>;
+  using Vec = Eigen::VectorXd;
+  using Mat = Eigen::MatrixXd;
   using Vec6 = Eigen::Matrix<double, 6, 1>;
 
   // Starts at the first reference epoch, transferring its state to the MEMS IMU through the
   // nominal mounting (rotation C_mb, MEMS → reference body) and lever arm.
-  InMotionFilterT(const InMotionConfig& cfg, const Mat3& C_mb_nominal, const Vec3& lever, const RefObs& first);
+  InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb_nominal, const Vec3& lever, const RefObs& first);
 
   // One IMU interval ending at t: increments of the data as given (Δθ rad, Δv m/s).
   void imu(double t, const Vec3& dtheta, const Vec3& dv, double dt);
@@ -150,14 +195,18 @@ class InMotionFilterT {
   double time() const { return nav_.state().t; }
   const ins::NavState& nav() const { return nav_.state(); }
   const Mat& P() const { return P_; }
+  const StateLayout& layout() const { return layout_; }
+  int offset(Block b) const { return layout_.offset(b); }  // −1: not in this layout
+  // The nominal value of the extra blocks' states (at their layout offsets).
+  const Eigen::VectorXd& extra_values() const { return n_.extra; }
   // Current estimates of the sensor model of the data the filter saw (constant part) with σ.
   SensorErrors estimate() const;
   // 1σ of the total gyro drift b + d (constant plus in-run part) now, rad/s; the two parts are
   // separable only over many correlation times, their sum is what navigation needs.
   Vec3 gyro_total_drift_sigma() const;
-  Vec3 gyro_drift() const { return dg_; }
-  Vec3 accel_drift() const { return da_; }
-  const Mat3& mounting() const { return C_mb_; }
+  Vec3 gyro_drift() const { return n_.dg; }
+  Vec3 accel_drift() const { return n_.da; }
+  const Mat3& mounting() const { return n_.C_mb; }
   // Mounting as roll, pitch, yaw (rad) and their 1σ (through the Jacobian of the angles).
   void mounting_rpy(Vec3& rpy, Vec3& sigma) const;
   const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
@@ -167,7 +216,10 @@ class InMotionFilterT {
   const std::vector<Recovery>& recoveries() const { return recoveries_; }
   // True while the filter has no heading yet (GNSS-only start before the first course).
   bool heading_known() const { return phase_ == Phase::aligned; }
-  // Totals of every state (series units, see state_names(), then aux_state_names()) and their 1σ.
+  // Series column names of the layout's states (block declarations), in state order.
+  std::vector<std::string> column_names() const;
+  // Totals of every state in the series' display units (the blocks' declared factors, applied by
+  // series_display) and their 1σ, in layout order.
   void totals(Vec& x, Vec& sigma) const;
   // Total drift per axis, constant part + in-run shaping-filter state (b + d; series units
   // °/h and mg, total_drift_names()), and its 1σ (with the b–d correlation).
@@ -188,6 +240,7 @@ class InMotionFilterT {
   void feedback(const Vec& dx);
   void propagate_drift_nominal(double T);
   void refresh_correctors();
+  int off(Block b) const { return layout_.offset(b); }
   // Heading from the course over ground (see InMotionConfig::realign_heading).
   struct Fix {
     double t, lat, lon, h, yaw_ins;  // yaw_ins: INS body yaw at the fix (its changes are what count)
@@ -201,19 +254,13 @@ class InMotionFilterT {
   void finish_levelling(const RefObs& r);
 
   InMotionConfig cfg_;
+  StateLayout layout_;
+  int N_ = 0;
   ins::Strapdown nav_;
   Vec3 lever_;
-  Mat3 C_mb_;
-  Vec3 bg_ = Vec3::Zero(), ba_ = Vec3::Zero(), dg_ = Vec3::Zero(), da_ = Vec3::Zero();
-  Mat3 Mg_ = Mat3::Zero(), Ma_ = Mat3::Zero(), Ag_ = Mat3::Identity(), Aa_ = Mat3::Identity();
-  Vec3 alpha_g_, alpha_a_, sig_dg_, sig_da_;
-  // Exponential-cosine axes (0–2 gyro, 3–5 accel): their shaping filters and the nominal first
-  // states x[0] (the drift x[1] is dg_/da_).
-  bool expcos_[6] = {false, false, false, false, false, false};
-  identification::ShapingFilter sf_[6];
-  identification::DiscreteShapingFilter disc_[6];  // discretised for the step disc_[k].dt (cache)
-  const identification::DiscreteShapingFilter& discrete(int k, double T);
-  Vec3 xg0_ = Vec3::Zero(), xa0_ = Vec3::Zero();
+  Nominal n_;
+  Mat3 Ag_ = Mat3::Identity(), Aa_ = Mat3::Identity();
+  DriftModels drift_;
   Mat P_;
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
@@ -224,8 +271,7 @@ class InMotionFilterT {
   Phase phase_ = Phase::aligned;
   struct Snapshot {
     Mat P;
-    Vec3 bg, ba, dg, da, xg0, xa0;
-    Mat3 Mg, Ma, C_mb;
+    Nominal n;  // nav unused
   };
   Snapshot lvl_snap_;  // at the end of levelling (restart_at_heading)
   Vec3 lvl_dth_ = Vec3::Zero(), lvl_dv_ = Vec3::Zero();
@@ -240,15 +286,15 @@ class InMotionFilterT {
   // Smoother storage (float to halve memory): per propagation step k → k+1.
   struct Stored {
     double t;
-    Eigen::Matrix<float, N, N> P_post, Phi, P_prior_next;
-    Eigen::Matrix<float, N, 1> dx_next;  // update applied at the next epoch
-    Eigen::Matrix<double, N, 1> x_post;  // totals after the update at this epoch
+    Eigen::MatrixXf P_post, Phi, P_prior_next;
+    Eigen::VectorXf dx_next;  // update applied at the next epoch
+    Eigen::VectorXd x_post;   // totals after the update at this epoch
   };
   std::vector<Stored> store_;
-  Vec pending_dx_ = Vec::Zero();
+  Vec pending_dx_;
 };
 
-using InMotionFilter = InMotionFilterT<kStates>;
-using InMotionFilterAug = InMotionFilterT<kStatesAug>;
+// The former layout-templated names, kept for callers written against them: one class now.
+using InMotionFilterAug = InMotionFilter;
 
 }  // namespace calbench::inmotion

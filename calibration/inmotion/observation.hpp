@@ -34,11 +34,14 @@ struct ObsContext {
   Mat3 C_mb = Mat3::Identity();         // current mounting estimate
   Vec3 lever = Vec3::Zero();
   Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes
+  // The filter's layout: its size and where the mounting block is (−1: not estimated).
+  int n_states = kStates;
+  int mount = kMount;
 };
 
 struct Observation {
   Vec3 z = Vec3::Zero();
-  ObsMat H = ObsMat::Zero();
+  Eigen::Matrix<double, 3, Eigen::Dynamic> H;  // 3 × the layout's size
   Mat3 R = Mat3::Identity();
 };
 

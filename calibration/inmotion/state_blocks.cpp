@@ -1,10 +1,21 @@
+// The declarations of the in-motion filter's built-in blocks (state_blocks.hpp): per block its
+// names and units, and its own code — initial covariance, feedback, F and Q, series value.
+// Adding a block is one declaration like these (and its Jacobian in error_model.cpp when it is
+// more than a line), here or, for a block the filter does not ship, in InMotionConfig::extra_blocks.
 #include "calibration/inmotion/state_blocks.hpp"
 
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "calibration/inmotion/inmotion_filter.hpp"
 #include "common/units.hpp"
 
 namespace calbench::inmotion {
 
 namespace {
+using namespace units;
+
 // Series columns: totals (estimate, not error) in display units.
 const char* const kPosCols[] = {"lat_deg", "lon_deg", "h_m"};  // MEMS IMU position
 const char* const kVelCols[] = {"vel_n_m_s", "vel_e_m_s", "vel_d_m_s"};
@@ -20,27 +31,274 @@ const char* const kDgCols[] = {"gyro_drift_x_dph", "gyro_drift_y_dph", "gyro_dri
 const char* const kDaCols[] = {"accel_drift_x_mg", "accel_drift_y_mg", "accel_drift_z_mg"};
 const char* const kDgAuxCols[] = {"gyro_drift_aux_x_dph_s", "gyro_drift_aux_y_dph_s", "gyro_drift_aux_z_dph_s"};
 const char* const kDaAuxCols[] = {"accel_drift_aux_x_mg_s", "accel_drift_aux_y_mg_s", "accel_drift_aux_z_mg_s"};
+// Series factors of blocks whose columns differ: latitude/longitude in degrees, height in metres.
+const double kPosFactors[] = {kDeg, kDeg, 1.0};
 
 constexpr int sz(Block b) { return size_of(b); }
+
+void diag(MatRef P, int off, int n, double sigma) {
+  for (int i = 0; i < n; ++i) P(off + i, off + i) = sigma * sigma;
+}
+void put3(const Vec3& v, double* x) {
+  for (int i = 0; i < 3; ++i) x[i] = v(i);
+}
+void put9(const Mat3& m, double* x) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) x[3 * i + j] = m(i, j);
+}
+void sub9(Mat3& m, const VecCRef& dx, int off) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m(i, j) -= dx(off + 3 * i + j);
+}
+
+// ---- navigation: position (eq 11's δr), velocity (δv), attitude (φ). Their F rows are one
+// equation family (error_model.cpp nav_block), written by the position block.
+BlockSpec pos_block() {
+  BlockSpec b{Block::pos, "position", sz(Block::pos), kPosCols, "m (NED)", "deg, deg, m", 1.0, false, false};
+  b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) { diag(P, off, 3, std::hypot(in.sp, 0.05)); };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) {
+    ins::geodetic_add_ned(n.nav->lat, n.nav->lon, n.nav->h, -dx.segment<3>(off));
+  };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
+    nav_block(d.nav, F);
+    const double qa = d.cfg.noise.accel.white_density;
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T * d.T * d.T / 3.0;
+  };
+  b.total = [](const Nominal& n, int, double* x) {
+    x[0] = n.nav->lat;
+    x[1] = n.nav->lon;
+    x[2] = n.nav->h;
+  };
+  b.total_per_display = kPosFactors;
+  return b;
+}
+
+BlockSpec vel_block() {
+  BlockSpec b{Block::vel, "velocity", sz(Block::vel), kVelCols, "m/s (NED)", "m/s", 1.0, false, false};
+  b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+    diag(P, off, 3, std::hypot(in.sv, in.cfg.sigma_vel0));
+  };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.nav->v -= dx.segment<3>(off); };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef, MatRef Q) {
+    const double qa = d.cfg.noise.accel.white_density;
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T;
+  };
+  b.total = [](const Nominal& n, int, double* x) { put3(n.nav->v, x); };
+  return b;
+}
+
+BlockSpec att_block() {
+  BlockSpec b{Block::att, "attitude", sz(Block::att), kAttCols, "rad", "deg", kDeg, false, false};
+  b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+    if (in.first.has_att) {
+      P.block<3, 3>(off, off) = Mat3::Identity() * (in.sa * in.sa);  // the mounting block adds its part
+    } else {
+      // A GNSS fix: no attitude. The MEMS is levelled from its own specific force (tilt error =
+      // horizontal accelerometer bias / g, independent of the mounting); the heading is unknown
+      // (a placeholder 1 rad σ, re-initialised by the course over ground).
+      const double tilt = std::max(in.cfg.prior.accel_bias.maxCoeff(), 1e-3) / 9.8;
+      P.block<3, 3>(off, off) = Vec3(tilt * tilt, tilt * tilt, 1.0).asDiagonal();
+    }
+  };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) {
+    n.nav->q_nb = ins::quat_from_rotvec(dx.segment<3>(off)) * n.nav->q_nb;
+    n.nav->q_nb.normalize();
+  };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef, MatRef Q) {
+    const double qg = d.cfg.noise.gyro.white_density;
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qg * qg * d.T;
+  };
+  b.total = [](const Nominal& n, int, double* x) { put3(ins::rpy_from_dcm(n.nav->C_nb()), x); };
+  return b;
+}
+
+// ---- sensor model: constant parts of the drift/bias and M (identity transition, no noise).
+BlockSpec bias_block(Block id, const char* name, const char* const* cols, const char* si, const char* shown, double f) {
+  BlockSpec b{id, name, 3, cols, si, shown, f, true, false};
+  if (id == Block::bg) {
+    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.cfg.prior.gyro_bias(i) * in.cfg.prior.gyro_bias(i);
+    };
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.bg -= dx.segment<3>(off); };
+    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
+      gyro_bias_jacobian(d.acc, off, F);
+    };
+    b.total = [](const Nominal& n, int, double* x) { put3(n.bg, x); };
+  } else {
+    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.cfg.prior.accel_bias(i) * in.cfg.prior.accel_bias(i);
+    };
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.ba -= dx.segment<3>(off); };
+    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
+      accel_bias_jacobian(d.acc, off, F);
+    };
+    b.total = [](const Nominal& n, int, double* x) { put3(n.ba, x); };
+  }
+  return b;
+}
+
+BlockSpec m_block(Block id) {
+  const bool g = id == Block::Mg;
+  BlockSpec b{id, g ? "gyro_M" : "accel_M", 9, g ? kMgCols : kMaCols, "1", "ppm", kPpm, true, false};
+  if (g) {
+    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) P(off + 3 * i + j, off + 3 * i + j) = in.cfg.prior.gyro_M(i, j) * in.cfg.prior.gyro_M(i, j);
+    };
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(n.Mg, dx, off); };
+    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
+      gyro_M_jacobian(d.acc, off, F);
+    };
+    b.total = [](const Nominal& n, int, double* x) { put9(n.Mg, x); };
+  } else {
+    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          P(off + 3 * i + j, off + 3 * i + j) = in.cfg.prior.accel_M(i, j) * in.cfg.prior.accel_M(i, j);
+    };
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(n.Ma, dx, off); };
+    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
+      accel_M_jacobian(d.acc, off, F);
+    };
+    b.total = [](const Nominal& n, int, double* x) { put9(n.Ma, x); };
+  }
+  return b;
+}
+
+// ---- mounting misalignment δμ (reference body axes): Ĉ_mb = (I − δμ×)·C_mb. Its H columns are
+// part of eqs 13–15 (obs_*.cpp).
+BlockSpec mount_block() {
+  BlockSpec b{Block::mount, "mounting", sz(Block::mount), kMountCols, "rad", "deg", kDeg, false, false};
+  b.active = [](const InMotionConfig& cfg) { return cfg.mounting; };
+  b.init = [](const BlockInit& in, const filter::BlockLayout& L, int off, MatRef P) {
+    const ParameterPriors& pr = in.cfg.prior;
+    const Mat3 Pm = pr.mount.cwiseProduct(pr.mount).asDiagonal();
+    P.block<3, 3>(off, off) = Pm;
+    if (!in.first.has_att) return;  // a GNSS start levels the MEMS itself: no correlation
+    // The initial MEMS attitude error is the mounting error seen in NED plus the reference's own:
+    // φ₀ = C_nb·δμ + ε_ref, so the two blocks start correlated.
+    const int att = L.offset(static_cast<int>(Block::att));
+    P.block<3, 3>(att, att) = in.C_nb * Pm * in.C_nb.transpose() + P.block<3, 3>(att, att);
+    P.block<3, 3>(att, off) = in.C_nb * Pm;
+    P.block<3, 3>(off, att) = (in.C_nb * Pm).transpose();
+  };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) {
+    n.C_mb = ins::quat_from_rotvec(dx.segment<3>(off)).toRotationMatrix() * n.C_mb;
+  };
+  b.total = [](const Nominal& n, int, double* x) { put3(ins::rpy_from_dcm(n.C_mb), x); };
+  return b;
+}
+
+// ---- in-run drifts (eq 22 shaping filters; exp-cosine second states, eqs 35–36).
+BlockSpec drift_block(Block id) {
+  const bool g = id == Block::dg;
+  BlockSpec b{id, g ? "gyro_drift" : "accel_drift", 3, g ? kDgCols : kDaCols, g ? "rad/s" : "m/s^2", g ? "deg/h" : "mg",
+              g ? kDegPerHour : kMilliG, true, false};
+  if (g) {
+    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.drift.sig_g(i) * in.drift.sig_g(i);
+    };
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.dg -= dx.segment<3>(off); };
+    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
+      gyro_bias_jacobian(d.acc, off, F);  // the drift enters the sensor model as the bias does
+      drift_jacobian(d.drift.alpha_g, off, F);
+      for (int i = 0; i < 3; ++i)
+        Q(off + i, off + i) = d.drift.sig_g(i) * d.drift.sig_g(i) * (1.0 - std::exp(-2.0 * d.drift.alpha_g(i) * d.T));
+    };
+    b.total = [](const Nominal& n, int, double* x) { put3(n.dg, x); };
+  } else {
+    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.drift.sig_a(i) * in.drift.sig_a(i);
+    };
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.da -= dx.segment<3>(off); };
+    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
+      accel_bias_jacobian(d.acc, off, F);
+      drift_jacobian(d.drift.alpha_a, off, F);
+      for (int i = 0; i < 3; ++i)
+        Q(off + i, off + i) = d.drift.sig_a(i) * d.drift.sig_a(i) * (1.0 - std::exp(-2.0 * d.drift.alpha_a(i) * d.T));
+    };
+    b.total = [](const Nominal& n, int, double* x) { put3(n.da, x); };
+  }
+  return b;
+}
+
+// Exp-cosine first states Δμ (eqs 35–36) of the axes that carry that model; the 2×2 of (aux,
+// drift) replaces the first-order entries of the drift block (set before it in layout order).
+template <int S>
+void aux_init(const BlockInit& in, const filter::BlockLayout& L, int off, MatRef P) {
+  const int drift = L.offset(static_cast<int>(S == 0 ? Block::dg : Block::da));
+  for (int i = 0; i < 3; ++i) {
+    const int k = 3 * S + i;
+    if (!in.drift.expcos[k]) continue;
+    const int idx[2] = {off + i, drift + i};  // stationary covariance P∞ of (x[0], x[1])
+    for (int r = 0; r < 2; ++r)
+      for (int c = 0; c < 2; ++c) P(idx[r], idx[c]) = in.drift.sf[k].P_inf(r, c);
+  }
+}
+template <int S>
+void aux_dynamics(const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) {
+  const int drift = L.offset(static_cast<int>(S == 0 ? Block::dg : Block::da));
+  for (int i = 0; i < 3; ++i) {
+    const int k = 3 * S + i;
+    if (!d.drift.expcos[k]) continue;
+    expcos_drift_block(d.drift.sf[k], off + i, drift + i, F);
+    expcos_drift_noise(d.drift.discrete(k, d.T), off + i, drift + i, Q);
+  }
+}
+
+BlockSpec aux_block(Block id) {
+  const bool g = id == Block::dg_aux;
+  BlockSpec b{id, g ? "gyro_drift_aux" : "accel_drift_aux", 3, g ? kDgAuxCols : kDaAuxCols, g ? "rad/s^2" : "m/s^3",
+              g ? "deg/h/s" : "mg/s", g ? kDegPerHour : kMilliG, true, true};
+  b.active = [](const InMotionConfig& cfg) { return needs_augmented_layout(cfg); };
+  b.init = g ? aux_init<0> : aux_init<1>;
+  b.dynamics = g ? aux_dynamics<0> : aux_dynamics<1>;
+  if (g) {
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.xg0 -= dx.segment<3>(off); };
+    b.total = [](const Nominal& n, int, double* x) { put3(n.xg0, x); };
+  } else {
+    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.xa0 -= dx.segment<3>(off); };
+    b.total = [](const Nominal& n, int, double* x) { put3(n.xa0, x); };
+  }
+  return b;
+}
+
 }  // namespace
 
 const std::array<BlockSpec, static_cast<std::size_t>(Block::count)>& block_specs() {
-  using namespace units;
   static const std::array<BlockSpec, static_cast<std::size_t>(Block::count)> specs = {{
-      {Block::pos, "position", sz(Block::pos), kPosCols, "m (NED)", "deg, deg, m", 1.0, false, false},
-      {Block::vel, "velocity", sz(Block::vel), kVelCols, "m/s (NED)", "m/s", 1.0, false, false},
-      {Block::att, "attitude", sz(Block::att), kAttCols, "rad", "deg", kDeg, false, false},
-      {Block::bg, "gyro_bias", sz(Block::bg), kBgCols, "rad/s", "deg/h", kDegPerHour, true, false},
-      {Block::ba, "accel_bias", sz(Block::ba), kBaCols, "m/s^2", "mg", kMilliG, true, false},
-      {Block::Mg, "gyro_M", sz(Block::Mg), kMgCols, "1", "ppm", kPpm, true, false},
-      {Block::Ma, "accel_M", sz(Block::Ma), kMaCols, "1", "ppm", kPpm, true, false},
-      {Block::mount, "mounting", sz(Block::mount), kMountCols, "rad", "deg", kDeg, false, false},
-      {Block::dg, "gyro_drift", sz(Block::dg), kDgCols, "rad/s", "deg/h", kDegPerHour, true, false},
-      {Block::da, "accel_drift", sz(Block::da), kDaCols, "m/s^2", "mg", kMilliG, true, false},
-      {Block::dg_aux, "gyro_drift_aux", sz(Block::dg_aux), kDgAuxCols, "rad/s^2", "deg/h/s", kDegPerHour, true, true},
-      {Block::da_aux, "accel_drift_aux", sz(Block::da_aux), kDaAuxCols, "m/s^3", "mg/s", kMilliG, true, true},
+      pos_block(),
+      vel_block(),
+      att_block(),
+      bias_block(Block::bg, "gyro_bias", kBgCols, "rad/s", "deg/h", kDegPerHour),
+      bias_block(Block::ba, "accel_bias", kBaCols, "m/s^2", "mg", kMilliG),
+      m_block(Block::Mg),
+      m_block(Block::Ma),
+      mount_block(),
+      drift_block(Block::dg),
+      drift_block(Block::da),
+      aux_block(Block::dg_aux),
+      aux_block(Block::da_aux),
   }};
   return specs;
+}
+
+StateLayout make_layout(const InMotionConfig& cfg) {
+  StateLayout s;
+  for (const BlockSpec& b : block_specs())
+    if (!b.active || b.active(cfg)) {
+      s.L.add(static_cast<int>(b.id), b.size);
+      s.specs.push_back(&b);
+    }
+  for (const BlockSpec& b : cfg.extra_blocks) {
+    if (static_cast<int>(b.id) < static_cast<int>(Block::count))
+      throw std::invalid_argument(std::string("in-motion filter: the extra block '") + b.name + "' has a built-in id");
+    if (!b.active || b.active(cfg)) {
+      s.L.add(static_cast<int>(b.id), b.size);
+      s.specs.push_back(&b);
+    }
+  }
+  return s;
 }
 
 }  // namespace calbench::inmotion

@@ -1,50 +1,87 @@
-// Blocks of the in-motion error state, each declared once (name, size, SI and display units,
-// series column names, whether the smoother corrects it); the offsets are computed from the order
-// of the list, not typed by hand. The idea follows open_vins' ov_core Type blocks: a block knows
-// its own size and place, the filter asks for them.
+// Blocks of the in-motion error state, each declared once (state_blocks.cpp), as open_vins' ov_core
+// Type blocks: name, size, SI and display units, series column names, whether the smoother
+// corrects it, and its own code — initial covariance, feedback into the nominal state, transition
+// (F) and process noise (Q), extra observation columns. The filter builds its layout from the
+// blocks the configuration activates (the exp-cosine aux blocks only for an exp-cosine drift
+// model, the mounting block unless switched off, blocks declared outside the filter's files from
+// InMotionConfig::extra_blocks) and computes the offsets; it never names a block's offset itself
+// except for the navigation blocks, which lead every layout.
 //
-// Order = the paper's state order (section IV, eq 11); the exp-cosine aux blocks (eqs 35–36) come
-// after the default layout so that the default layout is a prefix of the augmented one.
+// Order of the built-in blocks = the paper's state order (section IV, eq 11); the exp-cosine aux
+// blocks (eqs 35–36) come after the default layout so that the default layout is a prefix of the
+// augmented one.
 #pragma once
+#include <Eigen/Dense>
 #include <array>
 #include <cstddef>
+#include <vector>
+
+#include "calibration/filter/block_layout.hpp"
 
 namespace calbench::inmotion {
 
 enum class Block { pos, vel, att, bg, ba, Mg, Ma, mount, dg, da, dg_aux, da_aux, count };
 
+struct InMotionConfig;
+struct BlockInit;       // what a block's initial covariance depends on (inmotion_filter.hpp)
+struct Nominal;         // the filter's nominal state (inmotion_filter.hpp)
+struct BlockDynamics;   // what a block's F and Q depend on over one propagation step
+struct BlockObsInput;   // what a block's extra observation columns depend on
+using MatRef = Eigen::Ref<Eigen::MatrixXd>;
+using VecCRef = Eigen::Ref<const Eigen::VectorXd>;
+
 struct BlockSpec {
-  Block id;
+  Block id;              // built-in: its Block; a block declared elsewhere: any value ≥ Block::count
   const char* name;
   int size;
   const char* const* columns;  // `size` series column names, in state order within the block
-  const char* si_unit;       // unit of the estimated error state
-  const char* display_unit;  // unit of the series/RESULT columns
-  // SI per display unit (e.g. rad/s per °/h): series value = SI / si_per_display. 1 for blocks whose
-  // series value is not a linear scaling of the state (position as lat/lon, attitude and mounting as
-  // Euler angles are converted by their own code at the output).
+  const char* si_unit;         // unit of the estimated error state
+  const char* display_unit;    // unit of the series/RESULT columns
+  // SI per display unit of the σ columns (e.g. rad/s per °/h): σ shown = σ_SI / si_per_display.
   double si_per_display;
   bool sensor;  // a sensor-error block: the smoother corrects its series value (nav blocks it leaves)
   bool aux;     // only in the augmented (exp-cosine) layout
+  // Is the block in the layout for this configuration? nullptr: always.
+  bool (*active)(const InMotionConfig& cfg) = nullptr;
+  // Initial covariance: its rows/columns of P (P zero before; blocks are set in layout order).
+  void (*init)(const BlockInit& in, const filter::BlockLayout& L, int off, MatRef P) = nullptr;
+  // Feedback of the estimated error dx (the whole state; the block reads its segment at off):
+  // nominal ← nominal − dx.
+  void (*feedback)(Nominal& n, int off, const VecCRef& dx) = nullptr;
+  // Its entries of F (continuous time) and Q (discrete, over the step) for one propagation step.
+  void (*dynamics)(const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) = nullptr;
+  // Extra columns of an observation (type 0 position, 1 velocity, 2 attitude; eqs 13–15 in the
+  // obs_*.cpp files write the navigation and mounting columns), or nullptr.
+  void (*observe)(const BlockObsInput& o, int type, int off, MatRef H) = nullptr;
+  // The series value of the block's states in SI (`size` values), and their display factor for
+  // the series (value shown = SI / factor per column; nullptr: si_per_display for every column).
+  void (*total)(const Nominal& n, int off, double* x) = nullptr;
+  const double* total_per_display = nullptr;
 };
 
-// The declarations (state_blocks.cpp); index = static_cast<int>(Block).
+// The built-in declarations (state_blocks.cpp); index = static_cast<int>(Block).
 const std::array<BlockSpec, static_cast<std::size_t>(Block::count)>& block_specs();
 
-// Offsets from a list of sizes: offset of entry i = sum of the sizes before it. constexpr so that
-// the filter's fixed-size layout and a test's extra block use the same rule.
-template <std::size_t K>
-constexpr std::array<int, K + 1> offsets_from_sizes(const std::array<int, K>& sizes) {
-  std::array<int, K + 1> o{};
-  for (std::size_t i = 0; i < K; ++i) o[i + 1] = o[i] + sizes[i];
-  return o;
-}
+// Offsets from a list of sizes (the rule of calibration/filter/block_layout.hpp).
+using filter::offsets_from_sizes;
 
-// Sizes of the blocks in Block order (compile time, for the fixed-size layout).
+// The built-in blocks' sizes and their offsets in the full layout (every built-in block active:
+// the paper's 42 states plus the 6 exp-cosine aux states). The filter itself uses its run-time
+// layout; these name the full layout for code that reads stored series and for tests.
 inline constexpr std::array<int, static_cast<std::size_t>(Block::count)> kBlockSizes = {3, 3, 3, 3, 3, 9, 9, 3, 3, 3, 3, 3};
 inline constexpr auto kBlockOffsets = offsets_from_sizes(kBlockSizes);
 
 constexpr int offset_of(Block b) { return kBlockOffsets[static_cast<std::size_t>(b)]; }
 constexpr int size_of(Block b) { return kBlockSizes[static_cast<std::size_t>(b)]; }
+
+// The layout of a configuration: the active built-in blocks in declaration order, then the extra
+// ones; `specs` in layout order.
+struct StateLayout {
+  filter::BlockLayout L;
+  std::vector<const BlockSpec*> specs;
+  int offset(Block b) const { return L.offset(static_cast<int>(b)); }
+  int size() const { return L.size(); }
+};
+StateLayout make_layout(const InMotionConfig& cfg);
 
 }  // namespace calbench::inmotion

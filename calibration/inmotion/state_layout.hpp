@@ -26,8 +26,9 @@
 
 namespace calbench::inmotion {
 
-// Offsets computed from the block declarations (state_blocks.hpp); the names stay for the
-// Jacobian code, which indexes by block.
+// Offsets of the full layout (every built-in block active), computed from the block declarations
+// (state_blocks.hpp). The navigation blocks lead every layout, so kPos, kVel and kAtt are the
+// filter's offsets too; for the other blocks the filter asks its run-time layout.
 inline constexpr int kPos = offset_of(Block::pos);
 inline constexpr int kVel = offset_of(Block::vel);
 inline constexpr int kAtt = offset_of(Block::att);
@@ -43,14 +44,6 @@ inline constexpr int kDgAux = offset_of(Block::dg_aux);
 inline constexpr int kDaAux = offset_of(Block::da_aux);
 inline constexpr int kStatesAug = offset_of(Block::count);
 static_assert(kStates == 42 && kStatesAug == 48, "the paper's layout: 42 states, 48 with the exp-cosine aux states");
-
-using StateVec = Eigen::Matrix<double, kStates, 1>;
-using StateMat = Eigen::Matrix<double, kStates, kStates>;
-using ObsMat = Eigen::Matrix<double, 3, kStates>;
-template <int N>
-using StateVecN = Eigen::Matrix<double, N, 1>;
-template <int N>
-using StateMatN = Eigen::Matrix<double, N, N>;
 
 // Column names of the --series file, one per state (totals, not errors), in state order.
 const std::array<std::string, kStates>& state_names();

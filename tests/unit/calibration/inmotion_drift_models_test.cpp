@@ -203,8 +203,10 @@ TEST(InmotionDriftModels, ExpCosineBlockKeepsItsStationaryCovariance) {
     EXPECT_NEAR(f.P()(a, a), sf.P_inf(0, 0), 1e-3 * sf.P_inf(0, 0)) << i;
     EXPECT_NEAR(f.P()(a, d), sf.P_inf(0, 1), 1e-3 * std::sqrt(sf.P_inf(0, 0) * sf.P_inf(1, 1))) << i;
   }
-  // The default filter refuses an exp-cosine model instead of silently dropping a state.
-  EXPECT_THROW(InMotionFilter(fc, Mat3::Identity(), Vec3::Zero(), r0), std::invalid_argument);
+  // The configuration chooses the layout (issue 19: blocks by configuration, not by a template
+  // parameter): an exp-cosine model brings its aux states, the default configuration does not.
+  EXPECT_EQ(InMotionFilter(fc, Mat3::Identity(), Vec3::Zero(), r0).layout().size(), kStatesAug);
+  EXPECT_EQ(InMotionFilter(plain, Mat3::Identity(), Vec3::Zero(), r0).layout().size(), kStates);
 }
 
 TEST(InmotionDriftModels, IdentifiedModelsMakeTheFilterConsistent) {
