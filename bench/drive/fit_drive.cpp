@@ -393,9 +393,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   using namespace units;
   using Filter = inmotion::InMotionFilter;
   // The series columns of the layout this configuration gives (the filter builds the same one).
-  std::vector<std::string> columns;
-  for (const inmotion::BlockSpec* b : inmotion::make_layout(cfg).specs)
-    for (int i = 0; i < b->size; ++i) columns.push_back(b->columns[i]);
+  const std::vector<std::string> columns = inmotion::column_names(inmotion::make_layout(cfg));
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
                  gnss ? Aiding::gnss : Aiding::reference);
   const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};  // observations: position, velocity, attitude

@@ -237,10 +237,11 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     if (!use[type] || (type == 1 && !r.has_vel) || (type == 2 && !r.has_att)) continue;
     const Observation o = type == 0 ? position_observation(c, r) : type == 1 ? velocity_observation(c, r) : attitude_observation(c, r);
     Eigen::Matrix<double, 3, Eigen::Dynamic> H = o.H;
-    // Blocks with observation columns of their own (declared outside eqs 13–15).
+    Vec3 z = o.z;
+    // Blocks with an observation part of their own (declared outside eqs 13–15).
     for (const BlockSpec* b : layout_.specs)
-      if (b->observe) b->observe(BlockObsInput{c, r}, type, layout_.L.offset(static_cast<int>(b->id)), H);
-    const Vec3 nu = o.z - H * dx;
+      if (b->observe) b->observe(BlockObsInput{c, r}, n_, type, layout_.L.offset(static_cast<int>(b->id)), H, z);
+    const Vec3 nu = z - H * dx;
     Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = P_ * H.transpose();
     Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
     const double nis = nu.dot(Sl.solve(nu));

@@ -46,12 +46,7 @@ void InMotionFilter::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
   sigma = S.diagonal().cwiseMax(0.0).cwiseSqrt();
 }
 
-std::vector<std::string> InMotionFilter::column_names() const {
-  std::vector<std::string> n;
-  for (const BlockSpec* b : layout_.specs)
-    for (int i = 0; i < b->size; ++i) n.push_back(b->columns[i]);
-  return n;
-}
+std::vector<std::string> InMotionFilter::column_names() const { return inmotion::column_names(layout_); }
 
 void InMotionFilter::totals(Vec& x, Vec& sig) const {
   x.resize(N_);

@@ -301,4 +301,11 @@ StateLayout make_layout(const InMotionConfig& cfg) {
   return s;
 }
 
+std::vector<std::string> column_names(const StateLayout& s) {
+  std::vector<std::string> n;
+  for (const BlockSpec* b : s.specs)
+    for (int i = 0; i < b->size; ++i) n.push_back(b->columns[i]);
+  return n;
+}
+
 }  // namespace calbench::inmotion

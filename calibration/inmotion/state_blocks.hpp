@@ -14,6 +14,7 @@
 #include <Eigen/Dense>
 #include <array>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "calibration/filter/block_layout.hpp"
@@ -50,9 +51,10 @@ struct BlockSpec {
   void (*feedback)(Nominal& n, int off, const VecCRef& dx) = nullptr;
   // Its entries of F (continuous time) and Q (discrete, over the step) for one propagation step.
   void (*dynamics)(const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) = nullptr;
-  // Extra columns of an observation (type 0 position, 1 velocity, 2 attitude; eqs 13–15 in the
-  // obs_*.cpp files write the navigation and mounting columns), or nullptr.
-  void (*observe)(const BlockObsInput& o, int type, int off, MatRef H) = nullptr;
+  // Its part of an observation (type 0 position, 1 velocity, 2 attitude; eqs 13–15 in the obs_*.cpp
+  // files write the navigation and mounting parts): its columns of H, and what its nominal value
+  // adds to the predicted reference (z = predicted − reference), or nullptr.
+  void (*observe)(const BlockObsInput& o, const Nominal& n, int type, int off, MatRef H, Eigen::Vector3d& z) = nullptr;
   // The series value of the block's states in SI (`size` values), and their display factor for
   // the series (value shown = SI / factor per column; nullptr: si_per_display for every column).
   void (*total)(const Nominal& n, int off, double* x) = nullptr;
@@ -83,5 +85,7 @@ struct StateLayout {
   int size() const { return L.size(); }
 };
 StateLayout make_layout(const InMotionConfig& cfg);
+// Series column names of a layout's states, in state order (the blocks' declarations).
+std::vector<std::string> column_names(const StateLayout& s);
 
 }  // namespace calbench::inmotion
