@@ -22,6 +22,14 @@ DriveSeries::DriveSeries(const std::string& path, const std::vector<std::string>
       w_(std::make_unique<CsvWriter>(path, series_columns(state_columns), comment)),
       row_(w_->columns()) {}
 
+void DriveSeries::row_si(double t, const inmotion::StateLayout& layout, Eigen::VectorXd x, Eigen::VectorXd sigma,
+                         const Eigen::Matrix<double, 6, 1>& total_sigma_si) {
+  Eigen::Matrix<double, 6, 1> total, total_sigma;
+  inmotion::series_display(layout, x, sigma);
+  inmotion::series_total_drift(layout, x, total_sigma_si, total, total_sigma);
+  row(t, x.data(), sigma.data(), total.data(), total_sigma.data());
+}
+
 void DriveSeries::row(double t, const double* x, const double* sigma, const double* total, const double* total_sigma) {
   row_[0] = t;
   std::copy(x, x + n_, row_.begin() + 1);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bench/io/csv.hpp"
+#include "calibration/inmotion/state_blocks.hpp"
 
 namespace calbench {
 
@@ -17,6 +18,10 @@ class DriveSeries {
   DriveSeries(const std::string& path, const std::vector<std::string>& state_columns, const std::string& comment);
   // x, sigma: one value per state column; total, total_sigma: 6 values each.
   void row(double t, const double* x, const double* sigma, const double* total, const double* total_sigma);
+  // One row from the filter's SI output (InMotionFilter::state_si, total_drift_si's σ): converted
+  // to series units here, at the output (inmotion::series_display, series_total_drift).
+  void row_si(double t, const inmotion::StateLayout& layout, Eigen::VectorXd x, Eigen::VectorXd sigma,
+              const Eigen::Matrix<double, 6, 1>& total_sigma_si);
   void close() { w_->close(); }
 
  private:

@@ -428,9 +428,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
       if (took && series) {
         Filter::Vec x, s;
         Filter::Vec6 tx, ts;
-        f->totals(x, s);
-        f->total_drift(tx, ts);
-        series->row(e.t, x.data(), s.data(), tx.data(), ts.data());
+        f->state_si(x, s);
+        f->total_drift_si(tx, ts);
+        series->row_si(e.t, f->layout(), x, s, ts);
       }
     } else if (f) {
       double dt = e.dt;
@@ -454,7 +454,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     const auto sm = f->smooth();
     if (!a.series.empty()) {
       DriveSeries w(a.series, columns, "in-motion estimates after the RTS smoother (sensor states smoothed; navigation states from the forward pass)");
-      for (const auto& ep : sm) w.row(ep.t, ep.x.data(), ep.sigma.data(), ep.total.data(), ep.total_sigma.data());
+      for (const auto& ep : sm) w.row_si(ep.t, f->layout(), ep.x, ep.sigma, ep.total_sigma);
       w.close();
     }
   }

@@ -152,7 +152,7 @@ void InMotionFilter::propagate() {
     s.P_prior_next = P_next.template cast<float>();
     s.dx_next.setZero(N_);
     Vec x, sig;
-    totals(x, sig);
+    state_si(x, sig);
     s.x_post = x;
     store_.push_back(std::move(s));
     pending_dx_.setZero(N_);

@@ -218,20 +218,21 @@ class InMotionFilter {
   bool heading_known() const { return phase_ == Phase::aligned; }
   // Series column names of the layout's states (block declarations), in state order.
   std::vector<std::string> column_names() const;
-  // Totals of every state in the series' display units (the blocks' declared factors, applied by
-  // series_display) and their 1σ, in layout order.
-  void totals(Vec& x, Vec& sigma) const;
-  // Total drift per axis, constant part + in-run shaping-filter state (b + d; series units
-  // °/h and mg, total_drift_names()), and its 1σ (with the b–d correlation).
-  void total_drift(Vec6& x, Vec6& sigma) const;
+  // Every state's nominal value (estimate, not error) and 1σ, SI, in layout order (position as
+  // latitude/longitude in rad and height; attitude and mounting as Euler angles, the mounting σ
+  // through the angles' Jacobian). Series units only at the output: series_display().
+  void state_si(Vec& x, Vec& sigma) const;
+  // Total drift per axis, constant part + in-run shaping-filter state (b + d: gyro rad/s, accel
+  // m/s²; what `calbench identify` identifies), and its 1σ (with the b–d correlation).
+  void total_drift_si(Vec6& x, Vec6& sigma) const;
 
   // Rauch–Tung–Striebel pass over the stored epochs (store_for_smoother); replaces the
   // constant-parameter estimates with the smoothed values at the first epoch and returns the
-  // smoothed series (time, totals of the sensor states, σ) if wanted.
+  // smoothed series (time, states as state_si with the sensor states smoothed, σ, total drift σ).
   struct SmoothedEpoch {
     double t;
-    Vec x, sigma;
-    Vec6 total, total_sigma;  // as total_drift()
+    Vec x, sigma;        // SI
+    Vec6 total_sigma;    // SI, as total_drift_si()
   };
   std::vector<SmoothedEpoch> smooth();
 

@@ -48,61 +48,53 @@ void InMotionFilter::mounting_rpy(Vec3& rpy, Vec3& sigma) const {
 
 std::vector<std::string> InMotionFilter::column_names() const { return inmotion::column_names(layout_); }
 
-void InMotionFilter::totals(Vec& x, Vec& sig) const {
+void InMotionFilter::state_si(Vec& x, Vec& sig) const {
   x.resize(N_);
   sig.resize(N_);
-  // σ in display units, each block by its declared factor; the mounting σ is of its Euler angles.
-  const Vec sd = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
+  sig = P_.diagonal().cwiseMax(0.0).cwiseSqrt();
   double v[16];
   for (const BlockSpec* b : layout_.specs) {
     const int o = layout_.L.offset(static_cast<int>(b->id));
     if (b->total) b->total(n_, o, v);
-    for (int i = 0; i < b->size; ++i) {
-      x(o + i) = b->total ? v[i] / (b->total_per_display ? b->total_per_display[i] : b->si_per_display) : 0.0;
-      sig(o + i) = sd(o + i) / b->si_per_display;
-    }
+    for (int i = 0; i < b->size; ++i) x(o + i) = b->total ? v[i] : 0.0;
   }
-  if (off(Block::mount) >= 0) {
+  if (off(Block::mount) >= 0) {  // the mounting σ is of its Euler angles
     Vec3 mr, ms;
     mounting_rpy(mr, ms);
-    sig.segment<3>(off(Block::mount)) = ms / units::kDeg;
+    sig.segment<3>(off(Block::mount)) = ms;
   }
 }
 
 namespace {
-// Total drift b + d per axis in series units and its 1σ from a covariance (any layout).
-template <class M, class V>
-void total_drift_of(const V& x_series, const M& P, int bg, int ba, int dg, int da, Eigen::Matrix<double, 6, 1>& x,
-                    Eigen::Matrix<double, 6, 1>& s) {
+// 1σ of b + d per axis (SI) from a covariance, with the b–d correlation.
+template <class M>
+Eigen::Matrix<double, 6, 1> total_drift_sigma(const M& P, int bg, int ba, int dg, int da) {
+  Eigen::Matrix<double, 6, 1> s;
   for (int k = 0; k < 6; ++k) {
     const int b = k < 3 ? bg + k : ba + k - 3, d = k < 3 ? dg + k : da + k - 3;
-    const double unit = k < 3 ? units::kDegPerHour : units::kMilliG;
-    x(k) = x_series(b) + x_series(d);
-    s(k) = std::sqrt(std::max(0.0, static_cast<double>(P(b, b) + P(d, d) + 2 * P(b, d)))) / unit;
+    s(k) = std::sqrt(std::max(0.0, static_cast<double>(P(b, b) + P(d, d) + 2 * P(b, d))));
   }
+  return s;
 }
 }  // namespace
 
-void InMotionFilter::total_drift(Vec6& x, Vec6& sigma) const {
-  Vec xs, ss;
-  totals(xs, ss);
-  total_drift_of(xs, P_, off(Block::bg), off(Block::ba), off(Block::dg), off(Block::da), x, sigma);
+void InMotionFilter::total_drift_si(Vec6& x, Vec6& sigma) const {
+  x << n_.bg + n_.dg, n_.ba + n_.da;
+  sigma = total_drift_sigma(P_, off(Block::bg), off(Block::ba), off(Block::dg), off(Block::da));
 }
 
 std::vector<InMotionFilter::SmoothedEpoch> InMotionFilter::smooth() {
   std::vector<SmoothedEpoch> out;
   if (store_.empty()) return out;
   store_.back().dx_next = pending_dx_.cast<float>();
-  // Scale of each state between series units and SI (for the sensor blocks).
-  Vec unit = Vec::Ones(N_);
-  std::vector<bool> sensor(static_cast<std::size_t>(N_), false);  // the smoother corrects the sensor blocks' series values only
+  // The smoother corrects the sensor blocks' values only (navigation and mounting: forward pass).
+  std::vector<bool> sensor(static_cast<std::size_t>(N_), false);
   for (const BlockSpec* b : layout_.specs) {
     const int o = layout_.L.offset(static_cast<int>(b->id));
     if (!b->sensor) continue;
-    unit.segment(o, b->size).setConstant(1.0 / b->si_per_display);
     for (int i = 0; i < b->size; ++i) sensor[static_cast<std::size_t>(o + i)] = true;
   }
-  Vec s = Vec::Zero(N_);  // smoothed minus filtered totals (SI) at epoch k+1
+  Vec s = Vec::Zero(N_);  // smoothed minus filtered values (SI) at epoch k+1
   Mat Ps = P_;            // smoothed covariance at the final epoch
   out.resize(store_.size());
   for (long k = static_cast<long>(store_.size()) - 1; k >= 0; --k) {
@@ -114,10 +106,10 @@ std::vector<InMotionFilter::SmoothedEpoch> InMotionFilter::smooth() {
     SmoothedEpoch e;
     e.t = st.t;
     e.x = st.x_post;
-    e.sigma = Ps.diagonal().cwiseMax(0.0).cwiseSqrt().cwiseProduct(unit);
+    e.sigma = Ps.diagonal().cwiseMax(0.0).cwiseSqrt();
     for (int i = 0; i < N_; ++i)
-      if (sensor[static_cast<std::size_t>(i)]) e.x(i) += s(i) * unit(i);
-    total_drift_of(e.x, Ps, off(Block::bg), off(Block::ba), off(Block::dg), off(Block::da), e.total, e.total_sigma);
+      if (sensor[static_cast<std::size_t>(i)]) e.x(i) += s(i);
+    e.total_sigma = total_drift_sigma(Ps, off(Block::bg), off(Block::ba), off(Block::dg), off(Block::da));
     out[static_cast<std::size_t>(k)] = e;
   }
   return out;

@@ -301,6 +301,25 @@ StateLayout make_layout(const InMotionConfig& cfg) {
   return s;
 }
 
+void series_display(const StateLayout& s, Eigen::VectorXd& x, Eigen::VectorXd& sigma) {
+  for (const BlockSpec* b : s.specs) {
+    const int o = s.L.offset(static_cast<int>(b->id));
+    for (int i = 0; i < b->size; ++i) {
+      x(o + i) /= b->total_per_display ? b->total_per_display[i] : b->si_per_display;
+      sigma(o + i) /= b->si_per_display;
+    }
+  }
+}
+
+void series_total_drift(const StateLayout& s, const Eigen::VectorXd& x_series, const Eigen::Matrix<double, 6, 1>& sigma_si,
+                        Eigen::Matrix<double, 6, 1>& x, Eigen::Matrix<double, 6, 1>& sigma) {
+  const int bg = s.offset(Block::bg), ba = s.offset(Block::ba), dg = s.offset(Block::dg), da = s.offset(Block::da);
+  for (int k = 0; k < 6; ++k) {
+    x(k) = k < 3 ? x_series(bg + k) + x_series(dg + k) : x_series(ba + k - 3) + x_series(da + k - 3);
+    sigma(k) = sigma_si(k) / (k < 3 ? kDegPerHour : kMilliG);
+  }
+}
+
 std::vector<std::string> column_names(const StateLayout& s) {
   std::vector<std::string> n;
   for (const BlockSpec* b : s.specs)

@@ -87,5 +87,12 @@ struct StateLayout {
 StateLayout make_layout(const InMotionConfig& cfg);
 // Series column names of a layout's states, in state order (the blocks' declarations).
 std::vector<std::string> column_names(const StateLayout& s);
+// The one place where SI becomes series units (°/h, mg, ppm, deg; latitude and longitude in
+// degrees): every state's value and σ (InMotionFilter::state_si), in place, by the declarations.
+void series_display(const StateLayout& s, Eigen::VectorXd& x, Eigen::VectorXd& sigma);
+// Total drift b + d per axis in series units (gyro °/h, accel mg): the sum of the two series
+// columns x_series (already displayed) and the SI σ (InMotionFilter::total_drift_si) converted.
+void series_total_drift(const StateLayout& s, const Eigen::VectorXd& x_series, const Eigen::Matrix<double, 6, 1>& sigma_si,
+                        Eigen::Matrix<double, 6, 1>& x, Eigen::Matrix<double, 6, 1>& sigma);
 
 }  // namespace calbench::inmotion

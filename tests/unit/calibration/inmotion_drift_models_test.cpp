@@ -122,13 +122,12 @@ Outcome run(const InMotionConfig& fc, double window_end) {
       const inmotion::RefObs ro = ref_obs(d.ref[r++]);
       if (!replay.reference(ro)) continue;  // the first epoch starts the filter
       typename Filter::Vec6 x, s;
-      replay.filter().total_drift(x, s);
+      replay.filter().total_drift_si(x, s);
       std::array<double, 6> tot, sig, tru;
       const auto ki = static_cast<std::size_t>(std::lround((ro.t - t_truth0) / dt_imu));
       for (int i = 0; i < 6; ++i) {
-        const double unit = i < 3 ? kDegPerHour : kMilliG;
-        tot[i] = x(i) * unit;
-        sig[i] = s(i) * unit;
+        tot[i] = x(i);
+        sig[i] = s(i);
         tru[i] = (i < 3 ? d.unit.gyro.bias(i) : d.unit.accel.bias(i - 3)) + d.drift[ki][static_cast<std::size_t>(i)];
         if (ro.t >= kBurnIn) {
           const int g = i < 3 ? 0 : 1;
