@@ -113,55 +113,46 @@ BlockSpec att_block() {
 }
 
 // ---- sensor model: constant parts of the drift/bias and M (identity transition, no noise).
-BlockSpec bias_block(Block id, const char* name, const char* const* cols, const char* si, const char* shown, double f) {
-  BlockSpec b{id, name, 3, cols, si, shown, f, true, false};
-  if (id == Block::bg) {
-    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
-      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.cfg.prior.gyro_bias(i) * in.cfg.prior.gyro_bias(i);
-    };
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.bg -= dx.segment<3>(off); };
-    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
-      gyro_bias_jacobian(d.acc, off, F);
-    };
-    b.total = [](const Nominal& n, int, double* x) { put3(n.bg, x); };
-  } else {
-    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
-      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.cfg.prior.accel_bias(i) * in.cfg.prior.accel_bias(i);
-    };
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.ba -= dx.segment<3>(off); };
-    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
-      accel_bias_jacobian(d.acc, off, F);
-    };
-    b.total = [](const Nominal& n, int, double* x) { put3(n.ba, x); };
-  }
+// S: 0 gyro, 1 accelerometer. The head of a per-sensor 3-state block in the sensor's units (gyro
+// rad/s shown in °/h, accelerometer m/s² in mg).
+template <int S>
+BlockSpec sensor_triad(Block g, Block a, const char* gname, const char* aname, const char* const* gcols,
+                       const char* const* acols) {
+  return BlockSpec{S == 0 ? g : a, S == 0 ? gname : aname, 3, S == 0 ? gcols : acols, S == 0 ? "rad/s" : "m/s^2",
+                   S == 0 ? "deg/h" : "mg", S == 0 ? kDegPerHour : kMilliG, true, false};
+}
+
+template <int S>
+BlockSpec bias_block() {
+  BlockSpec b = sensor_triad<S>(Block::bg, Block::ba, "gyro_bias", "accel_bias", kBgCols, kBaCols);
+  b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+    const Vec3& p = S == 0 ? in.cfg.prior.gyro_bias : in.cfg.prior.accel_bias;
+    for (int i = 0; i < 3; ++i) P(off + i, off + i) = p(i) * p(i);
+  };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { (S == 0 ? n.bg : n.ba) -= dx.segment<3>(off); };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
+    if (S == 0) gyro_bias_jacobian(d.acc, off, F);
+    else accel_bias_jacobian(d.acc, off, F);
+  };
+  b.total = [](const Nominal& n, int, double* x) { put3(S == 0 ? n.bg : n.ba, x); };
   return b;
 }
 
-BlockSpec m_block(Block id) {
-  const bool g = id == Block::Mg;
-  BlockSpec b{id, g ? "gyro_M" : "accel_M", 9, g ? kMgCols : kMaCols, "1", "ppm", kPpm, true, false};
-  if (g) {
-    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) P(off + 3 * i + j, off + 3 * i + j) = in.cfg.prior.gyro_M(i, j) * in.cfg.prior.gyro_M(i, j);
-    };
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(n.Mg, dx, off); };
-    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
-      gyro_M_jacobian(d.acc, off, F);
-    };
-    b.total = [](const Nominal& n, int, double* x) { put9(n.Mg, x); };
-  } else {
-    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          P(off + 3 * i + j, off + 3 * i + j) = in.cfg.prior.accel_M(i, j) * in.cfg.prior.accel_M(i, j);
-    };
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(n.Ma, dx, off); };
-    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
-      accel_M_jacobian(d.acc, off, F);
-    };
-    b.total = [](const Nominal& n, int, double* x) { put9(n.Ma, x); };
-  }
+template <int S>
+BlockSpec m_block() {
+  BlockSpec b{S == 0 ? Block::Mg : Block::Ma, S == 0 ? "gyro_M" : "accel_M", 9, S == 0 ? kMgCols : kMaCols, "1", "ppm", kPpm,
+              true, false};
+  b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+    const Mat3& p = S == 0 ? in.cfg.prior.gyro_M : in.cfg.prior.accel_M;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) P(off + 3 * i + j, off + 3 * i + j) = p(i, j) * p(i, j);
+  };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(S == 0 ? n.Mg : n.Ma, dx, off); };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
+    if (S == 0) gyro_M_jacobian(d.acc, off, F);
+    else accel_M_jacobian(d.acc, off, F);
+  };
+  b.total = [](const Nominal& n, int, double* x) { put9(S == 0 ? n.Mg : n.Ma, x); };
   return b;
 }
 
@@ -190,35 +181,24 @@ BlockSpec mount_block() {
 }
 
 // ---- in-run drifts (eq 22 shaping filters; exp-cosine second states, eqs 35–36).
-BlockSpec drift_block(Block id) {
-  const bool g = id == Block::dg;
-  BlockSpec b{id, g ? "gyro_drift" : "accel_drift", 3, g ? kDgCols : kDaCols, g ? "rad/s" : "m/s^2", g ? "deg/h" : "mg",
-              g ? kDegPerHour : kMilliG, true, false};
-  if (g) {
-    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
-      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.drift.sig_g(i) * in.drift.sig_g(i);
-    };
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.dg -= dx.segment<3>(off); };
-    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
-      gyro_bias_jacobian(d.acc, off, F);  // the drift enters the sensor model as the bias does
-      drift_jacobian(d.drift.alpha_g, off, F);
-      for (int i = 0; i < 3; ++i)
-        Q(off + i, off + i) = d.drift.sig_g(i) * d.drift.sig_g(i) * (1.0 - std::exp(-2.0 * d.drift.alpha_g(i) * d.T));
-    };
-    b.total = [](const Nominal& n, int, double* x) { put3(n.dg, x); };
-  } else {
-    b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
-      for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.drift.sig_a(i) * in.drift.sig_a(i);
-    };
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.da -= dx.segment<3>(off); };
-    b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
-      accel_bias_jacobian(d.acc, off, F);
-      drift_jacobian(d.drift.alpha_a, off, F);
-      for (int i = 0; i < 3; ++i)
-        Q(off + i, off + i) = d.drift.sig_a(i) * d.drift.sig_a(i) * (1.0 - std::exp(-2.0 * d.drift.alpha_a(i) * d.T));
-    };
-    b.total = [](const Nominal& n, int, double* x) { put3(n.da, x); };
-  }
+template <int S>
+BlockSpec drift_block() {
+  BlockSpec b = sensor_triad<S>(Block::dg, Block::da, "gyro_drift", "accel_drift", kDgCols, kDaCols);
+  b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
+    const Vec3& sig = S == 0 ? in.drift.sig_g : in.drift.sig_a;
+    for (int i = 0; i < 3; ++i) P(off + i, off + i) = sig(i) * sig(i);
+  };
+  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { (S == 0 ? n.dg : n.da) -= dx.segment<3>(off); };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
+    // The drift enters the sensor model as the bias does.
+    if (S == 0) gyro_bias_jacobian(d.acc, off, F);
+    else accel_bias_jacobian(d.acc, off, F);
+    const Vec3& alpha = S == 0 ? d.drift.alpha_g : d.drift.alpha_a;
+    const Vec3& sig = S == 0 ? d.drift.sig_g : d.drift.sig_a;
+    drift_jacobian(alpha, off, F);
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = sig(i) * sig(i) * (1.0 - std::exp(-2.0 * alpha(i) * d.T));
+  };
+  b.total = [](const Nominal& n, int, double* x) { put3(S == 0 ? n.dg : n.da, x); };
   return b;
 }
 
@@ -270,13 +250,13 @@ const std::array<BlockSpec, static_cast<std::size_t>(Block::count)>& block_specs
       pos_block(),
       vel_block(),
       att_block(),
-      bias_block(Block::bg, "gyro_bias", kBgCols, "rad/s", "deg/h", kDegPerHour),
-      bias_block(Block::ba, "accel_bias", kBaCols, "m/s^2", "mg", kMilliG),
-      m_block(Block::Mg),
-      m_block(Block::Ma),
+      bias_block<0>(),
+      bias_block<1>(),
+      m_block<0>(),
+      m_block<1>(),
       mount_block(),
-      drift_block(Block::dg),
-      drift_block(Block::da),
+      drift_block<0>(),
+      drift_block<1>(),
       aux_block(Block::dg_aux),
       aux_block(Block::da_aux),
   }};
