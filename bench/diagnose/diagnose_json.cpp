@@ -11,6 +11,21 @@
 
 namespace calbench {
 
+namespace {
+// The candidates a recording cannot excite (DiagnoseResult::not_excited).
+nlohmann::json not_excited_json(const std::vector<NotExcited>& v) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& n : v) {
+    const EffectSpec& x = effect_spec(n.term.effect);
+    out.push_back({{"effect", x.key},
+                   {"label", n.term.label()},
+                   {"sigma_over_plausible", std::isfinite(n.sigma_ratio) ? nlohmann::json(n.sigma_ratio) : nlohmann::json(nullptr)},
+                   {"needs", x.excited_by ? x.excited_by : x.condition}});
+  }
+  return out;
+}
+}  // namespace
+
 namespace diagnose_out {
 
 void finding_value_json(const DiagFinding& f, nlohmann::json& value, nlohmann::json& sigma) {
@@ -38,6 +53,12 @@ nlohmann::json correlations_json(const std::vector<ConditionCorrelation>& c, std
   nlohmann::json j = nlohmann::json::array();
   for (std::size_t k = 0; k < c.size() && k < most; ++k) j.push_back({{"condition", c[k].condition}, {"r", c[k].r}});
   return j;
+}
+
+// A finding the recording cannot tell from an alternative is not established: no σ, as if it were.
+void not_established(const DiagFinding& f, nlohmann::json& j) {
+  j["established"] = f.alternatives.empty();
+  if (!f.alternatives.empty()) j["sigma"] = nullptr;
 }
 
 void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohmann::json& diagnosis) {
@@ -70,6 +91,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                         {"rms_before", f.rms_before},
                         {"rms_after", f.rms_after},
                         {"sentence", finding_sentence(f)}});
+    not_established(f, findings.back());
   }
   nlohmann::json unexplained = nlohmann::json::array();
   for (const auto& u : r.unexplained) {
@@ -84,6 +106,10 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                            {"correlations", corr},
                            {"angle_harmonic", u.angle_harmonic},
                            {"angle_harmonic_amplitude", u.angle_harmonic_amp}});
+    if (std::isfinite(u.angle_bin_deg[0]))
+      unexplained.back()["angle_bin"] = {{"from_deg", u.angle_bin_deg[0]}, {"to_deg", u.angle_bin_deg[1]},
+                                         {"mean", u.angle_bin_mean}, {"z", u.angle_bin_z}};
+    if (u.period_hz > 0) unexplained.back()["periodic"] = {{"hz", u.period_hz}, {"amplitude", u.period_amp}};
   }
   nlohmann::json axes = nlohmann::json::object();
   for (int a = 0; a < 6; ++a) {
@@ -101,10 +127,12 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
   return {{"findings", findings},
           {"unexplained", unexplained},
           {"withdrawn", withdrawn_json(r.withdrawn)},
+          {"not_excited", not_excited_json(r.not_excited)},
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "bench fit of this recording" : "given"},
           {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
 }
+
 
 namespace {
 
@@ -177,6 +205,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     x["rms_before"] = f.rms_before;
     x["rms_after"] = f.rms_after;
     x["sentence"] = drive_finding_sentence(f, fi < R.shown_on.size() ? R.shown_on[fi] / 3 : -1);
+    not_established(f, x);
     fs.push_back(x);
   }
   j["findings"] = fs;

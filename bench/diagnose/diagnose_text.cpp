@@ -159,7 +159,8 @@ std::string finding_sentence(const DiagFinding& f) {
   sentence_head(o, f, who);
   if (f.value.size() == 1) {
     o << human_value(f, f.value[0]);
-    if (std::isfinite(f.sigma[0])) o << " ± " << human_value(f, f.sigma[0]);
+    // A finding not told apart from an alternative is not established: no σ as if it were.
+    if (std::isfinite(f.sigma[0]) && f.alternatives.empty()) o << " ± " << human_value(f, f.sigma[0]);
   } else {
     o << "(";
     for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
@@ -168,6 +169,24 @@ std::string finding_sentence(const DiagFinding& f) {
   if (x.shape == EffectShape::noise) o << ", τ ≈ " << drift_tau_text(f);
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
   o << alternatives_text(f);
+  return o.str();
+}
+
+// "not excited by this recording (not candidates): g2_sensitivity gyro x, y, z — needs …", one
+// line per effect and sensor.
+std::string not_excited_text(const std::vector<NotExcited>& v) {
+  std::ostringstream o;
+  for (std::size_t i = 0; i < v.size();) {
+    const Term& t = v[i].term;
+    std::string axes;
+    std::size_t j = i;
+    for (; j < v.size() && v[j].term.effect == t.effect && v[j].term.sensor == t.sensor; ++j)
+      if (v[j].term.axis >= 0) axes += std::string(axes.empty() ? " " : ", ") + "xyz"[v[j].term.axis];
+    const EffectSpec& x = effect_spec(t.effect);
+    o << "- not excited by this recording (not a candidate): " << x.key << (t.sensor == 0 ? " gyro" : t.sensor == 1 ? " accel" : "")
+      << axes << "; needs " << (x.excited_by ? x.excited_by : x.condition) << "\n";
+    i = j;
+  }
   return o.str();
 }
 
@@ -188,8 +207,14 @@ std::string diagnosis_text(const DiagRun& run) {
     o << "; correlates with";
     o << correlations_text(u.correlations);
     if (u.angle_harmonic > 0) o << "; angle harmonic " << u.angle_harmonic << " amplitude " << fmt(u.angle_harmonic_amp);
+    const char* unit = u.sensor == 0 ? " rad/s" : " m/s²";
+    if (std::isfinite(u.angle_bin_deg[0]))
+      o << "; concentrated at table angle " << fmt(u.angle_bin_deg[0]) << "–" << fmt(u.angle_bin_deg[1]) << "° (mean "
+        << fmt(u.angle_bin_mean) << unit << ", z " << fmt(u.angle_bin_z, 2) << ")";
+    if (u.period_hz > 0) o << "; strongest periodic component " << fmt(u.period_hz, 3) << " Hz, amplitude " << fmt(u.period_amp) << unit;
     o << "\n";
   }
+  o << not_excited_text(r.not_excited);
   o << axis_table_text(r, human_rms);
   return o.str();
 }

@@ -1,5 +1,7 @@
 #include "bench/diagnose/effects_json.hpp"
 
+#include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -52,6 +54,44 @@ void set_mat(const EffectSpec& x, EffectTerms& e, const Mat3& m) {
     for (int p = 0; p < 3; ++p) *effect_param(x, e, x.sensor, a, p) = m(a, p);
 }
 
+// The rows of an axis_rows effect on one sensor: 3 × nparams, as nested arrays.
+nlohmann::json get_rows(const EffectSpec& x, const EffectTerms& e, int sensor, bool sigma) {
+  nlohmann::json r = nlohmann::json::array();
+  for (int a = 0; a < 3; ++a) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int p = 0; p < x.nparams; ++p) {
+      const double v = effect_value(x, e, sensor, a, p);
+      if (sigma && !(std::isfinite(v) && v >= 0)) row.push_back(nullptr);
+      else row.push_back(v);
+    }
+    r.push_back(row);
+  }
+  return r;
+}
+void set_rows(const EffectSpec& x, EffectTerms& e, int sensor, const nlohmann::json& v, const std::string& f,
+              const std::string& key, bool sigma) {
+  const std::string shape = "expected 3 rows of " + std::to_string(x.nparams) + " numbers";
+  if (!v.is_array() || v.size() != 3) throw InputError(f, 0, key, shape);
+  for (int a = 0; a < 3; ++a) {
+    const nlohmann::json& row = v[static_cast<std::size_t>(a)];
+    if (!row.is_array() || static_cast<int>(row.size()) != x.nparams) throw InputError(f, 0, key, shape);
+    for (int p = 0; p < x.nparams; ++p) {
+      const std::string k = key + "[" + std::to_string(a) + "][" + std::to_string(p) + "]";
+      const nlohmann::json& c = row[static_cast<std::size_t>(p)];
+      if (sigma && c.is_null()) *effect_param(x, e, sensor, a, p) = std::numeric_limits<double>::infinity();
+      else *effect_param(x, e, sensor, a, p) = jnum(c, f, k);
+    }
+  }
+}
+// The column names of an axis_rows effect ("xx", …; the other-axes rows: "next", "previous").
+nlohmann::json row_columns(const EffectSpec& x) {
+  nlohmann::json c = nlohmann::json::array();
+  for (int p = 0; p < x.nparams; ++p)
+    c.push_back(x.components_other_axes ? (p == 0 ? "next axis (x: y, y: z, z: x)" : "previous axis (x: z, y: x, z: y)")
+                                        : effect_component_name(x, 0, p));
+  return c;
+}
+
 // The JSON form of one effect, by the shape of its parameters (docs/diagnosis.md).
 void read_effect(const EffectSpec& x, const nlohmann::json& o, const std::string& f, EffectTerms& e, EffectTerms& s) {
   const std::string key = x.key;
@@ -63,6 +103,13 @@ void read_effect(const EffectSpec& x, const nlohmann::json& o, const std::string
         if (effect_allows_sensor(x, k)) {
           set_axes(x, e, k, opt3(o, x.json_value[k], f, key));
           set_axes(x, s, k, optsig3(o, kSigmaKey[k], f, key));
+        }
+      break;
+    case EffectShape::axis_rows:
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k)) {
+          if (o.contains(x.json_value[k])) set_rows(x, e, k, o[x.json_value[k]], f, key + "." + x.json_value[k], false);
+          if (o.contains(kSigmaKey[k])) set_rows(x, s, k, o[kSigmaKey[k]], f, key + "." + kSigmaKey[k], true);
         }
       break;
     case EffectShape::gyro_matrix:
@@ -105,6 +152,14 @@ nlohmann::json write_effect(const EffectSpec& x, const EffectTerms& e, const Eff
         }
       break;
     case EffectShape::gyro_matrix: o = {{vk, to_json(get_mat(x, e))}, {"sigma", sigma_json(get_mat(x, s))}}; break;
+    case EffectShape::axis_rows:
+      o["columns"] = row_columns(x);
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k)) {
+          o[x.json_value[k]] = get_rows(x, e, k, false);
+          o[kSigmaKey[k]] = get_rows(x, s, k, true);
+        }
+      break;
     case EffectShape::vector:
       if (x.nparams == 1) o = {{vk, effect_value(x, e, x.sensor, -1, 0)}, {"sigma", effect_value(x, s, x.sensor, -1, 0)}};
       else if (x.nparams == 2) o = {{vk, arr2(Eigen::Vector2d(get_vec(x, e)))}, {"sigma", arr2(Eigen::Vector2d(get_vec(x, s)))}};
@@ -218,6 +273,21 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
       *effect_param(x, e, x.sensor, i, k) += num("value");
       break;
     }
+    case EffectShape::axis_rows: {
+      const int k = sensor(), i = axis("axis");
+      const std::string ck = x.components_other_axes ? "with" : "term";
+      if (!kv.count(ck)) throw InputError(where, 0, ck, "missing key");
+      used[ck] = true;
+      int p = -1;
+      std::string names;
+      for (int q = 0; q < x.nparams; ++q) {
+        names += (q ? ", " : "") + effect_component_name(x, i, q);
+        if (kv[ck] == effect_component_name(x, i, q)) p = q;
+      }
+      if (p < 0) throw InputError(where, 0, ck, "expected one of " + names + " for axis " + kv["axis"] + ", got '" + kv[ck] + "'");
+      *effect_param(x, e, k, i, p) += num("value");
+      break;
+    }
     case EffectShape::vector: {
       std::stringstream ss(x.inject_keys);
       std::string k;
@@ -270,7 +340,7 @@ std::string md(const std::string& t) {  // a Markdown table cell
 }
 
 std::string sensors_text(const EffectSpec& x) {
-  if (x.shape == EffectShape::triad_axis || x.shape == EffectShape::noise)
+  if (x.shape == EffectShape::triad_axis || x.shape == EffectShape::noise || x.shape == EffectShape::axis_rows)
     return effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1) ? "gyro, accel" : effect_allows_sensor(x, 0) ? "gyro" : "accel";
   return x.sensor == 2 ? "reference" : kSensorName[x.sensor];
 }
@@ -305,6 +375,14 @@ std::string json_text(const EffectSpec& x) {
           o += std::string(n++ ? ", " : "") + "\"" + x.json_value[k] + "\": [3], \"" + kSigmaKey[k] + "\": [3]";
       break;
     case EffectShape::gyro_matrix: o += std::string("\"") + x.json_value[0] + "\": 3×3, \"sigma\": 3×3"; break;
+    case EffectShape::axis_rows: {
+      const std::string n = "3×" + std::to_string(x.nparams);
+      o += "\"columns\"";
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(x, k))
+          o += std::string(", \"") + x.json_value[k] + "\": " + n + ", \"" + kSigmaKey[k] + "\": " + n;
+      break;
+    }
     case EffectShape::vector:
       o += std::string("\"") + x.json_value[0] + "\"" +
            (x.nparams > 1 ? ": [" + std::to_string(x.nparams) + "], \"sigma\": [" + std::to_string(x.nparams) + "]" : ", \"sigma\"");
@@ -324,6 +402,12 @@ std::string inject_text(const EffectSpec& x) {
   switch (x.shape) {
     case EffectShape::triad_axis: return "`" + sensor + "axis=x|y|z,value=V`";
     case EffectShape::gyro_matrix: return "`axis=` (gyro axis), `f=` (force axis), `value=`";
+    case EffectShape::axis_rows: {
+      if (x.components_other_axes) return "`" + sensor + "axis=x|y|z,with=` (another axis), `value=`";
+      std::string names;
+      for (int p = 0; p < x.nparams; ++p) names += (p ? "|" : "") + effect_component_name(x, 0, p);
+      return "`" + sensor + "axis=x|y|z,term=" + names + ",value=V`";
+    }
     case EffectShape::vector: {
       std::string k = x.inject_keys, o;
       std::stringstream ss(k);
@@ -349,12 +433,12 @@ const char* drive_text(const EffectSpec& x) {
 
 std::string effect_catalogue_markdown() {
   std::string o =
-      "| effect ID | physics | model term | sensors | SI unit (shown in) | revealed on the bench by | on drives | extra JSON key |\n"
-      "|---|---|---|---|---|---|---|---|\n";
+      "| effect ID | physics | model term | sensors | SI unit (shown in) | revealed on the bench by | excited by | on drives | extra JSON key |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
   for (const EffectSpec& x : effect_specs())
     o += "| `" + std::string(x.key) + "` | " + md(x.physics) + " | " + md(x.model) + " | " + sensors_text(x) + " | " +
          md(unit_text(x)) + " | " + md(x.condition) + (x.bench_candidate || x.shape == EffectShape::noise ? "" : " (not a bench candidate: M is refitted)") +
-         " | " + drive_text(x) + " | " + md(json_text(x)) + " |\n";
+         " | " + md(x.excited_by ? x.excited_by : x.condition) + " | " + drive_text(x) + " | " + md(json_text(x)) + " |\n";
   o += "\n| effect | `--inject` keys | unit |\n|---|---|---|\n";
   for (const EffectSpec& x : effect_specs())
     o += "| `" + std::string(x.key) + "` | " + md(inject_text(x)) + " | " + md(si_units(x)) + " |\n";
@@ -374,6 +458,8 @@ nlohmann::json effect_catalogue_json() {
                  {"display_unit", {x.bench_display.unit[0], x.bench_display.unit[1]}},
                  {"bench_condition", x.condition},
                  {"bench_candidate", x.bench_candidate},
+                 {"excited_by", x.excited_by ? x.excited_by : x.condition},
+                 {"plausible_size", {x.drive_prior[0], x.drive_prior[1]}},
                  {"drives", drive_text(x)},
                  {"drive_prior_sigma", {x.drive_prior[0], x.drive_prior[1]}},
                  {"json", json_text(x)},

@@ -58,7 +58,8 @@ nlohmann::json alternatives_json(const DiagFinding& f) {
                     {"label", a.term.label()},
                     {"value", av},
                     {"unit", a.unit},
-                    {"chi2_worse", a.chi2_worse}});
+                    {"chi2_worse", a.chi2_worse},
+                    {"regressor_correlation", a.regressor_correlation}});
   }
   return alts;
 }
@@ -71,7 +72,18 @@ std::string alternatives_text(const DiagFinding& f) {
     o += "; NOT told apart on this recording from " + a.term.label() +
          (a.chi2_worse >= 0 ? " (χ² only " + fmt(a.chi2_worse) + " worse)"
                             : " (χ² " + fmt(-a.chi2_worse) + " better, but with a larger penalty: more parameters or a smaller prior)");
-    if (const char* note = separation_note(f.term.effect, a.term.effect)) o += std::string(": ") + note;
+    if (a.chi2_worse >= 0 && a.regressor_correlation >= 0.9) o += ", regressors correlated " + fmt(a.regressor_correlation, 3) + " here";
+    if (const char* note = separation_note(f.term.effect, a.term.effect)) {
+      o += std::string(": ") + note;
+    } else {
+      // No pair note: what excites each of the two.
+      const EffectSpec &x = effect_spec(f.term.effect), &y = effect_spec(a.term.effect);
+      if (x.id != y.id)
+        o += std::string("; what separates them: ") + x.key + " needs " + (x.excited_by ? x.excited_by : x.condition) + ", " +
+             y.key + " " + (y.excited_by ? y.excited_by : y.condition);
+      else
+        o += "; the same effect on another axis: a plan that excites each axis alone tells them apart";
+    }
   }
   return o;
 }
@@ -82,15 +94,35 @@ nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& ws) {
     out.push_back({{"effect", effect_name(w.term.effect)},
                    {"label", w.term.label()},
                    {"delta_chi2_when_accepted", w.delta_chi2_when_accepted},
-                   {"delta_chi2_final", w.delta_chi2_final}});
+                   {"delta_chi2_final", w.delta_chi2_final},
+                   {"why", withdrawn_why_key(w.why)}});
   return out;
+}
+
+const char* withdrawn_why_key(WithdrawnWhy w) {
+  switch (w) {
+    case WithdrawnWhy::weak: return "weak_in_final_model";
+    case WithdrawnWhy::drift_recheck: return "better_without_drift";
+    case WithdrawnWhy::overdispersed: return "carried_by_unexplained_remainder";
+    case WithdrawnWhy::leaves_unexplained: return "drift_leaves_axis_unexplained";
+  }
+  return "";
 }
 
 std::string withdrawn_text(const DiagWithdrawn& w) {
   std::string o = "- withdrawn: " + w.term.label() + " (accepted with Δχ² " + fmt(w.delta_chi2_when_accepted);
-  if (effect_spec(w.term.effect).shape == EffectShape::noise)
-    return o + ", but the catalogue terms explain the recording better without it: penalised −2 ln L " +
-           fmt(w.delta_chi2_final) + ")";
+  switch (w.why) {
+    case WithdrawnWhy::drift_recheck:
+      return o + ", but the catalogue terms explain the recording better without it: penalised −2 ln L " +
+             fmt(w.delta_chi2_final) + ")";
+    case WithdrawnWhy::leaves_unexplained:
+      return o + ", but an axis of the triad stays unexplained with it: the drift stood in for structure outside "
+                 "the catalogue)";
+    case WithdrawnWhy::overdispersed:
+      return o + ", but counted against the unexplained remainder of its axis (Δχ²/φ) it explains only " +
+             fmt(w.delta_chi2_final) + ")";
+    case WithdrawnWhy::weak: break;
+  }
   return o + ", but in the final model it explains only Δχ² " + fmt(w.delta_chi2_final) + ")";
 }
 

@@ -32,6 +32,8 @@ std::string alternatives_text(const DiagFinding& f);
 nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& w);
 // "- withdrawn: … (accepted with Δχ² …, but …)" without the newline.
 std::string withdrawn_text(const DiagWithdrawn& w);
+// The JSON "why" of a withdrawn term.
+const char* withdrawn_why_key(WithdrawnWhy w);
 
 // A spec's sentence (effect_registry.hpp) with {who} and {condition} filled in.
 std::string fill_sentence(const char* tmpl, const std::string& who, const std::string& condition);

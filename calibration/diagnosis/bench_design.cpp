@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
 
 #include "calibration/bench_fit.hpp"
 
@@ -59,6 +62,82 @@ Eigen::MatrixXd parent_cov(const DiagData& d, const std::vector<int>& P, int a, 
       R(k, l) = R(l, k) = v;
     }
   return R;
+}
+
+// The excitation check: per term, the information its columns carry beyond the base columns (b, M
+// of each touched axis), sub-blocks weighted by their white-noise variance only (optimistic: the
+// drift and the bench errors would only widen σ). A term whose best parameter's 1σ exceeds a third
+// of its plausible size (the spec's prior σ) cannot be seen here: it is dropped from the candidates
+// and listed, so that it is neither named nor reported as absent.
+void drop_unexcited(const DiagData& d, Design& D) {
+  const int N = static_cast<int>(d.subs.size());
+  std::vector<bool> keep(D.terms.size(), true);
+  for (std::size_t t = 0; t < D.terms.size(); ++t) {
+    const Term& term = D.terms[t];
+    const EffectSpec& x = effect_spec(term.effect);
+    const double plausible = x.drive_prior[term.sensor == 1 ? 1 : 0];
+    const int np = term.nparams();
+    Eigen::MatrixXd info = Eigen::MatrixXd::Zero(np, np);
+    for (int a = 0; a < kAxes; ++a) {
+      const int c0 = D.col_of[a][t];
+      if (c0 < 0) continue;
+      Eigen::VectorXd w(N);
+      for (int j = 0; j < N; ++j) w(j) = d.subs[j].n / D.white_var[a];
+      const Eigen::MatrixXd B = D.X[a].leftCols(kBase), X = D.X[a].middleCols(c0, np);
+      const Eigen::MatrixXd BtW = B.transpose() * w.asDiagonal();
+      const Eigen::MatrixXd BB = BtW * B, BX = BtW * X;
+      const Eigen::MatrixXd XX = X.transpose() * w.asDiagonal() * X;
+      info += XX - BX.transpose() * BB.ldlt().solve(BX);
+    }
+    // σ of each parameter with the others free; a parameter the record does not see at all has
+    // (numerically) no information and an infinite σ.
+    const Eigen::VectorXd scale = info.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+    const Eigen::MatrixXd S = scale.asDiagonal() * info * scale.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
+    const double lmax = std::max(es.eigenvalues().maxCoeff(), 1e-300);
+    Eigen::VectorXd inv = Eigen::VectorXd::Zero(np);
+    for (int k = 0; k < np; ++k)
+      if (es.eigenvalues()(k) > 1e-12 * lmax) inv += es.eigenvectors().col(k).cwiseAbs2() / es.eigenvalues()(k);
+      else inv += es.eigenvectors().col(k).cwiseAbs2() * std::numeric_limits<double>::infinity();
+    double best = std::numeric_limits<double>::infinity();
+    for (int p = 0; p < np; ++p)
+      if (info(p, p) > 0) best = std::min(best, std::sqrt(inv(p)) * scale(p) / plausible);
+    if (!(best * 3 < 1)) {
+      keep[t] = false;
+      D.not_excited.push_back({term, best});
+    }
+  }
+  // Drop the columns of the terms not kept.
+  Design out;
+  for (std::size_t t = 0; t < D.terms.size(); ++t)
+    if (keep[t]) out.terms.push_back(D.terms[t]);
+  if (out.terms.size() == D.terms.size()) return;
+  for (int a = 0; a < kAxes; ++a) {
+    out.col_of[a].assign(out.terms.size(), -1);
+    std::vector<int> cols;
+    for (int c = 0; c < kBase; ++c) cols.push_back(c);
+    for (std::size_t t = 0, u = 0; t < D.terms.size(); ++t) {
+      if (!keep[t]) continue;
+      if (D.col_of[a][t] >= 0) {
+        out.col_of[a][u] = static_cast<int>(cols.size());
+        for (int p = 0; p < D.terms[t].nparams(); ++p) cols.push_back(D.col_of[a][t] + p);
+      }
+      ++u;
+    }
+    out.ncols[a] = static_cast<int>(cols.size());
+    Eigen::MatrixXd X(D.X[a].rows(), out.ncols[a]);
+    for (std::size_t c = 0; c < cols.size(); ++c) X.col(static_cast<Eigen::Index>(c)) = D.X[a].col(cols[c]);
+    D.X[a] = std::move(X);
+    D.col_of[a] = std::move(out.col_of[a]);
+    D.ncols[a] = out.ncols[a];
+  }
+  D.terms = std::move(out.terms);
+  D.term_param_offset.clear();
+  D.n_term_params = 0;
+  for (const auto& t : D.terms) {
+    D.term_param_offset.push_back(D.n_term_params);
+    D.n_term_params += t.nparams();
+  }
 }
 
 }  // namespace
@@ -122,6 +201,7 @@ Design build_design(const DiagData& d, const EffectTerms& carried) {
     }
     D.white_var[a] = std::max(dof > 100 ? ss / dof : ss_all / std::max(dof_all, 1.0), 1e-30);
   }
+  drop_unexcited(d, D);
   return D;
 }
 

@@ -24,6 +24,7 @@ struct Design {
   std::vector<Eigen::VectorXd> z;  // per axis: raw z per sub-block (measured − ref − carried)
   std::vector<Eigen::MatrixXd> X;  // per axis: Nsub × ncols raw columns
   double white_var[kAxes] = {};
+  std::vector<NotExcited> not_excited;  // candidates dropped: this recording cannot excite them
 };
 
 using Dataset = diag::LinearDataset;

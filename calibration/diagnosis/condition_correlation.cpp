@@ -171,5 +171,40 @@ void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, do
   }
 }
 
+void time_spectrum(const DiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp) {
+  best_hz = 0;
+  best_amp = 0;
+  // Deviations from each parent block's mean (the slow part belongs to the drift and the steps),
+  // sampled at the sub-blocks' mid times; a least-squares sinusoid per trial frequency.
+  const std::vector<double> rp = parent_block_means(d, r);
+  const std::size_t n = d.subs.size();
+  if (n < 20) return;
+  std::vector<double> t(n), x(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    t[j] = d.subs[j].t_mid;
+    x[j] = r(static_cast<Eigen::Index>(j)) - rp[static_cast<std::size_t>(d.subs[j].parent)];
+  }
+  for (double hz = 0.02; hz <= 5.0; hz *= 1.005) {
+    const double w = 2 * M_PI * hz;
+    double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      const double c = std::cos(w * t[j]), s = std::sin(w * t[j]);
+      cc += c * c;
+      ss += s * s;
+      cs += c * s;
+      xc += x[j] * c;
+      xs += x[j] * s;
+    }
+    const double det = cc * ss - cs * cs;
+    if (det <= 1e-9 * cc * ss) continue;
+    const double a = (xc * ss - xs * cs) / det, b = (xs * cc - xc * cs) / det;
+    const double amp = std::hypot(a, b);
+    if (amp > best_amp) {
+      best_amp = amp;
+      best_hz = hz;
+    }
+  }
+}
+
 }  // namespace diag
 }  // namespace calbench

@@ -30,5 +30,8 @@ std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eig
 // Bench: amplitude of harmonics 1..4 of the table angle in the within-parent residual (rotating
 // sub-blocks); the strongest harmonic and its amplitude.
 void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, double& best_amp);
+// The strongest sinusoid in time in a sub-block residual (deviations from the parent means),
+// 0.02–5 Hz: its frequency and amplitude (0 when the record is too short).
+void time_spectrum(const DiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp);
 
 }  // namespace calbench::diag

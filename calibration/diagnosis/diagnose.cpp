@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "calibration/diagnosis/bench_design.hpp"
@@ -122,6 +123,33 @@ AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const
   }
   st.within_rms = std::sqrt(std::max(0.0, wwt > 0 ? wms / wwt : 0.0));
   st.systematic_rms = std::hypot(st.step_rms, st.within_rms);
+  // The same bins as a test: χ² of every (step, angle bin) mean against its white-noise variance,
+  // and the table-angle profile summed over the steps (where in the angle the structure sits).
+  std::array<double, 12> prof{}, prof_var{}, prof_n{};
+  for (const auto& [step, bs] : bins)
+    for (int b = 0; b < 12; ++b) {
+      const auto& bb = bs[static_cast<std::size_t>(b)];
+      if (bb[1] <= 0 || bb[2] <= 0) continue;
+      st.angle_bins_chi2 += bb[0] * bb[0] / bb[2];
+      ++st.angle_bins_dof;
+      prof[b] += bb[0];
+      prof_var[b] += bb[2];
+      prof_n[b] += bb[1];
+    }
+  double prof_chi2 = 0;
+  int prof_dof = 0;
+  for (int b = 0; b < 12; ++b)
+    if (prof_var[b] > 0) {
+      prof_chi2 += prof[b] * prof[b] / prof_var[b];
+      ++prof_dof;
+    }
+  st.angle_profile_p = prof_dof > 0 ? chi2_upper_p(prof_chi2, prof_dof) : 1.0;
+  for (int b = 0; b < 12; ++b)
+    if (prof_var[b] > 0 && std::abs(prof[b]) / std::sqrt(prof_var[b]) > std::abs(st.worst_angle_bin_z)) {
+      st.worst_angle_bin_z = prof[b] / std::sqrt(prof_var[b]);
+      st.worst_angle_bin = b;
+      st.worst_angle_bin_mean = prof[b] / prof_n[b];
+    }
   st.bic = rw.squaredNorm() + S.logdet + nparams / static_cast<double>(kAxes) * std::log(std::max(N, 2));
   return st;
 }
@@ -167,6 +195,15 @@ void finding_rms(const Term& t, const std::vector<int>& touched, const DiagnoseR
   f.rms_after = n ? std::sqrt(ra / n) : 0;
 }
 
+// Is an axis's final residual still far from its noise model? Parent-level or sub-block χ²/dof
+// beyond 6σ of its sampling spread, Ljung–Box p < 1e-4, or structure in the table angle: the
+// residual's angle profile (12 bins summed over the rotating steps) with χ² p < 1e-6.
+bool axis_unexplained(const AxisStats& s, const Dataset& S) {
+  const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, S.n_low) / 2.0);
+  const double z_high = (s.high_chi2_dof - 1) * std::sqrt(std::max(1, S.n_high) / 2.0);
+  return z_low >= 6 || z_high >= 6 || s.ljung_box_p <= 1e-4 || s.angle_profile_p < 1e-6;
+}
+
 // The condition that reveals a finding (g-sensitivity: the force component it follows most).
 void finding_condition(const Term& t, DiagFinding& f) {
   f.condition = revealing_condition(t.effect);
@@ -185,6 +222,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   DiagnoseResult res;
   if (data.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks in plan steps");
   const Design D = build_design(data, carried);
+  res.not_excited = D.not_excited;
   res.parents = static_cast<int>(data.parents.size());
   res.subs = static_cast<int>(data.subs.size());
   for (const auto& p : data.parents) res.data_s += p.duration;
@@ -212,30 +250,39 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   // Backward check (stepwise): a term accepted in an early round can lose its evidence once later
   // terms or a larger drift (correlated_drift) are in the model — e.g. a g-sensitivity that only
   // half-fitted an effect outside the catalogue. Withdrawn terms are reported, not findings.
-  for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w));
-  for (const auto& w : search.withdraw_weak()) res.withdrawn.push_back(search.withdrawn_report(w));
+  for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w, WithdrawnWhy::drift_recheck));
+  for (const auto& w : search.withdraw_weak()) res.withdrawn.push_back(search.withdrawn_report(w, WithdrawnWhy::weak));
+  // The final residual and its statistics; an axis still unexplained after the search counts as
+  // overdispersed (its residual χ²/dof beyond the noise model's): a term kept only because the
+  // unmodelled structure inflates its Δχ² is withdrawn (quasi-likelihood: Δχ²/φ), and the
+  // statistics are taken again.
   const Model& model = search.model;
   const FitOut& cur = search.cur;
-
-  // The improved model.
-  search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
-  for (int a = 0; a < kAxes; ++a) {
-    TriadErrors& te = a < 3 ? res.improved.gyro : res.improved.accel;
-    const int i = a % 3;
-    te.bias(i) = cur.theta(a * kBase);
-    te.sigma_bias(i) = std::sqrt(std::max(cur.cov(a * kBase, a * kBase), 0.0));
-    for (int c = 0; c < 3; ++c) {
-      te.M(i, c) = cur.theta(a * kBase + 1 + c);
-      te.sigma_M(i, c) = std::sqrt(std::max(cur.cov(a * kBase + 1 + c, a * kBase + 1 + c), 0.0));
-    }
-  }
-  std::copy(ds, ds + 2, res.drift_sigma);
-  std::copy(tau, tau + 2, res.drift_tau);
   Eigen::VectorXd r_after[kAxes];
-  const int np = model_params(D, model);
+  for (int round = 0;; ++round) {
+    const int np = model_params(D, model);
+    double phi[kAxes];
+    for (int a = 0; a < kAxes; ++a) {
+      r_after[a] = residual(D, model, a, cur.theta);
+      res.after[a] = axis_stats(data, D, all[a], r_after[a], np);
+      phi[a] = axis_unexplained(res.after[a], all[a]) ? std::max(1.0, res.after[a].chi2_dof) : 1.0;
+    }
+    if (round == 3) break;
+    bool changed = false;
+    for (int triad = 0; triad < 2 && !changed; ++triad) {
+      if (ds[triad] == drift_sigma[triad] && tau[triad] == drift_tau[triad]) continue;
+      for (int a = 3 * triad; a < 3 * triad + 3 && !changed; ++a)
+        if (phi[a] > 1 || axis_unexplained(res.after[a], all[a])) {
+          res.withdrawn.push_back(search.withdrawn_report(search.give_up_drift(triad), WithdrawnWhy::leaves_unexplained));
+          changed = true;
+        }
+    }
+    if (changed) continue;
+    const auto w = search.withdraw_overdispersed(phi);
+    for (const auto& x : w) res.withdrawn.push_back(search.withdrawn_report(x, WithdrawnWhy::overdispersed));
+    if (w.empty()) break;
+  }
   for (int a = 0; a < kAxes; ++a) {
-    r_after[a] = residual(D, model, a, cur.theta);
-    res.after[a] = axis_stats(data, D, all[a], r_after[a], np);
     // The before figures keep their own χ², whiteness and BIC (base model, data-sheet noise); the
     // systematic part is re-measured against the drift the data-sheet noise model sees in the final
     // residual (for linear findings the same drift the after figure removes; a correlated_drift
@@ -255,6 +302,20 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     res.residual[a].after.assign(r_after[a].data(), r_after[a].data() + r_after[a].size());
   }
 
+  // The improved model.
+  search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
+  for (int a = 0; a < kAxes; ++a) {
+    TriadErrors& te = a < 3 ? res.improved.gyro : res.improved.accel;
+    const int i = a % 3;
+    te.bias(i) = cur.theta(a * kBase);
+    te.sigma_bias(i) = std::sqrt(std::max(cur.cov(a * kBase, a * kBase), 0.0));
+    for (int c = 0; c < 3; ++c) {
+      te.M(i, c) = cur.theta(a * kBase + 1 + c);
+      te.sigma_M(i, c) = std::sqrt(std::max(cur.cov(a * kBase + 1 + c, a * kBase + 1 + c), 0.0));
+    }
+  }
+  std::copy(ds, ds + 2, res.drift_sigma);
+  std::copy(tau, tau + 2, res.drift_tau);
   // Findings.
   for (const auto& acc : search.steps) {
     if (acc.term < 0) {
@@ -275,7 +336,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     // Could another candidate in its place explain the recording as well? It must itself explain
     // the residual (Δχ² ≥ min_delta_chi2 against the model without the finding) and fit within
     // ambiguity_chi2 of the finding.
-    f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, carried);
+    f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, opt.ambiguity_correlation, carried);
     // Axis on which it shows: the touched axis whose residual it explains most.
     std::vector<int> touched;
     for (int a = 0; a < kAxes; ++a)
@@ -292,12 +353,16 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   // Unexplained structure: an axis still far from its noise model.
   for (int a = 0; a < kAxes; ++a) {
     const AxisStats& s = res.after[a];
-    const double n = std::max(1, all[a].n_low);
-    const double z_low = (s.chi2_dof - 1) * std::sqrt(n / 2.0);
-    const double z_high = (s.high_chi2_dof - 1) * std::sqrt(std::max(1, all[a].n_high) / 2.0);
-    if (z_low < 6 && z_high < 6 && s.ljung_box_p > 1e-4) continue;
+    if (!axis_unexplained(s, all[a])) continue;
     DiagUnexplained u = diag::unexplained_axis(a, s, diag::correlations(data, r_after[a]));
     diag::angle_spectrum(data, r_after[a], u.angle_harmonic, u.angle_harmonic_amp);
+    diag::time_spectrum(data, r_after[a], u.period_hz, u.period_amp);
+    if (s.worst_angle_bin >= 0 && std::abs(s.worst_angle_bin_z) >= 4) {
+      u.angle_bin_deg[0] = 30.0 * s.worst_angle_bin;
+      u.angle_bin_deg[1] = 30.0 * (s.worst_angle_bin + 1);
+      u.angle_bin_mean = s.worst_angle_bin_mean;
+      u.angle_bin_z = s.worst_angle_bin_z;
+    }
     // Worst steps by |mean residual| relative to its white-noise σ.
     std::map<int, std::pair<double, double>> st;
     for (const auto& sb : data.subs) {

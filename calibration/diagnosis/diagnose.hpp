@@ -32,8 +32,11 @@ struct DiagnoseOptions {
   double min_delta_chi2 = 40;            // smallest Δχ² that can count as a finding
   int max_findings = 6;
   // A candidate that, put in a finding's place in the final model, fits within this Δχ² of it is
-  // reported as an alternative the recording cannot tell apart (likelihood ratio < e^5).
+  // reported as an alternative the recording cannot tell apart (likelihood ratio < e^5); so is one
+  // whose regressor correlates with the finding's at ≥ ambiguity_correlation on this recording
+  // (DiagAlternative::regressor_correlation), however large the Δχ².
   double ambiguity_chi2 = 10;
+  double ambiguity_correlation = 0.99;
 };
 
 struct AxisStats {
@@ -43,6 +46,14 @@ struct AxisStats {
   double systematic_rms = 0; // RMS of per-step means and within-step low-passed residual, noise removed
   double step_rms = 0, within_rms = 0;
   double systematic_floor = 0; // drives: noise level of systematic_rms (below it, not told from zero)
+  // Bench: rotating steps' sub-block residuals binned by table angle (12 bins per step): χ² of the
+  // bin means against white noise and its dof; the angle profile's most significant bin (index,
+  // its z and its mean residual).
+  double angle_bins_chi2 = 0;
+  int angle_bins_dof = 0;
+  int worst_angle_bin = -1;
+  double worst_angle_bin_z = 0, worst_angle_bin_mean = 0;
+  double angle_profile_p = 1;  // χ² test of the 12-bin angle profile against white noise
   double bic = 0;
 };
 
@@ -58,6 +69,9 @@ struct DiagAlternative {
   std::vector<double> value;  // fitted in the finding's place, SI
   std::string unit;
   double chi2_worse = 0;      // χ² of that model minus the chosen one's (< ambiguity_chi2)
+  // √(Δχ² it explains in the finding's place / Δχ² the finding explains): the regressors'
+  // correlation on this recording as the residual shows it (1: the same shape here).
+  double regressor_correlation = 0;
 };
 
 // Profile-likelihood intervals of a correlated_drift finding: σ, τ and the random-walk density
@@ -92,12 +106,22 @@ struct DiagFinding {
 // A term the greedy search accepted that lost its evidence in the final model (stepwise backward
 // check), or a correlated_drift given up because the search redone without it explains the
 // recording better (a slow deterministic effect it had taken the place of): not a finding.
+// Why an accepted term was given up.
+enum class WithdrawnWhy {
+  weak,           // in the final model it explains less than min_delta_chi2 (backward check)
+  drift_recheck,  // correlated_drift: the search redone without it scores better
+  overdispersed,  // its Δχ², scaled by the unexplained remainder's χ²/dof (φ), fails the threshold
+  leaves_unexplained,  // correlated_drift: an axis of its triad stays unexplained with it
+};
+
 struct DiagWithdrawn {
   Term term;
   double delta_chi2_when_accepted = 0;
-  // Linear term: what removing it from the final model costs (< min_delta_chi2). correlated_drift:
-  // the change of the penalised −2 ln L from the model with it to the one redone without (< 0).
+  // weak / overdispersed: what removing it from the final model costs (overdispersed: Σ Δχ²_a/φ_a).
+  // correlated_drift: the change of the penalised −2 ln L from the model with it to the one redone
+  // without (< 0 for drift_recheck).
   double delta_chi2_final = 0;
+  WithdrawnWhy why = WithdrawnWhy::weak;
 };
 
 struct DiagUnexplained {
@@ -107,6 +131,12 @@ struct DiagUnexplained {
   std::vector<ConditionCorrelation> correlations;  // strongest first
   double angle_harmonic_amp = 0;
   int angle_harmonic = 0;
+  // Where in the table angle (bench): the 30° bin whose mean residual stands out most (its z ≥ 4;
+  // else NaN), over the rotating steps; and the strongest periodic component in time (the
+  // sub-block residual's periodogram, 0.02–5 Hz; amplitude in SI).
+  double angle_bin_deg[2] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  double angle_bin_mean = 0, angle_bin_z = 0;
+  double period_hz = 0, period_amp = 0;
 };
 
 // Per-sub-block residual of one sensor axis, for plots.
@@ -114,8 +144,17 @@ struct ResidualSeries {
   std::vector<double> before, after;  // rad/s or m/s²
 };
 
+// A catalogue term this recording cannot excite: even with white noise alone its best-determined
+// parameter's 1σ exceeds a third of the largest value plausible for the unit class (the spec's
+// prior), so it is not a candidate here (docs/diagnosis.md, "Which recording excites what").
+struct NotExcited {
+  Term term;
+  double sigma_ratio = 0;  // min over parameters of 1σ / plausible value
+};
+
 struct DiagnoseResult {
   std::vector<DiagFinding> findings;
+  std::vector<NotExcited> not_excited;
   std::vector<DiagUnexplained> unexplained;
   std::vector<DiagWithdrawn> withdrawn;
   AxisStats before[6], after[6];                 // gyro x,y,z, accel x,y,z
@@ -152,5 +191,7 @@ std::string condition_axis_label(const std::string& name);
 
 // Ljung–Box Q over `lags` lags and its p-value (χ² with `lags` dof, Wilson–Hilferty).
 void ljung_box(const std::vector<double>& x, int lags, double& q, double& p);
+// Upper tail P(χ²_dof > q) (Wilson–Hilferty).
+double chi2_upper_p(double q, double dof);
 
 }  // namespace calbench

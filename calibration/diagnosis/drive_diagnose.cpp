@@ -233,7 +233,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   }
 
   search.run();
-  for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w));
+  for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w, WithdrawnWhy::drift_recheck));
   const std::vector<int>& model = search.model;
   const FitOut& cur = search.cur;
   const double* ds = search.ds;
@@ -309,7 +309,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     const Term& t = D.terms[acc.term];
     // Another candidate in its place that fits within ambiguity_chi2 and itself explains the
     // residual (as on the bench): the drive does not tell them apart.
-    f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, carried);
+    f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, opt.ambiguity_correlation, carried);
     report_axis_of(t, f);
     // Systematic residual along the finding's own signature, on each axis the term touches:
     // parents binned by the term's fitted contribution c; before = the final residual with the

@@ -38,6 +38,7 @@ struct DriveDiagnoseOptions {
   // Another candidate that, in a finding's place, fits within this Δχ² (and itself explains
   // min_delta_chi2) is reported as not told apart from it (DiagAlternative).
   double ambiguity_chi2 = 10;
+  double ambiguity_correlation = 0.99;  // as DiagnoseOptions::ambiguity_correlation
   double penalty_per_param = 0;
   int max_findings = 6;
 };

@@ -169,12 +169,13 @@ class GreedySearch {
   // and themselves explain at least min_explain of χ² against the model without it (not a null
   // term that leaves the residual alone): what the recording does not tell apart from the finding.
   // Values relative to `carried` as for findings; best (lowest χ²) first.
-  std::vector<DiagAlternative> alternatives(int term, double below, double min_explain,
+  std::vector<DiagAlternative> alternatives(int term, double below, double min_explain, double min_share,
                                             const EffectTerms& carried) const {
     const std::size_t k = std::find(model.begin(), model.end(), term) - model.begin();
     std::vector<int> without = model;
     without.erase(without.begin() + static_cast<std::ptrdiff_t>(k));
     const double chi2_without = P_.fit(without, ptrs(all)).chi2;
+    const double explained = chi2_without - cur.chi2;  // by the finding
     std::vector<DiagAlternative> out;
     for (int t = 0; t < P_.n_terms(); ++t) {
       if (in_model(t)) continue;
@@ -182,13 +183,19 @@ class GreedySearch {
       m[k] = t;
       const Fit g = P_.fit(m, ptrs(all));
       const double worse = g.chi2 - cur.chi2;
-      if (worse >= below || chi2_without - g.chi2 < min_explain) continue;
+      const double explains = chi2_without - g.chi2;
+      // The share of the finding's Δχ² the alternative explains in its place: for a residual of
+      // the finding's shape, the (whitened, base-projected) correlation of the two regressors on
+      // this recording, squared.
+      const double share = explained > 0 ? std::sqrt(std::clamp(explains / explained, 0.0, 1.0)) : 0.0;
+      if (explains < min_explain || (worse >= below && share < min_share)) continue;
       DiagAlternative alt;
       alt.term = P_.term(t);
       const int first = P_.param_index(g, k, t);
       for (int p = 0; p < alt.term.nparams(); ++p) alt.value.push_back(g.theta(first + p) + alt.term.get_param(carried, p));
       alt.unit = term_unit(alt.term);
       alt.chi2_worse = worse;
+      alt.regressor_correlation = share;
       out.push_back(std::move(alt));
     }
     std::sort(out.begin(), out.end(),
@@ -227,6 +234,67 @@ class GreedySearch {
     return out;
   }
 
+  // After withdraw_weak(), with the final residual's overdispersion per axis (phi[a] ≥ 1: how far
+  // the residual of an axis that stays unexplained exceeds its noise model; 1 elsewhere): a term
+  // whose removal costs, with each axis's χ² divided by its φ, less than the acceptance threshold
+  // (min_delta_chi2 and its penalty) was carried by structure outside the catalogue, not by its own
+  // shape, and is withdrawn (quasi-likelihood). One at a time, the weakest first.
+  std::vector<Withdrawn> withdraw_overdispersed(const double (&phi)[6]) {
+    std::vector<Withdrawn> out;
+    bool any = false;
+    for (double p : phi) any = any || p > 1;
+    if (!any) return out;
+    int worst = -1;
+    double worst_margin = 0, worst_cost = 0;
+    Fit worst_fit;
+    for (std::size_t j = 0; j < steps.size(); ++j) {
+      if (steps[j].term < 0) continue;
+      const int t = steps[j].term;
+      bool inflated = false;
+      for (int a = 0; a < 6; ++a) inflated = inflated || (phi[a] > 1 && P_.touches(t, a));
+      if (!inflated) continue;
+      std::vector<int> m = model;
+      m.erase(std::find(m.begin(), m.end(), t));
+      Fit g = P_.fit(m, ptrs(all));
+      double cost = 0;
+      for (int a = 0; a < 6; ++a) cost += (g.chi2_axis[a] - cur.chi2_axis[a]) / phi[a];
+      int rows = 0;
+      for (const auto& S : all)
+        if (P_.touches(t, S.axis)) rows += P_.rows(S);
+      const double need = std::max(pol_.min_delta_chi2, greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param) +
+                                                            effect_spec(P_.term(t).effect).prior_penalty);
+      const double margin = cost - need;
+      if (margin < 0 && (worst < 0 || margin < worst_margin)) {
+        worst = static_cast<int>(j);
+        worst_margin = margin;
+        worst_cost = cost;
+        worst_fit = std::move(g);
+      }
+    }
+    if (worst < 0) return out;
+    out.push_back({steps[worst], worst_cost});
+    model.erase(std::find(model.begin(), model.end(), steps[worst].term));
+    cur = std::move(worst_fit);
+    cur_held = heldout(model);
+    steps.erase(steps.begin() + worst);
+    return out;
+  }
+
+  // A drift finding that leaves an axis of its triad unexplained has not explained the residual:
+  // something outside the catalogue (a periodic term, a step) inflated the drift. Give it up:
+  // redo the search with that triad's drift held at the prior and adopt the result.
+  Withdrawn give_up_drift(int triad) {
+    const auto it = std::find_if(steps.begin(), steps.end(), [&](const GreedyStep& s) { return s.term == -1 - triad; });
+    GreedyStep step = it != steps.end() ? *it : GreedyStep{};
+    step.term = -1 - triad;
+    GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
+    for (int k = 0; k < 2; ++k) alt.drift_done_[k] = k == triad || drift_done_[k] && ds[k] == prior_ds_[k];
+    alt.run();
+    const double change = alt.total_score() - total_score();
+    adopt(std::move(alt));
+    return {step, change};
+  }
+
   // After run(): a large drift can take the place of a slow deterministic effect (a temperature
   // ramp is also a likely path of a Gauss–Markov drift 30× the data sheet), and once it is in the
   // model the effect no longer passes. So for each triad whose drift was enlarged the search is run
@@ -253,9 +321,9 @@ class GreedySearch {
   }
 
   // A withdrawn step (withdraw_weak, recheck_drift) as reported.
-  DiagWithdrawn withdrawn_report(const Withdrawn& w) const {
+  DiagWithdrawn withdrawn_report(const Withdrawn& w, WithdrawnWhy why) const {
     const Term t = w.step.term >= 0 ? P_.term(w.step.term) : Term{noise_effect_spec().id, -1 - w.step.term, -1};
-    return {t, w.step.dchi2, w.cost};
+    return {t, w.step.dchi2, w.cost, why};
   }
 
   static std::vector<const Dataset*> ptrs(const std::vector<Dataset>& v) {

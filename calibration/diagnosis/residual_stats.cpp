@@ -22,9 +22,13 @@ void ljung_box(const std::vector<double>& x, int lags, double& q, double& p) {
     q += rho * rho / (n - k);
   }
   q *= n * (n + 2.0);
-  const double h = lags;
-  const double z = (std::cbrt(q / h) - (1 - 2 / (9 * h))) / std::sqrt(2 / (9 * h));
-  p = 0.5 * std::erfc(z / std::sqrt(2.0));
+  p = chi2_upper_p(q, lags);
+}
+
+double chi2_upper_p(double q, double dof) {
+  // Wilson–Hilferty: (q/k)^(1/3) is nearly normal with mean 1 − 2/(9k) and variance 2/(9k).
+  const double z = (std::cbrt(std::max(q, 0.0) / dof) - (1 - 2 / (9 * dof))) / std::sqrt(2 / (9 * dof));
+  return 0.5 * std::erfc(z / std::sqrt(2.0));
 }
 
 DiagFinding correlated_drift_finding(int triad, double sigma, double tau_s, const DriftInterval& interval,

@@ -14,6 +14,7 @@ int value_slots(const EffectSpec& s) {
   switch (s.shape) {
     case EffectShape::triad_axis: return 6;   // sensor·3 + axis
     case EffectShape::gyro_matrix: return 9;  // p·3 + axis (column-major, as Mat3)
+    case EffectShape::axis_rows: return 6 * s.nparams;  // sensor·3·n + p·3 + axis
     case EffectShape::vector: return s.nparams;
     case EffectShape::noise: return 4;  // sensor·2 + p
   }
@@ -60,6 +61,9 @@ double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, 
   switch (s.shape) {
     case EffectShape::triad_axis: k = axis >= 0 && axis < 3 && p == 0 ? sensor * 3 + axis : -1; break;
     case EffectShape::gyro_matrix: k = axis >= 0 && axis < 3 && p >= 0 && p < 3 ? p * 3 + axis : -1; break;
+    case EffectShape::axis_rows:
+      k = axis >= 0 && axis < 3 && p >= 0 && p < s.nparams ? sensor * 3 * s.nparams + p * 3 + axis : -1;
+      break;
     case EffectShape::vector: k = p >= 0 && p < s.nparams ? p : -1; break;
     case EffectShape::noise: k = p >= 0 && p < 2 ? sensor * 2 + p : -1; break;
   }
@@ -102,6 +106,13 @@ Eigen::Map<Mat3> effect_matrix(EffectTerms& e, EffectId id) {
 }
 Eigen::Map<const Mat3> effect_matrix(const EffectTerms& e, EffectId id) {
   return Eigen::Map<const Mat3>(view_base(const_cast<EffectTerms&>(e), id, EffectShape::gyro_matrix, 0, 9));
+}
+
+std::string effect_component_name(const EffectSpec& s, int axis, int p) {
+  if (s.components_other_axes) return std::string(1, "xyz"[(axis + 1 + p) % 3]);
+  std::string keys = s.inject_keys ? s.inject_keys : "";
+  for (int k = 0; k < p; ++k) keys = keys.substr(keys.find(',') + 1);
+  return keys.substr(0, keys.find(','));
 }
 
 void effect_clear(const EffectSpec& s, EffectTerms& e) {
@@ -157,7 +168,7 @@ bool effect_from_name(const std::string& s, EffectId& e) {
 }
 
 bool effect_allows_sensor(const EffectSpec& s, int sensor) {
-  if (s.shape == EffectShape::triad_axis || s.shape == EffectShape::noise)
+  if (s.shape == EffectShape::triad_axis || s.shape == EffectShape::noise || s.shape == EffectShape::axis_rows)
     return sensor >= 0 && sensor < 2 && (s.sensors >> sensor & 1u);
   return sensor == s.sensor;
 }
@@ -174,6 +185,13 @@ bool effect_present(const EffectSpec& s, const EffectTerms& e) {
       for (int a = 0; a < 3; ++a)
         for (int p = 0; p < 3; ++p)
           if (effect_value(s, e, s.sensor, a, p) != 0) return true;
+      return false;
+    case EffectShape::axis_rows:
+      for (int k = 0; k < 2; ++k)
+        if (effect_allows_sensor(s, k))
+          for (int a = 0; a < 3; ++a)
+            for (int p = 0; p < s.nparams; ++p)
+              if (effect_value(s, e, k, a, p) != 0) return true;
       return false;
     case EffectShape::vector:
       for (int p = 0; p < s.nparams; ++p)
@@ -200,6 +218,7 @@ bool Term::touches(int s, int a) const {
   const EffectSpec& x = effect_spec(effect);
   switch (x.shape) {
     case EffectShape::triad_axis:
+    case EffectShape::axis_rows:
     case EffectShape::gyro_matrix: return s == sensor && a == axis;
     case EffectShape::vector: return x.shows_on < 0 || s == x.shows_on;
     case EffectShape::noise: return false;
@@ -226,6 +245,10 @@ std::vector<Term> candidate_terms() {
     for (int a = 0; a < 3; ++a)
       for (const EffectSpec& x : effect_specs())
         if (x.shape == EffectShape::triad_axis && effect_allows_sensor(x, s)) out.push_back({x.id, s, a});
+  for (int s = 0; s < 2; ++s)
+    for (int a = 0; a < 3; ++a)
+      for (const EffectSpec& x : effect_specs())
+        if (x.shape == EffectShape::axis_rows && effect_allows_sensor(x, s)) out.push_back({x.id, s, a});
   for (const EffectSpec& x : effect_specs()) {
     if (x.shape == EffectShape::gyro_matrix)
       for (int a = 0; a < 3; ++a) out.push_back({x.id, x.sensor, a});

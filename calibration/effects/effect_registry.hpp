@@ -29,7 +29,12 @@ enum class EffectId {
   correlated_drift,
   temperature_rate,  // thermal lag: bias ∝ dT/dt (appended: the IDs above keep their indices)
   scale_factor,      // scale differs from the given coefficients (drives with --coeffs only)
-  scale_k2,          // even gyro scale term K2·ω² (IEEE 952/1431 scale-factor polynomial)
+  scale_k2,          // even scale term K2·x² (IEEE 952/1431/1293 scale-factor polynomial)
+  scale_k3,          // cubic scale term K3·x³
+  cross_coupling,    // cross-coupling x_i·x_j with the other axes' inputs (accel K_ip, K_io; gyro)
+  cross_axis_rate,   // gyro sensitivity to the square of the rate about another axis
+  g2_sensitivity,    // gyro anisoelastic (g²) sensitivity: products of specific-force components
+  size_effect,       // accelerometer size effect: each axis's own lever arm (rate² and ω̇)
 };
 
 // How an effect's parameters are laid out, which decides its candidate terms, its JSON form and
@@ -37,6 +42,8 @@ enum class EffectId {
 enum class EffectShape {
   triad_axis,   // one parameter per sensor axis: a term per (sensor, axis) of the sensors allowed
   gyro_matrix,  // a row of 3 per gyro axis (output axis × force axis): a term per gyro axis
+  axis_rows,    // a row of nparams per axis of each allowed sensor (components named by inject_keys):
+                //   a term per (sensor, axis)
   vector,       // one term of nparams parameters on one sensor (or the reference)
   noise,        // no linear parameter: (σ, τ) of the noise model per triad
 };
@@ -110,10 +117,14 @@ struct EffectSpec {
   DisplayUnit bench_display;  // the bench report's sentences
   DisplayUnit drive_display;  // the drive report's sentences (multiplied per value)
   // JSON: value key per sensor (triad_axis), or the one value key; whether the object carries the
-  // reference temperature t0_c. `--inject`: the component keys of a vector ("x,y,z"), "value" for one.
+  // reference temperature t0_c. `--inject`: the component keys of a vector ("x,y,z"), "value" for one;
+  // of an axis_rows effect the names of a row's components (`--inject ...,axis=x,term=xy,value=V`).
   const char* json_value[2];
   bool json_t0;
   const char* inject_keys;
+  // axis_rows: the row's components are the two other axes (next, previous: x → y, z), named by
+  // their letter; `--inject ...,axis=x,with=y,value=V`.
+  bool components_other_axes = false;
   // Bench diagnosis.
   bool bench_candidate;      // false: the bench refits M, so a scale_factor term would be M_ii again
   // −2 ln(prior odds) against the effect, added to its penalty in the search (both diagnoses): a
@@ -121,6 +132,8 @@ struct EffectSpec {
   // recording better by this much to be named instead of it. 0 for the established ones.
   double prior_penalty = 0;
   const char* condition;     // the reference condition that reveals it on the bench
+  // What excites it (plan steps, manoeuvres): said when a recording cannot (nullptr: the condition).
+  const char* excited_by = nullptr;
   bool condition_by_column;  // the condition names the dominant column (g-sensitivity: f_x, f_y, f_z)
   bool dominant_component;   // one vector in IMU axes: reported on its dominant component
   int shows_on;              // −1: its own sensor; 1: the accelerometers show it (lever arm, table tilt)
@@ -171,6 +184,9 @@ template <int N>
 Eigen::Map<const Eigen::Matrix<double, N, 1>> effect_vector(const EffectTerms& e, EffectId id);
 Eigen::Map<Mat3> effect_matrix(EffectTerms& e, EffectId id);
 Eigen::Map<const Mat3> effect_matrix(const EffectTerms& e, EffectId id);
+// The name of component p of an axis_rows effect's row on `axis` (g2_sensitivity "xy"; the
+// other-axes rows: the other axis's letter).
+std::string effect_component_name(const EffectSpec& s, int axis, int p);
 // Every value of the effect back to zero.
 void effect_clear(const EffectSpec& s, EffectTerms& e);
 

@@ -45,6 +45,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[1] = "accel_m_s2_per_K";
   s.json_t0 = true;
   s.bench_candidate = true;
+  s.excited_by = "a temperature span (a thermal plan; the warm-up alone spans ~2 K)";
   s.condition = "temperature";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::with_temperature;
@@ -77,6 +78,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[1] = "accel_per_K";
   s.json_t0 = true;
   s.bench_candidate = true;
+  s.excited_by = "a temperature span with rates or forces of both signs at each temperature";
   s.condition = "temperature";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::with_temperature;
@@ -110,6 +112,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = "gyro_rad_s_per_K_per_s";
   s.json_value[1] = "accel_m_s2_per_K_per_s";
   s.bench_candidate = true;
+  s.excited_by = "a temperature that changes at different rates, heating and cooling (thermal_updown.toml)";
   s.condition = "dT/dt";
   s.shows_on = -1;
   // Not on drives: no dT/dt is derived from a drive (simulated drives have no temperature).
@@ -143,6 +146,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_display = {[](double x, int) { return x * (1.0 / kDeg * kG0); }, {"°/s/g", "°/s/g"}};
   s.json_value[0] = s.json_value[1] = "gyro_rad_s_per_m_s2";
   s.bench_candidate = true;
+  s.excited_by = "positions with each specific-force component positive and negative";
   s.condition = "f";
   s.condition_by_column = true;
   s.shows_on = -1;
@@ -152,6 +156,50 @@ std::vector<EffectSpec> make_effect_specs() {
   s.bench_sentence = "{who} error grows with {condition}: g-sensitivity, ";
   s.drive_what = "g-sensitivity";
   s.lookalike = -1;
+  row(s);
+
+  // ---- g2_sensitivity: the anisoelastic (g²) gyro terms.
+  s = EffectSpec{};
+  s.id = EffectId::g2_sensitivity;
+  s.key = "g2_sensitivity";
+  s.physics =
+      "gyro proof-mass suspension of unequal compliance: a drift ∝ products of specific-force components "
+      "(anisoelastic, g² sensitivity; IEEE 1431). The squares are relative to f_z²: where |f| = g the "
+      "isotropic part is a bias";
+  s.model = "A_xx·f_x² + A_yy·f_y² + A_xy·f_x·f_y + A_yz·f_y·f_z + A_zx·f_z·f_x (per gyro axis)";
+  s.shape = EffectShape::axis_rows;
+  s.sensor = -1;
+  s.sensors = kGyro;
+  s.nparams = 5;
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3&) {
+    const EffectSpec& x = effect_spec(EffectId::g2_sensitivity);
+    const Vec3& f = c.f;
+    const double q[5] = {f(0) * f(0), f(1) * f(1), f(0) * f(1), f(1) * f(2), f(2) * f(0)};
+    for (int i = 0; i < 3; ++i)
+      for (int p = 0; p < 5; ++p)
+        if (const double v = effect_value(x, e, 0, i, p); v != 0) dg(i) += v * q[p];
+  };
+  s.si_unit[0] = s.si_unit[1] = "rad/s/(m/s^2)^2";
+  s.bench_display = {[](double x, int) { return x * kG0 * kG0 / kDeg; }, {"°/s/g²", "°/s/g²"}};
+  s.drive_display = {[](double x, int) { return x * (kG0 * kG0 / kDeg); }, {"°/s/g²", "°/s/g²"}};
+  s.json_value[0] = s.json_value[1] = "gyro_rad_s_per_m2_s4";
+  s.inject_keys = "xx,yy,xy,yz,zx";
+  s.bench_candidate = true;
+  s.prior_penalty = 10;  // a newer effect beside an established look-alike (see scale_k2)
+  s.excited_by = "positions with two or three specific-force components at once and the vertical axis both up and down (diagnose.toml's tilts)";
+  s.condition = "f";
+  s.shows_on = -1;
+  // On a car f_z ≈ g: f_x·f_z is g-sensitivity to f_x again; not a drive candidate.
+  s.drive = DriveDiagnosis::never;
+  s.drive_prior[0] = s.drive_prior[1] = 1e-4;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} error grows with products of specific-force components: g²-sensitivity (anisoelastic), ";
+  s.drive_what = "g²-sensitivity (anisoelastic)";
+  s.lookalike = static_cast<int>(EffectId::g_sensitivity);
+  s.separation =
+      "where the IMU only stands with one axis up or down, f_x·f_z is ±g·f_x, a g-sensitivity; positions with "
+      "the same horizontal force and the vertical axis up and down (diagnose.toml's axis-up/down positions and "
+      "tilts) tell them apart";
   row(s);
 
   // ---- scale_nonlinearity
@@ -173,6 +221,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = "gyro_per_rad_s";
   s.json_value[1] = "accel_per_m_s2";
   s.bench_candidate = true;
+  s.excited_by = "inputs of two or more magnitudes of both signs";
   s.condition = "rate";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::always;
@@ -204,6 +253,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = "gyro";
   s.json_value[1] = "accel";
   s.bench_candidate = true;
+  s.excited_by = "inputs of both signs";
   s.condition = "rate";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::always;
@@ -255,37 +305,159 @@ std::vector<EffectSpec> make_effect_specs() {
   s.id = EffectId::scale_k2;
   s.key = "scale_k2";
   s.physics =
-      "scale factor grows with the square of the rate, the same for both signs: the even K2 term of the IEEE "
-      "952/1431 scale-factor polynomial";
-  s.model = "K2,i·ω_i² (gyro)";
+      "scale factor grows with the square of the input, the same for both signs: the even K2 term of the "
+      "scale-factor polynomial (gyros IEEE 952/1431, accelerometers IEEE 1293)";
+  s.model = "K2,i·x_i²";
   s.shape = EffectShape::triad_axis;
   s.sensor = -1;
-  s.sensors = kGyro;
+  s.sensors = kBoth;
   s.nparams = 1;
   s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x * x; };
-  s.si_unit[0] = s.si_unit[1] = "1/(rad/s)";
-  s.bench_display = {[](double x, int) { return x * kDeg / kPpm; }, {"ppm/(°/s)", "ppm/(°/s)"}};
-  s.drive_display = {[](double x, int) { return x * (1e6 * kDeg); }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.si_unit[0] = "1/(rad/s)";
+  s.si_unit[1] = "1/(m/s^2)";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x * kDeg / kPpm : x * kG0 / kPpm; }, {"ppm/(°/s)", "ppm/g"}};
+  s.drive_display = {[](double x, int k) { return k == 0 ? x * (1e6 * kDeg) : x * (1e6 * kG0); }, {"ppm/(°/s)", "ppm/g"}};
   s.json_value[0] = "gyro_per_rad_s";
+  s.json_value[1] = "accel_per_m_s2";
   s.bench_candidate = true;
   // With one rate magnitude (thermal_short.toml: ±300 °/s) ω² and |ω| are the same column: named
   // only where it explains the recording better than scale_asymmetry by Δχ² 10.
   s.prior_penalty = 10;
+  s.excited_by = "inputs of two or more magnitudes of both signs";
   s.condition = "rate";
   s.shows_on = -1;
-  // A car turns at < 1 rad/s: ω² barely differs from the bias and scale there; not a drive candidate
-  // (a set that carries it is still compensated on drives).
+  // A car turns at < 1 rad/s and accelerates at < 0.5 g: x² barely differs from the bias and scale
+  // there; not a drive candidate (a set that carries it is still compensated on drives).
   s.drive = DriveDiagnosis::never;
   s.drive_prior[0] = s.drive_prior[1] = 1e-2;
   s.own_input = true;
   s.curvature = true;
   s.compensation = DriveCompensation::output;
-  s.bench_sentence = "{who} scale error grows with the square of the rate, the same for both signs: even scale-factor term K2, ";
-  s.drive_what = "even scale-factor term K2·ω²";
+  s.bench_sentence = "{who} scale error grows with the square of the input, the same for both signs: even scale-factor term K2, ";
+  s.drive_what = "even scale-factor term K2·x²";
   s.lookalike = static_cast<int>(EffectId::scale_asymmetry);
   s.separation =
-      "both are even in the rate; only rates of several magnitudes (75, 150, 300 °/s in diagnose.toml) tell ω² "
-      "from |ω|";
+      "both are even in the input; only inputs of several magnitudes (rates 75, 150, 300 °/s in diagnose.toml; "
+      "forces of 0.7 and 1 g in tilted positions) tell x² from |x|";
+  row(s);
+
+  // ---- scale_k3: the cubic term of the scale-factor polynomial.
+  s = EffectSpec{};
+  s.id = EffectId::scale_k3;
+  s.key = "scale_k3";
+  s.physics =
+      "scale factor grows with the square of the input, opposite for the two signs (odd): the cubic K3 term of "
+      "the scale-factor polynomial (IEEE 952/1431/1293)";
+  s.model = "K3,i·x_i³";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 1;
+  s.axis_output = [](double p, double x, double, const EffectContext&) { return p * x * x * x; };
+  s.si_unit[0] = "1/(rad/s)^2";
+  s.si_unit[1] = "1/(m/s^2)^2";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x * kDeg * kDeg / kPpm : x * kG0 * kG0 / kPpm; },
+                     {"ppm/(°/s)²", "ppm/g²"}};
+  s.drive_display = {[](double x, int k) { return k == 0 ? x * (1e6 * kDeg * kDeg) : x * (1e6 * kG0 * kG0); },
+                     {"ppm/(°/s)²", "ppm/g²"}};
+  s.json_value[0] = "gyro_per_rad_s_2";
+  s.json_value[1] = "accel_per_m_s2_2";
+  s.bench_candidate = true;
+  // x³ and x·|x| are both odd: with two input magnitudes (after the scale factor) they are the same
+  // column; named only where it explains the recording better than scale_nonlinearity by Δχ² 10.
+  s.prior_penalty = 10;
+  s.excited_by = "inputs of three or more magnitudes of both signs (factory.toml's 20, 75, 150, 300 °/s; forces of 0.7 and 1 g)";
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;  // a car's inputs are too small for a cubic term
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;
+  s.own_input = true;
+  s.curvature = true;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} scale error grows with the square of the input, opposite for the two signs: cubic scale-factor term K3, ";
+  s.drive_what = "cubic scale-factor term K3·x³";
+  s.lookalike = static_cast<int>(EffectId::scale_nonlinearity);
+  s.separation =
+      "both are odd in the input; only inputs of three or more magnitudes (rates 20, 75, 150, 300 °/s in "
+      "factory.toml) tell x³ from x·|x|";
+  row(s);
+
+  // ---- cross_coupling: products of the axis's input with the other axes' inputs.
+  s = EffectSpec{};
+  s.id = EffectId::cross_coupling;
+  s.key = "cross_coupling";
+  s.physics =
+      "output of axis i grows with the product of its input and another axis's input: the cross-coupling "
+      "coefficients K_ip·a_i·a_p, K_io·a_i·a_o of IEEE 1293 (accelerometers) and their gyro counterparts";
+  s.model = "K_ij·x_i·x_j, j the two other axes";
+  s.shape = EffectShape::axis_rows;
+  s.sensor = -1;
+  s.sensors = kBoth;
+  s.nparams = 2;
+  s.components_other_axes = true;
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3& da) {
+    const EffectSpec& x = effect_spec(EffectId::cross_coupling);
+    for (int k = 0; k < 2; ++k) {
+      const Vec3& in = k == 0 ? c.w : c.f;
+      Vec3& out = k == 0 ? dg : da;
+      for (int i = 0; i < 3; ++i)
+        for (int p = 0; p < 2; ++p)
+          if (const double v = effect_value(x, e, k, i, p); v != 0) out(i) += v * in(i) * in((i + 1 + p) % 3);
+    }
+  };
+  s.si_unit[0] = "1/(rad/s)";
+  s.si_unit[1] = "1/(m/s^2)";
+  s.bench_display = {[](double x, int k) { return k == 0 ? x * kDeg / kPpm : x * kG0 / kPpm; }, {"ppm/(°/s)", "ppm/g"}};
+  s.drive_display = {[](double x, int k) { return k == 0 ? x * (1e6 * kDeg) : x * (1e6 * kG0); }, {"ppm/(°/s)", "ppm/g"}};
+  s.json_value[0] = "gyro_per_rad_s";
+  s.json_value[1] = "accel_per_m_s2";
+  s.inject_keys = "with";
+  s.bench_candidate = true;
+  s.excited_by = "accelerometers: positions with two specific-force components at once (tilts); gyros: rotation about an axis between two IMU axes at once (both table axes turning, or a 45° wedge fixture) — no plan of this station has it";
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;  // a car's inputs rarely have two large components at once
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} error grows with the product of its input and another axis's input: cross-coupling, ";
+  s.drive_what = "cross-coupling";
+  s.lookalike = -1;
+  row(s);
+
+  // ---- cross_axis_rate: a gyro responds to the square of the rate about another axis.
+  s = EffectSpec{};
+  s.id = EffectId::cross_axis_rate;
+  s.key = "cross_axis_rate";
+  s.physics =
+      "gyro output grows with the square of the rate about another axis, the same for both signs (centrifugal "
+      "load on the proof mass): cross-axis rate sensitivity beyond the linear skew in M";
+  s.model = "C_ij·ω_j², j the two other axes";
+  s.shape = EffectShape::axis_rows;
+  s.sensor = -1;
+  s.sensors = kGyro;
+  s.nparams = 2;
+  s.components_other_axes = true;
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3& dg, Vec3&) {
+    const EffectSpec& x = effect_spec(EffectId::cross_axis_rate);
+    for (int i = 0; i < 3; ++i)
+      for (int p = 0; p < 2; ++p)
+        if (const double v = effect_value(x, e, 0, i, p); v != 0) dg(i) += v * c.w((i + 1 + p) % 3) * c.w((i + 1 + p) % 3);
+  };
+  s.si_unit[0] = s.si_unit[1] = "1/(rad/s)";
+  s.bench_display = {[](double x, int) { return x * kDeg / kPpm; }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.drive_display = {[](double x, int) { return x * (1e6 * kDeg); }, {"ppm/(°/s)", "ppm/(°/s)"}};
+  s.json_value[0] = "gyro_per_rad_s";
+  s.inject_keys = "with";
+  s.bench_candidate = true;
+  s.excited_by = "rate steps about each of the other IMU axes (mounts x, y and z)";
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;  // a car's roll and pitch rates are small
+  s.drive_prior[0] = s.drive_prior[1] = 1e-2;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} error grows with the square of the rate about another axis: cross-axis rate sensitivity, ";
+  s.drive_what = "cross-axis rate sensitivity";
+  s.lookalike = -1;
   row(s);
 
   // ---- time_offset
@@ -314,6 +486,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = s.json_value[1] = "s";
   s.inject_keys = "value";
   s.bench_candidate = true;
+  s.excited_by = "rate changes, or gravity turning through the IMU (rate steps about a horizontal inner axis)";
   s.condition = "angle";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::always;
@@ -331,7 +504,8 @@ std::vector<EffectSpec> make_effect_specs() {
   s.id = EffectId::lever_arm;
   s.key = "lever_arm";
   s.physics =
-      "IMU origin at r from the rotation centre: centripetal and tangential acceleration (size effect)";
+      "IMU origin at r from the rotation centre: centripetal and tangential acceleration, the same offset for "
+      "the three axes (each axis's own offset: size_effect)";
   s.model = "accel: ω×(ω×r) + ω̇×r";
   s.shape = EffectShape::vector;
   s.sensor = 1;
@@ -347,6 +521,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = s.json_value[1] = "m";
   s.inject_keys = "x,y,z";
   s.bench_candidate = true;
+  s.excited_by = "rate steps (centripetal) and their accelerations";
   s.condition = "rate";
   s.dominant_component = true;
   s.shows_on = 1;
@@ -357,6 +532,52 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_what = "lever arm: the MEMS sits elsewhere than meta.json says";
   s.drive_head = "accelerometer error grows with rotation rate and angular acceleration";
   s.lookalike = -1;
+  row(s);
+
+  // ---- size_effect: each accelerometer's proof mass sits off the IMU origin along its own axis.
+  s = EffectSpec{};
+  s.id = EffectId::size_effect;
+  s.key = "size_effect";
+  s.physics =
+      "the three accelerometers' proof masses sit apart: accelerometer i sits r_i along its own axis from the "
+      "IMU origin and senses the centripetal acceleration there (size effect: sensitivity to the square of the "
+      "rate about the other axes). An offset shared by the three is the lever arm";
+  s.model = "accel i: −r_i·(ω_j² + ω_k²) = e_i·(ω×(ω×r_i e_i))";
+  s.shape = EffectShape::triad_axis;
+  s.sensor = -1;
+  s.sensors = 2;  // accel
+  s.nparams = 1;
+  s.axis_output = nullptr;
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3&, Vec3& da) {
+    const Eigen::Map<const Vec3> r = effect_triad(e, EffectId::size_effect, 1);
+    const double w2 = c.w.squaredNorm();
+    for (int i = 0; i < 3; ++i)
+      if (r(i) != 0) da(i) -= r(i) * (w2 - c.w(i) * c.w(i));
+  };
+  s.si_unit[0] = s.si_unit[1] = "m";
+  s.bench_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
+  s.drive_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
+  s.json_value[0] = s.json_value[1] = "accel_m";
+  s.bench_candidate = true;
+  // Without angular acceleration in the data (the bench's blocks lie inside constant-rate steps) an
+  // accelerometer's own offset is a lever arm along that axis. The lever arm is the common case (a
+  // unit off the table's centre by centimetres; a MEMS die's proof masses sit < 1 mm apart), so a
+  // size effect must explain the recording better than the lever arm by Δχ² 30 (prior odds e^15).
+  s.prior_penalty = 30;
+  s.excited_by = "rate steps about each of the other IMU axes (mounts x, y and z)";
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;  // a car turns too slowly for millimetre offsets
+  s.drive_prior[0] = s.drive_prior[1] = 0.05;
+  s.own_input = false;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence = "{who} error grows with the square of the rate about the other axes, unlike the other accelerometers: size effect, ";
+  s.drive_what = "size effect";
+  s.lookalike = static_cast<int>(EffectId::lever_arm);
+  s.separation =
+      "within constant-rate steps an accelerometer's own offset along its axis is a lever arm along that axis; "
+      "only angular acceleration (ω̇×r reaches the other accelerometers for a lever arm, not for a size effect) "
+      "tells them apart: rate steps recorded through their accelerations";
   row(s);
 
   // ---- misalignment
@@ -398,6 +619,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = s.json_value[1] = "table_tilt_rad";
   s.inject_keys = "north,east";
   s.bench_candidate = true;
+  s.excited_by = "static positions over several table angles";
   s.condition = "f";
   s.shows_on = 1;
   s.drive = DriveDiagnosis::never;
@@ -453,6 +675,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = s.json_value[1] = "encoder_rad";
   s.inject_keys = "sin,cos";
   s.bench_candidate = true;
+  s.excited_by = "rate steps (a full revolution of the inner axis)";
   s.condition = "angle";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::never;

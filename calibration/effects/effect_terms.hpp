@@ -38,7 +38,7 @@ namespace calbench {
 // large enough).
 struct EffectTerms {
   double t0_c = 25.0;  // reference temperature of the temperature terms
-  std::array<double, 128> values{};
+  std::array<double, 192> values{};
 
   bool any() const;
   bool any_sensor_side() const;

@@ -28,17 +28,18 @@ std::string summary(const DiagRun& r) {
 
 TEST(DiagnoseScaleK2, InjectAndJsonRoundTrip) {
   EffectTerms fx;
-  apply_inject_option("scale_k2:axis=y,value=5e-5", fx);
+  apply_inject_option("scale_k2:sensor=gyro,axis=y,value=5e-5", fx);
   apply_inject_option("scale_k2:sensor=gyro,axis=z,value=-4e-5", fx);
   const Term ty{EffectId::scale_k2, 0, 1}, tz{EffectId::scale_k2, 0, 2};
   EXPECT_EQ(ty.get_param(fx, 0), 5e-5);
   EXPECT_EQ(tz.get_param(fx, 0), -4e-5);
   EXPECT_TRUE(fx.any_sensor_side());
-  EXPECT_THROW(apply_inject_option("scale_k2:sensor=accel,axis=x,value=1e-5", fx), InputError);
+  EXPECT_THROW(apply_inject_option("scale_k2:axis=x,value=1e-5", fx), InputError);  // which sensor?
   nlohmann::json j = nlohmann::json::object();
   effects_to_json(fx, EffectTerms{}, j);
   ASSERT_TRUE(j.contains("scale_k2")) << j.dump();
   EXPECT_FALSE(j["scale_k2"].contains("accel_per_rad_s"));
+  EXPECT_TRUE(j["scale_k2"].contains("accel_per_m_s2"));
   const EffectTerms back = effects_from_json(j, "mem");
   EXPECT_EQ(tz.get_param(back, 0), -4e-5);
   // The output term: K2·ω², even in the rate.
@@ -59,8 +60,8 @@ TEST(DiagnoseScaleK2, FoundOnTwoAxes) {
     double value;
     std::uint64_t seed;
   };
-  for (const Case& c : {Case{"scale_k2:axis=y,value=5e-5", 1, 5e-5, 41}, Case{"scale_k2:axis=y,value=5e-5", 1, 5e-5, 42},
-                        Case{"scale_k2:axis=x,value=-4e-5", 0, -4e-5, 43}, Case{"scale_k2:axis=x,value=-4e-5", 0, -4e-5, 44}}) {
+  for (const Case& c : {Case{"scale_k2:sensor=gyro,axis=y,value=5e-5", 1, 5e-5, 41}, Case{"scale_k2:sensor=gyro,axis=y,value=5e-5", 1, 5e-5, 42},
+                        Case{"scale_k2:sensor=gyro,axis=x,value=-4e-5", 0, -4e-5, 43}, Case{"scale_k2:sensor=gyro,axis=x,value=-4e-5", 0, -4e-5, 44}}) {
     BenchSimOptions so;
     so.seed = c.seed;
     apply_inject_option(c.inject, so.effects);

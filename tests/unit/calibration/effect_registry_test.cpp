@@ -18,10 +18,11 @@ TEST(EffectRegistry, EveryParameterHasItsOwnSlot) {
   EffectTerms base;
   for (const EffectSpec& s : effect_specs()) {
     // Vector and noise effects have no axis (−1); triads and the gyro matrix one per axis.
-    const bool per_axis = s.shape == EffectShape::triad_axis || s.shape == EffectShape::gyro_matrix;
+    const bool per_axis = s.shape == EffectShape::triad_axis || s.shape == EffectShape::gyro_matrix ||
+                          s.shape == EffectShape::axis_rows;
     for (int k = 0; k < 3; ++k)
       for (int a = per_axis ? 0 : -1; a < (per_axis ? 3 : 0); ++a)
-        for (int p = 0; p < 3; ++p) {
+        for (int p = 0; p < 6; ++p) {
           double* v = effect_param(s, base, k, a, p);
           if (!v) continue;
           EXPECT_TRUE(seen.insert(v).second) << s.key << " sensor " << k << " axis " << a << " p " << p;
@@ -35,7 +36,7 @@ TEST(EffectRegistry, EveryParameterHasItsOwnSlot) {
           EXPECT_FALSE(e.any()) << s.key;
         }
   }
-  EXPECT_GT(seen.size(), 50u);
+  EXPECT_GT(seen.size(), 100u);
 }
 
 TEST(EffectRegistry, TypedViewsAddressTheSameSlots) {
@@ -50,8 +51,35 @@ TEST(EffectRegistry, TypedViewsAddressTheSameSlots) {
   // A view of another shape or size, or of a sensor the effect does not have, is a programming error.
   EXPECT_THROW(effect_vector<2>(e, EffectId::lever_arm), std::logic_error);
   EXPECT_THROW(effect_triad(e, EffectId::lever_arm, 1), std::logic_error);
-  EXPECT_THROW(effect_triad(e, EffectId::scale_k2, 1), std::logic_error);  // gyro only
+  EXPECT_THROW(effect_triad(e, EffectId::cross_axis_rate, 0), std::logic_error);  // rows, not a triad
   EXPECT_THROW(effect_matrix(e, EffectId::temperature_bias), std::logic_error);
+}
+
+// An axis_rows effect: a row of components per axis of each allowed sensor, named for --inject.
+TEST(EffectRegistry, AxisRowsAndTheirOutputs) {
+  const EffectSpec& g2 = effect_spec(EffectId::g2_sensitivity);
+  const EffectSpec& cc = effect_spec(EffectId::cross_coupling);
+  EXPECT_EQ(effect_component_name(g2, 1, 3), "yz");
+  EXPECT_EQ(effect_component_name(cc, 0, 0), "y");
+  EXPECT_EQ(effect_component_name(cc, 0, 1), "z");
+  EXPECT_EQ(effect_component_name(cc, 2, 0), "x");
+  EffectTerms e;
+  EXPECT_EQ(effect_param(g2, e, 1, 0, 0), nullptr);  // gyro only
+  *effect_param(g2, e, 0, 0, 4) = 2e-6;       // gyro x: f_z·f_x
+  *effect_param(cc, e, 1, 1, 1) = 3e-4;       // accel y: a_y·a_x
+  *effect_param(cc, e, 0, 2, 0) = -1e-3;      // gyro z: ω_z·ω_x
+  effect_triad(e, EffectId::size_effect, 1)(0) = 0.01;  // accel x sits 10 mm along x
+  EffectContext c;
+  c.w = Vec3(0.5, 0, 2.0);
+  c.f = Vec3(3.0, 4.0, 9.0);
+  Vec3 dg, da;
+  sensor_side_terms(e, c, dg, da);
+  EXPECT_DOUBLE_EQ(dg(0), 2e-6 * 9.0 * 3.0);
+  EXPECT_DOUBLE_EQ(dg(2), -1e-3 * 2.0 * 0.5);
+  EXPECT_DOUBLE_EQ(da(1), 3e-4 * 4.0 * 3.0);
+  // The size effect is the x component of ω×(ω×r) at r = (0.01, 0, 0): ω_x(ω·r) − r_x|ω|².
+  const Vec3 r(0.01, 0, 0);
+  EXPECT_NEAR(da(0), c.w.cross(c.w.cross(r))(0), 1e-15);
 }
 
 // The truth side: identity without effects; with them, what the rows' hooks say.
