@@ -46,6 +46,11 @@ nlohmann::json finding_evidence_json(const DiagFinding& f) {
                        {"correlation_before", f.condition_r}};
   if (effect_spec(f.term.effect).shape == EffectShape::noise) add_drift_tau_evidence(f, ev);
   ev["indistinguishable_from"] = alternatives_json(f);
+  if (f.versus_drift.tested)
+    ev["versus_drift"] = {{"delta_score", f.versus_drift.delta_score},
+                          {"drift_sigma", f.versus_drift.drift_sigma},
+                          {"drift_tau_s", f.versus_drift.drift_tau_s},
+                          {"verdict", f.versus_drift.verdict}};
   return ev;
 }
 

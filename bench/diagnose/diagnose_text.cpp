@@ -169,6 +169,13 @@ std::string finding_sentence(const DiagFinding& f) {
   if (x.shape == EffectShape::noise) o << ", τ ≈ " << drift_tau_text(f);
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
   o << alternatives_text(f);
+  if (f.versus_drift.tested) {
+    const DisplayUnit& du = noise_effect_spec().bench_display;
+    const int k = f.term.sensor == 1 ? 1 : 0;
+    o << "; against a drift of the triad in its place (σ " << fmt(du.value(f.versus_drift.drift_sigma, k)) << " " << du.unit[k]
+      << ", τ " << fmt(f.versus_drift.drift_tau_s) << " s): −2 ln L " << fmt(f.versus_drift.delta_score)
+      << " in favour of the temperature term (" << f.versus_drift.verdict << ")";
+  }
   return o.str();
 }
 

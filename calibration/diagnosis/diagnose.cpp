@@ -198,10 +198,12 @@ void finding_rms(const Term& t, const std::vector<int>& touched, const DiagnoseR
 // Is an axis's final residual still far from its noise model? Parent-level or sub-block χ²/dof
 // beyond 6σ of its sampling spread, Ljung–Box p < 1e-4, or structure in the table angle: the
 // residual's angle profile (12 bins summed over the rotating steps) with χ² p < 1e-6.
-bool axis_unexplained(const AxisStats& s, const Dataset& S) {
+// `parent_level`: only the criteria the drift model covers (parent-level χ², whiteness, angle
+// profile); the sub-block χ² is white noise only, which a large drift itself inflates.
+bool axis_unexplained(const AxisStats& s, const Dataset& S, bool parent_level = false) {
   const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, S.n_low) / 2.0);
   const double z_high = (s.high_chi2_dof - 1) * std::sqrt(std::max(1, S.n_high) / 2.0);
-  return z_low >= 6 || z_high >= 6 || s.ljung_box_p <= 1e-4 || s.angle_profile_p < 1e-6;
+  return z_low >= 6 || (!parent_level && z_high >= 6) || s.ljung_box_p <= 1e-4 || s.angle_profile_p < 1e-6;
 }
 
 // The condition that reveals a finding (g-sensitivity: the force component it follows most).
@@ -272,7 +274,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     for (int triad = 0; triad < 2 && !changed; ++triad) {
       if (ds[triad] == drift_sigma[triad] && tau[triad] == drift_tau[triad]) continue;
       for (int a = 3 * triad; a < 3 * triad + 3 && !changed; ++a)
-        if (phi[a] > 1 || axis_unexplained(res.after[a], all[a])) {
+        if (axis_unexplained(res.after[a], all[a], true)) {
           res.withdrawn.push_back(search.withdrawn_report(search.give_up_drift(triad), WithdrawnWhy::leaves_unexplained));
           changed = true;
         }
@@ -337,6 +339,21 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     // the residual (Δχ² ≥ min_delta_chi2 against the model without the finding) and fit within
     // ambiguity_chi2 of the finding.
     f.alternatives = search.alternatives(acc.term, opt.ambiguity_chi2, opt.min_delta_chi2, opt.ambiguity_correlation, carried);
+    // Temperature or drift, by likelihood: a temperature term against a drift of its triad with the
+    // drift's own σ, τ. Within ambiguity_chi2 the record cannot tell: the drift is an alternative.
+    if (effect_spec(t.effect).temperature_driven && t.sensor < 2) {
+      const auto vd = search.versus_drift(acc.term);
+      f.versus_drift = {true, vd.delta_score, vd.sigma, vd.tau,
+                        vd.delta_score >= opt.ambiguity_chi2 ? "temperature" : vd.delta_score <= -opt.ambiguity_chi2 ? "drift" : "cannot tell"};
+      if (vd.delta_score < opt.ambiguity_chi2 && vd.sigma > drift_sigma[t.sensor]) {
+        DiagAlternative alt;
+        alt.term = Term{noise_effect_spec().id, t.sensor, -1};
+        alt.value = {vd.sigma};
+        alt.unit = term_unit(alt.term);
+        alt.chi2_worse = vd.delta_score;
+        f.alternatives.push_back(alt);
+      }
+    }
     // Axis on which it shows: the touched axis whose residual it explains most.
     std::vector<int> touched;
     for (int a = 0; a < kAxes; ++a)

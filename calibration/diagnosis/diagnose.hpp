@@ -101,11 +101,16 @@ struct DiagFinding {
   double noise_tau_s = 0;                // correlated_drift only
   DriftInterval noise_interval;          // correlated_drift only: profile intervals of σ, τ and K
   std::vector<DiagAlternative> alternatives;  // best first; empty = the effect is told apart
+  // A temperature-driven term against a correlated drift of its triad (the search redone with the
+  // triad's temperature terms banned, the drift free to grow): that model's penalised −2 ln L minus
+  // this one's (> 0: the temperature term explains the record better), and the drift it needed.
+  struct VersusDrift {
+    bool tested = false;
+    double delta_score = 0, drift_sigma = 0, drift_tau_s = 0;
+    const char* verdict = "";  // "temperature", "drift" or "cannot tell" (|Δ| < ambiguity_chi2)
+  } versus_drift;
 };
 
-// A term the greedy search accepted that lost its evidence in the final model (stepwise backward
-// check), or a correlated_drift given up because the search redone without it explains the
-// recording better (a slow deterministic effect it had taken the place of): not a finding.
 // Why an accepted term was given up.
 enum class WithdrawnWhy {
   weak,           // in the final model it explains less than min_delta_chi2 (backward check)
@@ -114,6 +119,7 @@ enum class WithdrawnWhy {
   leaves_unexplained,  // correlated_drift: an axis of its triad stays unexplained with it
 };
 
+// A term the greedy search accepted and then gave up (why: WithdrawnWhy): not a finding.
 struct DiagWithdrawn {
   Term term;
   double delta_chi2_when_accepted = 0;

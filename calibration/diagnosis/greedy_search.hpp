@@ -128,6 +128,24 @@ class GreedySearch {
     }
   }
 
+  // Temperature or drift: the search redone with every temperature-driven term of term t's sensor
+  // banned, so that a correlated drift of the triad may take their place. Returns that model's
+  // total_score() minus this one's (> 0: the temperature terms explain the record better) and the
+  // drift σ, τ it settled on.
+  struct VersusDrift {
+    double delta_score = 0, sigma = 0, tau = 0;
+  };
+  VersusDrift versus_drift(int t) const {
+    GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
+    alt.banned = banned;
+    const int sensor = P_.term(t).sensor;
+    for (int u = 0; u < P_.n_terms(); ++u)
+      if (P_.term(u).sensor == sensor && effect_spec(P_.term(u).effect).temperature_driven) alt.banned.push_back(u);
+    alt.run();
+    return {alt.total_score() - total_score(), alt.ds[sensor], alt.tau[sensor]};
+  }
+  std::vector<int> banned;  // terms the search may not accept
+
   // Penalised −2 ln L of the current model over all axes: χ² + ln det R + every accepted step's
   // penalty (Δχ² − ΔBIC). Models with different noise models and terms compare by it.
   double total_score() const {
@@ -388,7 +406,7 @@ class GreedySearch {
   Linear best_linear() const {
     Linear best;
     for (int t = 0; t < P_.n_terms(); ++t) {
-      if (in_model(t)) continue;
+      if (in_model(t) || std::find(banned.begin(), banned.end(), t) != banned.end()) continue;
       int rows = 0;
       bool touched = false;
       for (int a = 0; a < kAxes; ++a)

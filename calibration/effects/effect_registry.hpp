@@ -132,6 +132,9 @@ struct EffectSpec {
   // recording better by this much to be named instead of it. 0 for the established ones.
   double prior_penalty = 0;
   const char* condition;     // the reference condition that reveals it on the bench
+  // Driven by the device temperature (T − T0 or dT/dt): on a warm-up a correlated drift may explain
+  // the same slow change, and the diagnosis weighs the two (DiagFinding::versus_drift).
+  bool temperature_driven = false;
   // What excites it (plan steps, manoeuvres): said when a recording cannot (nullptr: the condition).
   const char* excited_by = nullptr;
   bool condition_by_column;  // the condition names the dominant column (g-sensitivity: f_x, f_y, f_z)

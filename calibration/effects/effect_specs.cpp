@@ -44,6 +44,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = "gyro_rad_s_per_K";
   s.json_value[1] = "accel_m_s2_per_K";
   s.json_t0 = true;
+  s.temperature_driven = true;
   s.bench_candidate = true;
   s.excited_by = "a temperature span (a thermal plan; the warm-up alone spans ~2 K)";
   s.condition = "temperature";
@@ -77,6 +78,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = "gyro_per_K";
   s.json_value[1] = "accel_per_K";
   s.json_t0 = true;
+  s.temperature_driven = true;
   s.bench_candidate = true;
   s.excited_by = "a temperature span with rates or forces of both signs at each temperature";
   s.condition = "temperature";
@@ -111,6 +113,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_display = {identity, {"rad/s/(K/s)", "m/s^2/(K/s)"}};
   s.json_value[0] = "gyro_rad_s_per_K_per_s";
   s.json_value[1] = "accel_m_s2_per_K_per_s";
+  s.temperature_driven = true;
   s.bench_candidate = true;
   s.excited_by = "a temperature that changes at different rates, heating and cooling (thermal_updown.toml)";
   s.condition = "dT/dt";
@@ -716,7 +719,13 @@ std::vector<EffectSpec> make_effect_specs() {
   s.bench_sentence = "{who} residual wanders slowly beyond the data-sheet drift: correlated drift, ";
   s.drive_what = "bias drift larger than the data sheet's (run calbench identify)";
   s.drive_head = "{who} residual wanders slowly in time";
-  s.lookalike = -1;
+  // A slow bias change on a warm-up: a temperature term or a drift (DiagFinding::versus_drift).
+  s.lookalike = static_cast<int>(EffectId::temperature_bias);
+  s.separation =
+      "a slow bias change while the unit warms up is either a temperature term or a drift; a plan that holds "
+      "the temperature at several levels, or heats and cools over the same range (bench/plans/thermal.toml), "
+      "tells them apart (record length and span needed: docs/diagnosis.md)";
+
   row(s);
 
   return v;

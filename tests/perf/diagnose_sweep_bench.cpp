@@ -39,10 +39,12 @@ int env_int(const char* name, int def) {
 // The plans of the rows: the 6-minute diagnosis plan; the thermal CI plan (5 → 45 °C); the
 // up-and-down chamber plan (thermal lag). Test plans live in tests/data and may be absent from an
 // installed tree: those rows then skip.
-enum class Plan { diagnose, thermal, updown };
+enum class Plan { diagnose, thermal, updown, factory };
 const BenchPlan* plan_of(Plan which) {
   static const BenchPlan diag = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
+  static const BenchPlan factory = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
   if (which == Plan::diagnose) return &diag;
+  if (which == Plan::factory) return &factory;
   const std::string f = std::string(CALBENCH_SOURCE_DIR) +
                         (which == Plan::thermal ? "/tests/data/thermal_short.toml" : "/tests/data/thermal_updown.toml");
   if (!std::filesystem::exists(f)) return nullptr;
@@ -205,6 +207,9 @@ void sweep_clean(benchmark::State& state, Plan which, int seeds, std::uint64_t s
 void BM_Diagnose_SweepClean(benchmark::State& state) {
   sweep_clean(state, Plan::diagnose, env_int("DIAGNOSE_CLEAN_SEEDS", 40), 9000);
 }
+void BM_Diagnose_SweepCleanFactory(benchmark::State& state) {
+  sweep_clean(state, Plan::factory, env_int("DIAGNOSE_CLEAN_SEEDS", 40), 9300);
+}
 void BM_Diagnose_SweepCleanThermal(benchmark::State& state) {
   sweep_clean(state, Plan::thermal, env_int("DIAGNOSE_CLEAN_THERMAL_SEEDS", 10), 9500);
 }
@@ -212,6 +217,7 @@ void BM_Diagnose_SweepCleanUpdown(benchmark::State& state) {
   sweep_clean(state, Plan::updown, env_int("DIAGNOSE_CLEAN_THERMAL_SEEDS", 10), 9700);
 }
 BENCHMARK(BM_Diagnose_SweepClean)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_Diagnose_SweepCleanFactory)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_Diagnose_SweepCleanThermal)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_Diagnose_SweepCleanUpdown)->Unit(benchmark::kSecond)->Iterations(1);
 
@@ -238,6 +244,19 @@ std::function<Expect(int, double)> triad_term(EffectId e, int sensor, int shift)
     return x;
   };
 }
+// An axis_rows term (g²-sensitivity, cross-coupling, cross-axis rate): axis (k + shift) % 3,
+// component k % ncomp (of the row's components), sign alternating with k.
+std::function<Expect(int, double)> rows_term(EffectId e, int sensor, int shift, int ncomp) {
+  return [=](int k, double si) {
+    Expect x;
+    x.value = (k % 2 ? -si : si);
+    x.effect = e;
+    x.sensor = sensor, x.axis = (k + shift) % 3, x.param = (k / 2) % ncomp;
+    *effect_param(effect_spec(e), x.fx, sensor, x.axis, x.param) = x.value;
+    return x;
+  };
+}
+
 // A reference-side pair (table tilt ψN/ψE, wobble sin/cos): parameter k % 2, sign flips every 2.
 std::function<Expect(int, double)> table_term(EffectId e) {
   return [=](int k, double si) {
@@ -309,6 +328,27 @@ std::vector<Row> sweep_rows() {
        table_term(E::misalignment)},
       {"table_wobble/", "arcsec", {10, 20, 40}, kDeg / 3600, Plan::diagnose,
        table_term(E::table_wobble)},
+      // The IEEE model-equation terms (issue 20). Scale-factor polynomial: K2 (even) and K3 (odd);
+      // x³ and x·|x| correlate 0.994 after the scale factor over ±20…300 °/s, so K3 is expected to be
+      // named with scale_nonlinearity as the alternative (or the other way round).
+      {"scale_k2/gyro_", "e-6_per_rad_s", {5, 10, 20}, 1e-6, Plan::diagnose, triad_term(E::scale_k2, 0, 0)},
+      {"scale_k2/accel_", "e-6_per_m_s2", {15, 30, 60}, 1e-6, Plan::diagnose, triad_term(E::scale_k2, 1, 1)},
+      {"scale_k3/gyro_", "e-6_per_rad_s2", {5, 10, 20}, 1e-6, Plan::factory, triad_term(E::scale_k3, 0, 2)},
+      {"scale_k3/accel_", "e-6_per_m_s2_2", {4, 8, 16}, 1e-6, Plan::diagnose, triad_term(E::scale_k3, 1, 0)},
+      // Anisoelastic: the cross products f_x·f_y, f_y·f_z (components 2, 3) of gyro axes x, y, z.
+      {"g2_sensitivity/", "e-6_rad_s_per_m2_s4", {2, 4, 8}, 1e-6, Plan::diagnose,
+       [](int k, double si) {
+         Expect x = rows_term(EffectId::g2_sensitivity, 0, 0, 2)(k, si);
+         *effect_param(effect_spec(EffectId::g2_sensitivity), x.fx, 0, x.axis, x.param) = 0;
+         x.param += 2;
+         *effect_param(effect_spec(EffectId::g2_sensitivity), x.fx, 0, x.axis, x.param) = x.value;
+         return x;
+       }},
+      {"cross_coupling/accel_", "e-6_per_m_s2", {20, 40, 80}, 1e-6, Plan::diagnose, rows_term(E::cross_coupling, 1, 0, 2)},
+      {"cross_axis_rate/gyro_", "e-6_per_rad_s", {5, 10, 20}, 1e-6, Plan::diagnose, rows_term(E::cross_axis_rate, 0, 1, 2)},
+      // Size effect: on constant-rate steps the same shape as a lever arm along the axis (named
+      // lever_arm, size_effect listed as not told apart; docs/diagnosis.md).
+      {"size_effect/accel_", "mm", {2, 4, 8}, 1e-3, Plan::diagnose, triad_term(E::size_effect, 1, 0)},
       // Temperature terms on the short warm-up of the diagnosis plan (~2 K): gyro only.
       {"temperature_bias/gyro_", "dph_K_warmup", {100, 200}, kDegPerHour, Plan::diagnose,
        triad_term(E::temperature_bias, 0, 0)},
@@ -368,6 +408,80 @@ void register_sweeps() {
           ->Iterations(1);
     }
 }
+
+// The confusion table (issue 20): every catalogue row of sweep_rows() on the diagnosis plan or the
+// factory plan, at its largest magnitude, injected on both plans with DIAGNOSE_CONFUSION_SEEDS seeds
+// (default 5): which effects the diagnosis names. A cell counts the runs that named that effect
+// (any axis); "(n alt)" counts those whose finding lists the injected effect as not told apart.
+// Written as Markdown to DIAGNOSE_CONFUSION_OUT (bench/diagnose/confusion.sh stamps it into
+// docs/validation/diagnose-confusion.md).
+void BM_Diagnose_Confusion(benchmark::State& state) {
+  if (skip_unless_enabled(state)) return;
+  const int seeds = env_int("DIAGNOSE_CONFUSION_SEEDS", 5);
+  for (auto _ : state) {
+    std::ostringstream md;
+    for (Plan which : {Plan::factory, Plan::diagnose}) {
+      const BenchPlan& plan = *plan_of(which);
+      std::vector<std::string> names;
+      std::vector<std::map<std::string, std::pair<int, int>>> cells;  // named → (runs, with the truth as alternative)
+      std::vector<int> nothing, unexplained, not_excited;
+      std::vector<std::string> cols;
+      for (const Row& row : sweep_rows()) {
+        if (row.plan == Plan::thermal || row.plan == Plan::updown) continue;
+        const double v = row.magnitudes.back();
+        names.push_back(row.name + magnitude_label(v) + row.suffix);
+        cells.emplace_back();
+        nothing.push_back(0), unexplained.push_back(0), not_excited.push_back(0);
+        for (int k = 0; k < seeds; ++k) {
+          const Expect x = row.make(k, v * row.unit);
+          const DiagRun r = run(plan, x.fx, 700 + 31 * k);
+          nothing.back() += r.result.findings.empty();
+          unexplained.back() += !r.result.unexplained.empty();
+          for (const auto& n : r.result.not_excited) not_excited.back() += n.term.effect == x.effect && n.term.sensor == x.sensor;
+          std::map<std::string, std::pair<int, int>> once;
+          for (const auto& f : r.result.findings) {
+            const std::string e = effect_name(f.term.effect);
+            auto& c = once[e];
+            c.first = 1;
+            for (const auto& a : f.alternatives) c.second = c.second || a.term.effect == x.effect;
+          }
+          for (const auto& [e, c] : once) {
+            cells.back()[e].first += c.first;
+            cells.back()[e].second += c.second;
+            if (std::find(cols.begin(), cols.end(), e) == cols.end()) cols.push_back(e);
+          }
+        }
+      }
+      std::sort(cols.begin(), cols.end());
+      md << "\n### " << (which == Plan::factory ? "Factory plan (`bench/plans/factory.toml`)" : "Diagnosis plan (`bench/plans/diagnose.toml`)")
+         << ", " << seeds << " seeds per row\n\n| injected |";
+      for (const auto& c : cols) md << " `" << c << "` |";
+      md << " no finding | something unexplained | truth not excited |\n|---|";
+      for (std::size_t c = 0; c < cols.size() + 3; ++c) md << "---|";
+      md << "\n";
+      for (std::size_t i = 0; i < names.size(); ++i) {
+        md << "| " << names[i] << " |";
+        for (const auto& c : cols) {
+          const auto it = cells[i].find(c);
+          if (it == cells[i].end()) md << " |";
+          else md << " " << it->second.first << (it->second.second ? " (" + std::to_string(it->second.second) + " alt)" : "") << " |";
+        }
+        md << " " << nothing[i] << " | " << unexplained[i] << " | " << not_excited[i] << " |\n";
+      }
+    }
+    if (const char* out = std::getenv("DIAGNOSE_CONFUSION_OUT")) {
+      std::FILE* f = std::fopen(out, "w");
+      if (f) {
+        std::fputs(md.str().c_str(), f);
+        std::fclose(f);
+      }
+    } else {
+      std::printf("%s\n", md.str().c_str());
+    }
+    state.counters["seeds"] = seeds;
+  }
+}
+BENCHMARK(BM_Diagnose_Confusion)->Unit(benchmark::kSecond)->Iterations(1);
 
 const bool registered = (register_sweeps(), true);
 
