@@ -33,6 +33,22 @@ void BM_Diagnose_Bench(benchmark::State& state) {
 }
 BENCHMARK(BM_Diagnose_Bench)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(5);
 
+// The factory plan (~11 min of steps), clean: the diagnosis a station would run on every unit.
+void BM_Diagnose_BenchFactory(benchmark::State& state) {
+  const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
+  BenchSimOptions so;
+  so.seed = 3;
+  const DiagInput in = simulate_diag_input(plan, draw_random_unit(5003), so);
+  std::size_t findings = 0;
+  for (auto _ : state) {
+    const DiagRun r = run_diagnosis(in, nullptr, plan.table);
+    findings = r.result.findings.size();
+    benchmark::DoNotOptimize(findings);
+  }
+  state.counters["findings"] = static_cast<double>(findings);
+}
+BENCHMARK(BM_Diagnose_BenchFactory)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(5);
+
 void BM_Diagnose_Drive(benchmark::State& state) {
   EffectTerms fx;
   effect_vector<1>(fx, EffectId::time_offset)(0) = 0.002;
