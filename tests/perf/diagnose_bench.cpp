@@ -16,12 +16,12 @@
 namespace calbench {
 namespace {
 
-void BM_Diagnose_Bench(benchmark::State& state) {
-  const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
+// One bench diagnosis of a simulated run of `plan` (seed 3) with `effects` concealed, timed.
+void bench_diagnosis(benchmark::State& state, const char* plan_file, const EffectTerms& effects) {
+  const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + plan_file);
   BenchSimOptions so;
   so.seed = 3;
-  effect_matrix(so.effects, EffectId::g_sensitivity)(0, 2) = 1.5e-4;
-  effect_vector<3>(so.effects, EffectId::lever_arm)(1) = 0.02;
+  so.effects = effects;
   const DiagInput in = simulate_diag_input(plan, draw_random_unit(5003), so);
   std::size_t findings = 0;
   for (auto _ : state) {
@@ -30,23 +30,18 @@ void BM_Diagnose_Bench(benchmark::State& state) {
     benchmark::DoNotOptimize(findings);
   }
   state.counters["findings"] = static_cast<double>(findings);
+}
+
+void BM_Diagnose_Bench(benchmark::State& state) {
+  EffectTerms fx;
+  effect_matrix(fx, EffectId::g_sensitivity)(0, 2) = 1.5e-4;
+  effect_vector<3>(fx, EffectId::lever_arm)(1) = 0.02;
+  bench_diagnosis(state, "/bench/plans/diagnose.toml", fx);
 }
 BENCHMARK(BM_Diagnose_Bench)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(5);
 
 // The factory plan (~11 min of steps), clean: the diagnosis a station would run on every unit.
-void BM_Diagnose_BenchFactory(benchmark::State& state) {
-  const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
-  BenchSimOptions so;
-  so.seed = 3;
-  const DiagInput in = simulate_diag_input(plan, draw_random_unit(5003), so);
-  std::size_t findings = 0;
-  for (auto _ : state) {
-    const DiagRun r = run_diagnosis(in, nullptr, plan.table);
-    findings = r.result.findings.size();
-    benchmark::DoNotOptimize(findings);
-  }
-  state.counters["findings"] = static_cast<double>(findings);
-}
+void BM_Diagnose_BenchFactory(benchmark::State& state) { bench_diagnosis(state, "/bench/plans/factory.toml", EffectTerms{}); }
 BENCHMARK(BM_Diagnose_BenchFactory)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(5);
 
 void BM_Diagnose_Drive(benchmark::State& state) {

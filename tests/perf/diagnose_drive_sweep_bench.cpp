@@ -34,6 +34,7 @@
 #include "calibration/drive_sim/drive_simulator.hpp"
 #include "calibration/gauss_markov_window.hpp"
 #include "common/imu_error_sim.hpp"
+#include "tests/perf/confusion_table.hpp"
 
 namespace calbench {
 namespace {
@@ -502,15 +503,11 @@ void BM_DiagnoseDrive_Confusion(benchmark::State& state) {
   if (skip_unless_enabled(state)) return;
   const int seeds = env_int("DIAGNOSE_CONFUSION_SEEDS", 5);
   for (auto _ : state) {
-    std::vector<std::string> names, cols;
-    std::vector<std::map<std::string, std::pair<int, int>>> cells;
-    std::vector<int> nothing, unexplained;
+    ConfusionTable table({"no finding", "something unexplained"});
     for (const Row& row : rows()) {
       if (row.coeffs_only && !with_bench_coeffs()) continue;
       const Component c{&spec(row.spec), row.magnitudes.back()};
-      names.push_back(std::string(row.spec) + " " + fmt(row.magnitudes.back() * c.spec->label_scale, "%g") + " " + c.spec->unit);
-      cells.emplace_back();
-      nothing.push_back(0), unexplained.push_back(0);
+      table.add_row(std::string(row.spec) + " " + fmt(row.magnitudes.back() * c.spec->label_scale, "%g") + " " + c.spec->unit);
       for (int k = 0; k < seeds; ++k) {
         const Expected x = expect(c, k);
         EffectTerms fx;
@@ -520,47 +517,14 @@ void BM_DiagnoseDrive_Confusion(benchmark::State& state) {
         const std::optional<DriveCoeffs> coeffs = bench_coeffs(seed, fx);
         const DriveDiagRun run = run_drive_diagnosis(in, coeffs ? &*coeffs : nullptr);
         const auto& R = run.result.core;
-        nothing.back() += R.findings.empty();
-        unexplained.back() += !R.unexplained.empty();
-        std::map<std::string, std::pair<int, int>> once;
-        for (const auto& f : R.findings) {
-          auto& o = once[effect_name(f.term.effect)];
-          o.first = 1;
-          for (const auto& a : f.alternatives) o.second = o.second || a.term.effect == x.effect;
-        }
-        for (const auto& [e, o] : once) {
-          cells.back()[e].first += o.first;
-          cells.back()[e].second += o.second;
-          if (std::find(cols.begin(), cols.end(), e) == cols.end()) cols.push_back(e);
-        }
+        table.add_run(R.findings, x.effect);
+        table.count(0, R.findings.empty());
+        table.count(1, !R.unexplained.empty());
       }
     }
-    std::sort(cols.begin(), cols.end());
-    std::string md = std::string("\n### Default route (`tests/data/drive_diag_route.toml`") +
-                     (with_bench_coeffs() ? ", with the factory coefficients" : "") + "), " + std::to_string(seeds) +
-                     " seeds per row\n\n| injected |";
-    for (const auto& c : cols) md += " `" + c + "` |";
-    md += " no finding | something unexplained |\n|---|";
-    for (std::size_t c = 0; c < cols.size() + 2; ++c) md += "---|";
-    md += "\n";
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      md += "| " + names[i] + " |";
-      for (const auto& c : cols) {
-        const auto it = cells[i].find(c);
-        md += it == cells[i].end() ? " |"
-                                   : " " + std::to_string(it->second.first) +
-                                         (it->second.second ? " (" + std::to_string(it->second.second) + " alt)" : "") + " |";
-      }
-      md += " " + std::to_string(nothing[i]) + " | " + std::to_string(unexplained[i]) + " |\n";
-    }
-    if (const char* out = std::getenv("DIAGNOSE_CONFUSION_OUT")) {
-      if (std::FILE* f = std::fopen(out, "a")) {
-        std::fputs(md.c_str(), f);
-        std::fclose(f);
-      }
-    } else {
-      std::printf("%s\n", md.c_str());
-    }
+    ConfusionTable::emit(table.markdown(std::string("Default route (`tests/data/drive_diag_route.toml`") +
+                                        (with_bench_coeffs() ? ", with the factory coefficients" : "") + "), " +
+                                        std::to_string(seeds) + " seeds per row"));
     state.counters["seeds"] = seeds;
   }
 }

@@ -25,6 +25,7 @@
 #include "calibration/effects/effect_registry.hpp"
 #include "calibration/gauss_markov_window.hpp"
 #include "common/units.hpp"
+#include "tests/perf/confusion_table.hpp"
 
 namespace calbench {
 namespace {
@@ -419,65 +420,30 @@ void BM_Diagnose_Confusion(benchmark::State& state) {
   if (skip_unless_enabled(state)) return;
   const int seeds = env_int("DIAGNOSE_CONFUSION_SEEDS", 5);
   for (auto _ : state) {
-    std::ostringstream md;
+    std::string md;
     for (Plan which : {Plan::factory, Plan::diagnose}) {
       const BenchPlan& plan = *plan_of(which);
-      std::vector<std::string> names;
-      std::vector<std::map<std::string, std::pair<int, int>>> cells;  // named → (runs, with the truth as alternative)
-      std::vector<int> nothing, unexplained, not_excited;
-      std::vector<std::string> cols;
+      ConfusionTable table({"no finding", "something unexplained", "truth not excited"});
       for (const Row& row : sweep_rows()) {
         if (row.plan == Plan::thermal || row.plan == Plan::updown) continue;
         const double v = row.magnitudes.back();
-        names.push_back(row.name + magnitude_label(v) + row.suffix);
-        cells.emplace_back();
-        nothing.push_back(0), unexplained.push_back(0), not_excited.push_back(0);
+        table.add_row(row.name + magnitude_label(v) + row.suffix);
         for (int k = 0; k < seeds; ++k) {
           const Expect x = row.make(k, v * row.unit);
           const DiagRun r = run(plan, x.fx, 700 + 31 * k);
-          nothing.back() += r.result.findings.empty();
-          unexplained.back() += !r.result.unexplained.empty();
-          for (const auto& n : r.result.not_excited) not_excited.back() += n.term.effect == x.effect && n.term.sensor == x.sensor;
-          std::map<std::string, std::pair<int, int>> once;
-          for (const auto& f : r.result.findings) {
-            const std::string e = effect_name(f.term.effect);
-            auto& c = once[e];
-            c.first = 1;
-            for (const auto& a : f.alternatives) c.second = c.second || a.term.effect == x.effect;
-          }
-          for (const auto& [e, c] : once) {
-            cells.back()[e].first += c.first;
-            cells.back()[e].second += c.second;
-            if (std::find(cols.begin(), cols.end(), e) == cols.end()) cols.push_back(e);
-          }
+          table.add_run(r.result.findings, x.effect);
+          table.count(0, r.result.findings.empty());
+          table.count(1, !r.result.unexplained.empty());
+          bool not_excited = false;
+          for (const auto& n : r.result.not_excited) not_excited = not_excited || (n.term.effect == x.effect && n.term.sensor == x.sensor);
+          table.count(2, not_excited);
         }
       }
-      std::sort(cols.begin(), cols.end());
-      md << "\n### " << (which == Plan::factory ? "Factory plan (`bench/plans/factory.toml`)" : "Diagnosis plan (`bench/plans/diagnose.toml`)")
-         << ", " << seeds << " seeds per row\n\n| injected |";
-      for (const auto& c : cols) md << " `" << c << "` |";
-      md << " no finding | something unexplained | truth not excited |\n|---|";
-      for (std::size_t c = 0; c < cols.size() + 3; ++c) md << "---|";
-      md << "\n";
-      for (std::size_t i = 0; i < names.size(); ++i) {
-        md << "| " << names[i] << " |";
-        for (const auto& c : cols) {
-          const auto it = cells[i].find(c);
-          if (it == cells[i].end()) md << " |";
-          else md << " " << it->second.first << (it->second.second ? " (" + std::to_string(it->second.second) + " alt)" : "") << " |";
-        }
-        md << " " << nothing[i] << " | " << unexplained[i] << " | " << not_excited[i] << " |\n";
-      }
+      md += table.markdown(std::string(which == Plan::factory ? "Factory plan (`bench/plans/factory.toml`)"
+                                                              : "Diagnosis plan (`bench/plans/diagnose.toml`)") +
+                           ", " + std::to_string(seeds) + " seeds per row");
     }
-    if (const char* out = std::getenv("DIAGNOSE_CONFUSION_OUT")) {
-      std::FILE* f = std::fopen(out, "w");
-      if (f) {
-        std::fputs(md.str().c_str(), f);
-        std::fclose(f);
-      }
-    } else {
-      std::printf("%s\n", md.str().c_str());
-    }
+    ConfusionTable::emit(md);
     state.counters["seeds"] = seeds;
   }
 }
