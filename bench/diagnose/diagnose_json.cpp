@@ -20,7 +20,7 @@ nlohmann::json not_excited_json(const std::vector<NotExcited>& v) {
     out.push_back({{"effect", x.key},
                    {"label", n.term.label()},
                    {"sigma_over_plausible", std::isfinite(n.sigma_ratio) ? nlohmann::json(n.sigma_ratio) : nlohmann::json(nullptr)},
-                   {"needs", x.excited_by ? x.excited_by : x.condition}});
+                   {"needs", effect_excited_by(x)}});
   }
   return out;
 }
@@ -137,7 +137,6 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
           {"coefficients_tested", run.fitted_first ? "bench fit of this recording" : "given"},
           {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
 }
-
 
 namespace {
 

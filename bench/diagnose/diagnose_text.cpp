@@ -191,7 +191,7 @@ std::string not_excited_text(const std::vector<NotExcited>& v) {
       if (v[j].term.axis >= 0) axes += std::string(axes.empty() ? " " : ", ") + "xyz"[v[j].term.axis];
     const EffectSpec& x = effect_spec(t.effect);
     o << "- not excited by this recording (not a candidate): " << x.key << (t.sensor == 0 ? " gyro" : t.sensor == 1 ? " accel" : "")
-      << axes << "; needs " << (x.excited_by ? x.excited_by : x.condition) << "\n";
+      << axes << "; needs " << effect_excited_by(x) << "\n";
     i = j;
   }
   return o.str();

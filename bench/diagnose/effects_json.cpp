@@ -340,7 +340,7 @@ std::string md(const std::string& t) {  // a Markdown table cell
 }
 
 std::string sensors_text(const EffectSpec& x) {
-  if (x.shape == EffectShape::triad_axis || x.shape == EffectShape::noise || x.shape == EffectShape::axis_rows)
+  if (effect_per_sensor(x))
     return effect_allows_sensor(x, 0) && effect_allows_sensor(x, 1) ? "gyro, accel" : effect_allows_sensor(x, 0) ? "gyro" : "accel";
   return x.sensor == 2 ? "reference" : kSensorName[x.sensor];
 }
@@ -348,7 +348,7 @@ std::string sensors_text(const EffectSpec& x) {
 std::string unit_text(const EffectSpec& x) {
   std::string u;
   for (int k = 0; k < 2; ++k) {
-    if (!effect_allows_sensor(x, k) && !(x.shape == EffectShape::vector || x.shape == EffectShape::gyro_matrix)) continue;
+    if (!effect_allows_sensor(x, k) && effect_per_sensor(x)) continue;
     const std::string one = std::string(x.si_unit[k]) + " (shown in " + x.bench_display.unit[k] + ")";
     if (!u.empty() && u.find(one) != std::string::npos) continue;
     u += (u.empty() ? "" : "; ") + one;
@@ -359,7 +359,7 @@ std::string unit_text(const EffectSpec& x) {
 std::string si_units(const EffectSpec& x) {
   std::string u;
   for (int k = 0; k < 2; ++k)
-    if ((effect_allows_sensor(x, k) || x.shape == EffectShape::vector || x.shape == EffectShape::gyro_matrix) &&
+    if ((effect_allows_sensor(x, k) || !effect_per_sensor(x)) &&
         u.find(x.si_unit[k]) == std::string::npos)
       u += (u.empty() ? "" : " (gyro), ") + std::string(x.si_unit[k]) + (u.empty() ? "" : " (accel)");
   return u;
@@ -438,7 +438,7 @@ std::string effect_catalogue_markdown() {
   for (const EffectSpec& x : effect_specs())
     o += "| `" + std::string(x.key) + "` | " + md(x.physics) + " | " + md(x.model) + " | " + sensors_text(x) + " | " +
          md(unit_text(x)) + " | " + md(x.condition) + (x.bench_candidate || x.shape == EffectShape::noise ? "" : " (not a bench candidate: M is refitted)") +
-         " | " + md(x.excited_by ? x.excited_by : x.condition) + " | " + drive_text(x) + " | " + md(json_text(x)) + " |\n";
+         " | " + md(effect_excited_by(x)) + " | " + drive_text(x) + " | " + md(json_text(x)) + " |\n";
   o += "\n| effect | `--inject` keys | unit |\n|---|---|---|\n";
   for (const EffectSpec& x : effect_specs())
     o += "| `" + std::string(x.key) + "` | " + md(inject_text(x)) + " | " + md(si_units(x)) + " |\n";
@@ -458,7 +458,7 @@ nlohmann::json effect_catalogue_json() {
                  {"display_unit", {x.bench_display.unit[0], x.bench_display.unit[1]}},
                  {"bench_condition", x.condition},
                  {"bench_candidate", x.bench_candidate},
-                 {"excited_by", x.excited_by ? x.excited_by : x.condition},
+                 {"excited_by", effect_excited_by(x)},
                  {"plausible_size", {x.drive_prior[0], x.drive_prior[1]}},
                  {"drives", drive_text(x)},
                  {"drive_prior_sigma", {x.drive_prior[0], x.drive_prior[1]}},

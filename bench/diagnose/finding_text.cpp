@@ -79,8 +79,8 @@ std::string alternatives_text(const DiagFinding& f) {
       // No pair note: what excites each of the two.
       const EffectSpec &x = effect_spec(f.term.effect), &y = effect_spec(a.term.effect);
       if (x.id != y.id)
-        o += std::string("; what separates them: ") + x.key + " needs " + (x.excited_by ? x.excited_by : x.condition) + ", " +
-             y.key + " " + (y.excited_by ? y.excited_by : y.condition);
+        o += std::string("; what separates them: ") + x.key + " needs " + effect_excited_by(x) + ", " +
+             y.key + " " + effect_excited_by(y);
       else
         o += "; the same effect on another axis: a plan that excites each axis alone tells them apart";
     }

@@ -64,6 +64,27 @@ Eigen::MatrixXd parent_cov(const DiagData& d, const std::vector<int>& P, int a, 
   return R;
 }
 
+// The columns of D.terms: per axis, the base columns then every term touching it (col_of, ncols),
+// and each term's offset in the global parameter vector.
+void lay_out_terms(Design& D) {
+  for (int a = 0; a < kAxes; ++a) {
+    D.col_of[a].assign(D.terms.size(), -1);
+    int c = kBase;
+    for (std::size_t t = 0; t < D.terms.size(); ++t)
+      if (D.terms[t].touches(a / 3, a % 3)) {
+        D.col_of[a][t] = c;
+        c += D.terms[t].nparams();
+      }
+    D.ncols[a] = c;
+  }
+  D.term_param_offset.clear();
+  D.n_term_params = 0;
+  for (const auto& t : D.terms) {
+    D.term_param_offset.push_back(D.n_term_params);
+    D.n_term_params += t.nparams();
+  }
+}
+
 // The excitation check: per term, the information its columns carry beyond the base columns (b, M
 // of each touched axis), sub-blocks weighted by their white-noise variance only (optimistic: the
 // drift and the bench errors would only widen σ). A term whose best parameter's 1σ exceeds a third
@@ -71,23 +92,29 @@ Eigen::MatrixXd parent_cov(const DiagData& d, const std::vector<int>& P, int a, 
 // and listed, so that it is neither named nor reported as absent.
 void drop_unexcited(const DiagData& d, Design& D) {
   const int N = static_cast<int>(d.subs.size());
-  std::vector<bool> keep(D.terms.size(), true);
+  // Per axis, once: the weights, Bᵀ·W and the factorised BᵀWB of the base columns.
+  std::vector<Eigen::VectorXd> w(kAxes);
+  std::vector<Eigen::MatrixXd> BtW(kAxes);
+  std::vector<Eigen::LDLT<Eigen::MatrixXd>> BB(kAxes);
+  for (int a = 0; a < kAxes; ++a) {
+    w[a].resize(N);
+    for (int j = 0; j < N; ++j) w[a](j) = d.subs[j].n / D.white_var[a];
+    BtW[a] = D.X[a].leftCols(kBase).transpose() * w[a].asDiagonal();
+    BB[a].compute(BtW[a] * D.X[a].leftCols(kBase));
+  }
+  std::vector<Term> kept;
+  std::vector<int> old_of;  // kept term → its index before
   for (std::size_t t = 0; t < D.terms.size(); ++t) {
     const Term& term = D.terms[t];
-    const EffectSpec& x = effect_spec(term.effect);
-    const double plausible = x.drive_prior[term.sensor == 1 ? 1 : 0];
+    const double plausible = effect_spec(term.effect).drive_prior[term.sensor == 1 ? 1 : 0];
     const int np = term.nparams();
     Eigen::MatrixXd info = Eigen::MatrixXd::Zero(np, np);
     for (int a = 0; a < kAxes; ++a) {
       const int c0 = D.col_of[a][t];
       if (c0 < 0) continue;
-      Eigen::VectorXd w(N);
-      for (int j = 0; j < N; ++j) w(j) = d.subs[j].n / D.white_var[a];
-      const Eigen::MatrixXd B = D.X[a].leftCols(kBase), X = D.X[a].middleCols(c0, np);
-      const Eigen::MatrixXd BtW = B.transpose() * w.asDiagonal();
-      const Eigen::MatrixXd BB = BtW * B, BX = BtW * X;
-      const Eigen::MatrixXd XX = X.transpose() * w.asDiagonal() * X;
-      info += XX - BX.transpose() * BB.ldlt().solve(BX);
+      const auto X = D.X[a].middleCols(c0, np);
+      const Eigen::MatrixXd BX = BtW[a] * X;
+      info += X.transpose() * w[a].asDiagonal() * X - BX.transpose() * BB[a].solve(BX);
     }
     // σ of each parameter with the others free; a parameter the record does not see at all has
     // (numerically) no information and an infinite σ.
@@ -102,41 +129,25 @@ void drop_unexcited(const DiagData& d, Design& D) {
     double best = std::numeric_limits<double>::infinity();
     for (int p = 0; p < np; ++p)
       if (info(p, p) > 0) best = std::min(best, std::sqrt(inv(p)) * scale(p) / plausible);
-    if (!(best * 3 < 1)) {
-      keep[t] = false;
+    if (best * 3 < 1) {
+      kept.push_back(term);
+      old_of.push_back(static_cast<int>(t));
+    } else {
       D.not_excited.push_back({term, best});
     }
   }
-  // Drop the columns of the terms not kept.
-  Design out;
-  for (std::size_t t = 0; t < D.terms.size(); ++t)
-    if (keep[t]) out.terms.push_back(D.terms[t]);
-  if (out.terms.size() == D.terms.size()) return;
+  if (kept.size() == D.terms.size()) return;
+  // Lay the kept terms out again and move their columns.
+  const std::vector<std::vector<int>> old_col_of(D.col_of, D.col_of + kAxes);
+  D.terms = std::move(kept);
+  lay_out_terms(D);
   for (int a = 0; a < kAxes; ++a) {
-    out.col_of[a].assign(out.terms.size(), -1);
-    std::vector<int> cols;
-    for (int c = 0; c < kBase; ++c) cols.push_back(c);
-    for (std::size_t t = 0, u = 0; t < D.terms.size(); ++t) {
-      if (!keep[t]) continue;
-      if (D.col_of[a][t] >= 0) {
-        out.col_of[a][u] = static_cast<int>(cols.size());
-        for (int p = 0; p < D.terms[t].nparams(); ++p) cols.push_back(D.col_of[a][t] + p);
-      }
-      ++u;
-    }
-    out.ncols[a] = static_cast<int>(cols.size());
-    Eigen::MatrixXd X(D.X[a].rows(), out.ncols[a]);
-    for (std::size_t c = 0; c < cols.size(); ++c) X.col(static_cast<Eigen::Index>(c)) = D.X[a].col(cols[c]);
+    Eigen::MatrixXd X(D.X[a].rows(), D.ncols[a]);
+    X.leftCols(kBase) = D.X[a].leftCols(kBase);
+    for (std::size_t u = 0; u < D.terms.size(); ++u)
+      if (D.col_of[a][u] >= 0)
+        X.middleCols(D.col_of[a][u], D.terms[u].nparams()) = D.X[a].middleCols(old_col_of[a][old_of[u]], D.terms[u].nparams());
     D.X[a] = std::move(X);
-    D.col_of[a] = std::move(out.col_of[a]);
-    D.ncols[a] = out.ncols[a];
-  }
-  D.terms = std::move(out.terms);
-  D.term_param_offset.clear();
-  D.n_term_params = 0;
-  for (const auto& t : D.terms) {
-    D.term_param_offset.push_back(D.n_term_params);
-    D.n_term_params += t.nparams();
   }
 }
 
@@ -147,20 +158,7 @@ Design build_design(const DiagData& d, const EffectTerms& carried) {
   // The bench refits M: a scale_factor term would be M_ii again.
   for (const Term& t : candidate_terms())
     if (effect_spec(t.effect).bench_candidate) D.terms.push_back(t);
-  for (int a = 0; a < kAxes; ++a) {
-    D.col_of[a].assign(D.terms.size(), -1);
-    int c = kBase;
-    for (std::size_t t = 0; t < D.terms.size(); ++t)
-      if (D.terms[t].touches(a / 3, a % 3)) {
-        D.col_of[a][t] = c;
-        c += D.terms[t].nparams();
-      }
-    D.ncols[a] = c;
-  }
-  for (const auto& t : D.terms) {
-    D.term_param_offset.push_back(D.n_term_params);
-    D.n_term_params += t.nparams();
-  }
+  lay_out_terms(D);
   const int N = static_cast<int>(d.subs.size());
   D.z.assign(kAxes, Eigen::VectorXd(N));
   D.X.resize(kAxes);

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <map>
 
 #include "calibration/diagnosis/bench_design.hpp"
@@ -123,15 +122,13 @@ AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const
   }
   st.within_rms = std::sqrt(std::max(0.0, wwt > 0 ? wms / wwt : 0.0));
   st.systematic_rms = std::hypot(st.step_rms, st.within_rms);
-  // The same bins as a test: χ² of every (step, angle bin) mean against its white-noise variance,
-  // and the table-angle profile summed over the steps (where in the angle the structure sits).
+  // The same bins as a test: the table-angle profile summed over the steps, against white noise
+  // (where in the angle the structure sits).
   std::array<double, 12> prof{}, prof_var{}, prof_n{};
   for (const auto& [step, bs] : bins)
     for (int b = 0; b < 12; ++b) {
       const auto& bb = bs[static_cast<std::size_t>(b)];
       if (bb[1] <= 0 || bb[2] <= 0) continue;
-      st.angle_bins_chi2 += bb[0] * bb[0] / bb[2];
-      ++st.angle_bins_dof;
       prof[b] += bb[0];
       prof_var[b] += bb[2];
       prof_n[b] += bb[1];

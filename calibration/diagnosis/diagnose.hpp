@@ -46,11 +46,8 @@ struct AxisStats {
   double systematic_rms = 0; // RMS of per-step means and within-step low-passed residual, noise removed
   double step_rms = 0, within_rms = 0;
   double systematic_floor = 0; // drives: noise level of systematic_rms (below it, not told from zero)
-  // Bench: rotating steps' sub-block residuals binned by table angle (12 bins per step): χ² of the
-  // bin means against white noise and its dof; the angle profile's most significant bin (index,
-  // its z and its mean residual).
-  double angle_bins_chi2 = 0;
-  int angle_bins_dof = 0;
+  // Bench: rotating steps' sub-block residuals binned by table angle (12 bins per step) and summed
+  // over the steps into a profile: its most significant bin (index, its z and its mean residual).
   int worst_angle_bin = -1;
   double worst_angle_bin_z = 0, worst_angle_bin_mean = 0;
   double angle_profile_p = 1;  // χ² test of the 12-bin angle profile against white noise

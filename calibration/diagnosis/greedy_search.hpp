@@ -190,9 +190,7 @@ class GreedySearch {
   std::vector<DiagAlternative> alternatives(int term, double below, double min_explain, double min_share,
                                             const EffectTerms& carried) const {
     const std::size_t k = std::find(model.begin(), model.end(), term) - model.begin();
-    std::vector<int> without = model;
-    without.erase(without.begin() + static_cast<std::ptrdiff_t>(k));
-    const double chi2_without = P_.fit(without, ptrs(all)).chi2;
+    const double chi2_without = fit_without(term).chi2;
     const double explained = chi2_without - cur.chi2;  // by the finding
     std::vector<DiagAlternative> out;
     for (int t = 0; t < P_.n_terms(); ++t) {
@@ -235,16 +233,11 @@ class GreedySearch {
       again = false;
       for (std::size_t j = 0; j < steps.size(); ++j) {
         if (steps[j].term < 0) continue;
-        std::vector<int> m = model;
-        m.erase(std::find(m.begin(), m.end(), steps[j].term));
-        Fit g = P_.fit(m, ptrs(all));
+        Fit g = fit_without(steps[j].term);
         const double cost = g.chi2 - cur.chi2;
         if (cost >= pol_.min_delta_chi2) continue;
         out.push_back({steps[j], cost});
-        model = std::move(m);
-        cur = std::move(g);
-        cur_held = heldout(model);
-        steps.erase(steps.begin() + static_cast<std::ptrdiff_t>(j));
+        remove_step(j, std::move(g));
         again = true;
         break;
       }
@@ -271,17 +264,10 @@ class GreedySearch {
       bool inflated = false;
       for (int a = 0; a < 6; ++a) inflated = inflated || (phi[a] > 1 && P_.touches(t, a));
       if (!inflated) continue;
-      std::vector<int> m = model;
-      m.erase(std::find(m.begin(), m.end(), t));
-      Fit g = P_.fit(m, ptrs(all));
+      Fit g = fit_without(t);
       double cost = 0;
       for (int a = 0; a < 6; ++a) cost += (g.chi2_axis[a] - cur.chi2_axis[a]) / phi[a];
-      int rows = 0;
-      for (const auto& S : all)
-        if (P_.touches(t, S.axis)) rows += P_.rows(S);
-      const double need = std::max(pol_.min_delta_chi2, greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param) +
-                                                            effect_spec(P_.term(t).effect).prior_penalty);
-      const double margin = cost - need;
+      const double margin = cost - std::max(pol_.min_delta_chi2, term_penalty(t));
       if (margin < 0 && (worst < 0 || margin < worst_margin)) {
         worst = static_cast<int>(j);
         worst_margin = margin;
@@ -291,10 +277,7 @@ class GreedySearch {
     }
     if (worst < 0) return out;
     out.push_back({steps[worst], worst_cost});
-    model.erase(std::find(model.begin(), model.end(), steps[worst].term));
-    cur = std::move(worst_fit);
-    cur_held = heldout(model);
-    steps.erase(steps.begin() + worst);
+    remove_step(static_cast<std::size_t>(worst), std::move(worst_fit));
     return out;
   }
 
@@ -306,7 +289,7 @@ class GreedySearch {
     GreedyStep step = it != steps.end() ? *it : GreedyStep{};
     step.term = -1 - triad;
     GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
-    for (int k = 0; k < 2; ++k) alt.drift_done_[k] = k == triad || drift_done_[k] && ds[k] == prior_ds_[k];
+    for (int k = 0; k < 2; ++k) alt.drift_done_[k] = k == triad || (drift_done_[k] && ds[k] == prior_ds_[k]);
     alt.run();
     const double change = alt.total_score() - total_score();
     adopt(std::move(alt));
@@ -403,24 +386,42 @@ class GreedySearch {
 
   // The linear term with the best Δχ² − penalty that passes Δχ² ≥ min and the held-out check
   // (waived at Δχ² ≥ 5·min).
+  // What term t must explain to be accepted beyond its Δχ²: the BIC penalty by the rows of the axes
+  // it touches, plus the spec's prior odds against it.
+  double term_penalty(int t) const {
+    int rows = 0;
+    for (int a = 0; a < kAxes; ++a)
+      if (P_.touches(t, a)) rows += P_.rows(all[a]);
+    return greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param) + effect_spec(P_.term(t).effect).prior_penalty;
+  }
+
+  // The current model refitted without term t.
+  Fit fit_without(int t) const {
+    std::vector<int> m = model;
+    m.erase(std::find(m.begin(), m.end(), t));
+    return P_.fit(m, ptrs(all));
+  }
+
+  // Takes accepted step j out of the model; g is the model's fit without it.
+  void remove_step(std::size_t j, Fit&& g) {
+    model.erase(std::find(model.begin(), model.end(), steps[j].term));
+    cur = std::move(g);
+    cur_held = heldout(model);
+    steps.erase(steps.begin() + static_cast<std::ptrdiff_t>(j));
+  }
+
   Linear best_linear() const {
     Linear best;
     for (int t = 0; t < P_.n_terms(); ++t) {
       if (in_model(t) || std::find(banned.begin(), banned.end(), t) != banned.end()) continue;
-      int rows = 0;
       bool touched = false;
-      for (int a = 0; a < kAxes; ++a)
-        if (P_.touches(t, a)) {
-          rows += P_.rows(all[a]);
-          touched = true;
-        }
+      for (int a = 0; a < kAxes; ++a) touched = touched || P_.touches(t, a);
       if (pol_.skip_untouched && !touched) continue;
       std::vector<int> m = model;
       m.push_back(t);
       Fit f = P_.fit(m, ptrs(all));
       const double dchi2 = cur.chi2 - f.chi2;
-      const double penalty =
-          greedy_term_penalty(P_.term(t).nparams(), rows, pol_.penalty_per_param) + effect_spec(P_.term(t).effect).prior_penalty;
+      const double penalty = term_penalty(t);
       const double score = dchi2 - penalty;
       if (dchi2 < pol_.min_delta_chi2 || score <= best.score) continue;
       const double held = heldout(m);

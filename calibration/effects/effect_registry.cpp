@@ -12,9 +12,10 @@ namespace {
 // Slots of an effect in EffectTerms::values, by shape.
 int value_slots(const EffectSpec& s) {
   switch (s.shape) {
-    case EffectShape::triad_axis: return 6;   // sensor·3 + axis
+    // A triad term is a row of one component: both lay out sensor·3·n + p·3 + axis.
+    case EffectShape::triad_axis:
+    case EffectShape::axis_rows: return 6 * s.nparams;
     case EffectShape::gyro_matrix: return 9;  // p·3 + axis (column-major, as Mat3)
-    case EffectShape::axis_rows: return 6 * s.nparams;  // sensor·3·n + p·3 + axis
     case EffectShape::vector: return s.nparams;
     case EffectShape::noise: return 4;  // sensor·2 + p
   }
@@ -59,11 +60,11 @@ double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, 
   if (!effect_allows_sensor(s, sensor)) return nullptr;
   int k = -1;
   switch (s.shape) {
-    case EffectShape::triad_axis: k = axis >= 0 && axis < 3 && p == 0 ? sensor * 3 + axis : -1; break;
-    case EffectShape::gyro_matrix: k = axis >= 0 && axis < 3 && p >= 0 && p < 3 ? p * 3 + axis : -1; break;
+    case EffectShape::triad_axis:
     case EffectShape::axis_rows:
       k = axis >= 0 && axis < 3 && p >= 0 && p < s.nparams ? sensor * 3 * s.nparams + p * 3 + axis : -1;
       break;
+    case EffectShape::gyro_matrix: k = axis >= 0 && axis < 3 && p >= 0 && p < 3 ? p * 3 + axis : -1; break;
     case EffectShape::vector: k = p >= 0 && p < s.nparams ? p : -1; break;
     case EffectShape::noise: k = p >= 0 && p < 2 ? sensor * 2 + p : -1; break;
   }
@@ -107,6 +108,12 @@ Eigen::Map<Mat3> effect_matrix(EffectTerms& e, EffectId id) {
 Eigen::Map<const Mat3> effect_matrix(const EffectTerms& e, EffectId id) {
   return Eigen::Map<const Mat3>(view_base(const_cast<EffectTerms&>(e), id, EffectShape::gyro_matrix, 0, 9));
 }
+
+bool effect_per_sensor(const EffectSpec& s) {
+  return s.shape == EffectShape::triad_axis || s.shape == EffectShape::axis_rows || s.shape == EffectShape::noise;
+}
+
+const char* effect_excited_by(const EffectSpec& s) { return s.excited_by ? s.excited_by : s.condition; }
 
 std::string effect_component_name(const EffectSpec& s, int axis, int p) {
   if (s.components_other_axes) return std::string(1, "xyz"[(axis + 1 + p) % 3]);
@@ -168,7 +175,7 @@ bool effect_from_name(const std::string& s, EffectId& e) {
 }
 
 bool effect_allows_sensor(const EffectSpec& s, int sensor) {
-  if (s.shape == EffectShape::triad_axis || s.shape == EffectShape::noise || s.shape == EffectShape::axis_rows)
+  if (effect_per_sensor(s))
     return sensor >= 0 && sensor < 2 && (s.sensors >> sensor & 1u);
   return sensor == s.sensor;
 }
@@ -176,22 +183,17 @@ bool effect_allows_sensor(const EffectSpec& s, int sensor) {
 bool effect_present(const EffectSpec& s, const EffectTerms& e) {
   switch (s.shape) {
     case EffectShape::triad_axis:
-      for (int k = 0; k < 2; ++k)
-        if (effect_allows_sensor(s, k))
-          for (int a = 0; a < 3; ++a)
-            if (effect_value(s, e, k, a, 0) != 0) return true;
-      return false;
-    case EffectShape::gyro_matrix:
-      for (int a = 0; a < 3; ++a)
-        for (int p = 0; p < 3; ++p)
-          if (effect_value(s, e, s.sensor, a, p) != 0) return true;
-      return false;
     case EffectShape::axis_rows:
       for (int k = 0; k < 2; ++k)
         if (effect_allows_sensor(s, k))
           for (int a = 0; a < 3; ++a)
             for (int p = 0; p < s.nparams; ++p)
               if (effect_value(s, e, k, a, p) != 0) return true;
+      return false;
+    case EffectShape::gyro_matrix:
+      for (int a = 0; a < 3; ++a)
+        for (int p = 0; p < 3; ++p)
+          if (effect_value(s, e, s.sensor, a, p) != 0) return true;
       return false;
     case EffectShape::vector:
       for (int p = 0; p < s.nparams; ++p)
@@ -241,14 +243,12 @@ double Term::get_param(const EffectTerms& e, int p) const { return effect_value(
 
 std::vector<Term> candidate_terms() {
   std::vector<Term> out;
-  for (int s = 0; s < 2; ++s)
-    for (int a = 0; a < 3; ++a)
-      for (const EffectSpec& x : effect_specs())
-        if (x.shape == EffectShape::triad_axis && effect_allows_sensor(x, s)) out.push_back({x.id, s, a});
-  for (int s = 0; s < 2; ++s)
-    for (int a = 0; a < 3; ++a)
-      for (const EffectSpec& x : effect_specs())
-        if (x.shape == EffectShape::axis_rows && effect_allows_sensor(x, s)) out.push_back({x.id, s, a});
+  // Per (sensor, axis) terms: the one-parameter triad rows first, then the rows of components.
+  for (EffectShape shape : {EffectShape::triad_axis, EffectShape::axis_rows})
+    for (int s = 0; s < 2; ++s)
+      for (int a = 0; a < 3; ++a)
+        for (const EffectSpec& x : effect_specs())
+          if (x.shape == shape && effect_allows_sensor(x, s)) out.push_back({x.id, s, a});
   for (const EffectSpec& x : effect_specs()) {
     if (x.shape == EffectShape::gyro_matrix)
       for (int a = 0; a < 3; ++a) out.push_back({x.id, x.sensor, a});

@@ -34,7 +34,7 @@ enum class EffectId {
   cross_coupling,    // cross-coupling x_i·x_j with the other axes' inputs (accel K_ip, K_io; gyro)
   cross_axis_rate,   // gyro sensitivity to the square of the rate about another axis
   g2_sensitivity,    // gyro anisoelastic (g²) sensitivity: products of specific-force components
-  size_effect,       // accelerometer size effect: each axis's own lever arm (rate² and ω̇)
+  size_effect,       // accelerometer size effect: each accelerometer's offset along its own axis (rate²)
 };
 
 // How an effect's parameters are laid out, which decides its candidate terms, its JSON form and
@@ -172,6 +172,10 @@ const char* effect_name(EffectId e);
 int effect_count();  // EffectId values are 0 … effect_count() − 1
 bool effect_from_name(const std::string& s, EffectId& e);
 bool effect_allows_sensor(const EffectSpec& s, int sensor);
+// Its sensors come from `sensors` (triad_axis, axis_rows, noise), not from the one `sensor`.
+bool effect_per_sensor(const EffectSpec& s);
+// What excites it, for reports: excited_by, else the revealing condition.
+const char* effect_excited_by(const EffectSpec& s);
 // The stored value of parameter p of the effect on (sensor, axis) (axis −1 for vector and noise
 // shapes; noise: p 0 = σ, 1 = τ), or nullptr outside the effect's shape.
 double* effect_param(const EffectSpec& s, EffectTerms& e, int sensor, int axis, int p);

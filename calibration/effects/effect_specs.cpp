@@ -37,6 +37,9 @@ EffectSpec scale_polynomial_row(EffectId id, const char* key, double (*out)(doub
   s.own_input = true;
   s.curvature = true;
   s.compensation = DriveCompensation::output;
+  // A newer term beside an established look-alike of the same input (|x|, x·|x|): named only where
+  // it explains the recording better than that one by Δχ² 10.
+  s.prior_penalty = 10;
   return s;
 }
 
@@ -212,7 +215,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[0] = s.json_value[1] = "gyro_rad_s_per_m2_s4";
   s.inject_keys = "xx,yy,xy,yz,zx";
   s.bench_candidate = true;
-  s.prior_penalty = 10;  // a newer effect beside an established look-alike (see scale_k2)
+  s.prior_penalty = 10;  // a newer effect beside an established look-alike (g_sensitivity)
   s.excited_by = "positions with two or three specific-force components at once and the vertical axis both up and down (diagnose.toml's tilts)";
   s.condition = "f";
   s.shows_on = -1;
@@ -339,9 +342,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_display = {[](double x, int k) { return k == 0 ? x * (1e6 * kDeg) : x * (1e6 * kG0); }, {"ppm/(°/s)", "ppm/g"}};
   s.json_value[0] = "gyro_per_rad_s";
   s.json_value[1] = "accel_per_m_s2";
-  // With one rate magnitude (thermal_short.toml: ±300 °/s) ω² and |ω| are the same column: named
-  // only where it explains the recording better than scale_asymmetry by Δχ² 10.
-  s.prior_penalty = 10;
+  // With one rate magnitude (thermal_short.toml: ±300 °/s) ω² and |ω| are the same column.
   s.excited_by = "inputs of two or more magnitudes of both signs";
   s.bench_sentence = "{who} scale error grows with the square of the input, the same for both signs: even scale-factor term K2, ";
   s.drive_what = "even scale-factor term K2·x²";
@@ -365,9 +366,7 @@ std::vector<EffectSpec> make_effect_specs() {
                      {"ppm/(°/s)²", "ppm/g²"}};
   s.json_value[0] = "gyro_per_rad_s_2";
   s.json_value[1] = "accel_per_m_s2_2";
-  // x³ and x·|x| are both odd: with two input magnitudes (after the scale factor) they are the same
-  // column; named only where it explains the recording better than scale_nonlinearity by Δχ² 10.
-  s.prior_penalty = 10;
+  // x³ and x·|x| are both odd: with two input magnitudes (after the scale factor) they are the same column.
   s.excited_by = "inputs of three or more magnitudes of both signs (factory.toml's 20, 75, 150, 300 °/s; forces of 0.7 and 1 g)";
   s.bench_sentence = "{who} scale error grows with the square of the input, opposite for the two signs: cubic scale-factor term K3, ";
   s.drive_what = "cubic scale-factor term K3·x³";
