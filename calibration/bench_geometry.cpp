@@ -10,14 +10,39 @@ Mat3 ry(double a) { return Eigen::AngleAxisd(a, Vec3::UnitY()).toRotationMatrix(
 Mat3 rz(double a) { return Eigen::AngleAxisd(a, Vec3::UnitZ()).toRotationMatrix(); }
 }  // namespace
 
+const char* mount_name(int mount) {
+  static const char* const names[kMountCount] = {"x", "y", "z", "xy", "yz", "zx"};
+  return mount >= 0 && mount < kMountCount ? names[mount] : "?";
+}
+
+int mount_from_name(const std::string& name) {
+  const std::string n = !name.empty() && name[0] == '+' ? name.substr(1) : name;
+  for (int m = 0; m < kMountCount; ++m)
+    if (n == mount_name(m)) return m;
+  return -1;
+}
+
 Mat3 mount_rotation(int mount) {
   constexpr double kHalfPi = 1.5707963267948966;
   switch (mount) {
     case 0: return ry(-kHalfPi);  // IMU x → platform z
     case 1: return rx(kHalfPi);   // IMU y → platform z
+    case 3:
+    case 4:
+    case 5: {  // wedge: (e_i + e_j)/√2 → platform z, the third axis e_k → platform x
+      const int i = mount - 3, j = (i + 1) % 3, k = (i + 2) % 3;
+      const Vec3 z = (Vec3::Unit(i) + Vec3::Unit(j)) / std::sqrt(2.0), x = Vec3::Unit(k);
+      Mat3 C;  // rows: the platform's axes in IMU axes
+      C.row(0) = x.transpose();
+      C.row(1) = z.cross(x).transpose();
+      C.row(2) = z.transpose();
+      return C;
+    }
     default: return Mat3::Identity();
   }
 }
+
+Vec3 mount_direction(int mount) { return mount_rotation(mount).row(2).transpose(); }
 
 Mat3 imu_attitude(double outer, double inner, int mount) {
   return rx(outer) * rz(inner) * mount_rotation(mount);

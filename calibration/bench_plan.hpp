@@ -4,7 +4,9 @@
 //   outer axis: horizontal, along north (x_L); outer angle θo rotates about it: C_O→L = Rx(θo)
 //   inner axis: the outer gimbal's z (down when θo = 0); inner angle θi: C_P→O = Rz(θi)
 //   the IMU sits on the inner platform P in a fixture ("mount"): C_B→P, one of three cube faces,
-//   chosen so that the named IMU axis lies along the inner (rate) axis.
+//   chosen so that the named IMU axis lies along the inner (rate) axis, or one of three faces of a
+//   45° wedge that put a face diagonal (e_i + e_j)/√2 of the IMU there ("xy", "yz", "zx"), so that
+//   a rate step turns two IMU axes at once (the gyro cross-coupling ω_i·ω_j needs that).
 // So C_B→L = Rx(θo)·Rz(θi)·C_B→P. Rate steps spin the inner axis; a rate step about IMU axis k
 // needs mount k (the station asks the operator to re-mount the cube when it changes).
 #pragma once
@@ -36,7 +38,7 @@ enum class StepKind { static_position, rate };
 struct PlanStep {
   StepKind kind = StepKind::static_position;
   std::string label;
-  int mount = 2;           // IMU axis (0 = x, 1 = y, 2 = z) along the inner axis
+  int mount = 2;           // IMU direction along the inner axis: 0..2 = x, y, z; 3..5 = the diagonals xy, yz, zx
   double outer = 0;        // rad: outer angle for the step
   double inner = 0;        // rad: inner angle (static steps; start angle of rate steps)
   double rate = 0;         // rad/s: inner-axis rate (rate steps), right-handed about +IMU axis `mount`
@@ -66,8 +68,16 @@ struct BenchPlan {
   TemperatureProfile temperature;
 };
 
-// C_B→P of the cube fixture that puts IMU axis `mount` (0..2) along the platform's z.
+// The fixtures: IMU axes x, y, z (cube faces) and the face diagonals xy, yz, zx (45° wedge).
+inline constexpr int kMountCount = 6;
+// "x", "y", "z", "xy", "yz", "zx".
+const char* mount_name(int mount);
+// The mount of a name ("+x" is "x"); -1 if there is none.
+int mount_from_name(const std::string& name);
+// C_B→P of the fixture that puts the IMU direction of `mount` along the platform's z.
 Mat3 mount_rotation(int mount);
+// That IMU direction, a unit vector in IMU axes (C_B→P's last row).
+Vec3 mount_direction(int mount);
 // C_B→L for table angles and mount.
 Mat3 imu_attitude(double outer, double inner, int mount);
 // Table angles (outer, inner) that realise C_B→L with the given mount; false if unreachable

@@ -161,6 +161,16 @@ std::string finding_sentence(const DiagFinding& f) {
     o << human_value(f, f.value[0]);
     // A finding not told apart from an alternative is not established: no σ as if it were.
     if (std::isfinite(f.sigma[0]) && f.alternatives.empty()) o << " ± " << human_value(f, f.sigma[0]);
+  } else if (x.shape == EffectShape::axis_rows && f.report_axis >= 0 && f.sigma.size() == f.value.size()) {
+    // A row of named components (g² products, the other axes): "y 0.37 ± 0.04, z 0.01 ± 0.05 unit".
+    const int u = f.term.sensor == 1 ? 1 : 0;
+    o << "(";
+    for (std::size_t k = 0; k < f.value.size(); ++k) {
+      o << (k ? ", " : "") << effect_component_name(x, f.report_axis, static_cast<int>(k)) << " "
+        << fmt(x.bench_display.value(f.value[k], u));
+      if (std::isfinite(f.sigma[k]) && f.alternatives.empty()) o << " ± " << fmt(x.bench_display.value(f.sigma[k], u));
+    }
+    o << " " << x.bench_display.unit[u] << ")";
   } else {
     o << "(";
     for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
@@ -269,6 +279,9 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
     o << "! unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " χ²/dof " << fmt(u.chi2_dof)
       << ", Ljung–Box p " << fmt(u.ljung_box_p, 2) << "; strongest correlations:";
     o << correlations_text(u.correlations);
+    if (u.period_hz > 0)
+      o << "; strongest periodic component " << fmt(u.period_hz, 3) << " Hz, amplitude " << fmt(disp(u.period_amp, u.sensor))
+        << " " << disp_unit(u.sensor);
     o << "\n";
   }
   o << axis_table_text(r, [](int s, double v) { return fmt(disp(v, s)) + " " + disp_unit(s); });

@@ -26,7 +26,7 @@ jq -r '
   [.benchmarks[] | select(.name | test("SweepClean"))] | select(length > 0) |
     (map(.runs) | add) as $n | (map(.runs * .no_finding_pct / 100 | round) | add) as $ok |
     "**Clean recordings: " + (map("\(.runs) on \(.name | sub("^BM_Diagnose_SweepClean"; "") | sub("/iterations:1$"; "") |
-      if . == "" then "the diagnosis plan" elif . == "Factory" then "the factory plan" elif . == "Thermal" then "`thermal_short`" else "`thermal_updown`" end)") | join(", ")) +
+      if . == "" then "the diagnosis plan" elif . == "Factory" then "the factory plan" elif . == "Thermal" then "`thermal_short`" elif . == "Wedge" then "the wedge plan" else "`thermal_updown`" end)") | join(", ")) +
     ": no finding in \($ok) of \($n), \(map(.false_findings) | add) false findings, \(map(.runs_with_unexplained) | add) with something unexplained.**"
 ' "$json"
 echo

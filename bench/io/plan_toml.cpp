@@ -51,10 +51,10 @@ struct Ctx {
     const toml::node* n = t.get(key);
     if (!n) return def;
     const auto s = n->value<std::string>();
-    if (s == "x" || s == "+x") return 0;
-    if (s == "y" || s == "+y") return 1;
-    if (s == "z" || s == "+z") return 2;
-    fail(n, prefix + key, "expected an IMU axis: \"x\", \"y\" or \"z\"");
+    if (const int m = s ? mount_from_name(*s) : -1; m >= 0) return m;
+    fail(n, prefix + key,
+         "expected an IMU axis: \"x\", \"y\" or \"z\", or a face diagonal (45° wedge fixture): \"xy\", \"yz\" or "
+         "\"zx\"");
   }
 };
 

@@ -66,7 +66,6 @@ std::string iso_utc(std::chrono::system_clock::time_point tp) {
   return b;
 }
 
-const char* axis_name(int m) { return m == 0 ? "x" : m == 1 ? "y" : "z"; }
 
 class Station {
  public:
@@ -444,8 +443,9 @@ Result Station::run() {
       if (s.mount != mount_) {
         // Stop, and have the cube re-mounted with IMU axis `mount` on the inner axis.
         if (st_[kInner].mode == table::Mode::rate) table_->command_rate(kInner, 0.0);
-        log_ << (o_.progress_tty ? "\n" : "") << "re-mount the cube: IMU " << axis_name(s.mount)
-             << " axis on the inner axis (" << plan_.table.remount_s << " s)\n";
+        log_ << (o_.progress_tty ? "\n" : "") << (s.mount < 3 ? "re-mount the cube: IMU " : "re-mount on the 45° wedge: IMU ")
+             << mount_name(s.mount) << (s.mount < 3 ? " axis" : " diagonal") << " on the inner axis ("
+             << plan_.table.remount_s << " s)\n";
         wait_for(plan_.table.remount_s);
         mount_ = s.mount;  // emulated: the operator did it; real: the operator had remount_s
       }

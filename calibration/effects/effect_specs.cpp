@@ -407,7 +407,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.json_value[1] = "accel_per_m_s2";
   s.inject_keys = "with";
   s.bench_candidate = true;
-  s.excited_by = "accelerometers: positions with two specific-force components at once (tilts); gyros: rotation about an axis between two IMU axes at once (both table axes turning, or a 45° wedge fixture) — no plan of this station has it";
+  s.excited_by = "accelerometers: positions with two specific-force components at once (tilts); gyros: rotation about a direction between two IMU axes, with rotations about each axis alone to separate K2 and the cross-axis terms (bench/plans/wedge.toml, a 45° wedge fixture)";
   s.condition = "rate";
   s.shows_on = -1;
   s.drive = DriveDiagnosis::never;  // a car's inputs rarely have two large components at once

@@ -32,6 +32,8 @@ expect_fail "meta.json:2: invalid JSON" "$CALBENCH" fit bench "$tmp/r"
 # Plans
 printf '[site]\nlat_deg = 50.0\nlon_deg = 10.0\n[[step]]\nkind = "rate"\naxis = "w"\nrate_dps = 10.0\ndwell_s = 5.0\n' > "$tmp/p.toml"
 expect_fail "p.toml:6: 'step\[1\].axis': expected an IMU axis" "$CALBENCH" simulate bench --plan "$tmp/p.toml" --truth random --out "$tmp/s"
+printf '[site]\nlat_deg = 50.0\nlon_deg = 10.0\n[[step]]\nkind = "rate"\naxis = "xz"\nrate_dps = 10.0\ndwell_s = 5.0\n' > "$tmp/p.toml"
+expect_fail "p.toml:6: 'step\[1\].axis': expected an IMU axis.*a face diagonal .45° wedge fixture.: \"xy\", \"yz\" or \"zx\"" "$CALBENCH" simulate bench --plan "$tmp/p.toml" --truth random --out "$tmp/s"
 printf '[site]\nlat_deg = 50.0\nlon_deg = 10.0\n[[step]]\nkind = "static"\nmount = "x"\nrpy_deg = [0.0, 0.0, 0.0]\ndwell_s = 5.0\n' > "$tmp/p.toml"
 expect_fail "p.toml:7: 'step\[1\].rpy_deg': orientation not reachable" "$CALBENCH" simulate bench --plan "$tmp/p.toml" --truth random --out "$tmp/s"
 printf '[site]\nlat_deg = 50.0\nlon_deg = 10.0\n[[step]]\nkind = "static"\ndwel_s = 5.0\n' > "$tmp/p.toml"

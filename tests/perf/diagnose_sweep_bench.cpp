@@ -40,12 +40,14 @@ int env_int(const char* name, int def) {
 // The plans of the rows: the 6-minute diagnosis plan; the thermal CI plan (5 → 45 °C); the
 // up-and-down chamber plan (thermal lag). Test plans live in tests/data and may be absent from an
 // installed tree: those rows then skip.
-enum class Plan { diagnose, thermal, updown, factory };
+enum class Plan { diagnose, thermal, updown, factory, wedge };
 const BenchPlan* plan_of(Plan which) {
   static const BenchPlan diag = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
   static const BenchPlan factory = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
   if (which == Plan::diagnose) return &diag;
+  static const BenchPlan wedge = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/wedge.toml");
   if (which == Plan::factory) return &factory;
+  if (which == Plan::wedge) return &wedge;
   const std::string f = std::string(CALBENCH_SOURCE_DIR) +
                         (which == Plan::thermal ? "/tests/data/thermal_short.toml" : "/tests/data/thermal_updown.toml");
   if (!std::filesystem::exists(f)) return nullptr;
@@ -217,10 +219,14 @@ void BM_Diagnose_SweepCleanThermal(benchmark::State& state) {
 void BM_Diagnose_SweepCleanUpdown(benchmark::State& state) {
   sweep_clean(state, Plan::updown, env_int("DIAGNOSE_CLEAN_THERMAL_SEEDS", 10), 9700);
 }
+void BM_Diagnose_SweepCleanWedge(benchmark::State& state) {
+  sweep_clean(state, Plan::wedge, env_int("DIAGNOSE_CLEAN_SEEDS", 40), 9900);
+}
 BENCHMARK(BM_Diagnose_SweepClean)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_Diagnose_SweepCleanFactory)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_Diagnose_SweepCleanThermal)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_Diagnose_SweepCleanUpdown)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_Diagnose_SweepCleanWedge)->Unit(benchmark::kSecond)->Iterations(1);
 
 // One sweep row family: an effect, the magnitudes (in display units; `unit` converts to SI) and how a
 // seed index k places it (axis and sign vary with k).
@@ -339,6 +345,9 @@ std::vector<Row> sweep_rows() {
       // Anisoelastic: the cross products f_x·f_y, f_y·f_z (components 2, 3) of gyro axes x, y, z.
       {"g2_sensitivity/", "e-6_rad_s_per_m2_s4", {2, 4, 8}, 1e-6, Plan::diagnose, rows_term(E::g2_sensitivity, 0, 0, 2, 2)},
       {"cross_coupling/accel_", "e-6_per_m_s2", {20, 40, 80}, 1e-6, Plan::diagnose, rows_term(E::cross_coupling, 1, 0, 2)},
+      // Gyro cross-coupling ω_i·ω_j: only rotations about a face diagonal excite it (the wedge plan);
+      // on the factory and diagnosis plans it is "not excited".
+      {"cross_coupling/gyro_", "e-6_per_rad_s", {10, 20, 40}, 1e-6, Plan::wedge, rows_term(E::cross_coupling, 0, 0, 2)},
       {"cross_axis_rate/gyro_", "e-6_per_rad_s", {5, 10, 20}, 1e-6, Plan::diagnose, rows_term(E::cross_axis_rate, 0, 1, 2)},
       // Size effect: on constant-rate steps the same shape as a lever arm along the axis (named
       // lever_arm, size_effect listed as not told apart; docs/diagnosis.md).

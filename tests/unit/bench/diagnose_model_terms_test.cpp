@@ -18,7 +18,9 @@ namespace {
 const BenchPlan& plan(const char* name) {
   static const BenchPlan diag = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
   static const BenchPlan factory = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/factory.toml");
-  return std::string(name) == "factory" ? factory : diag;
+  static const BenchPlan wedge = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/wedge.toml");
+  const std::string n = name;
+  return n == "factory" ? factory : n == "wedge" ? wedge : diag;
 }
 
 std::string summary(const DiagRun& r) {
@@ -60,6 +62,9 @@ TEST(DiagnoseModelTerms, NamedOnTwoAxes) {
       {"diagnose", "cross_coupling:sensor=accel,axis=z,with=y,value=-8e-5", EffectId::cross_coupling, 1, 2, 1, -8e-5},
       {"diagnose", "cross_axis_rate:axis=x,with=y,value=2e-5", EffectId::cross_axis_rate, 0, 0, 0, 2e-5},
       {"diagnose", "cross_axis_rate:axis=z,with=y,value=-2e-5", EffectId::cross_axis_rate, 0, 2, 1, -2e-5},
+      // Gyro cross-coupling ω_i·ω_j: rates about the face diagonals (45° wedge fixture).
+      {"wedge", "cross_coupling:sensor=gyro,axis=x,with=y,value=2e-5", EffectId::cross_coupling, 0, 0, 0, 2e-5},
+      {"wedge", "cross_coupling:sensor=gyro,axis=z,with=x,value=-2e-5", EffectId::cross_coupling, 0, 2, 0, -2e-5},
   };
   std::uint64_t seed = 71;
   for (const Case& c : cases) {
@@ -107,9 +112,9 @@ TEST(DiagnoseModelTerms, SizeEffectIsALeverArmLookAlike) {
   EXPECT_TRUE(listed) << summary(r);
 }
 
-// Gyro cross-coupling needs rates about two axes at once, which no plan of the station has: on the
-// diagnosis plan it is not a candidate, and it is reported as not excited; injected, it is never
-// named with a σ.
+// Gyro cross-coupling needs rates about two axes at once, which the diagnosis plan does not have
+// (bench/plans/wedge.toml has): there it is not a candidate, it is reported as not excited, with
+// the plan that excites it, and injected it is never named with a σ.
 TEST(DiagnoseModelTerms, NotExcitedIsReportedAndNeverNamed) {
   const DiagRun r = run("diagnose", "cross_coupling:sensor=gyro,axis=x,with=y,value=1e-3", 95);
   int listed = 0;
@@ -117,6 +122,7 @@ TEST(DiagnoseModelTerms, NotExcitedIsReportedAndNeverNamed) {
   EXPECT_EQ(listed, 3) << summary(r);
   EXPECT_EQ(named(r, EffectId::cross_coupling), nullptr) << summary(r);
   EXPECT_NE(diagnosis_text(r).find("not excited by this recording"), std::string::npos);
+  EXPECT_NE(diagnosis_text(r).find("wedge.toml"), std::string::npos) << diagnosis_text(r);
 }
 
 // Temperature or drift, by likelihood: on a 5 → 45 °C ramp a temperature bias explains the record
