@@ -221,6 +221,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     us.push_back({{"sensor", kSensor[u.sensor]}, {"axis", kAxis[u.axis]}, {"chi2_per_dof", u.chi2_dof},
                   {"ljung_box_p", u.ljung_box_p}, {"systematic_rms", u.systematic_rms}, {"worst_windows_s", w},
                   {"correlations", c}});
+    if (u.period_hz > 0) us.back()["periodic"] = {{"hz", u.period_hz}, {"amplitude", u.period_amp}};
   }
   j["unexplained"] = us;
   j["withdrawn"] = withdrawn_json(r.withdrawn);

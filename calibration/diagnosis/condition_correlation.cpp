@@ -171,24 +171,41 @@ void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, do
   }
 }
 
-void time_spectrum(const DiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp) {
+void strongest_sinusoid(const std::vector<double>& t, const std::vector<double>& x, double fmin, double fmax,
+                        double& best_hz, double& best_amp, const std::vector<int>* group, const std::vector<double>* wt) {
   best_hz = 0;
   best_amp = 0;
-  // Deviations from each parent block's mean (the slow part belongs to the drift and the steps),
-  // sampled at the sub-blocks' mid times; a least-squares sinusoid per trial frequency.
-  const std::vector<double> rp = parent_block_means(d, r);
-  const std::size_t n = d.subs.size();
-  if (n < 20) return;
-  std::vector<double> t(n), x(n);
-  for (std::size_t j = 0; j < n; ++j) {
-    t[j] = d.subs[j].t_mid;
-    x[j] = r(static_cast<Eigen::Index>(j)) - rp[static_cast<std::size_t>(d.subs[j].parent)];
-  }
-  for (double hz = 0.02; hz <= 5.0; hz *= 1.005) {
+  const std::size_t n = t.size();
+  if (n < 20 || x.size() != n || !(fmax > fmin)) return;
+  const int ng = group && !group->empty() ? *std::max_element(group->begin(), group->end()) + 1 : 0;
+  std::vector<double> gw(static_cast<std::size_t>(ng), 0.0), gc(gw.size()), gs(gw.size()), cj(n), sj(n);
+  for (std::size_t j = 0; ng > 0 && j < n; ++j) gw[static_cast<std::size_t>((*group)[j])] += wt ? (*wt)[j] : 1.0;
+  std::vector<double> power;
+  double best_power = 0, hz_at = 0, amp_at = 0;
+  for (double hz = fmin; hz <= fmax; hz *= 1.005) {
     const double w = 2 * M_PI * hz;
+    for (std::size_t j = 0; j < n; ++j) {
+      cj[j] = std::cos(w * t[j]);
+      sj[j] = std::sin(w * t[j]);
+    }
+    if (ng > 0) {  // the regressors as deviations from their group means, like x
+      std::fill(gc.begin(), gc.end(), 0.0);
+      std::fill(gs.begin(), gs.end(), 0.0);
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t g = static_cast<std::size_t>((*group)[j]);
+        const double q = (wt ? (*wt)[j] : 1.0) / gw[g];
+        gc[g] += q * cj[j];
+        gs[g] += q * sj[j];
+      }
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t g = static_cast<std::size_t>((*group)[j]);
+        cj[j] -= gc[g];
+        sj[j] -= gs[g];
+      }
+    }
     double cc = 0, ss = 0, cs = 0, xc = 0, xs = 0;
     for (std::size_t j = 0; j < n; ++j) {
-      const double c = std::cos(w * t[j]), s = std::sin(w * t[j]);
+      const double c = cj[j], s = sj[j];
       cc += c * c;
       ss += s * s;
       cs += c * s;
@@ -198,11 +215,57 @@ void time_spectrum(const DiagData& d, const Eigen::VectorXd& r, double& best_hz,
     const double det = cc * ss - cs * cs;
     if (det <= 1e-9 * cc * ss) continue;
     const double a = (xc * ss - xs * cs) / det, b = (xs * cc - xc * cs) / det;
-    const double amp = std::hypot(a, b);
-    if (amp > best_amp) {
-      best_amp = amp;
-      best_hz = hz;
+    const double p = a * xc + b * xs;  // the sum of squares the sinusoid explains
+    power.push_back(p);
+    if (p > best_power) {
+      best_power = p;
+      hz_at = hz;
+      amp_at = std::hypot(a, b);
     }
+  }
+  if (power.size() < 10) return;
+  std::nth_element(power.begin(), power.begin() + static_cast<std::ptrdiff_t>(power.size() / 2), power.end());
+  const double mean_noise = power[power.size() / 2] / std::log(2.0);  // median of Exp(μ) is μ ln 2
+  const double span = t.back() - t.front();
+  const double m = std::max(1.0, (fmax - fmin) * span);
+  if (mean_noise <= 0 || best_power / mean_noise < std::log(m / 1e-3)) return;
+  best_hz = hz_at;
+  best_amp = amp_at;
+}
+
+void time_spectrum(const DiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp) {
+  // Deviations from each parent block's mean (the slow part belongs to the drift and the steps),
+  // sampled at the sub-blocks' mid times; the sinusoid likewise.
+  const std::vector<double> rp = parent_block_means(d, r);
+  const std::size_t n = d.subs.size();
+  std::vector<double> t(n), x(n), w(n);
+  std::vector<int> g(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    t[j] = d.subs[j].t_mid;
+    x[j] = r(static_cast<Eigen::Index>(j)) - rp[static_cast<std::size_t>(d.subs[j].parent)];
+    g[j] = d.subs[j].parent;
+    w[j] = d.subs[j].n;
+  }
+  strongest_sinusoid(t, x, 0.02, 5.0, best_hz, best_amp, &g, &w);
+}
+
+void time_spectrum(const DriveDiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp) {
+  best_hz = best_amp = 0;
+  const std::size_t n = d.parents.size();
+  if (n < 20) return;
+  std::vector<double> t(n), x(n);
+  double len = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    t[k] = d.parents[k].t_mid;
+    x[k] = r(static_cast<Eigen::Index>(k));
+    len += d.parents[k].duration;
+  }
+  len /= static_cast<double>(n);
+  if (len <= 0) return;
+  strongest_sinusoid(t, x, 0.01, 0.45 / len, best_hz, best_amp);
+  if (best_hz > 0) {
+    const double u = M_PI * best_hz * len;
+    best_amp /= std::sin(u) / u;
   }
 }
 

@@ -30,8 +30,21 @@ std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eig
 // Bench: amplitude of harmonics 1..4 of the table angle in the within-parent residual (rotating
 // sub-blocks); the strongest harmonic and its amplitude.
 void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, double& best_amp);
-// The strongest sinusoid in time in a sub-block residual (deviations from the parent means),
-// 0.02–5 Hz: its frequency and amplitude (0 when the record is too short).
+// The strongest sinusoid of x(t) (irregular times allowed; a least-squares sinusoid per trial
+// frequency, fmin…fmax on a 0.5 % grid): its frequency and amplitude, or 0 and 0 when the peak is
+// not significant — its power against the median power of the band (a robust noise level: for
+// noise alone power/mean is Exp(1)) below ln(M/10⁻³), M the independent frequencies in the band
+// ((fmax − fmin)·record length), i.e. a false-alarm probability above 10⁻³ — or x is too short.
+// With `group` (a group index per sample, 0…G−1, and weights w), x holds deviations from its
+// groups' weighted means, and the sinusoid is taken the same way, so its amplitude stays unbiased.
+void strongest_sinusoid(const std::vector<double>& t, const std::vector<double>& x, double fmin, double fmax,
+                        double& best_hz, double& best_amp, const std::vector<int>* group = nullptr,
+                        const std::vector<double>* w = nullptr);
+// Bench: the strongest sinusoid in time in a sub-block residual (deviations from the parent means),
+// 0.02–5 Hz (strongest_sinusoid).
 void time_spectrum(const DiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp);
+// Drive: the same in a parent-block residual r (drift removed), 0.01 Hz up to 0.45 of the blocks'
+// rate; the amplitude corrected for the block averaging (÷ sinc(f·block length)).
+void time_spectrum(const DriveDiagData& d, const Eigen::VectorXd& r, double& best_hz, double& best_amp);
 
 }  // namespace calbench::diag

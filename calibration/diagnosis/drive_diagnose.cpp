@@ -378,6 +378,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, all[a].n_low) / 2.0);
     if (z_low < 6 && s.ljung_box_p > 1e-4) continue;
     DiagUnexplained u = diag::unexplained_axis(a, s, out.correlations_after[a]);
+    diag::time_spectrum(data, rn_after[a], u.period_hz, u.period_amp);
     std::map<int, std::pair<double, double>> win;
     for (int k = 0; k < NP; ++k) {
       auto& x = win[data.parents[k].step];
