@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The confusion tables of the diagnosis (issue 20): every catalogue effect of the sweep rows
 # (bench/diagnose/sweep.sh, drive_sweep.sh) injected at its largest sweep magnitude on the factory
-# plan, on the diagnosis plan and on the default drive route, DIAGNOSE_CONFUSION_SEEDS seeds each
+# plan, on the diagnosis plan, on the wedge plan and on the default drive route, DIAGNOSE_CONFUSION_SEEDS seeds each
 # (default 5), against what the diagnosis names.
 # Prints the tables and writes them, stamped, to docs/validation/diagnose-confusion.md
 # (VALIDATION_NAME=OTHER.md for another file). ~15 min at 5 seeds.

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "calibration/bench_plan.hpp"
+
 namespace calbench {
 
 bool static_attitude(const Vec3& w, const Vec3& f, Mat3& C) {
@@ -21,10 +23,17 @@ bool static_attitude(const Vec3& w, const Vec3& f, Mat3& C) {
 bool bench_attitude(const Vec3& w, const Vec3& f, Mat3& C) {
   if (w.norm() <= 1e-3) return static_attitude(w, f, C);
   if (f.norm() < 1.0) return false;
-  int m = 0;
-  w.cwiseAbs().maxCoeff(&m);
-  const Vec3 k = Vec3::Unit(m);
-  const Vec3 w_perp = w - w(m) * k;             // Earth rate only when the table spins about IMU axis m
+  // The spin axis: the fixture direction (an IMU axis or a face diagonal) nearest the rate.
+  Vec3 k = Vec3::UnitZ();
+  double best = -1;
+  for (int m = 0; m < kMountCount; ++m) {
+    const Vec3 km = mount_direction(m);
+    if (std::abs(km.dot(w)) > best) {
+      best = std::abs(km.dot(w));
+      k = km;
+    }
+  }
+  const Vec3 w_perp = w - w.dot(k) * k;          // Earth rate only when the table spins about k
   if (w_perp.norm() > 1e-3) return false;
   const Vec3 d = -f.normalized();
   const Vec3 c = k.cross(d);

@@ -35,6 +35,7 @@ enum class EffectId {
   cross_axis_rate,   // gyro sensitivity to the square of the rate about another axis
   g2_sensitivity,    // gyro anisoelastic (g²) sensitivity: products of specific-force components
   size_effect,       // accelerometer size effect: each accelerometer's offset along its own axis (rate²)
+  proof_mass_offset, // accelerometer offset across its axis: angular-acceleration sensitivity, ω_i·(ω·r)
 };
 
 // How an effect's parameters are laid out, which decides its candidate terms, its JSON form and

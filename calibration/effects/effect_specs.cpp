@@ -553,10 +553,11 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
   s.json_value[0] = s.json_value[1] = "accel_m";
   s.bench_candidate = true;
-  // Without angular acceleration in the data (the bench's blocks lie inside constant-rate steps) an
-  // accelerometer's own offset is a lever arm along that axis. The lever arm is the common case (a
-  // unit off the table's centre by centimetres; a MEMS die's proof masses sit < 1 mm apart), so a
-  // size effect must explain the recording better than the lever arm by Δχ² 30 (prior odds e^15).
+  // Without angular acceleration in the data (the bench's blocks lie inside constant-rate steps) and
+  // without rates about two axes at once, an accelerometer's own offset is a lever arm along that
+  // axis. The lever arm is the common case (a unit off the table's centre by centimetres; a MEMS
+  // die's proof masses sit < 1 mm apart), so a size effect must explain the recording better than
+  // the lever arm by Δχ² 30 (prior odds e^15).
   s.prior_penalty = 30;
   s.excited_by = "rate steps about each of the other IMU axes (mounts x, y and z)";
   s.condition = "rate";
@@ -569,9 +570,61 @@ std::vector<EffectSpec> make_effect_specs() {
   s.drive_what = "size effect";
   s.lookalike = static_cast<int>(EffectId::lever_arm);
   s.separation =
-      "within constant-rate steps an accelerometer's own offset along its axis is a lever arm along that axis; "
-      "only angular acceleration (ω̇×r reaches the other accelerometers for a lever arm, not for a size effect) "
-      "tells them apart: rate steps recorded through their accelerations";
+      "within constant-rate steps about single IMU axes an accelerometer's own offset along its axis is a lever "
+      "arm along that axis; rates about the face diagonals tell them apart (bench/plans/wedge.toml: there a lever "
+      "arm along y reaches accelerometer x as ω_x·ω_y·r_y, a size effect of y does not), and so would angular "
+      "acceleration (ω̇×r reaches the other accelerometers for a lever arm, not for a size effect)";
+  row(s);
+
+  // ---- proof_mass_offset: each accelerometer's effective proof mass off the IMU origin across its
+  // axis (a pendulous sensor's arm). Together with size_effect (along the axis) it is a lever arm per
+  // accelerometer; the part across the axis is the angular-acceleration sensitivity of IEEE 1293.
+  s = EffectSpec{};
+  s.id = EffectId::proof_mass_offset;
+  s.key = "proof_mass_offset";
+  s.physics =
+      "accelerometer i's effective proof mass sits r_i off the IMU origin across its own axis (a pendulous "
+      "sensor's arm): it senses the tangential acceleration ω̇×r_i (angular-acceleration sensitivity, IEEE "
+      "1293) and, on rates about two axes at once, the centripetal ω_i·(ω·r_i). An offset shared by the three "
+      "is the lever arm";
+  s.model = "accel i: e_i·(ω̇×r_i + ω×(ω×r_i)), r_i across e_i (components along the other two axes)";
+  s.shape = EffectShape::axis_rows;
+  s.sensor = -1;
+  s.sensors = 2;  // accel
+  s.nparams = 2;
+  s.components_other_axes = true;
+  s.sensor_output = [](const EffectTerms& e, const EffectContext& c, Vec3&, Vec3& da) {
+    const EffectSpec& x = effect_spec(EffectId::proof_mass_offset);
+    for (int i = 0; i < 3; ++i) {
+      Vec3 r = Vec3::Zero();
+      for (int p = 0; p < 2; ++p) r((i + 1 + p) % 3) = effect_value(x, e, 1, i, p);
+      if (!r.isZero()) da(i) += lever_arm_force(r, c.w, c.dw)(i);
+    }
+  };
+  s.needs_rate_derivative = true;
+  s.si_unit[0] = s.si_unit[1] = "m";
+  s.bench_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
+  s.drive_display = {[](double x, int) { return x * 1e3; }, {"mm", "mm"}};
+  s.json_value[1] = "accel_m";
+  s.inject_keys = "with";
+  s.bench_candidate = true;
+  // Within constant-rate steps about one IMU axis ω_i·(ω·r_i) is zero for r_i across e_i: only
+  // rates about a face diagonal (or the angular acceleration of the transitions, which the bench's
+  // blocks leave out) reach it.
+  s.excited_by =
+      "rates about two IMU axes at once (bench/plans/wedge.toml: ω_i·ω_j·r_ij), or angular acceleration about "
+      "the third axis (ω̇×r_i; the bench diagnosis uses constant-rate steps only)";
+  s.condition = "rate";
+  s.shows_on = -1;
+  s.drive = DriveDiagnosis::never;  // a car's ω̇ and ω² reach millimetre offsets far below the noise
+  s.drive_prior[0] = s.drive_prior[1] = 0.05;
+  s.own_input = false;
+  s.compensation = DriveCompensation::output;
+  s.bench_sentence =
+      "{who} error grows with the product of rates about two axes, unlike the other accelerometers: its proof "
+      "mass sits off the IMU origin across its axis (angular-acceleration sensitivity), ";
+  s.drive_what = "proof-mass offset";
+  s.lookalike = -1;
   row(s);
 
   // ---- misalignment

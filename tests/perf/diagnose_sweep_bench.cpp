@@ -348,10 +348,15 @@ std::vector<Row> sweep_rows() {
       // Gyro cross-coupling ω_i·ω_j: only rotations about a face diagonal excite it (the wedge plan);
       // on the factory and diagnosis plans it is "not excited".
       {"cross_coupling/gyro_", "e-6_per_rad_s", {10, 20, 40}, 1e-6, Plan::wedge, rows_term(E::cross_coupling, 0, 0, 2)},
+      // An accelerometer's proof mass off the origin across its axis: the centripetal ω_i·ω_j·r_ij of the
+      // wedge plan's diagonals (not excited on the factory and diagnosis plans).
+      {"proof_mass_offset/accel_", "mm", {0.1, 0.2, 0.4}, 1e-3, Plan::wedge, rows_term(E::proof_mass_offset, 1, 1, 2)},
       {"cross_axis_rate/gyro_", "e-6_per_rad_s", {5, 10, 20}, 1e-6, Plan::diagnose, rows_term(E::cross_axis_rate, 0, 1, 2)},
       // Size effect: on constant-rate steps the same shape as a lever arm along the axis (named
       // lever_arm, size_effect listed as not told apart; docs/diagnosis.md).
       {"size_effect/accel_", "mm", {2, 4, 8}, 1e-3, Plan::diagnose, triad_term(E::size_effect, 1, 0)},
+      // The wedge plan's diagonals tell it from the lever arm: named size_effect, down to hundredths of a mm.
+      {"size_effect/accel_", "mm_wedge", {0.03, 0.06, 0.12}, 1e-3, Plan::wedge, triad_term(E::size_effect, 1, 1)},
       // Temperature terms on the short warm-up of the diagnosis plan (~2 K): gyro only.
       {"temperature_bias/gyro_", "dph_K_warmup", {100, 200}, kDegPerHour, Plan::diagnose,
        triad_term(E::temperature_bias, 0, 0)},
@@ -412,8 +417,8 @@ void register_sweeps() {
     }
 }
 
-// The confusion table (issue 20): every catalogue row of sweep_rows() on the diagnosis plan or the
-// factory plan, at its largest magnitude, injected on both plans with DIAGNOSE_CONFUSION_SEEDS seeds
+// The confusion table (issue 20): every catalogue row of sweep_rows() on the diagnosis, factory or
+// wedge plan, at its largest magnitude, injected on the three plans with DIAGNOSE_CONFUSION_SEEDS seeds
 // (default 5): which effects the diagnosis names. A cell counts the runs that named that effect
 // (any axis); "(n alt)" counts those whose finding lists the injected effect as not told apart.
 // Written as Markdown to DIAGNOSE_CONFUSION_OUT (bench/diagnose/confusion.sh stamps it into
@@ -423,7 +428,7 @@ void BM_Diagnose_Confusion(benchmark::State& state) {
   const int seeds = env_int("DIAGNOSE_CONFUSION_SEEDS", 5);
   for (auto _ : state) {
     std::string md;
-    for (Plan which : {Plan::factory, Plan::diagnose}) {
+    for (Plan which : {Plan::factory, Plan::diagnose, Plan::wedge}) {
       const BenchPlan& plan = *plan_of(which);
       ConfusionTable table({"no finding", "something unexplained", "truth not excited"});
       for (const Row& row : sweep_rows()) {
@@ -441,8 +446,9 @@ void BM_Diagnose_Confusion(benchmark::State& state) {
           table.count(2, not_excited);
         }
       }
-      md += table.markdown(std::string(which == Plan::factory ? "Factory plan (`bench/plans/factory.toml`)"
-                                                              : "Diagnosis plan (`bench/plans/diagnose.toml`)") +
+      md += table.markdown(std::string(which == Plan::factory    ? "Factory plan (`bench/plans/factory.toml`)"
+                                       : which == Plan::diagnose ? "Diagnosis plan (`bench/plans/diagnose.toml`)"
+                                                                 : "Wedge plan (`bench/plans/wedge.toml`)") +
                            ", " + std::to_string(seeds) + " seeds per row");
     }
     ConfusionTable::emit(md);

@@ -65,6 +65,11 @@ TEST(DiagnoseModelTerms, NamedOnTwoAxes) {
       // Gyro cross-coupling ω_i·ω_j: rates about the face diagonals (45° wedge fixture).
       {"wedge", "cross_coupling:sensor=gyro,axis=x,with=y,value=2e-5", EffectId::cross_coupling, 0, 0, 0, 2e-5},
       {"wedge", "cross_coupling:sensor=gyro,axis=z,with=x,value=-2e-5", EffectId::cross_coupling, 0, 2, 0, -2e-5},
+      // An accelerometer's proof mass off the origin across its axis: ω_i·ω_j·r_ij on the diagonals.
+      {"wedge", "proof_mass_offset:axis=y,with=z,value=4e-4", EffectId::proof_mass_offset, 1, 1, 0, 4e-4},
+      {"wedge", "proof_mass_offset:axis=z,with=y,value=-4e-4", EffectId::proof_mass_offset, 1, 2, 1, -4e-4},
+      // The wedge plan tells the size effect from a lever arm (named alone, no alternative).
+      {"wedge", "size_effect:axis=y,value=2e-3", EffectId::size_effect, 1, 1, 0, 2e-3},
   };
   std::uint64_t seed = 71;
   for (const Case& c : cases) {

@@ -80,6 +80,24 @@ TEST(EffectRegistry, AxisRowsAndTheirOutputs) {
   // The size effect is the x component of ω×(ω×r) at r = (0.01, 0, 0): ω_x(ω·r) − r_x|ω|².
   const Vec3 r(0.01, 0, 0);
   EXPECT_NEAR(da(0), c.w.cross(c.w.cross(r))(0), 1e-15);
+
+  // The proof-mass offset: accel z's mass 2 mm along x (component 0: the next axis after z) and
+  // 1 mm along y senses the z component of ω̇×r + ω×(ω×r) there; the others nothing of it.
+  const EffectSpec& pm = effect_spec(EffectId::proof_mass_offset);
+  EXPECT_EQ(effect_param(pm, e, 0, 0, 0), nullptr);  // accelerometers only
+  EXPECT_EQ(effect_component_name(pm, 2, 0), "x");
+  EffectTerms o;
+  *effect_param(pm, o, 1, 2, 0) = 2e-3;
+  *effect_param(pm, o, 1, 2, 1) = 1e-3;
+  c.dw = Vec3(0.3, -0.7, 1.1);
+  Vec3 og = Vec3::Zero(), oa = Vec3::Zero();
+  sensor_side_terms(o, c, og, oa);
+  const Vec3 rz(2e-3, 1e-3, 0);
+  EXPECT_NEAR(oa(2), (c.dw.cross(rz) + c.w.cross(c.w.cross(rz)))(2), 1e-15);
+  EXPECT_EQ(oa(0), 0.0);
+  EXPECT_EQ(oa(1), 0.0);
+  EXPECT_TRUE(og.isZero());
+  EXPECT_TRUE(needs_rate_derivative(o));
 }
 
 // The truth side: identity without effects; with them, what the rows' hooks say.
