@@ -90,12 +90,18 @@ std::string alternatives_text(const DiagFinding& f) {
 
 nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& ws) {
   nlohmann::json out = nlohmann::json::array();
-  for (const auto& w : ws)
+  for (const auto& w : ws) {
     out.push_back({{"effect", effect_name(w.term.effect)},
                    {"label", w.term.label()},
                    {"delta_chi2_when_accepted", w.delta_chi2_when_accepted},
                    {"delta_chi2_final", w.delta_chi2_final},
                    {"why", withdrawn_why_key(w.why)}});
+    if (w.why == WithdrawnWhy::follows_condition)
+      out.back()["follows"] = {{"condition", w.condition},
+                               {"axis", std::string(1, "xyz"[w.axis])},
+                               {"r", w.condition_r},
+                               {"fisher_z", w.condition_z}};
+  }
   return out;
 }
 
@@ -105,6 +111,7 @@ const char* withdrawn_why_key(WithdrawnWhy w) {
     case WithdrawnWhy::drift_recheck: return "better_without_drift";
     case WithdrawnWhy::overdispersed: return "carried_by_unexplained_remainder";
     case WithdrawnWhy::leaves_unexplained: return "drift_leaves_axis_unexplained";
+    case WithdrawnWhy::follows_condition: return "drift_follows_condition";
   }
   return "";
 }
@@ -118,6 +125,10 @@ std::string withdrawn_text(const DiagWithdrawn& w) {
     case WithdrawnWhy::leaves_unexplained:
       return o + ", but an axis of the triad stays unexplained with it: the drift stood in for structure outside "
                  "the catalogue)";
+    case WithdrawnWhy::follows_condition:
+      return o + ", but its path on " + std::string(w.term.sensor == 0 ? "gyro " : "accel ") + "xyz"[w.axis] +
+             " follows " + w.condition + " (r " + fmt(w.condition_r, 2) + ", Fisher z " + fmt(w.condition_z, 2) +
+             "): a random wander is not tied to the motion; the drift stood in for structure outside the catalogue)";
     case WithdrawnWhy::overdispersed:
       return o + ", but counted against the unexplained remainder of its axis (Δχ²/φ) it explains only " +
              fmt(w.delta_chi2_final) + ")";

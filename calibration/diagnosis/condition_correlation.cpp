@@ -180,7 +180,7 @@ void strongest_sinusoid(const std::vector<double>& t, const std::vector<double>&
   const int ng = group && !group->empty() ? *std::max_element(group->begin(), group->end()) + 1 : 0;
   std::vector<double> gw(static_cast<std::size_t>(ng), 0.0), gc(gw.size()), gs(gw.size()), cj(n), sj(n);
   for (std::size_t j = 0; ng > 0 && j < n; ++j) gw[static_cast<std::size_t>((*group)[j])] += wt ? (*wt)[j] : 1.0;
-  std::vector<double> power;
+  std::vector<double> power, freq;
   double best_power = 0, hz_at = 0, amp_at = 0;
   for (double hz = fmin; hz <= fmax; hz *= 1.005) {
     const double w = 2 * M_PI * hz;
@@ -217,16 +217,23 @@ void strongest_sinusoid(const std::vector<double>& t, const std::vector<double>&
     const double a = (xc * ss - xs * cs) / det, b = (xs * cc - xc * cs) / det;
     const double p = a * xc + b * xs;  // the sum of squares the sinusoid explains
     power.push_back(p);
+    freq.push_back(hz);
     if (p > best_power) {
       best_power = p;
       hz_at = hz;
       amp_at = std::hypot(a, b);
     }
   }
-  if (power.size() < 10) return;
-  std::nth_element(power.begin(), power.begin() + static_cast<std::ptrdiff_t>(power.size() / 2), power.end());
-  const double mean_noise = power[power.size() / 2] / std::log(2.0);  // median of Exp(μ) is μ ln 2
+  // The noise level near the peak: the median power within a factor 1.5 of its frequency, outside
+  // its main lobe (±2/record length). A sinusoid stands alone there; broad-band structure (a
+  // remainder that is not periodic) raises its neighbours with it.
   const double span = t.back() - t.front();
+  std::vector<double> near;
+  for (std::size_t q = 0; q < power.size(); ++q)
+    if (freq[q] > hz_at / 1.5 && freq[q] < hz_at * 1.5 && std::abs(freq[q] - hz_at) > 2.0 / span) near.push_back(power[q]);
+  if (near.size() < 10) return;
+  std::nth_element(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(near.size() / 2), near.end());
+  const double mean_noise = near[near.size() / 2] / std::log(2.0);  // median of Exp(μ) is μ ln 2
   const double m = std::max(1.0, (fmax - fmin) * span);
   if (mean_noise <= 0 || best_power / mean_noise < std::log(m / 1e-3)) return;
   best_hz = hz_at;

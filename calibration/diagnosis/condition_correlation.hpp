@@ -32,9 +32,10 @@ std::vector<ConditionCorrelation> correlations(const DriveDiagData& d, const Eig
 void angle_spectrum(const DiagData& d, const Eigen::VectorXd& r, int& best_k, double& best_amp);
 // The strongest sinusoid of x(t) (irregular times allowed; a least-squares sinusoid per trial
 // frequency, fmin…fmax on a 0.5 % grid): its frequency and amplitude, or 0 and 0 when the peak is
-// not significant — its power against the median power of the band (a robust noise level: for
-// noise alone power/mean is Exp(1)) below ln(M/10⁻³), M the independent frequencies in the band
-// ((fmax − fmin)·record length), i.e. a false-alarm probability above 10⁻³ — or x is too short.
+// not significant — its power against the median power near it (within a factor 1.5 of its
+// frequency, outside its main lobe: a robust local noise level; for noise alone power/mean is
+// Exp(1)) below ln(M/10⁻³), M the independent frequencies in the band ((fmax − fmin)·record
+// length), i.e. a false-alarm probability above 10⁻³ — or x is too short.
 // With `group` (a group index per sample, 0…G−1, and weights w), x holds deviations from its
 // groups' weighted means, and the sinusoid is taken the same way, so its amplitude stays unbiased.
 void strongest_sinusoid(const std::vector<double>& t, const std::vector<double>& x, double fmin, double fmax,

@@ -114,6 +114,7 @@ enum class WithdrawnWhy {
   drift_recheck,  // correlated_drift: the search redone without it scores better
   overdispersed,  // its Δχ², scaled by the unexplained remainder's χ²/dof (φ), fails the threshold
   leaves_unexplained,  // correlated_drift: an axis of its triad stays unexplained with it
+  follows_condition,   // correlated_drift (drive): the wander it took follows a motion condition
 };
 
 // A term the greedy search accepted and then gave up (why: WithdrawnWhy): not a finding.
@@ -125,6 +126,11 @@ struct DiagWithdrawn {
   // without (< 0 for drift_recheck).
   double delta_chi2_final = 0;
   WithdrawnWhy why = WithdrawnWhy::weak;
+  // follows_condition: the condition, the axis and the correlation of the drift's smoothed path with
+  // it, and its Fisher z over the record's independent stretches (length / 2τ).
+  std::string condition;
+  int axis = -1;
+  double condition_r = 0, condition_z = 0;
 };
 
 struct DiagUnexplained {

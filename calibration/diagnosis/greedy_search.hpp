@@ -324,7 +324,12 @@ class GreedySearch {
   // A withdrawn step (withdraw_weak, recheck_drift) as reported.
   DiagWithdrawn withdrawn_report(const Withdrawn& w, WithdrawnWhy why) const {
     const Term t = w.step.term >= 0 ? P_.term(w.step.term) : Term{noise_effect_spec().id, -1 - w.step.term, -1};
-    return {t, w.step.dchi2, w.cost, why};
+    DiagWithdrawn r;
+    r.term = t;
+    r.delta_chi2_when_accepted = w.step.dchi2;
+    r.delta_chi2_final = w.cost;
+    r.why = why;
+    return r;
   }
 
   static std::vector<const Dataset*> ptrs(const std::vector<Dataset>& v) {

@@ -62,6 +62,8 @@ u = [x for x in d["unexplained"] if x["sensor"] == "gyro" and x["axis"] == "x"]
 assert u, (kind, "gyro x not reported as unexplained", d["unexplained"], d["findings"])
 # A catalogue term may be tried on the way, but no finding may claim gyro x with a value and σ.
 assert not gx, (kind, gx)
+if kind == "step":  # not periodic in time: no periodic component may be claimed
+    assert "periodic" not in u[0], ("step", u[0].get("periodic"))
 if kind == "periodic":  # where: the oscillation's frequency within 2 %, its amplitude within 20 %
     p = u[0].get("periodic")
     assert p and abs(p["hz"] - 0.37) < 0.02 * 0.37 and abs(p["amplitude"] - 4e-4) < 0.2 * 4e-4, ("periodic", p)
