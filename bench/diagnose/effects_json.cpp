@@ -424,6 +424,7 @@ const char* drive_text(const EffectSpec& x) {
     case DriveDiagnosis::always: return "yes";
     case DriveDiagnosis::with_temperature: return "with a temperature column";
     case DriveDiagnosis::fixed_scale: return "with given coefficients (M fixed)";
+    case DriveDiagnosis::alternative_only: return "no; weighed as an alternative to what is named";
     case DriveDiagnosis::never: return x.shape == EffectShape::noise ? "yes (noise model)" : "no";
   }
   return "";

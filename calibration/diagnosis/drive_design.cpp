@@ -20,6 +20,7 @@ bool drive_term(const Term& t, bool temperature, bool fixed_scale) {
     case DriveDiagnosis::always: return true;
     case DriveDiagnosis::with_temperature: return temperature;
     case DriveDiagnosis::fixed_scale: return fixed_scale;  // M free: it is M_ii
+    case DriveDiagnosis::alternative_only: return true;     // a column, never accepted (drive_diagnose)
     case DriveDiagnosis::never: return false;
   }
   return false;

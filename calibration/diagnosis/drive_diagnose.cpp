@@ -227,6 +227,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   policy.skip_untouched = true;
   const diag::DriftPrior prior_drift = diag::drift_prior(opt.noise);
   GreedySearch<DriveProblem> search(problem, policy, prior_drift.sigma, prior_drift.tau);
+  for (std::size_t t = 0; t < D.terms.size(); ++t)  // columns for the alternatives only
+    if (effect_spec(D.terms[t].effect).drive == DriveDiagnosis::alternative_only) search.banned.push_back(static_cast<int>(t));
   const std::vector<Dataset>& all = search.all;
 
   // Before: the base model (bias, and M or the mounting) refitted, no catalogue term.

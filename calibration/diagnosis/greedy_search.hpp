@@ -289,6 +289,7 @@ class GreedySearch {
     GreedyStep step = it != steps.end() ? *it : GreedyStep{};
     step.term = -1 - triad;
     GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
+    alt.banned = banned;
     for (int k = 0; k < 2; ++k) alt.drift_done_[k] = k == triad || (drift_done_[k] && ds[k] == prior_ds_[k]);
     alt.run();
     const double change = alt.total_score() - total_score();
@@ -310,6 +311,7 @@ class GreedySearch {
       if (it == steps.end()) continue;
       const GreedyStep step = *it;
       GreedySearch alt(P_, pol_, prior_ds_, prior_tau_);
+      alt.banned = banned;
       for (int k = 0; k < 2; ++k) alt.drift_done_[k] = k == triad || given_up[k];
       alt.run();
       const double change = alt.total_score() - total_score();

@@ -63,6 +63,10 @@ enum class DriveDiagnosis {
   always,
   with_temperature,  // only when the recording has a temperature column
   fixed_scale,       // only where M is not refitted (a drive with given coefficients)
+  // Not a drive candidate (a car does not excite it at a plausible size, or only in a shape another
+  // term has), but weighed as an alternative to what a drive names: a finding it explains as well
+  // is not established ("not told apart from …").
+  alternative_only,
   never,
 };
 

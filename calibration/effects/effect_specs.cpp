@@ -32,7 +32,7 @@ EffectSpec scale_polynomial_row(EffectId id, const char* key, double (*out)(doub
   s.bench_candidate = true;
   s.condition = "rate";
   s.shows_on = -1;
-  s.drive = DriveDiagnosis::never;
+  s.drive = DriveDiagnosis::alternative_only;  // x² beside the asymmetry's |x|, x³ beside x·|x|
   s.drive_prior[0] = s.drive_prior[1] = 1e-2;
   s.own_input = true;
   s.curvature = true;
@@ -219,8 +219,8 @@ std::vector<EffectSpec> make_effect_specs() {
   s.excited_by = "positions with two or three specific-force components at once and the vertical axis both up and down (diagnose.toml's tilts)";
   s.condition = "f";
   s.shows_on = -1;
-  // On a car f_z ≈ g: f_x·f_z is g-sensitivity to f_x again; not a drive candidate.
-  s.drive = DriveDiagnosis::never;
+  // On a car f_z ≈ g: f_x·f_z is g-sensitivity to f_x again; not a candidate, an alternative.
+  s.drive = DriveDiagnosis::alternative_only;
   s.drive_prior[0] = s.drive_prior[1] = 1e-4;
   s.compensation = DriveCompensation::output;
   s.bench_sentence = "{who} error grows with products of specific-force components: g²-sensitivity (anisoelastic), ";
@@ -410,7 +410,8 @@ std::vector<EffectSpec> make_effect_specs() {
   s.excited_by = "accelerometers: positions with two specific-force components at once (tilts); gyros: rotation about a direction between two IMU axes, with rotations about each axis alone to separate K2 and the cross-axis terms (bench/plans/wedge.toml, a 45° wedge fixture)";
   s.condition = "rate";
   s.shows_on = -1;
-  s.drive = DriveDiagnosis::never;  // a car's inputs rarely have two large components at once
+  // A car's inputs rarely have two large components at once, and f_x·f_z ≈ g·f_x is a scale error.
+  s.drive = DriveDiagnosis::alternative_only;
   s.drive_prior[0] = s.drive_prior[1] = 1e-2;
   s.compensation = DriveCompensation::output;
   s.bench_sentence = "{who} error grows with the product of its input and another axis's input: cross-coupling, ";
@@ -562,7 +563,7 @@ std::vector<EffectSpec> make_effect_specs() {
   s.excited_by = "rate steps about each of the other IMU axes (mounts x, y and z)";
   s.condition = "rate";
   s.shows_on = -1;
-  s.drive = DriveDiagnosis::never;  // a car turns too slowly for millimetre offsets
+  s.drive = DriveDiagnosis::alternative_only;  // a car turns too slowly for millimetre offsets; a lever arm's shape
   s.drive_prior[0] = s.drive_prior[1] = 0.05;
   s.own_input = false;
   s.compensation = DriveCompensation::output;
@@ -616,7 +617,8 @@ std::vector<EffectSpec> make_effect_specs() {
       "the third axis (ω̇×r_i; the bench diagnosis uses constant-rate steps only)";
   s.condition = "rate";
   s.shows_on = -1;
-  s.drive = DriveDiagnosis::never;  // a car's ω̇ and ω² reach millimetre offsets far below the noise
+  // A car's ω̇ and ω² reach millimetre offsets far below the noise; a lever arm's shape.
+  s.drive = DriveDiagnosis::alternative_only;
   s.drive_prior[0] = s.drive_prior[1] = 0.05;
   s.own_input = false;
   s.compensation = DriveCompensation::output;

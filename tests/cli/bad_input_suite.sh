@@ -77,7 +77,10 @@ cp d.db d.db.orig
 
 # Hostile files.
 : > empty.txt
-head -c 4096 /dev/urandom > garbage.bin
+# Random bytes behind a first byte that no number starts with: the first field is never numeric
+# (with /dev/urandom alone, one run in a few hundred began with a digit and a blank).
+printf '\xa7' > garbage.bin
+head -c 4095 /dev/urandom >> garbage.bin
 printf '\x00\x01\x02binary\xff\xfe\n' >> garbage.bin
 echo '{"format": "calbench-coefficients/1", "device": {"model": "ADIS16488A", "serial": "X"}}' > coeffs-like.json
 printf '[plan]\nname = "x"\n' > plan.toml

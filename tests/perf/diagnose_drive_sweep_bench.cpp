@@ -23,9 +23,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <future>
 #include <map>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "bench/diagnose/drive_run.hpp"
@@ -44,8 +46,12 @@ int env_int(const char* name, int def) {
   return e ? std::max(1, std::atoi(e)) : def;
 }
 
+// The route of the sweep: the 3.6-minute test route, or DIAGNOSE_DRIVE_ROUTE (a path relative to the
+// source tree, e.g. bench/routes/default.toml for the confusion table on the default route).
 const std::string& route() {
-  static const std::string r = std::string(CALBENCH_SOURCE_DIR) + "/tests/data/drive_diag_route.toml";
+  static const std::string r = std::string(CALBENCH_SOURCE_DIR) + "/" +
+                               (std::getenv("DIAGNOSE_DRIVE_ROUTE") ? std::getenv("DIAGNOSE_DRIVE_ROUTE")
+                                                                    : "tests/data/drive_diag_route.toml");
   return r;
 }
 
@@ -130,6 +136,28 @@ const std::vector<Spec>& specs() {
        true, "ppm", 1e6},
       {"scale_factor/accel", "scale_factor:sensor=accel,axis={a},value={v}", EffectId::scale_factor, 1,
        {P{0, 0}, P{1, 1}}, '0', true, "ppm", 1e6},
+      // Catalogue terms a drive does not excite (not candidates there; docs/effect-catalogue.md): in
+      // the confusion table only, to show that injected on a drive they are never named as another.
+      {"scale_k2/gyro", "scale_k2:sensor=gyro,axis={a},value={v}", EffectId::scale_k2, 0, {P{2, 2}}, '0', true,
+       "per_rad_s", 1},
+      {"scale_k2/accel", "scale_k2:sensor=accel,axis={a},value={v}", EffectId::scale_k2, 1, {P{0, 0}, P{1, 1}}, '0',
+       true, "per_m_s2", 1},
+      {"scale_k3/gyro", "scale_k3:sensor=gyro,axis={a},value={v}", EffectId::scale_k3, 0, {P{2, 2}}, '0', true,
+       "per_rad_s2", 1},
+      {"scale_k3/accel", "scale_k3:sensor=accel,axis={a},value={v}", EffectId::scale_k3, 1, {P{0, 0}, P{1, 1}}, '0',
+       true, "per_m_s2_2", 1},
+      {"g2_sensitivity", "g2_sensitivity:axis={a},term=xy,value={v}", EffectId::g2_sensitivity, 0, {P{2, 2}, P{0, 0}},
+       '0', true, "rad_s_per_m2_s4", 1},
+      {"cross_coupling/gyro", "cross_coupling:sensor=gyro,axis={a},with={f},value={v}", EffectId::cross_coupling, 0,
+       {P{2, 0}, P{0, 2}}, '0', true, "per_rad_s", 1},
+      {"cross_coupling/accel", "cross_coupling:sensor=accel,axis={a},with={f},value={v}", EffectId::cross_coupling, 1,
+       {P{0, 1}, P{1, 0}}, '0', true, "per_m_s2", 1},
+      {"cross_axis_rate", "cross_axis_rate:axis={a},with={f},value={v}", EffectId::cross_axis_rate, 0,
+       {P{0, 2}, P{1, 2}}, '0', true, "per_rad_s", 1},
+      {"size_effect", "size_effect:axis={a},value={v}", EffectId::size_effect, 1, {P{0, 0}, P{1, 1}}, '0', true, "mm",
+       1e3},
+      {"proof_mass_offset", "proof_mass_offset:axis={a},with={f},value={v}", EffectId::proof_mass_offset, 1,
+       {P{0, 1}, P{1, 0}}, '0', true, "mm", 1e3},
   };
   return s;
 }
@@ -145,6 +173,7 @@ struct Row {
   const char* spec;
   std::vector<double> magnitudes;
   bool coeffs_only = false;  // a candidate only when the coefficients are given (DIAGNOSE_DRIVE_COEFFS=bench)
+  bool confusion_only = false;  // not a drive candidate: a row of the confusion table, not of the sweep
 };
 const std::vector<Row>& rows() {
   const double gs = 5.1 * M_PI / 180 / 3600;  // data-sheet gyro drift σ, rad/s
@@ -162,6 +191,18 @@ const std::vector<Row>& rows() {
       // Limits seen in single runs: gyro z 3e-4 found, Δχ² ≈ 120; accel x 1e-3 Δχ² ≈ 440, y ≈ 100.
       {"scale_factor/gyro", {3e-4, 5e-4, 1e-3}, true},
       {"scale_factor/accel", {5e-4, 1e-3, 2e-3}, true},
+      // The terms a drive does not excite, at 5× the bench sweep's largest magnitude (the offsets:
+      // 10 mm and 2 mm, the most a unit could have).
+      {"scale_k2/gyro", {1e-4}, false, true},
+      {"scale_k2/accel", {3e-4}, false, true},
+      {"scale_k3/gyro", {1e-4}, false, true},
+      {"scale_k3/accel", {8e-5}, false, true},
+      {"g2_sensitivity", {4e-5}, false, true},
+      {"cross_coupling/gyro", {2e-4}, false, true},
+      {"cross_coupling/accel", {4e-4}, false, true},
+      {"cross_axis_rate", {1e-4}, false, true},
+      {"size_effect", {0.01}, false, true},
+      {"proof_mass_offset", {0.002}, false, true},
   };
   return r;
 }
@@ -508,22 +549,32 @@ void BM_DiagnoseDrive_Confusion(benchmark::State& state) {
       if (row.coeffs_only && !with_bench_coeffs()) continue;
       const Component c{&spec(row.spec), row.magnitudes.back()};
       table.add_row(std::string(row.spec) + " " + fmt(row.magnitudes.back() * c.spec->label_scale, "%g") + " " + c.spec->unit);
-      for (int k = 0; k < seeds; ++k) {
+      // The seeds of a row run side by side (one per core; each run is independent), counted in order.
+      auto one = [&](int k) {
         const Expected x = expect(c, k);
         EffectTerms fx;
         apply_inject_option(x.inject, fx);
         const std::uint64_t seed = 4000 + 37 * k;
         const DriveDiagInput in = simulate_drive_diag_input(route(), seed, fx);
         const std::optional<DriveCoeffs> coeffs = bench_coeffs(seed, fx);
-        const DriveDiagRun run = run_drive_diagnosis(in, coeffs ? &*coeffs : nullptr);
-        const auto& R = run.result.core;
-        table.add_run(R.findings, x.effect);
-        table.count(0, R.findings.empty());
-        table.count(1, !R.unexplained.empty());
+        return std::make_pair(x.effect, run_drive_diagnosis(in, coeffs ? &*coeffs : nullptr).result.core);
+      };
+      const int cores = std::max(1u, std::thread::hardware_concurrency());
+      for (int k0 = 0; k0 < seeds; k0 += cores) {
+        std::vector<std::future<std::pair<EffectId, DiagnoseResult>>> runs;
+        for (int k = k0; k < std::min(seeds, k0 + cores); ++k) runs.push_back(std::async(std::launch::async, one, k));
+        for (auto& f : runs) {
+          const auto [truth, R] = f.get();
+          table.add_run(R.findings, truth);
+          table.count(0, R.findings.empty());
+          table.count(1, !R.unexplained.empty());
+        }
       }
     }
-    ConfusionTable::emit(table.markdown(std::string("Default route (`tests/data/drive_diag_route.toml`") +
-                                        (with_bench_coeffs() ? ", with the factory coefficients" : "") + "), " +
+    const char* given = std::getenv("DIAGNOSE_DRIVE_ROUTE");
+    const std::string name = given ? std::string("Drive route (`") + given + "`"
+                                   : std::string("Drive test route (`tests/data/drive_diag_route.toml`");
+    ConfusionTable::emit(table.markdown(name + (with_bench_coeffs() ? ", with the factory coefficients" : "") + "), " +
                                         std::to_string(seeds) + " seeds per row"));
     state.counters["seeds"] = seeds;
   }
@@ -540,7 +591,7 @@ void register_sweeps() {
         ->Iterations(1);
   };
   for (std::size_t i = 0; i < rows().size(); ++i) {
-    if (rows()[i].coeffs_only && !with_bench_coeffs()) continue;
+    if ((rows()[i].coeffs_only && !with_bench_coeffs()) || rows()[i].confusion_only) continue;
     const Spec& s = spec(rows()[i].spec);
     for (double m : rows()[i].magnitudes)
       add(std::string(s.name) + "/" + fmt(m * s.label_scale, "%.4g") + s.unit, {{&s, m}}, 1000 + 50 * i);

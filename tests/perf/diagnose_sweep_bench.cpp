@@ -15,9 +15,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "bench/diagnose/diagnose_run.hpp"
@@ -435,15 +437,25 @@ void BM_Diagnose_Confusion(benchmark::State& state) {
         if (row.plan == Plan::thermal || row.plan == Plan::updown) continue;
         const double v = row.magnitudes.back();
         table.add_row(row.name + magnitude_label(v) + row.suffix);
-        for (int k = 0; k < seeds; ++k) {
-          const Expect x = row.make(k, v * row.unit);
-          const DiagRun r = run(plan, x.fx, 700 + 31 * k);
-          table.add_run(r.result.findings, x.effect);
-          table.count(0, r.result.findings.empty());
-          table.count(1, !r.result.unexplained.empty());
-          bool not_excited = false;
-          for (const auto& n : r.result.not_excited) not_excited = not_excited || (n.term.effect == x.effect && n.term.sensor == x.sensor);
-          table.count(2, not_excited);
+        // The seeds of a row run side by side (one per core; each run is independent), counted in order.
+        const int cores = std::max(1u, std::thread::hardware_concurrency());
+        for (int k0 = 0; k0 < seeds; k0 += cores) {
+          std::vector<std::future<std::pair<Expect, DiagRun>>> runs;
+          for (int k = k0; k < std::min(seeds, k0 + cores); ++k)
+            runs.push_back(std::async(std::launch::async, [&, k] {
+              const Expect x = row.make(k, v * row.unit);
+              return std::make_pair(x, run(plan, x.fx, 700 + 31 * k));
+            }));
+          for (auto& f : runs) {
+            const auto [x, r] = f.get();
+            table.add_run(r.result.findings, x.effect);
+            table.count(0, r.result.findings.empty());
+            table.count(1, !r.result.unexplained.empty());
+            bool not_excited = false;
+            for (const auto& n : r.result.not_excited)
+              not_excited = not_excited || (n.term.effect == x.effect && n.term.sensor == x.sensor);
+            table.count(2, not_excited);
+          }
         }
       }
       md += table.markdown(std::string(which == Plan::factory    ? "Factory plan (`bench/plans/factory.toml`)"
