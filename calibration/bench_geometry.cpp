@@ -98,6 +98,21 @@ BenchKinematics bench_kinematics(const SiteEarth& earth, const AxisState& outer,
   const Vec3 w_lb_l = outer.rate * Vec3::UnitX() + Co * (inner.rate * Vec3::UnitZ());
   k.w_ib_b = k.C_b_l.transpose() * (w_lb_l + earth.w_ie_ned);
   k.f_b = k.C_b_l.transpose() * (-earth.g_ned);
+  // d/dt (C_b_lᵀ·w_ib_l) = C_b_lᵀ·ẇ_lb_l − w_lb_b × w_ib_b, with ẇ_lb_l from both axes' accelerations and
+  // the outer gimbal carrying the inner axis round (the local-level frame itself is taken as fixed).
+  const Vec3 dw_lb_l = outer.accel * Vec3::UnitX() + Co * (inner.accel * Vec3::UnitZ()) +
+                       (outer.rate * Vec3::UnitX()).cross(Co * (inner.rate * Vec3::UnitZ()));
+  k.dw_ib_b = k.C_b_l.transpose() * dw_lb_l - (k.C_b_l.transpose() * w_lb_l).cross(k.w_ib_b);
+  return k;
+}
+
+BenchKinematics slot_kinematics(const BenchKinematics& c, const SlotPose& slot) {
+  BenchKinematics k;
+  const Vec3& r = slot.r_f;
+  k.C_b_l = c.C_b_l * slot.C_f_s;
+  k.w_ib_b = slot.C_f_s.transpose() * c.w_ib_b;
+  k.dw_ib_b = slot.C_f_s.transpose() * c.dw_ib_b;
+  k.f_b = slot.C_f_s.transpose() * (c.f_b + c.dw_ib_b.cross(r) + c.w_ib_b.cross(c.w_ib_b.cross(r)));
   return k;
 }
 

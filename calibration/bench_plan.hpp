@@ -66,6 +66,7 @@ struct BenchPlan {
   TableSpec table;
   std::vector<PlanStep> steps;
   TemperatureProfile temperature;
+  std::string fixture_file;  // [plan] fixture: the station's multi-unit fixture (path; empty: one unit)
 };
 
 // The fixtures: IMU axes x, y, z (cube faces) and the face diagonals xy, yz, zx (45° wedge).

@@ -70,6 +70,8 @@ SyncOutcome sync_journal(Store& journal, const std::string& central, const OpenO
     in.started_at = run->started_at;
     in.ended_at = run->ended_at;
     in.outcome = run->outcome;
+    in.slot = run->slot;
+    in.table_run = run->table_run;
     in.qc = journal.qc_of_bench_run(run->id);
     in.uid = it.uid;
     std::string detail;

@@ -169,6 +169,13 @@ CREATE TABLE forwarded (
   at         TEXT NOT NULL
 );
 )SQL",
+      // ---- 5: several units per table cycle (issue 21): the unit's slot on the fixture, and the id
+      //         of the table run that ties the units of one cycle ----
+      R"SQL(
+ALTER TABLE bench_runs ADD COLUMN slot TEXT NOT NULL DEFAULT '';
+ALTER TABLE bench_runs ADD COLUMN table_run TEXT NOT NULL DEFAULT '';
+CREATE INDEX bench_runs_table_run ON bench_runs(table_run);
+)SQL",
   };
   return m;
 }

@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 4;
+inline constexpr int kSchemaVersion = 5;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -101,11 +101,14 @@ struct BenchRunInput {
   // is not stored again. Empty: a new random one. The run's set gets uid + "/set".
   std::string uid;
   std::vector<QcResult> qc;     // bench residuals and checks
+  std::string slot;             // the unit's slot on a multi-unit fixture (empty: one unit)
+  std::string table_run;        // the table cycle's id, shared by the units run together (may be empty)
 };
 
 struct BenchRun {
   std::int64_t id = 0, device_id = 0;
   std::string station, plan, recording_path, recording_sha256, started_at, ended_at, outcome, created_at;
+  std::string slot, table_run;
 };
 
 struct InMotionRun {

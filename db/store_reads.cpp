@@ -120,11 +120,12 @@ std::optional<CoefficientSetRecord> Store::latest_set(std::int64_t device_id, st
 std::optional<BenchRun> Store::bench_run(std::int64_t id) {
   auto st = conn_->prepare(
       "SELECT r.id, r.device_id, COALESCE(s.name, ''), r.plan, r.recording_path, r.recording_sha256, r.started_at, "
-      "r.ended_at, r.outcome, r.created_at FROM bench_runs r LEFT JOIN stations s ON s.id = r.station_id WHERE r.id = ?");
+      "r.ended_at, r.outcome, r.created_at, r.slot, r.table_run FROM bench_runs r LEFT JOIN stations s ON "
+      "s.id = r.station_id WHERE r.id = ?");
   st.bind(1, id);
   if (!st.step()) return std::nullopt;
   return BenchRun{st.int64(0), st.int64(1), st.text(2), st.text(3), st.text(4), st.text(5),
-                  st.text(6), st.text(7), st.text(8), st.text(9)};
+                  st.text(6), st.text(7), st.text(8), st.text(9), st.text(10), st.text(11)};
 }
 
 std::optional<InMotionRun> Store::inmotion_run(std::int64_t id) {

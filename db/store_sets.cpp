@@ -157,7 +157,8 @@ void Store::insert_qc_locked(const std::vector<QcResult>& qc, std::optional<std:
 static void check_bench_run(const BenchRunInput& run) {
   if (run.outcome != "pass" && run.outcome != "fail" && run.outcome != "aborted")
     throw arg_error("outcome", "expected pass, fail or aborted, got '" + run.outcome + "'");
-  for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at})
+  for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at, &run.slot,
+                        &run.table_run})
     check_text(*f, "bench_run", false);
 }
 
@@ -179,10 +180,11 @@ static std::int64_t insert_bench_run_locked(Store& store, Connection& c, std::in
   if (!run.station.empty()) station = ensure_station_locked(store, c, run.station, "");
   auto st = c.prepare(std::string(
       "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
-      "outcome, created_at, uid) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + c.now_sql() + ", ?) RETURNING id");
+      "outcome, created_at, uid, slot, table_run) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + c.now_sql() +
+      ", ?, ?, ?) RETURNING id");
   st.bind(1, device_id).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
       .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome)
-      .bind(9, run.uid);
+      .bind(9, run.uid).bind(10, run.slot).bind(11, run.table_run);
   st.step();
   const std::int64_t id = st.int64(0);
   store.audit_locked("bench_run", id, "create", detail);

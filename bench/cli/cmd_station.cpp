@@ -1,4 +1,4 @@
-// calbench station run --plan PLAN [--table URI] [--imu URI] [--emulated] [--db PATH] [--out DIR] [--json]
+// calbench station run --plan PLAN [--table URI] [--imu URI | --fixture FILE | --emulated --units N] [--emulated] [--db PATH] [--out DIR] [--json]
 #include <unistd.h>
 
 #include <atomic>
@@ -40,29 +40,41 @@ std::uint16_t parse_u16(const std::string& v, const std::string& key) {
   }
 }
 
-void apply_inject(const std::string& kv, station::Injections& in) {
-  const auto eq = kv.find('=');
-  if (eq == std::string::npos) throw InputError("--inject", 0, kv, "expected KEY=VALUE");
-  const std::string k = kv.substr(0, eq), v = kv.substr(eq + 1);
+// [SLOT:]KEY=VALUE: a fault of every emulated unit, or of one slot of the fixture.
+void apply_inject(const std::string& spec, station::Injections& in) {
+  const auto eq = spec.find('=');
+  if (eq == std::string::npos) throw InputError("--inject", 0, spec, "expected [SLOT:]KEY=VALUE");
+  const auto colon = spec.substr(0, eq).find(':');
+  const std::string slot = colon == std::string::npos ? "" : spec.substr(0, colon);
+  const std::string kv = colon == std::string::npos ? spec : spec.substr(colon + 1);
+  const std::string k = kv.substr(0, kv.find('=')), v = kv.substr(kv.find('=') + 1);
+  if (colon != std::string::npos && slot.empty()) throw InputError("--inject", 0, spec, "empty slot name before ':'");
+  station::ImuInjections& imu = slot.empty() ? in.imu : in.slot[slot];
+  auto seconds = [&] {
+    double x = 0;
+    const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
+    if (r.ec != std::errc() || r.ptr != v.data() + v.size() || !std::isfinite(x) || x < 0)
+      throw InputError("--inject", 0, k, "expected a finite time >= 0 s, got '" + v + "'");
+    return x;
+  };
   try {
     // Whole decimal numbers in range: "nan", "-5" or "3abc" were taken and the fault silently never came.
     if (k == "table-kill-at") {
-      double x = 0;
-      const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
-      if (r.ec != std::errc() || r.ptr != v.data() + v.size() || !std::isfinite(x) || x < 0)
-        throw InputError("--inject", 0, k, "expected a finite time >= 0 s, got '" + v + "'");
-      in.table_kill_at_s = x;
-    } else if (k == "imu-prod-id") in.imu_prod_id = parse_u16(v, k);
-    else if (k == "imu-flags") in.imu_sys_e_flag = parse_u16(v, k);
+      if (!slot.empty()) throw InputError("--inject", 0, k, "a fault of the table, not of one slot ('" + slot + ":')");
+      in.table_kill_at_s = seconds();
+    } else if (k == "imu-prod-id") imu.prod_id = parse_u16(v, k);
+    else if (k == "imu-flags") imu.sys_e_flag = parse_u16(v, k);
+    else if (k == "imu-flags-from") imu.flags_from_s = seconds();
     else if (k == "imu-skip-every") {
       int n = 0;
       const auto r = std::from_chars(v.data(), v.data() + v.size(), n);
       if (r.ec != std::errc() || r.ptr != v.data() + v.size() || n < 1)
         throw InputError("--inject", 0, k, "expected a whole number >= 1, got '" + v + "'");
-      in.imu_skip_every = n;
+      imu.skip_every = n;
     }
-    else if (k == "imu-self-test") in.imu_self_test_diag = parse_u16(v, k);
-    else throw InputError("--inject", 0, k, "unknown; one of table-kill-at, imu-prod-id, imu-flags, imu-skip-every, imu-self-test");
+    else if (k == "imu-self-test") imu.self_test_diag = parse_u16(v, k);
+    else throw InputError("--inject", 0, k, "unknown; one of table-kill-at, imu-prod-id, imu-flags, imu-flags-from, "
+                                            "imu-skip-every, imu-self-test");
   } catch (const InputError&) {
     throw;
   } catch (...) {
@@ -70,14 +82,31 @@ void apply_inject(const std::string& kv, station::Injections& in) {
   }
 }
 
+// A rerun must not silently replace an earlier run's recording and coefficients (one unit: in --out;
+// a fixture: in --out/SLOT).
+bool holds_run(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  auto run_in = [](const fs::path& d) { return fs::exists(d / "COEFFS.json") || fs::exists(d / "recording" / "meta.json"); };
+  if (run_in(dir)) return true;
+  std::error_code ec;
+  if (fs::is_directory(dir, ec))
+    for (const auto& e : fs::directory_iterator(dir, ec))
+      if (e.is_directory(ec) && run_in(e.path())) return true;
+  return false;
+}
+
 void run_station(StationArgs& a) {
   a.o.plan_file = a.plan;
   a.o.out_dir = a.out;
   // A rerun must not silently replace an earlier run's recording and coefficients.
-  if (!a.force && (std::filesystem::exists(a.o.out_dir / "COEFFS.json") || std::filesystem::exists(a.o.out_dir / "recording" / "meta.json")))
+  if (!a.force && holds_run(a.o.out_dir))
     throw InputError(a.out, 0, "", "already holds a station run (recording/, COEFFS.json): give another --out, or --force to replace it");
   for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
+  if (a.o.units > 0 && !a.o.emulated)
+    throw InputError("--units", 0, "", "an emulated fixture needs --emulated (a real fixture is a --fixture file)");
+  if (a.o.units > 0 && !a.o.fixture_file.empty())
+    throw InputError("--units", 0, "", "either --units (emulated units) or --fixture FILE, not both");
   // A bad operator name is bad input, refused before anything moves.
   (void)db::Actor::from_environment(a.o.operator_name);
   if (a.o.emulated && !a.o.imu_uri.empty())  // was silently ignored: the emulated IMU ran instead
@@ -120,7 +149,15 @@ const bool registered = add_command(20, [](CLI::App& app) {
   auto* run = st->add_subcommand("run", "Run a plan: identify, self-test, command/settle/record/check each step, fit, store");
   run->add_option("--plan", a->plan, "bench plan (TOML), e.g. bench/plans/factory.toml")->required()->check(CLI::ExistingFile);
   run->add_option("--table", a->o.table_uri, "modbus-tcp://HOST:PORT[?order=abcd|cdab] or modbus-rtu:/dev/ttyX?baud=...");
-  run->add_option("--imu", a->o.imu_uri, "ft232h[:SERIAL] or mcp2210[:SERIAL]");
+  run->add_option("--imu", a->o.imu_uri, "one unit: ft232h[:SERIAL] or mcp2210[:SERIAL][#csN]");
+  run->add_option("--fixture", a->o.fixture_file,
+                  "several units: a fixture file (TOML; slots with IMU URIs and mountings, docs/devices.md "
+                  "\"Fixtures\"); default: the plan's [plan] fixture, else one unit")
+      ->check(CLI::ExistingFile);
+  run->add_option("--units", a->o.units,
+                  "with --emulated: a fixture of N emulated units (different truths, 80 mm round the centre; "
+                  "results in --out/1 .. --out/N)")
+      ->check(whole_number(1, 16));
   run->add_flag("--emulated", a->o.emulated,
                 "in-process table emulator (real Modbus TCP on an ephemeral loopback port) and IMU emulator, "
                 "emulated clock faster than real time");
@@ -129,7 +166,9 @@ const bool registered = add_command(20, [](CLI::App& app) {
                   "postgresql:// URI (central store; written to --journal first, forwarded when the server answers)");
   run->add_option("--journal", a->o.journal,
                   "with a PostgreSQL --db: the station's local journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
-  run->add_option("--out", a->out, "output folder: recording/, COEFFS.json (an existing run there is refused without --force)")
+  run->add_option("--out", a->out,
+                  "output folder: recording/, COEFFS.json (a fixture: one folder per slot); an existing run there is "
+                  "refused without --force")
       ->capture_default_str();
   run->add_flag("--force", a->force, "replace an earlier run in --out");
   add_operator_option(run, a->o.operator_name,
@@ -141,7 +180,8 @@ const bool registered = add_command(20, [](CLI::App& app) {
       ->capture_default_str()
       ->check(whole_number(0, 100));
   run->add_option("--inject", a->inject,
-                  "emulated faults KEY=VALUE: table-kill-at=S (emulated s), imu-prod-id=0x4060, imu-flags=0x0008, "
+                  "emulated faults [SLOT:]KEY=VALUE (SLOT: of that slot only): table-kill-at=S (emulated s), "
+                  "imu-prod-id=0x4060, imu-flags=0x0008, imu-flags-from=S (the flags from emulated time S on), "
                   "imu-skip-every=N, imu-self-test=0x0001");
   run->add_flag("--json", a->json, "print a JSON summary on stdout");
   run->callback([a] { run_station(*a); });

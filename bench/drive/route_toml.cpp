@@ -4,6 +4,7 @@
 #include <random>
 #include <toml++/toml.h>
 
+#include "bench/io/toml_read.hpp"
 #include "bench/io/toml_text.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
@@ -12,46 +13,7 @@
 namespace calbench {
 namespace {
 
-struct Ctx {
-  std::string file;
-  [[noreturn]] void fail(const toml::node* n, const std::string& key, const std::string& msg) const {
-    throw InputError(file, n ? n->source().begin.line : 0, key, msg);
-  }
-  double num(const toml::table& t, const std::string& prefix, const char* key, std::optional<double> def, double lo,
-             double hi) const {
-    const toml::node* n = t.get(key);
-    const std::string k = prefix + key;
-    if (!n) {
-      if (def) return *def;
-      fail(&t, k, "missing key");
-    }
-    const auto v = n->value<double>();
-    if (!v) fail(n, k, "expected a number");
-    if (!std::isfinite(*v)) fail(n, k, "NaN or infinity is not allowed");
-    if (*v < lo || *v > hi) fail(n, k, "out of range [" + number_text(lo) + ", " + number_text(hi) + "]");
-    return *v;
-  }
-  Vec3 vec3(const toml::table& t, const std::string& prefix, const char* key, const Vec3& def) const {
-    const toml::node* n = t.get(key);
-    if (!n) return def;
-    const toml::array* a = n->as_array();
-    if (!a || a->size() != 3) fail(n, prefix + key, "expected an array of 3 numbers");
-    Vec3 v;
-    for (std::size_t i = 0; i < 3; ++i) {
-      const auto d = (*a)[i].value<double>();
-      if (!d || !std::isfinite(*d)) fail(n, prefix + key, "expected an array of 3 finite numbers");
-      v(static_cast<int>(i)) = *d;
-    }
-    return v;
-  }
-  void check_keys(const toml::table& t, const std::string& prefix, std::initializer_list<const char*> allowed) const {
-    for (const auto& [k, v] : t) {
-      bool ok = false;
-      for (const char* a : allowed) ok = ok || k.str() == a;
-      if (!ok) fail(&v, prefix + std::string(k.str()), "unknown key");
-    }
-  }
-};
+using Ctx = TomlReader;
 
 }  // namespace
 

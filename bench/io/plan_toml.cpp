@@ -3,6 +3,7 @@
 #include <cmath>
 #include <toml++/toml.h>
 
+#include "bench/io/toml_read.hpp"
 #include "bench/io/toml_text.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
@@ -11,42 +12,7 @@
 namespace calbench {
 namespace {
 
-struct Ctx {
-  std::string file;
-  [[noreturn]] void fail(const toml::node* n, const std::string& key, const std::string& msg) const {
-    const std::size_t line = n ? n->source().begin.line : 0;
-    throw InputError(file, line, key, msg);
-  }
-  [[noreturn]] void fail(const toml::table& t, const std::string& key, const std::string& msg) const {
-    throw InputError(file, t.source().begin.line, key, msg);
-  }
-
-  double num(const toml::table& t, const std::string& prefix, const char* key, std::optional<double> def,
-             double lo, double hi) const {
-    const toml::node* n = t.get(key);
-    const std::string k = prefix + key;
-    if (!n) {
-      if (def) return *def;
-      fail(t, k, "missing key");
-    }
-    std::optional<double> v;
-    if (auto d = n->value<double>()) v = *d;
-    if (!v) fail(n, k, "expected a number");
-    if (!std::isfinite(*v)) fail(n, k, "NaN or infinity is not allowed");
-    if (*v < lo || *v > hi) fail(n, k, "out of range [" + number_text(lo) + ", " + number_text(hi) + "]");
-    return *v;
-  }
-
-  std::string str(const toml::table& t, const std::string& prefix, const char* key, std::optional<std::string> def) const {
-    const toml::node* n = t.get(key);
-    if (!n) {
-      if (def) return *def;
-      fail(t, prefix + key, "missing key");
-    }
-    if (auto s = n->value<std::string>()) return *s;
-    fail(n, prefix + key, "expected a string");
-  }
-
+struct Ctx : TomlReader {
   int axis(const toml::table& t, const std::string& prefix, const char* key, int def) const {
     const toml::node* n = t.get(key);
     if (!n) return def;
@@ -58,19 +24,11 @@ struct Ctx {
   }
 };
 
-void check_keys(const Ctx& c, const toml::table& t, const std::string& prefix, std::initializer_list<const char*> allowed) {
-  for (const auto& [k, v] : t) {
-    bool ok = false;
-    for (const char* a : allowed) ok = ok || k.str() == a;
-    if (!ok) c.fail(&v, prefix + std::string(k.str()), "unknown key (typo?)");
-  }
-}
-
 }  // namespace
 
 BenchPlan load_plan(const std::filesystem::path& file) {
   using namespace units;
-  Ctx c{file.string()};
+  Ctx c{{file.string()}};
   toml::table root;
   try {
     root = toml::parse(read_toml_text(file), file.string());
@@ -78,20 +36,28 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     if (!std::filesystem::exists(file)) throw InputError(c.file, 0, "", "cannot open: no such file");
     throw InputError(c.file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
   }
-  check_keys(c, root, "", {"plan", "site", "table", "step", "temperature"});
+  c.check_keys(root, "", {"plan", "site", "table", "step", "temperature"});
   BenchPlan p;
   int repeat = 1;
   if (const auto* t = root["plan"].as_table()) {
-    check_keys(c, *t, "plan.", {"name", "description", "repeat"});
+    c.check_keys(*t, "plan.", {"name", "description", "repeat", "fixture"});
     p.name = c.str(*t, "plan.", "name", std::string(file.stem()));
     p.description = c.str(*t, "plan.", "description", std::string());
+    // A multi-unit fixture (bench/fixtures/*.toml), relative to the plan's folder; read by the station.
+    if (t->get("fixture")) {
+      const std::filesystem::path f = c.str(*t, "plan.", "fixture", std::nullopt);
+      if (f.empty()) c.fail(t->get("fixture"), "plan.fixture", "expected the path of a fixture file");
+      p.fixture_file = (f.is_absolute() ? f : file.parent_path() / f).lexically_normal().string();
+      if (!std::filesystem::is_regular_file(p.fixture_file))
+        c.fail(t->get("fixture"), "plan.fixture", "no such fixture file: " + p.fixture_file);
+    }
     repeat = static_cast<int>(c.num(*t, "plan.", "repeat", 1.0, 1, 1000));
     if (const toml::node* r = t->get("repeat"); r && !r->is_integer()) c.fail(r, "plan.repeat", "expected an integer");
   } else {
     p.name = file.stem().string();
   }
   if (const auto* t = root["site"].as_table()) {
-    check_keys(c, *t, "site.", {"lat_deg", "lon_deg", "h_m"});
+    c.check_keys(*t, "site.", {"lat_deg", "lon_deg", "h_m"});
     p.site.lat_deg = c.num(*t, "site.", "lat_deg", std::nullopt, -90, 90);
     p.site.lon_deg = c.num(*t, "site.", "lon_deg", std::nullopt, -360, 360);
     p.site.h_m = c.num(*t, "site.", "h_m", 0.0, -500, 10000);
@@ -101,7 +67,7 @@ BenchPlan load_plan(const std::filesystem::path& file) {
   toml::table empty;
   const toml::table* tt = root["table"].as_table();
   const toml::table& t = tt ? *tt : empty;
-  check_keys(c, t, "table.", {"max_rate_dps", "max_accel_dps2", "slew_rate_dps", "settle_s", "remount_s",
+  c.check_keys(t, "table.", {"max_rate_dps", "max_accel_dps2", "slew_rate_dps", "settle_s", "remount_s",
                               "rate_accuracy_ppm", "position_accuracy_arcsec", "axis_wobble_arcsec"});
   p.table.max_rate = c.num(t, "table.", "max_rate_dps", 500.0, 1, 5000) * kDeg;
   p.table.max_accel = c.num(t, "table.", "max_accel_dps2", 200.0, 1, 10000) * kDeg;
@@ -119,7 +85,7 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     const std::string pre = "step[" + std::to_string(i + 1) + "].";
     const toml::table* s = (*steps)[i].as_table();
     if (!s) c.fail(&(*steps)[i], "step[" + std::to_string(i + 1) + "]", "expected a table");
-    check_keys(c, *s, pre, {"kind", "label", "mount", "axis", "outer_deg", "inner_deg", "rpy_deg", "rate_dps", "dwell_s"});
+    c.check_keys(*s, pre, {"kind", "label", "mount", "axis", "outer_deg", "inner_deg", "rpy_deg", "rate_dps", "dwell_s"});
     PlanStep st;
     st.line = static_cast<int>(s->source().begin.line);
     const std::string kind = c.str(*s, pre, "kind", std::nullopt);
@@ -177,7 +143,7 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     const toml::table* tt2 = tn->as_table();
     if (!tt2) c.fail(tn, "temperature", "expected a table [temperature]");
     const toml::table& T = *tt2;
-    check_keys(c, T, "temperature.", {"start_c", "chamber", "lag_s", "self_heating_k", "self_heating_tau_s"});
+    c.check_keys(T, "temperature.", {"start_c", "chamber", "lag_s", "self_heating_k", "self_heating_tau_s"});
     TemperatureProfile& tp = p.temperature;
     tp.set = true;
     const double start = c.num(T, "temperature.", "start_c", 25.0, -60, 150);

@@ -2,11 +2,15 @@
 // and self-test the unit, run each plan step (command, settle, record, check, repeat a failed step),
 // write the recording as it goes, fit, store the coefficients. Safety: any abort commands the table
 // to stop and disable. docs/devices.md "Station".
+// Several units at once (issue 21): a fixture's slots (bench/station/fixture.hpp) run one table cycle
+// together, one recording and one coefficient set each, tied by a run id; a unit that fails is
+// marked failed and the others go on. docs/devices.md "Fixtures".
 #pragma once
 #include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
+#include <map>
 #include <optional>
 #include <string>
 
@@ -16,18 +20,26 @@
 
 namespace calbench::station {
 
-struct Injections {                 // fault injection for the emulated devices (tests, demos)
-  double table_kill_at_s = -1;      // stop the in-process table emulator at this emulated time
-  std::optional<std::uint16_t> imu_prod_id;
-  std::uint16_t imu_sys_e_flag = 0; // from the first recorded step on
-  int imu_skip_every = 0;
-  std::uint16_t imu_self_test_diag = 0;
+struct ImuInjections {               // faults of an emulated IMU
+  std::optional<std::uint16_t> prod_id;
+  std::uint16_t sys_e_flag = 0;      // from the first recorded step on (or from flags_from_s)
+  double flags_from_s = -1;          // ≥ 0: the error flags from this emulated time on
+  int skip_every = 0;
+  std::uint16_t self_test_diag = 0;
+};
+
+struct Injections {                  // fault injection for the emulated devices (tests, demos)
+  double table_kill_at_s = -1;       // stop the in-process table emulator at this emulated time
+  ImuInjections imu;                 // every unit's
+  std::map<std::string, ImuInjections> slot;  // one slot's (by name), instead of `imu`
 };
 
 struct Options {
   std::filesystem::path plan_file;
   std::string table_uri;       // empty with --emulated: in-process emulator on an ephemeral port
   std::string imu_uri;         // ft232h[:serial] | mcp2210[:serial]; empty with --emulated
+  std::filesystem::path fixture_file;  // several units (else the plan's [plan] fixture, else one unit)
+  int units = 0;               // > 0 with --emulated: an emulated fixture of this many units
   bool emulated = false;
   std::filesystem::path out_dir = "station-out";
   std::string db;              // also store run + draft set here (COEFFS.json is always written): a SQLite
@@ -36,7 +48,7 @@ struct Options {
   std::string journal;         // with a PostgreSQL db: the local journal (empty: $CALBENCH_JOURNAL, else
                                // ./calbench-journal.db)
   std::string operator_name;   // who runs the station (recorded; empty: $CALBENCH_OPERATOR, else the OS user)
-  std::uint64_t seed = 1;      // emulated unit
+  std::uint64_t seed = 1;      // emulated unit (slot k of a fixture: seed + k)
   int max_repeats = 2;         // per step
   double heartbeat_s = 0.1;    // bus-clock period of heartbeat + status poll
   bool progress_tty = false;

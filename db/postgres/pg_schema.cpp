@@ -19,6 +19,14 @@ ALTER TABLE coefficient_sets ADD COLUMN uid text UNIQUE;
 -- (coefficient_sets.uid is immutable with the other columns: calbench_set_update compares them all.)
 INSERT INTO schema_version(version) VALUES (4);
 )SQL",
+      // ---- 5: several units per table cycle (issue 21): the unit's slot on the fixture, and the id
+      //         of the table run that ties the units of one cycle ----
+      R"SQL(
+ALTER TABLE bench_runs ADD COLUMN slot text NOT NULL DEFAULT '';
+ALTER TABLE bench_runs ADD COLUMN table_run text NOT NULL DEFAULT '';
+CREATE INDEX bench_runs_table_run ON bench_runs(table_run);
+INSERT INTO schema_version(version) VALUES (5);
+)SQL",
   };
   return m;
 }

@@ -146,6 +146,14 @@ LEFT="st" t station-imu-uri 2 "--imu.*nonsense" "$CALBENCH" station run --plan "
 LEFT="st" t station-db-not-db 2 "not started \(nothing ran\): notdb\.csv: not a calbench database" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db notdb.csv --out st
 LEFT="st" t station-db-missing-folder 2 "not started \(nothing ran\): nowhere/s\.db: cannot write: the folder nowhere does not exist" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --db nowhere/s.db --out st
 t station-out-is-file 2 "not started \(nothing ran\): empty\.txt: is a file, not a folder" "$CALBENCH" station run --emulated --plan "$SRC/tests/data/short_plan.toml" --out empty.txt
+printf '[[slot]]\nname = "a"\nimu = "mcp2210:S1"\n[[slot]]\nname = "a"\nimu = "mcp2210:S2"\n' > fx-dup.toml
+printf '[[slot]]\nname = "a"\nimu = "spi0"\n' > fx-uri.toml
+printf '[[slot]]\nname = "a"\nimu = "ft232h:F1"\n[[slot]]\nname = "b"\nimu = "ft232h://F1"\n' > fx-cs.toml
+LEFT="st" t station-fixture-duplicate-slot 2 "not started \(nothing ran\): fx-dup\.toml:5: 'slot\[2\]\.name': duplicate slot 'a'" "$CALBENCH" station run --emulated --fixture fx-dup.toml --plan "$SRC/tests/data/short_plan.toml" --out st
+LEFT="st" t station-fixture-bad-uri 2 "fx-uri\.toml:3: 'slot\[1\]\.imu': 'spi0': expected ft232h" "$CALBENCH" station run --fixture fx-uri.toml --table modbus-tcp://127.0.0.1:1 --plan "$SRC/tests/data/short_plan.toml" --out st
+LEFT="st" t station-fixture-one-chip-select 2 "fx-cs\.toml:6: 'slot\[2\]\.imu': .*two units on one chip select" "$CALBENCH" station run --fixture fx-cs.toml --table modbus-tcp://127.0.0.1:1 --plan "$SRC/tests/data/short_plan.toml" --out st
+LEFT="st" t station-units-zero 2 "--units: .*'0'" "$CALBENCH" station run --emulated --units 0 --plan "$SRC/tests/data/short_plan.toml" --out st
+LEFT="st" t station-inject-slot-table 2 "--inject: 'table-kill-at': a fault of the table" "$CALBENCH" station run --emulated --units 2 --inject 1:table-kill-at=3 --plan "$SRC/tests/data/short_plan.toml" --out st
 
 # ---------------------------------------------------------------------------------- emulate table
 t emulate-sub-typo 2 "unknown command 'tabel' for 'calbench emulate'; did you mean 'table'\?" "$CALBENCH" emulate tabel

@@ -21,8 +21,8 @@ ADMIN="postgresql:///calbench?host=$T/pg&port=$port&user=calbench_admin"
 p1=$!
 "$CALBENCH" db init --db "$ADMIN" --roles --operator admin > i2.txt 2>&1 || { cat i2.txt; fail "second init"; }
 wait $p1 || { cat i1.txt; fail "first init"; }
-grep -q "schema version 4" i1.txt && grep -q "schema version 4" i2.txt || fail "init output"
-[ "$(admin -d calbench -c "SELECT count(*) FROM schema_version WHERE version = 4")" = 1 ] || fail "migrated twice"
+grep -q "schema version 5" i1.txt && grep -q "schema version 5" i2.txt || fail "init output"
+[ "$(admin -d calbench -c "SELECT count(*) FROM schema_version WHERE version = 5")" = 1 ] || fail "migrated twice"
 [ "$(admin -d calbench -c "SELECT count(*) FROM audit_log WHERE entity = 'schema' AND action = 'migrate'")" = 1 ] || fail "migration audited twice"
 
 export PGPASSFILE="$T/pgpass"
@@ -135,5 +135,11 @@ admin -d old -1 -f "$SRC/db/postgres/schema.sql" > /dev/null
 admin -d old -f "$SRC/db/postgres/roles.sql" > /dev/null
 echo "127.0.0.1:$port:old:station3:${PW[station3]}" >> "$PGPASSFILE"
 set +e; "$CALBENCH" db devices --db "postgresql://station3@127.0.0.1:$port/old" 2> err.txt; rc=$?; set -e
-[ "$rc" = 1 ] && grep -q "schema version 3, this calbench needs 4" err.txt && grep -q "db init" err.txt || { cat err.txt; fail "older schema: exit $rc"; }
+[ "$rc" = 1 ] && grep -q "schema version 3, this calbench needs 5" err.txt && grep -q "db init" err.txt || { cat err.txt; fail "older schema: exit $rc"; }
+# Two units in one table cycle (a fixture): both reach the centre with their slots and one table run.
+"$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --units 2 --seed 40 --db "$ST" --out fx \
+  --json > fx.json 2> fx.txt || { cat fx.txt; fail "fixture station run"; }
+run_id=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["run_id"])' fx.json)
+[ "$(admin -d calbench -c "SELECT string_agg(r.slot || ':' || d.serial, ' ' ORDER BY r.slot) FROM bench_runs r JOIN devices d ON d.id = r.device_id WHERE r.table_run = '$run_id'")" = "1:1040 2:1041" ] \
+  || { admin -d calbench -c "SELECT slot, table_run FROM bench_runs"; fail "the fixture's runs at the centre"; }
 echo "PASS"

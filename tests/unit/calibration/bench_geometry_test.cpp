@@ -68,5 +68,51 @@ TEST(BenchGeometry, TableAnglesSolvedForAnOrientationGiveItBack) {
   EXPECT_FALSE(solve_table_angles(along_north, 3, o, n));
 }
 
+// The angular acceleration of the IMU (both axes accelerating, the outer carrying the inner round) is
+// the time derivative of its angular rate.
+TEST(BenchGeometry, AngularAccelerationIsTheDerivativeOfTheRate) {
+  const SiteEarth earth(Site{55.75, 37.62, 150.0});
+  auto at = [&](double t, int m) {
+    const AxisState o{0.3 + 0.7 * t + 0.5 * 2.0 * t * t, 0.7 + 2.0 * t, 2.0};
+    const AxisState n{-1.1 + 3.0 * t - 0.5 * 5.0 * t * t, 3.0 - 5.0 * t, -5.0};
+    return bench_kinematics(earth, o, n, m);
+  };
+  const double h = 1e-5;
+  for (int m = 0; m < kMountCount; ++m) {
+    const Vec3 fd = (at(h, m).w_ib_b - at(-h, m).w_ib_b) / (2 * h);
+    EXPECT_LT((at(0, m).dw_ib_b - fd).norm(), 1e-6) << mount_name(m) << ": " << at(0, m).dw_ib_b.transpose() << " vs "
+                                                    << fd.transpose();
+  }
+}
+
+// A unit off the centre of a multi-unit fixture (issue 21): the same rotation in its own axes, and
+// the specific force at its origin — the second derivative of its position on the turning platform,
+// less gravity (the local-level frame taken as fixed: earth rate's share, ~1e-4 m/s², is within the
+// tolerance).
+TEST(BenchGeometry, ASlotOffTheCentreFeelsItsOwnSpecificForce) {
+  const SiteEarth earth(Site{55.75, 37.62, 150.0});
+  SlotPose slot;
+  slot.C_f_s = (Eigen::AngleAxisd(0.4, Vec3::UnitZ()) * Eigen::AngleAxisd(-0.2, Vec3::UnitX())).toRotationMatrix();
+  slot.r_f = Vec3(0.08, -0.03, 0.02);
+  auto at = [&](double t, int m) {
+    const AxisState o{0.3 + 0.5 * t + 0.5 * 1.5 * t * t, 0.5 + 1.5 * t, 1.5};
+    const AxisState n{-1.1 + 5.0 * t - 0.5 * 4.0 * t * t, 5.0 - 4.0 * t, -4.0};
+    return bench_kinematics(earth, o, n, m);
+  };
+  const double h = 1e-4;
+  for (int m = 0; m < kMountCount; ++m) {
+    const BenchKinematics c = at(0, m), s = slot_kinematics(c, slot);
+    const Vec3 acc_l = (at(h, m).C_b_l * slot.r_f - 2 * c.C_b_l * slot.r_f + at(-h, m).C_b_l * slot.r_f) / (h * h);
+    const Vec3 f_s = (c.C_b_l * slot.C_f_s).transpose() * (acc_l - earth.g_ned);
+    EXPECT_LT((s.f_b - f_s).norm(), 2e-4) << mount_name(m) << ": " << s.f_b.transpose() << " vs " << f_s.transpose();
+    EXPECT_GT((s.f_b - slot.C_f_s.transpose() * c.f_b).norm(), 0.5);  // the lever arm is felt (~1 m/s²)
+    EXPECT_LT((s.w_ib_b - slot.C_f_s.transpose() * c.w_ib_b).norm(), 1e-15);
+    EXPECT_LT((s.C_b_l - c.C_b_l * slot.C_f_s).norm(), 1e-15);
+  }
+  // At the centre with the fixture's axes: the centre's kinematics.
+  const BenchKinematics c = at(0, 2), s = slot_kinematics(c, SlotPose{});
+  EXPECT_LT((s.f_b - c.f_b).norm(), 1e-15);
+}
+
 }  // namespace
 }  // namespace calbench

@@ -1,0 +1,43 @@
+// A multi-unit fixture on the table's inner platform (issue 21): its slots, each an IMU reached through
+// a USB-SPI bridge (devices/imu_uri.hpp) with its nominal pose on the fixture. The fixture takes the
+// cube's place in the plan: a plan's mounts name fixture axes. Format: docs/devices.md "Fixtures".
+// One slot with an identity pose at the centre is today's single-unit station.
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "calibration/bench_kinematics.hpp"
+#include "devices/imu_uri.hpp"
+
+namespace calbench::station {
+
+struct FixtureSlot {
+  std::string name;           // letters, digits, '-', '_' (a folder of the run's output)
+  std::string imu;            // as written; empty: emulated (no bridge)
+  devices::ImuUri uri;        // parsed imu
+  Vec3 rotation_deg = Vec3::Zero();  // roll, pitch, yaw (z-y-x) of slot axes → fixture axes, as written
+  SlotPose pose;              // C_f_s and r_f (SI)
+  int line = 0;               // in the fixture file
+};
+
+struct Fixture {
+  std::string name;
+  std::string file;           // empty for a fixture made from --units
+  std::vector<FixtureSlot> slots;
+};
+
+// Reads and checks a fixture file: InputError (exit 2) naming the file, line and key for bad input
+// (duplicate slot names, two slots on one bridge and chip select, an IMU URI that does not parse, a
+// bridge without serial number among several of its kind, ...).
+Fixture load_fixture(const std::filesystem::path& file);
+
+// N emulated units (`station run --emulated --units N`): slot names "1".."N", evenly round the
+// centre of the platform at 80 mm, each turned by 90° about z from the one before (so that the units'
+// own axes see every direction of the fixture), no bridges.
+Fixture emulated_fixture(int units);
+
+// The default single slot: today's station (IMU at the centre, axes of the cube).
+Fixture single_unit_fixture(const std::string& imu_uri);
+
+}  // namespace calbench::station
