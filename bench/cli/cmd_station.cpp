@@ -117,9 +117,26 @@ void run_station(StationArgs& a) {
   const station::Result r = station::run(a.o, std::cerr, g_stop);
   if (a.json) print_json(r.summary.dump(2));
   std::cerr << (r.exit_code == 0 ? "" : "calbench: ") << r.message << std::endl;
+  const std::string shown = db::redact_uri(a.o.db);  // never a password on the screen
+  if (r.summary.contains("units")) {  // a fixture: the next step per calibrated unit
+    for (const auto& u : r.summary["units"]) {
+      if (!u.value("ok", false)) continue;
+      const std::string slot = u["slot"].get<std::string>();
+      if (u.contains("db") && u["db"].contains("central") && u["db"]["central"].contains("set"))
+        std::cerr << "next (slot " << slot << "): calbench db approve " << u["db"]["central"]["set"].get<long long>()
+                  << " --db " << shown << " --operator NAME   (as a member of calbench_qc)" << std::endl;
+      else if (u.contains("db") && u["db"].contains("set") && !db::is_postgres_uri(a.o.db))
+        std::cerr << "next (slot " << slot << "): calbench db approve " << u["db"]["set"].get<long long>() << " --db "
+                  << shown << " --operator NAME" << std::endl;
+      else if (a.o.db.empty())
+        std::cerr << "next (slot " << slot << "): calbench db store-bench --coeffs " << u["coefficients"].get<std::string>()
+                  << " --recording " << u["recording"].get<std::string>() << " --db DB" << std::endl;
+    }
+    if (r.exit_code != 0) throw Exit{r.exit_code};
+    return;
+  }
   if (r.exit_code != 0) throw Exit{r.exit_code};
   // The next step of the workflow, to type.
-  const std::string shown = db::redact_uri(a.o.db);  // never a password on the screen
   if (r.summary.contains("db") && r.summary["db"].contains("central")) {
     const auto& c = r.summary["db"]["central"];
     // The approval is QC's: the same database as a QC login.

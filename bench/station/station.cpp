@@ -99,7 +99,7 @@ struct Unit {
   bool identified = false, failed = false;
   std::string why;                 // failed: the reason
   nlohmann::json steps = nlohmann::json::array(), summary = nlohmann::json::object();
-  // Reader thread (several units in real time): samples wait here for the station's thread.
+  // Reader thread (real time): samples wait here for the station's thread.
   std::thread reader;
   std::mutex mu;
   std::deque<ImuSample> queue;
@@ -167,7 +167,7 @@ class Station {
   BenchPlan plan_;
   Fixture fixture_;
   bool fixture_mode_ = false;             // a fixture (file or --units): one folder per slot
-  bool threaded_ = false;                 // several units in real time: a reader thread per unit
+  bool threaded_ = false;                 // real time: a reader thread per unit
   std::string run_id_ = db::new_uid();    // ties the units of one table cycle
   std::unique_ptr<SiteEarth> earth_;
   std::shared_ptr<VirtualClock> clock_;   // emulated time (the table's; several units: the slowest unit's)
@@ -237,7 +237,9 @@ void Station::make_units() {
     if (o_.emulated && clock_ && several) u->clock = std::make_shared<VirtualClock>(clock_->now());
     units_.push_back(std::move(u));
   }
-  threaded_ = several && !clock_;
+  // In real time the bus is read by a thread of its own: a Modbus round trip to the table (a few ms)
+  // must not hold up a data-ready stream whose samples come every 0.41 ms.
+  threaded_ = !clock_;
 }
 
 void Station::setup() {
@@ -289,7 +291,7 @@ void Station::setup() {
     log_ << "\n";
     if (fixture_mode_)
       log_ << "fixture " << fixture_.name << ": " << units_.size() << " unit" << (units_.size() > 1 ? "s" : "")
-           << ", one bridge each" << (threaded_ ? " (a reader thread per unit)" : "") << ", run " << run_id_ << "\n";
+           << ", one bridge each, run " << run_id_ << "\n";
     if (!ec && static_cast<double>(sp.available) < kMargin * bytes)
       throw std::runtime_error("not enough free disk space for the recording: the plan writes about " +
                                std::to_string(std::llround(bytes / 1e6)) + " MB, " +
@@ -442,8 +444,8 @@ void Station::stop_readers() {
 }
 
 // The next samples. Emulated time: the unit whose bus is furthest behind reads next (each unit has its
-// own bridge, so their reads overlap in time); the table's clock is the slowest unit's. Several units
-// in real time: each reader thread has queued its unit's samples; they are taken here, on this thread.
+// own bridge, so their reads overlap in time); the table's clock is the slowest unit's. In real time:
+// each unit's reader thread has queued its samples; they are taken here, on this thread.
 void Station::pump() {
   poll();
   if (++pumps_ % 256 == 0) progress(rec_step_ >= 0 ? "recording" : "moving");
@@ -460,7 +462,10 @@ void Station::pump() {
         err = u.reader_error;
       }
       for (const auto& x : q) take(u, x);
-      if (!err.empty()) fail_unit(u, err);
+      if (!err.empty()) {
+        if (!fixture_mode_) throw DeviceError(err);
+        fail_unit(u, err);
+      }
     }
     if (live_units() == 0) throw Aborted("every unit failed");
     return;

@@ -89,7 +89,7 @@ expect2() {  # expect2 WHAT PATTERN ARGS...
   [ ! -e "$tmp/bad/recording" ] || fail "$what: something was recorded"
 }
 expect2 "--units without --emulated" "--units" --units 2 --table modbus-tcp://127.0.0.1:1
-expect2 "--units and --fixture" "not both" --emulated --units 2 --fixture "$SRC/bench/fixtures/quad-mcp2210.toml"
+expect2 "--units and --fixture" "not both" --emulated --units 2 --fixture "$SRC/bench/fixtures/quad-ft232h.toml"
 expect2 "unknown slot" "no slot '9'" --emulated --units 3 --inject 9:imu-flags=1
 cat >"$tmp/shared.toml" <<'TOML'
 [[slot]]

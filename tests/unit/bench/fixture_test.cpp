@@ -36,12 +36,12 @@ InputError load_error(const std::string& text) {
 }
 
 TEST(Fixture, TheExampleFixtureReads) {
-  const Fixture fx = load_fixture(fs::path(CALBENCH_SOURCE_DIR) / "bench/fixtures/quad-mcp2210.toml");
-  EXPECT_EQ(fx.name, "quad-mcp2210");
+  const Fixture fx = load_fixture(fs::path(CALBENCH_SOURCE_DIR) / "bench/fixtures/quad-ft232h.toml");
+  EXPECT_EQ(fx.name, "quad-ft232h");
   ASSERT_EQ(fx.slots.size(), 4u);
   EXPECT_EQ(fx.slots[1].name, "B");
-  EXPECT_EQ(fx.slots[1].uri.kind, "mcp2210");
-  EXPECT_EQ(fx.slots[1].uri.serial, "0001234502");
+  EXPECT_EQ(fx.slots[1].uri.kind, "ft232h");
+  EXPECT_EQ(fx.slots[1].uri.serial, "FT4ZK1B");
   // Slot B: turned 90° about z (its x is the fixture's y), 80 mm along the fixture's y.
   EXPECT_LT((fx.slots[1].pose.C_f_s * Vec3::UnitX() - Vec3::UnitY()).norm(), 1e-12);
   EXPECT_LT((fx.slots[1].pose.r_f - Vec3(0, 0.08, 0)).norm(), 1e-15);
