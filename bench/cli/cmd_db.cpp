@@ -380,7 +380,10 @@ const bool registered = add_command(70, [](CLI::App& app) {
       ->add_flag("--json", a->json, "machine-readable output");
   auto* imp = leaf(db, "import-inmotion", "store an in-motion fit result (RESULT.json) against its device", a,
                    cmd_import_inmotion);
-  imp->add_option("RESULT", a->file, "RESULT.json of `calbench fit drive`")->required();
+  imp->add_option("RESULT", a->file,
+                  "RESULT.json of `calbench fit drive`, or the --out folder of a multi-unit fit (units.json: every "
+                  "fitted unit is stored, each against its device)")
+      ->required();
   imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)")->check(set_id());
   imp->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(imp, *a);

@@ -10,6 +10,7 @@
 #include "bench/cli/db_args.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
+#include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
 #include "db/connection.hpp"
@@ -22,18 +23,64 @@ namespace calbench::cli::dbcmd {
 using nlohmann::json;
 using namespace calbench::db;
 
-void cmd_import_inmotion(const DbArgs& a) {
-  std::ifstream in(a.file, std::ios::binary);
-  if (!in) throw InputError(a.file, 0, "", "cannot open");
+namespace {
+// A RESULT.json read and checked (nothing is written on bad input).
+InMotionResult read_result(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file, 0, "", "cannot open");
   std::stringstream ss;
   ss << in.rdbuf();
-  const InMotionResult r = parse_inmotion_result(ss.str(), a.file);  // before opening: nothing written on bad input
+  const InMotionResult r = parse_inmotion_result(ss.str(), file);
   // Where the recording is at hand, it must still be the one the result was fitted on.
   const std::filesystem::path imu = std::filesystem::path(r.recording_path) / "imu.csv";
   if (std::filesystem::is_regular_file(imu) && sha256_file(imu) != r.recording_sha256)
-    throw InputError(a.file, 0, "recording.sha256",
+    throw InputError(file, 0, "recording.sha256",
                      imu.string() + " has changed since the fit (its SHA-256 differs): refit, or import on the machine "
                      "that holds the recording it was fitted on");
+  return r;
+}
+
+// The output folder of a multi-unit `fit drive` (units.json, calbench-fit-units/1): every unit's result.
+void import_units(const DbArgs& a) {
+  namespace fs = std::filesystem;
+  const fs::path dir(a.file), file = dir / "units.json";
+  const json j = read_json_file(file);
+  if (!j.is_object() || j.value("format", "") != "calbench-fit-units/1" || !j.contains("units") || !j["units"].is_array())
+    throw InputError(file.string(), 0, "format", "expected the units.json of a multi-unit `fit drive` (calbench-fit-units/1)");
+  if (a.parent) throw InputError("--parent", 0, "", "one parent set cannot be every unit's: import a unit's RESULT.json alone");
+  std::vector<std::pair<std::string, InMotionResult>> results;  // all checked before anything is stored
+  std::vector<std::string> files;
+  for (const auto& u : j["units"]) {
+    if (!u.value("ok", false)) {
+      std::cerr << "unit " << u.value("slot", "?") << ": not fitted (" << u.value("error", "") << "), skipped\n";
+      continue;
+    }
+    const std::string f = (dir / u.value("result", "")).string();
+    results.emplace_back(u.value("slot", ""), read_result(f));
+    files.push_back(f);
+  }
+  if (results.empty()) throw InputError(file.string(), 0, "units", "no fitted unit to import");
+  auto s = open_store(a);
+  json out = json::array();
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const auto& [slot, r] = results[k];
+    const ImportOutcome o = import_inmotion(*s, r, files[k], std::nullopt);
+    out.push_back({{"slot", slot}, {"serial", r.device.serial}, {"set", o.set_id}, {"version", o.version},
+                   {"source", to_string(o.source)}, {"parent", o.parent_id ? json(*o.parent_id) : json(nullptr)},
+                   {"inmotion_run", o.run_id}, {"note", o.note}});
+    if (!a.json)
+      std::cout << "unit " << slot << ": stored in-motion run " << o.run_id << " and set " << o.set_id << " ("
+                << r.device.serial << " v" << o.version << ", " << to_string(o.source)
+                << (o.parent_id ? ", parent set " + std::to_string(*o.parent_id) : std::string()) << ", draft)\n";
+  }
+  if (a.json) print_json(json{{"units", out}}.dump(2));
+}
+}  // namespace
+
+void cmd_import_inmotion(const DbArgs& a) {
+  if (std::filesystem::is_directory(a.file) && std::filesystem::is_regular_file(std::filesystem::path(a.file) / "units.json"))
+    return import_units(a);
+  const InMotionResult r = read_result(a.file);  // before opening: nothing written on bad input
   auto s = open_store(a);
   const ImportOutcome o = import_inmotion(*s, r, a.file, a.parent ? std::optional<std::int64_t>(a.parent) : std::nullopt);
   if (a.json) {

@@ -7,6 +7,7 @@
 
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
+#include "bench/drive/drive_units.hpp"
 #include "bench/drive/fit_drive.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "calibration/inmotion/priors.hpp"
@@ -130,7 +131,11 @@ const bool registered = add_command(31, [](CLI::App& app) {
                                          "(EKF, paper eqs 13-15)");
   // Numbers from the command line: decimal, finite; NaN, inf, hex and negatives are bad input (exit 2).
   const CLI::Validator finite_nonneg = finite_non_negative(), finite_pos = finite_positive();
-  d->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
+  d->add_option("dir", a->dir,
+                "drive recording folder, or a multi-unit drive (units.json: every unit fitted against the reference, "
+                "parsed once; --out then names a folder, OUT/SLOT/RESULT.json)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
   d->add_option("--coeffs", a->coeffs,
                  "coefficient set applied to the data first (coefficients.json, or an earlier RESULT.json whose "
                  "mounting estimate then starts this fit); the filter's priors are the set's sigma combined with the "
@@ -138,7 +143,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "(diagnose --out IMPROVED.json: time_offset, lever_arm, g_sensitivity, scale_*, temperature_*, "
                  "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note")
       ->check(CLI::ExistingFile);
-  d->add_option("--out", a->out, "RESULT.json to write")->required();
+  d->add_option("--out", a->out, "RESULT.json to write (a multi-unit drive: a folder)")->required();
   CLI::Option* obs = d->add_option("--obs", a->obs,
                                    "observations to use: any of pos,vel,att (eqs 13, 14, 15); default pos,vel,att, with "
                                    "GNSS aiding pos,vel (velocity where gnss.csv has it)");
@@ -180,6 +185,35 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_flag("--json", *json, "print RESULT.json to stdout");
   d->callback([a, json, obs] {
     a->obs_given = obs->count() > 0;
+    if (is_multi_unit_drive(a->dir)) {  // several units against one reference (docs/recording-units.md)
+      nlohmann::json s;
+      const std::vector<UnitFit> fits = fit_drive_units(*a, 0, &s);
+      int failed = 0;
+      bool bad = false;
+      nlohmann::json all = s;
+      for (std::size_t k = 0; k < fits.size(); ++k) {
+        const UnitFit& f = fits[k];
+        if (!f.error.empty()) {
+          ++failed;
+          bad = bad || f.bad_input;
+          std::cerr << "calbench: unit " << f.slot << ": " << f.error << std::endl;
+          continue;
+        }
+        if (*json) all["units"][k]["RESULT"] = f.result;
+        else {
+          std::cout << "unit " << f.slot << " (" << f.out.string() << "): ";
+          print_summary(f.result);
+        }
+      }
+      if (*json) print_json(all.dump(2));
+      else
+        std::cout << fits.size() - static_cast<std::size_t>(failed) << " of " << fits.size() << " units fitted against "
+                  << s["reference"]["file"].get<std::string>() << " (parsed once, "
+                  << s["reference"]["rows"].dump() << " epochs), " << s["threads"] << " thread(s); "
+                  << (fs::path(a->out) / "units.json").string() << " names each RESULT.json" << std::endl;
+      if (failed) throw Exit{bad ? 2 : 1};
+      return;
+    }
     const nlohmann::json j = fit_drive(*a);
     if (*json) print_json(j.dump(2));
     else print_summary(j);

@@ -1,4 +1,4 @@
-// calbench simulate drive --route ROUTE --truth TRUTH.json|random --out DIR [--seed N]
+// calbench simulate drive --route ROUTE --truth TRUTH.json|random --out DIR [--seed N] [--units N]
 #include <iostream>
 
 #include "bench/cli/number_options.hpp"
@@ -30,11 +30,21 @@ const bool registered = add_command(11, [](CLI::App& app) {
                 "JSON with the unit's in-run drift instead of the data sheet's: {\"gyro\": {\"drift_sigma_deg_h\", "
                 "\"drift_tau_s\"}, \"accel\": {\"drift_sigma_mg\", \"drift_tau_s\"}} (kept in truth.json)")
       ->check(CLI::ExistingFile);
+  d->add_option("--units", a->units,
+                 "several MEMS units on the vehicle against one reference: unit k (1..N) with errors and mounting "
+                 "from --seed + k-1, turned 90° in yaw from the last, 0.15 m round the route's lever arm; writes "
+                 "units.json, reference.csv once and one recording folder per unit (docs/recording-units.md)")
+      ->check(whole_number(1, 16));
   d->callback([a] {
     const SimulateDriveSummary s = simulate_drive_recording(*a);
-    std::cout << "simulated " << s.imu_rows << " IMU samples (" << s.duration_s << " s), " << s.ref_rows
-              << " reference epochs, " << s.gnss_rows << " GNSS fixes into " << a->out << " (truth in " << a->out
-              << "/truth.json)" << std::endl;
+    if (a->units > 1)
+      std::cout << "simulated " << a->units << " units × " << s.imu_rows << " IMU samples (" << s.duration_s << " s), "
+                << s.ref_rows << " reference epochs, " << s.gnss_rows << " GNSS fixes into " << a->out << " (units.json; "
+                << a->out << "/1 .. " << a->out << "/" << a->units << ", truth in each truth.json)" << std::endl;
+    else
+      std::cout << "simulated " << s.imu_rows << " IMU samples (" << s.duration_s << " s), " << s.ref_rows
+                << " reference epochs, " << s.gnss_rows << " GNSS fixes into " << a->out << " (truth in " << a->out
+                << "/truth.json)" << std::endl;
   });
 });
 

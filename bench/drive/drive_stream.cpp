@@ -26,8 +26,19 @@ inmotion::RefObs to_ref_obs(const GnssRow& r) {
                                 nz(r.sigma_h_m), nz(r.sigma_v_m), r.sigma_vel_m_s);
 }
 
-DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre, const EffectTerms* effects, Aiding aiding)
-    : dir_(dir) {
+std::shared_ptr<const SharedReference> load_shared_reference(const fs::path& file) {
+  auto s = std::make_shared<SharedReference>();
+  s->file = file;
+  DriveRefReader r(file);
+  DriveRefRow row;
+  while (r.next(row)) s->rows.push_back(row);
+  s->sha256 = sha256_file(file);
+  return s;
+}
+
+DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre, const EffectTerms* effects, Aiding aiding,
+                         std::shared_ptr<const SharedReference> shared)
+    : dir_(dir), shared_(aiding == Aiding::gnss ? nullptr : std::move(shared)) {
   meta_ = read_meta(dir);
   if (meta_.kind != RecordingKind::drive)
     throw InputError((dir / "meta.json").string(), 0, "kind", "expected a drive recording (kind \"drive\")");
@@ -35,7 +46,7 @@ DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>&
   if (!(meta_.imu_rate_hz > 0)) throw InputError((dir / "meta.json").string(), 0, "imu_rate_hz", "must be > 0");
   imu_ = std::make_unique<ImuReader>(dir / "imu.csv", meta_.imu_rate_hz);
   if (aiding == Aiding::gnss) gnss_ = std::make_unique<GnssReader>(dir / "gnss.csv");
-  else ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv");
+  else if (!shared_) ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv");
   if (pre) {
     cg_ = TriadCorrector(pre->gyro);
     ca_ = TriadCorrector(pre->accel);
@@ -50,6 +61,11 @@ bool DriveStream::read_epoch() {
     GnssRow g;
     if (!gnss_->next(g)) return false;
     pending_ = to_ref_obs(g);
+    return true;
+  }
+  if (shared_) {
+    if (shared_next_ >= shared_->rows.size()) return false;
+    pending_ = to_ref_obs(shared_->rows[shared_next_++]);
     return true;
   }
   DriveRefRow r;

@@ -7,7 +7,10 @@
 // reference epoch is split there (increments in proportion), so that epochs still meet IMU stamps.
 #pragma once
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "bench/io/recording.hpp"
 #include "calibration/effects/effect_compensation.hpp"
@@ -24,11 +27,21 @@ inmotion::RefObs to_ref_obs(const GnssRow& r);
 // Which file aids the filter: reference.csv (reference INS) or gnss.csv (GNSS fixes only).
 enum class Aiding { reference, gnss };
 
+// A drive's reference.csv parsed once, for several MEMS units recorded against it (a multi-unit
+// drive, docs/recording-units.md): every unit's fit and QC take their epochs from here.
+struct SharedReference {
+  fs::path file;
+  std::vector<DriveRefRow> rows;
+  std::string sha256;
+};
+std::shared_ptr<const SharedReference> load_shared_reference(const fs::path& file);
+
 class DriveStream {
  public:
   // effects: catalogue terms to compensate (with the set they belong to: pre_correction, or zero).
+  // shared: the reference epochs from memory instead of dir/reference.csv (reference aiding only).
   DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre_correction, const EffectTerms* effects = nullptr,
-              Aiding aiding = Aiding::reference);
+              Aiding aiding = Aiding::reference, std::shared_ptr<const SharedReference> shared = nullptr);
   const RecordingMeta& meta() const { return meta_; }
   Mat3 nominal_mounting() const;  // C_mb from meta.json
   Vec3 lever_arm() const;
@@ -51,6 +64,8 @@ class DriveStream {
   std::unique_ptr<ImuReader> imu_;
   std::unique_ptr<DriveRefReader> ref_;
   std::unique_ptr<GnssReader> gnss_;
+  std::shared_ptr<const SharedReference> shared_;
+  std::size_t shared_next_ = 0;
   std::optional<TriadCorrector> cg_, ca_;
   std::optional<ImuEffectCompensator> comp_;
   Event rest_;  // remainder of an IMU interval split at a reference epoch (time offset only)

@@ -395,7 +395,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // The series columns of the layout this configuration gives (the filter builds the same one).
   const std::vector<std::string> columns = inmotion::column_names(inmotion::make_layout(cfg));
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
-                 gnss ? Aiding::gnss : Aiding::reference);
+                 gnss ? Aiding::gnss : Aiding::reference, a.shared_reference);
   const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};  // observations: position, velocity, attitude
   std::unique_ptr<Filter> f;
   std::unique_ptr<DriveSeries> series;
@@ -481,7 +481,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   const fs::path dir(a.dir);
   j["recording"] = {{"path", fs::absolute(dir).lexically_normal().string()},
                     {"sha256", sha256_file(dir / "imu.csv")},
-                    {"sha256_reference", fs::exists(dir / "reference.csv") ? nlohmann::json(sha256_file(dir / "reference.csv")) : nlohmann::json(nullptr)},
+                    {"sha256_reference", a.shared_reference ? nlohmann::json(a.shared_reference->sha256)
+                                         : fs::exists(dir / "reference.csv") ? nlohmann::json(sha256_file(dir / "reference.csv"))
+                                                                             : nlohmann::json(nullptr)},
                     {"sha256_meta", sha256_file(dir / "meta.json")}};
   if (gnss) j["recording"]["sha256_gnss"] = sha256_file(dir / "gnss.csv");
   j["recording"]["device"] = {{"model", meta.device.model}, {"serial", meta.device.serial}};  // the unit that drove
@@ -584,7 +586,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     if (a.coeffs_mounting_deg) before_mount = a.coeffs_mounting_deg->first;
     QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, before_mount, std::nullopt, fx.terms, std::nullopt};
     QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms, std::nullopt};
-    const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s);
+    const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s, a.shared_reference);
     qj = qc_json(q);
     qj["sample"] = oos ? "out-of-sample (after the fit window)" : "in-sample (no data after the fit window)";
   } else {

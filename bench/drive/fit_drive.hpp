@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "bench/drive/drive_stream.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 
@@ -41,6 +42,8 @@ struct FitDriveArgs {
   // Called after every reference epoch the filter took, per observation type (0 pos, 1 vel, 2 att).
   std::function<void(int type, const inmotion::InnovationRecord&)> on_innovation;
   bool write_out = true;      // false: return RESULT.json without writing a.out
+  // A multi-unit drive: the reference parsed once for every unit (fit and QC read no reference.csv).
+  std::shared_ptr<const SharedReference> shared_reference;
 };
 
 // The --allowance-* options, one row each: the option, its field in FitDriveArgs::Allowances (in

@@ -47,10 +47,11 @@ QcSet load_qc_set(const std::string& arg) {
 namespace {
 // One pass over the recording for the sets `idx` (all with the same time offset).
 void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx,
-                  std::optional<double> from_s, double horizon_s, QcOutcome& q) {
+                  std::optional<double> from_s, double horizon_s, QcOutcome& q,
+                  const std::shared_ptr<const SharedReference>& shared) {
   // The stream moves the time stamps; each set removes its own output terms.
   const EffectTerms shift = time_stamp_terms(sets[idx[0]].effects);
-  DriveStream st(dir, std::nullopt, time_stamp_offset(shift) != 0 ? &shift : nullptr);
+  DriveStream st(dir, std::nullopt, time_stamp_offset(shift) != 0 ? &shift : nullptr, Aiding::reference, shared);
   const Mat3 C_nom = st.nominal_mounting();
   const Vec3 lever = st.lever_arm();
   std::vector<std::unique_ptr<qc::InertialRun>> runs(idx.size());
@@ -97,7 +98,8 @@ void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std
 }
 }  // namespace
 
-QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s, double horizon_s) {
+QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s, double horizon_s,
+                 std::shared_ptr<const SharedReference> shared) {
   QcOutcome q;
   q.horizon_s = horizon_s;
   for (const QcSet& s : sets) q.curves.push_back(QcCurve{s.name, {}, {}});
@@ -112,7 +114,7 @@ QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optio
       }
     if (!placed) groups.push_back({i});
   }
-  for (const auto& g : groups) run_qc_group(dir, sets, g, from_s, horizon_s, q);
+  for (const auto& g : groups) run_qc_group(dir, sets, g, from_s, horizon_s, q, shared);
   if (!q.curves.empty() && !q.curves[0].t.empty()) q.horizon_s = std::min(horizon_s, q.curves[0].t.back());
   return q;
 }

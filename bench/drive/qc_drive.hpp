@@ -2,11 +2,13 @@
 // the circular position error ΔS(t) (eq 39) of each against the reference.
 #pragma once
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "bench/drive/drive_stream.hpp"
 #include "calibration/effects/effect_terms.hpp"
 #include "common/sensor_model.hpp"
 
@@ -36,8 +38,9 @@ struct QcOutcome {
 // Sets with catalogue terms: the output terms are removed from the raw samples before the set's
 // correction and the time stamps moved by the time offset (one pass over the data per distinct
 // time offset); bench-only terms are ignored.
+// shared: the drive's reference already in memory (a multi-unit drive), else dir/reference.csv.
 QcOutcome run_qc(const std::filesystem::path& dir, const std::vector<QcSet>& sets, std::optional<double> from_s,
-                 double horizon_s);
+                 double horizon_s, std::shared_ptr<const SharedReference> shared = nullptr);
 // The JSON: {"from_s", "horizon_s", "sets": [{"name", "final_cpe_m", "max_cpe_m", "cpe_m_at": {...},
 // "cpe_series": {"t_s": [...], "cpe_m": [...]}}]}; cpe_series is ΔS(t) over the whole horizon at 1 s
 // spacing (wider beyond a 1 h horizon: at most 3600 points plus the last epoch).

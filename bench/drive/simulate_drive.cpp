@@ -41,85 +41,137 @@ NoiseSpec read_noise_file(const std::string& file) {
 }
 }  // namespace
 
+namespace {
+
+// One simulated unit: its truth (errors and true mounting) and what meta.json says of it.
+struct SimUnit {
+  std::string slot;
+  CoefficientSet truth;
+  Vec3 true_rpy_deg, nominal_rpy_deg, lever;
+};
+
+// Replaces `link` by a hard link to `target` (the same file, no second copy), or a copy where the
+// file system has no hard links.
+void share_file(const fs::path& target, const fs::path& link) {
+  std::error_code ec;
+  fs::remove(link, ec);
+  fs::create_hard_link(target, link, ec);
+  if (ec) fs::copy_file(target, link, fs::copy_options::overwrite_existing);
+}
+
+}  // namespace
+
 SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   using units::kDeg;
   const RouteFile rf = load_route(a.route);
-  CoefficientSet truth;
-  Vec3 true_rpy_deg = rf.mounting_rpy_deg;
-  Vec3 lever = rf.lever_arm_m;
-  if (a.truth == "random") {
-    truth.errors = draw_random_unit(a.seed);
-    truth.device.serial = a.serial.empty() ? "SIM-" + std::to_string(a.seed) : a.serial;
-    true_rpy_deg = draw_true_mounting_rpy_deg(rf, a.seed);
-    truth.extra["truth"] = {{"drawn_by", "calbench simulate drive --truth random"}, {"seed", a.seed}};
-  } else {
-    truth = read_coefficients(a.truth);
-    if (!a.serial.empty()) truth.device.serial = a.serial;
-    if (truth.extra.contains("mounting")) {
-      const auto& m = truth.extra["mounting"];
-      if (m.contains("rpy_deg")) true_rpy_deg = jvec3(m["rpy_deg"], a.truth, "mounting.rpy_deg");
-      if (m.contains("lever_arm_m")) lever = jvec3(m["lever_arm_m"], a.truth, "mounting.lever_arm_m");
+  if (a.units < 1 || a.units > 16) throw InputError("--units", 0, "", "1 to 16 units, not " + std::to_string(a.units));
+  if (a.units > 1 && a.truth != "random")
+    throw InputError("--units", 0, "", "several units need --truth random (each unit its own errors, drawn from --seed + k)");
+  std::vector<SimUnit> sim(static_cast<std::size_t>(a.units));
+  for (int k = 0; k < a.units; ++k) {
+    SimUnit& u = sim[static_cast<std::size_t>(k)];
+    const std::uint64_t seed = a.seed + static_cast<std::uint64_t>(k);
+    u.slot = std::to_string(k + 1);
+    u.nominal_rpy_deg = rf.mounting_rpy_deg;
+    u.lever = rf.lever_arm_m;
+    if (a.units > 1) {  // on a plate round the route's lever arm, each turned 90° in yaw from the last
+      const double ang = 2 * M_PI * k / a.units;
+      u.nominal_rpy_deg(2) = std::remainder(rf.mounting_rpy_deg(2) + 90.0 * k, 360.0);
+      u.lever += 0.15 * Vec3(std::cos(ang), std::sin(ang), 0.0);
+    }
+    u.true_rpy_deg = u.nominal_rpy_deg;
+    if (a.truth == "random") {
+      u.truth.errors = draw_random_unit(seed);
+      u.truth.device.serial = a.serial.empty() ? "SIM-" + std::to_string(seed) : (a.units > 1 ? a.serial + "-" + u.slot : a.serial);
+      RouteFile r = rf;
+      r.mounting_rpy_deg = u.nominal_rpy_deg;
+      u.true_rpy_deg = draw_true_mounting_rpy_deg(r, seed);
+      u.truth.extra["truth"] = {{"drawn_by", "calbench simulate drive --truth random"}, {"seed", seed}};
+    } else {
+      u.truth = read_coefficients(a.truth);
+      if (!a.serial.empty()) u.truth.device.serial = a.serial;
+      if (u.truth.extra.contains("mounting")) {
+        const auto& m = u.truth.extra["mounting"];
+        if (m.contains("rpy_deg")) u.true_rpy_deg = jvec3(m["rpy_deg"], a.truth, "mounting.rpy_deg");
+        if (m.contains("lever_arm_m")) u.lever = jvec3(m["lever_arm_m"], a.truth, "mounting.lever_arm_m");
+      }
     }
   }
-  // Physics beyond the spec's model: the truth's own catalogue keys, an effects file, --inject.
-  const EffectTerms effects = simulation_effects(truth.extra, a.truth, a.effects, a.inject);
+  // Physics beyond the spec's model: the truth's own catalogue keys, an effects file, --inject (every unit).
+  const EffectTerms effects = simulation_effects(sim.front().truth.extra, a.truth, a.effects, a.inject);
   {
     const std::string src = a.inject.empty() ? (a.effects.empty() ? a.truth : a.effects) : "--inject";
     for (const EffectSpec& x : effect_specs())
       if (x.drive_sim_refusal && effect_present(x, effects)) throw InputError(src, 0, x.key, x.drive_sim_refusal);
   }
-  if (effects.any()) replace_effect_keys(effects, truth.extra);
-  // The true mounting (what the filter should find); meta.json carries the nominal one. A
-  // catalogue lever_arm (IMU axes) is on top of mounting.lever_arm_m.
-  truth.extra["mounting"] = {{"rpy_deg", to_json(true_rpy_deg)}, {"lever_arm_m", to_json(lever)}};
   const NoiseSpec noise = a.noise.empty() ? adis16488a_noise() : read_noise_file(a.noise);
-  if (!a.noise.empty())
-    truth.extra["noise"] = {{"model", "first-order Gauss-Markov in-run drift (simulate drive --noise)"},
-                            {"gyro", {{"drift_sigma_deg_h", noise.gyro.drift_sigma / units::kDegPerHour},
-                                      {"drift_tau_s", noise.gyro.drift_tau_s}}},
-                            {"accel", {{"drift_sigma_mg", noise.accel.drift_sigma / units::kMilliG},
-                                       {"drift_tau_s", noise.accel.drift_tau_s}}}};
+  for (SimUnit& u : sim) {
+    if (effects.any()) replace_effect_keys(effects, u.truth.extra);
+    // The true mounting (what the filter should find); meta.json carries the nominal one. A
+    // catalogue lever_arm (IMU axes) is on top of mounting.lever_arm_m.
+    u.truth.extra["mounting"] = {{"rpy_deg", to_json(u.true_rpy_deg)}, {"lever_arm_m", to_json(u.lever)}};
+    if (!a.noise.empty())
+      u.truth.extra["noise"] = {{"model", "first-order Gauss-Markov in-run drift (simulate drive --noise)"},
+                                {"gyro", {{"drift_sigma_deg_h", noise.gyro.drift_sigma / units::kDegPerHour},
+                                          {"drift_tau_s", noise.gyro.drift_tau_s}}},
+                                {"accel", {{"drift_sigma_mg", noise.accel.drift_sigma / units::kMilliG},
+                                           {"drift_tau_s", noise.accel.drift_tau_s}}}};
+  }
 
   const fs::path out(a.out);
-  if (fs::exists(out / "meta.json") && !a.force)
+  const bool several = a.units > 1;
+  if ((fs::exists(out / "meta.json") || fs::exists(out / "units.json")) && !a.force)
     throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
   check_output_folder(out);
   fs::create_directories(out);
-  write_coefficients(out / "truth.json", truth);
-
-  RecordingMeta meta;
-  meta.kind = RecordingKind::drive;
-  meta.device = truth.device;
-  if (meta.device.model.empty()) meta.device.model = "ADIS16488A";
-  meta.imu_rate_hz = rf.imu_rate_hz;
-  meta.mounting = Mounting{rf.mounting_rpy_deg, rf.lever_arm_m};
-  meta.notes = "simulated by calbench: route '" + rf.route.name + "', seed " + std::to_string(a.seed) +
-               "; reference = FOG-grade INS/GNSS with white errors of the stated sigma";
-  meta.extra["drive"] = {{"route", rf.route.name}, {"seed", a.seed}};
+  if (several) fs::remove(out / "meta.json");  // not a one-unit recording any more (--force)
 
   drivesim::DriveSimConfig cfg;
   cfg.route = rf.route;
-  cfg.mems = truth.errors;
   cfg.imu_rate_hz = rf.imu_rate_hz;
-  cfg.mounting_rpy = true_rpy_deg * kDeg;
-  cfg.lever_arm = lever;
   cfg.reference = rf.reference;
   cfg.gnss = rf.gnss;
   cfg.seed = a.seed;
-  cfg.effects = effects;
   cfg.noise = noise;
+  cfg.mems = sim.front().truth.errors;
+  cfg.mounting_rpy = sim.front().true_rpy_deg * kDeg;
+  cfg.lever_arm = sim.front().lever;
+  cfg.effects = effects;
+  for (std::size_t k = 1; k < sim.size(); ++k)
+    cfg.more_units.push_back({sim[k].truth.errors, noise, sim[k].true_rpy_deg * kDeg, sim[k].lever, a.seed + k, effects});
+
+  const bool with_gnss = rf.gnss.rate_hz > 0;
+  std::vector<std::unique_ptr<RecordingWriter>> writers;
+  for (const SimUnit& u : sim) {
+    const fs::path dir = several ? out / u.slot : out;
+    fs::create_directories(dir);
+    write_coefficients(dir / "truth.json", u.truth);
+    RecordingMeta meta;
+    meta.kind = RecordingKind::drive;
+    meta.device = u.truth.device;
+    if (meta.device.model.empty()) meta.device.model = "ADIS16488A";
+    meta.imu_rate_hz = rf.imu_rate_hz;
+    meta.mounting = Mounting{u.nominal_rpy_deg, u.lever};
+    meta.notes = "simulated by calbench: route '" + rf.route.name + "', seed " + std::to_string(a.seed) +
+                 "; reference = FOG-grade INS/GNSS with white errors of the stated sigma";
+    meta.extra["drive"] = {{"route", rf.route.name}, {"seed", a.seed}};
+    if (several) meta.extra["drive"]["unit"] = {{"slot", u.slot}, {"of", a.units}};
+    writers.push_back(std::make_unique<RecordingWriter>(dir, meta, ImuForm::rates, false, false, with_gnss));
+  }
+  RecordingWriter& w = *writers.front();  // the reference and GNSS go with the first unit's folder
 
   SimulateDriveSummary sum;
-  RecordingWriter w(out, meta, ImuForm::rates, false, false, rf.gnss.rate_hz > 0);
   drivesim::DriveSinks sinks;
   sinks.imu = [&](const drivesim::SimImu& m) {
     ImuRecord r;
     r.t = m.t;
     r.gyro = m.gyro;
     r.accel = m.accel;
-    w.imu(r);
-    ++sum.imu_rows;
-    sum.duration_s = m.t;
+    writers[static_cast<std::size_t>(m.unit)]->imu(r);
+    if (m.unit == 0) {
+      ++sum.imu_rows;
+      sum.duration_s = m.t;
+    }
   };
   sinks.reference = [&](const drivesim::SimRef& s) {
     DriveRefRow r;
@@ -149,7 +201,23 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     ++sum.gnss_rows;
   };
   drivesim::simulate_drive(cfg, sinks, a.until_s);
-  w.finish();
+  for (auto& wr : writers) wr->finish();
+  if (several) {
+    // The drive's reference once: out/reference.csv (and gnss.csv), the same file in every unit's
+    // folder, so that each folder is a whole recording of the interchange format.
+    nlohmann::json units = nlohmann::json::array();
+    for (const char* f : {"reference.csv", "gnss.csv"}) {
+      if (!fs::exists(out / sim.front().slot / f)) continue;
+      share_file(out / sim.front().slot / f, out / f);
+      for (std::size_t k = 1; k < sim.size(); ++k) share_file(out / f, out / sim[k].slot / f);
+    }
+    for (const SimUnit& u : sim) units.push_back({{"slot", u.slot}, {"dir", u.slot}, {"serial", u.truth.device.serial}});
+    nlohmann::json uj = {{"format", "calbench-drive-units/1"}, {"reference", "reference.csv"}, {"units", units},
+                         {"notes", "simulated by calbench simulate drive --units " + std::to_string(a.units) + ": route '" +
+                                       rf.route.name + "', seed " + std::to_string(a.seed)}};
+    if (with_gnss) uj["gnss"] = "gnss.csv";
+    write_text_atomic(out / "units.json", uj.dump(2) + "\n");
+  }
   return sum;
 }
 

@@ -21,10 +21,14 @@ struct SimulateDriveArgs {
   // Gauss–Markov per sensor): {"gyro": {"drift_sigma_deg_h": 20, "drift_tau_s": 60},
   // "accel": {"drift_sigma_mg": 0.1, "drift_tau_s": 300}}; every key optional; kept in truth.json.
   std::string noise;
+  // Several MEMS units on the vehicle (issue 21): N > 1 writes a multi-unit drive (units.json, the
+  // reference once, one recording folder per unit; docs/recording-units.md), unit k with the errors
+  // and mounting drawn from seed + k, turned 90°·k in yaw and 0.15 m round the route's lever arm.
+  int units = 1;
 };
 
 struct SimulateDriveSummary {
-  std::size_t imu_rows = 0, ref_rows = 0, gnss_rows = 0;
+  std::size_t imu_rows = 0, ref_rows = 0, gnss_rows = 0;  // imu_rows: per unit
   double duration_s = 0;
 };
 

@@ -30,26 +30,82 @@ Body body_at(const RouteProfile& prof, double t, double lat, double h) {
   b.f = C_bn * (vdot_n + (2 * e.w_ie + e.w_en).cross(b.v_n) - e.g);
   return b;
 }
+
+// One MEMS unit on the vehicle: its errors, noise and placement, and its output from the body's
+// motion at one sample.
+class MemsUnit {
+ public:
+  MemsUnit(const SensorErrors& mems, const NoiseSpec& spec, double rate_hz, const Vec3& mounting_rpy, const Vec3& lever,
+           std::uint64_t seed, const EffectTerms& fx)
+      : fx_(fx),
+        sensor_fx_(fx.any_sensor_side()),
+        gyro_inv_((Mat3::Identity() + mems.gyro.M).inverse()),
+        accel_inv_((Mat3::Identity() + mems.accel.M).inverse()),
+        mems_(mems, noise_for(spec, rate_hz, fx), seed),
+        C_bm_(ins::dcm_from_rpy(mounting_rpy).transpose()),
+        r_(lever) {}
+
+  // The sample stamped t (body at t: b); its position lat, h for the motion at other times.
+  ImuErrorSimulator::Output sample(const RouteProfile& prof, double t, double dt, const Body& b, double lat, double h) {
+    // MEMS: lever-arm specific force, then into MEMS axes, then the device's errors.
+    // A time offset τ: the sample stamped t saw the motion at t − τ (position change over τ is
+    // negligible for gravity and Earth rate).
+    const double t_seen = truth_time(fx_, t);
+    const double ti = std::max(0.0, t_seen);
+    const Body bi = t_seen != t ? body_at(prof, ti, lat, h) : b;
+    // ω̇ as the mean over the sample interval centred on the sample: (ω(t+T/2) − ω(t−T/2))/T is
+    // exactly the mean of ω̇ there, so ω̇×r is the interval mean of the tangential lever-arm
+    // acceleration (what an IMU's band-limited sample shows; for smooth motion it differs from the
+    // point derivative by ω⃛·T²/24). Finite for any motion: a step of the rate would give Δω×r/T on
+    // one sample, not the Dirac pulse a point derivative (0.1 ms difference) makes of it.
+    const double ta = ti + 0.5 * dt, tb = std::max(0.0, ti - 0.5 * dt);
+    const Vec3 w_a = body_at(prof, ta, lat, h).w_ib, w_b = body_at(prof, tb, lat, h).w_ib;
+    const Vec3 wdot = (w_a - w_b) / (ta - tb);
+    const Vec3 f_m = bi.f + wdot.cross(r_) + bi.w_ib.cross(bi.w_ib.cross(r_));
+    Vec3 w_in = C_bm_ * bi.w_ib, f_in = C_bm_ * f_m;
+    if (sensor_fx_) {
+      // Extra output d enters before noise and quantisation: (I+M)(x + (I+M)⁻¹d) + b = (I+M)x + b + d.
+      EffectContext c;
+      c.w = w_in;
+      c.f = f_in;
+      c.dw = C_bm_ * wdot;
+      c.temp_c = fx_.t0_c;  // no temperature on a drive: temperature terms stay zero
+      Vec3 dg, da;
+      sensor_side_terms(fx_, c, dg, da);
+      w_in += gyro_inv_ * dg;
+      f_in += accel_inv_ * da;
+    }
+    return mems_.sample(t, w_in, f_in);
+  }
+  const ImuErrorSimulator& errors() const { return mems_; }
+
+ private:
+  static NoiseSpec noise_for(NoiseSpec n, double rate_hz, const EffectTerms& fx) {
+    n.output_rate_hz = rate_hz;
+    return noise_with_effects(n, fx);  // a correlated_drift term replaces the drift prior
+  }
+  const EffectTerms& fx_;
+  bool sensor_fx_;
+  Mat3 gyro_inv_, accel_inv_;
+  ImuErrorSimulator mems_;
+  Mat3 C_bm_;
+  Vec3 r_;
+};
+
 }  // namespace
 
 void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double until_s) {
   const RouteProfile prof(cfg.route);
   const double T = until_s > 0 ? std::min(until_s, prof.duration()) : prof.duration();
-  NoiseSpec noise = cfg.noise;
-  noise.output_rate_hz = cfg.imu_rate_hz;
-  const EffectTerms& fx = cfg.effects;
-  noise = noise_with_effects(noise, fx);  // a correlated_drift term replaces the drift prior
-  const bool sensor_fx = fx.any_sensor_side();
-  const Mat3 gyro_inv = (Mat3::Identity() + cfg.mems.gyro.M).inverse();
-  const Mat3 accel_inv = (Mat3::Identity() + cfg.mems.accel.M).inverse();
-  ImuErrorSimulator mems(cfg.mems, noise, cfg.seed);
+  std::vector<MemsUnit> units;
+  units.reserve(1 + cfg.more_units.size());
+  units.emplace_back(cfg.mems, cfg.noise, cfg.imu_rate_hz, cfg.mounting_rpy, cfg.lever_arm, cfg.seed, cfg.effects);
+  for (const auto& u : cfg.more_units)
+    units.emplace_back(u.mems, u.noise, cfg.imu_rate_hz, u.mounting_rpy, u.lever_arm, u.seed, u.effects);
   std::mt19937_64 rng(cfg.seed * 0x2545F4914F6CDD1DULL + 7);
   std::normal_distribution<double> n01(0.0, 1.0);
   auto nvec = [&]() { return Vec3(n01(rng), n01(rng), n01(rng)); };
 
-  const Mat3 C_mb = ins::dcm_from_rpy(cfg.mounting_rpy);
-  const Mat3 C_bm = C_mb.transpose();
-  const Vec3& r = cfg.lever_arm;
   const double dt = 1.0 / cfg.imu_rate_hz;
   const long n = static_cast<long>(std::floor(T * cfg.imu_rate_hz + 1e-9));
 
@@ -72,36 +128,11 @@ void simulate_drive(const DriveSimConfig& cfg, const DriveSinks& sinks, double u
       lat = plat + va(0) / (R.RM + hm) * dt;
       lon = plon + va(1) / ((R.RN + hm) * std::cos(0.5 * (plat + lat))) * dt;
     }
-    // MEMS: lever-arm specific force, then into MEMS axes, then the device's errors.
-    // A time offset τ: the sample stamped t saw the motion at t − τ (position change over τ is
-    // negligible for gravity and Earth rate).
-    const double t_seen = truth_time(fx, t);
-    const double ti = std::max(0.0, t_seen);
-    const Body bi = t_seen != t ? body_at(prof, ti, lat, h) : b;
-    // ω̇ as the mean over the sample interval centred on the sample: (ω(t+T/2) − ω(t−T/2))/T is
-    // exactly the mean of ω̇ there, so ω̇×r is the interval mean of the tangential lever-arm
-    // acceleration (what an IMU's band-limited sample shows; for smooth motion it differs from the
-    // point derivative by ω⃛·T²/24). Finite for any motion: a step of the rate would give Δω×r/T on
-    // one sample, not the Dirac pulse a point derivative (0.1 ms difference) makes of it.
-    const double ta = ti + 0.5 * dt, tb = std::max(0.0, ti - 0.5 * dt);
-    const Vec3 w_a = body_at(prof, ta, lat, h).w_ib, w_b = body_at(prof, tb, lat, h).w_ib;
-    const Vec3 wdot = (w_a - w_b) / (ta - tb);
-    const Vec3 f_m = bi.f + wdot.cross(r) + bi.w_ib.cross(bi.w_ib.cross(r));
-    Vec3 w_in = C_bm * bi.w_ib, f_in = C_bm * f_m;
-    if (sensor_fx) {
-      // Extra output d enters before noise and quantisation: (I+M)(x + (I+M)⁻¹d) + b = (I+M)x + b + d.
-      EffectContext c;
-      c.w = w_in;
-      c.f = f_in;
-      c.dw = C_bm * wdot;
-      c.temp_c = fx.t0_c;  // no temperature on a drive: temperature terms stay zero
-      Vec3 dg, da;
-      sensor_side_terms(fx, c, dg, da);
-      w_in += gyro_inv * dg;
-      f_in += accel_inv * da;
+    for (std::size_t u = 0; u < units.size(); ++u) {
+      const auto out = units[u].sample(prof, t, dt, b, lat, h);
+      if (sinks.imu) sinks.imu(SimImu{t, out.gyro, out.accel, static_cast<int>(u)});
     }
-    const auto out = mems.sample(t, w_in, f_in);
-    if (sinks.imu) sinks.imu(SimImu{t, out.gyro, out.accel});
+    const ImuErrorSimulator& mems = units.front().errors();
     if (sinks.truth) sinks.truth(SimTruth{t, lat, lon, h, b.v_n, b.C_nb, b.w_ib, b.f, mems.gyro_drift(), mems.accel_drift()});
 
     // Reference epochs and GNSS fixes in (t − dt, t]: position interpolated linearly.

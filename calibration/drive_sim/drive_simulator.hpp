@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <random>
+#include <vector>
 
 #include "calibration/drive_sim/route.hpp"
 #include "calibration/effects/effect_terms.hpp"
@@ -52,11 +53,24 @@ struct DriveSimConfig {
   // motion at t − τ; correlated_drift replaces the drift σ, τ of `noise`. Temperature terms need a
   // temperature and the table terms a bench: not used here.
   EffectTerms effects;
+  // More MEMS units on the same vehicle (issue 21): the route, the reference and the GNSS are the
+  // drive's, once; each unit here has its own errors, noise, seed, mounting and lever arm. The unit
+  // above is unit 0 and its output is unchanged by them.
+  struct Unit {
+    SensorErrors mems;
+    NoiseSpec noise = adis16488a_noise();
+    Vec3 mounting_rpy = Vec3::Zero();
+    Vec3 lever_arm = Vec3::Zero();
+    std::uint64_t seed = 1;
+    EffectTerms effects;
+  };
+  std::vector<Unit> more_units;
 };
 
 struct SimImu {
   double t = 0;
   Vec3 gyro, accel;  // rad/s, m/s², MEMS axes (device output)
+  int unit = 0;      // 0, or 1 + index into DriveSimConfig::more_units
 };
 struct SimRef {
   double t = 0;
