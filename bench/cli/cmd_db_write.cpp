@@ -45,6 +45,10 @@ void import_units(const DbArgs& a) {
   namespace fs = std::filesystem;
   const fs::path dir(a.file), file = dir / "units.json";
   const json j = read_json_file(file);
+  if (j.is_object() && j.value("format", "") == "calbench-drive-units/1")
+    throw InputError(file.string(), 0, "format",
+                     "a multi-unit drive, not fit results: fit it first (calbench fit drive " + dir.string() +
+                         " --out OUT), then import OUT");
   if (!j.is_object() || j.value("format", "") != "calbench-fit-units/1" || !j.contains("units") || !j["units"].is_array())
     throw InputError(file.string(), 0, "format", "expected the units.json of a multi-unit `fit drive` (calbench-fit-units/1)");
   if (a.parent) throw InputError("--parent", 0, "", "one parent set cannot be every unit's: import a unit's RESULT.json alone");

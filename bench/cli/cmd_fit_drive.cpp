@@ -11,6 +11,7 @@
 #include "bench/drive/fit_drive.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "calibration/inmotion/priors.hpp"
+#include "common/input_error.hpp"
 #include "common/units.hpp"
 
 namespace calbench::cli {
@@ -141,8 +142,9 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "mounting estimate then starts this fit); the filter's priors are the set's sigma combined with the "
                  "device class's stability allowance, and the result is the fused set; catalogue keys it carries "
                  "(diagnose --out IMPROVED.json: time_offset, lever_arm, g_sensitivity, scale_*, temperature_*, "
-                 "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note")
-      ->check(CLI::ExistingFile);
+                 "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note; a multi-unit "
+                 "drive: a folder with SLOT/COEFFS.json or SLOT/RESULT.json per unit")
+      ->check(CLI::ExistingPath);
   d->add_option("--out", a->out, "RESULT.json to write (a multi-unit drive: a folder)")->required();
   CLI::Option* obs = d->add_option("--obs", a->obs,
                                    "observations to use: any of pos,vel,att (eqs 13, 14, 15); default pos,vel,att, with "
@@ -214,6 +216,10 @@ const bool registered = add_command(31, [](CLI::App& app) {
       if (failed) throw Exit{bad ? 2 : 1};
       return;
     }
+    if (!a->coeffs.empty() && fs::is_directory(a->coeffs))
+      throw InputError(a->coeffs, 0, "",
+                       "is a folder: --coeffs FOLDER is for a multi-unit drive (units.json); give the set's file "
+                       "(coefficients.json or RESULT.json)");
     const nlohmann::json j = fit_drive(*a);
     if (*json) print_json(j.dump(2));
     else print_summary(j);

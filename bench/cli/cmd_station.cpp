@@ -190,7 +190,7 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_flag("--force", a->force, "replace an earlier run in --out");
   add_operator_option(run, a->o.operator_name,
                   "who runs the station, recorded with the run and the set (default: $CALBENCH_OPERATOR, else the OS user)");
-  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed)")
+  run->add_option("--seed", a->o.seed, "emulated unit (random errors drawn from this seed; a fixture's unit k: seed + k - 1)")
       ->capture_default_str()
       ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
   run->add_option("--max-repeats", a->o.max_repeats, "repeats of a step that fails its data check")
