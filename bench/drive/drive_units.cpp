@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "bench/io/json_util.hpp"
+#include "bench/io/slot_name.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
 
@@ -16,13 +17,6 @@ namespace calbench {
 namespace fs = std::filesystem;
 
 namespace {
-
-bool good_slot(const std::string& s) {
-  if (s.empty() || s.size() > 32) return false;
-  for (const char ch : s)
-    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_')) return false;
-  return true;
-}
 
 // The unit's copy of a shared file is that file: the same file (a hard link), or equal bytes.
 bool same_file(const fs::path& a, const fs::path& b) {
@@ -71,7 +65,7 @@ DriveUnits load_drive_units(const fs::path& dir) {
       throw InputError(f, 0, key, "expected {\"slot\": NAME, \"dir\": FOLDER}");
     DriveUnit du;
     du.slot = u["slot"].get<std::string>();
-    if (!good_slot(du.slot)) throw InputError(f, 0, key + ".slot", "'" + du.slot + "': 1 to 32 letters, digits, '-' or '_'");
+    if (!valid_slot_name(du.slot)) throw InputError(f, 0, key + ".slot", "'" + du.slot + "': " + kSlotNameRule);
     if (!slots.insert(du.slot).second) throw InputError(f, 0, key + ".slot", "duplicate slot '" + du.slot + "'");
     const std::string rel = u["dir"].get<std::string>();
     if (rel.empty() || fs::path(rel).is_absolute() || rel.find("..") != std::string::npos)

@@ -5,6 +5,7 @@
 #include <map>
 #include <toml++/toml.h>
 
+#include "bench/io/slot_name.hpp"
 #include "bench/io/toml_read.hpp"
 #include "bench/io/toml_text.hpp"
 #include "common/input_error.hpp"
@@ -20,13 +21,6 @@ Mat3 rpy_rotation(const Vec3& rpy_deg) {
   return (Eigen::AngleAxisd(rpy_deg(2) * kDeg, Vec3::UnitZ()) * Eigen::AngleAxisd(rpy_deg(1) * kDeg, Vec3::UnitY()) *
           Eigen::AngleAxisd(rpy_deg(0) * kDeg, Vec3::UnitX()))
       .toRotationMatrix();
-}
-
-bool good_name(const std::string& s) {
-  if (s.empty() || s.size() > 32) return false;
-  for (const char ch : s)
-    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_')) return false;
-  return true;
 }
 
 }  // namespace
@@ -66,8 +60,7 @@ Fixture load_fixture(const std::filesystem::path& file) {
     FixtureSlot s;
     s.line = static_cast<int>(t->source().begin.line);
     s.name = c.str(*t, pre, "name", std::nullopt);
-    if (!good_name(s.name))
-      c.fail(t->get("name"), pre + "name", "'" + s.name + "': 1 to 32 letters, digits, '-' or '_' (it names a folder)");
+    if (!valid_slot_name(s.name)) c.fail(t->get("name"), pre + "name", "'" + s.name + "': " + kSlotNameRule);
     if (const auto [it, fresh] = names.emplace(s.name, pre + "name"); !fresh)
       c.fail(t->get("name"), pre + "name", "duplicate slot '" + s.name + "' (also " + it->second + ")");
     s.imu = c.str(*t, pre, "imu", std::nullopt);

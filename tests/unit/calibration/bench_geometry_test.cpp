@@ -70,13 +70,17 @@ TEST(BenchGeometry, TableAnglesSolvedForAnOrientationGiveItBack) {
 
 // The angular acceleration of the IMU (both axes accelerating, the outer carrying the inner round) is
 // the time derivative of its angular rate.
+// Both axes on constant accelerations (rate0, accel each), at time t, mount m.
+BenchKinematics accelerating(const SiteEarth& earth, double t, int m, double outer_rate0, double outer_accel,
+                             double inner_rate0, double inner_accel) {
+  const AxisState o{0.3 + outer_rate0 * t + 0.5 * outer_accel * t * t, outer_rate0 + outer_accel * t, outer_accel};
+  const AxisState n{-1.1 + inner_rate0 * t + 0.5 * inner_accel * t * t, inner_rate0 + inner_accel * t, inner_accel};
+  return bench_kinematics(earth, o, n, m);
+}
+
 TEST(BenchGeometry, AngularAccelerationIsTheDerivativeOfTheRate) {
   const SiteEarth earth(Site{55.75, 37.62, 150.0});
-  auto at = [&](double t, int m) {
-    const AxisState o{0.3 + 0.7 * t + 0.5 * 2.0 * t * t, 0.7 + 2.0 * t, 2.0};
-    const AxisState n{-1.1 + 3.0 * t - 0.5 * 5.0 * t * t, 3.0 - 5.0 * t, -5.0};
-    return bench_kinematics(earth, o, n, m);
-  };
+  auto at = [&](double t, int m) { return accelerating(earth, t, m, 0.7, 2.0, 3.0, -5.0); };
   const double h = 1e-5;
   for (int m = 0; m < kMountCount; ++m) {
     const Vec3 fd = (at(h, m).w_ib_b - at(-h, m).w_ib_b) / (2 * h);
@@ -94,11 +98,7 @@ TEST(BenchGeometry, ASlotOffTheCentreFeelsItsOwnSpecificForce) {
   SlotPose slot;
   slot.C_f_s = (Eigen::AngleAxisd(0.4, Vec3::UnitZ()) * Eigen::AngleAxisd(-0.2, Vec3::UnitX())).toRotationMatrix();
   slot.r_f = Vec3(0.08, -0.03, 0.02);
-  auto at = [&](double t, int m) {
-    const AxisState o{0.3 + 0.5 * t + 0.5 * 1.5 * t * t, 0.5 + 1.5 * t, 1.5};
-    const AxisState n{-1.1 + 5.0 * t - 0.5 * 4.0 * t * t, 5.0 - 4.0 * t, -4.0};
-    return bench_kinematics(earth, o, n, m);
-  };
+  auto at = [&](double t, int m) { return accelerating(earth, t, m, 0.5, 1.5, 5.0, -4.0); };
   const double h = 1e-4;
   for (int m = 0; m < kMountCount; ++m) {
     const BenchKinematics c = at(0, m), s = slot_kinematics(c, slot);
