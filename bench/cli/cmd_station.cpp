@@ -102,6 +102,13 @@ void run_station(StationArgs& a) {
   if (!a.force && holds_run(a.o.out_dir))
     throw InputError(a.out, 0, "", "already holds a station run (recording/, COEFFS.json): give another --out, or --force to replace it");
   for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
+  // imu-flags-from without the flags would silently inject nothing.
+  auto flags_need = [](const station::ImuInjections& i, const std::string& who) {
+    if (i.flags_from_s >= 0 && i.sys_e_flag == 0)
+      throw InputError("--inject", 0, who + "imu-flags-from", "needs " + who + "imu-flags=BITS (which error flags to raise)");
+  };
+  flags_need(a.o.inject.imu, "");
+  for (const auto& [slot, i] : a.o.inject.slot) flags_need(i, slot + ":");
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
   if (a.o.units > 0 && !a.o.emulated)
     throw InputError("--units", 0, "", "an emulated fixture needs --emulated (a real fixture is a --fixture file)");

@@ -154,6 +154,7 @@ LEFT="st" t station-fixture-bad-uri 2 "fx-uri\.toml:3: 'slot\[1\]\.imu': 'spi0':
 LEFT="st" t station-fixture-one-chip-select 2 "fx-cs\.toml:6: 'slot\[2\]\.imu': .*two units on one chip select" "$CALBENCH" station run --fixture fx-cs.toml --table modbus-tcp://127.0.0.1:1 --plan "$SRC/tests/data/short_plan.toml" --out st
 LEFT="st" t station-units-zero 2 "--units: .*'0'" "$CALBENCH" station run --emulated --units 0 --plan "$SRC/tests/data/short_plan.toml" --out st
 LEFT="st" t station-inject-slot-table 2 "--inject: 'table-kill-at': a fault of the table" "$CALBENCH" station run --emulated --units 2 --inject 1:table-kill-at=3 --plan "$SRC/tests/data/short_plan.toml" --out st
+LEFT="st" t station-inject-flags-from-alone 2 "--inject: '2:imu-flags-from': needs 2:imu-flags=BITS" "$CALBENCH" station run --emulated --units 2 --inject 2:imu-flags-from=3 --plan "$SRC/tests/data/short_plan.toml" --out st
 
 # ---------------------------------------------------------------------------------- emulate table
 t emulate-sub-typo 2 "unknown command 'tabel' for 'calbench emulate'; did you mean 'table'\?" "$CALBENCH" emulate tabel
