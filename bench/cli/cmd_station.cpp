@@ -110,10 +110,6 @@ void run_station(StationArgs& a) {
   flags_need(a.o.inject.imu, "");
   for (const auto& [slot, i] : a.o.inject.slot) flags_need(i, slot + ":");
   if (!a.inject.empty() && !a.o.emulated) throw InputError("--inject", 0, "", "fault injection needs --emulated");
-  if (a.o.units > 0 && !a.o.emulated)
-    throw InputError("--units", 0, "", "an emulated fixture needs --emulated (a real fixture is a --fixture file)");
-  if (a.o.units > 0 && !a.o.fixture_file.empty())
-    throw InputError("--units", 0, "", "either --units (emulated units) or --fixture FILE, not both");
   // A bad operator name is bad input, refused before anything moves.
   (void)db::Actor::from_environment(a.o.operator_name);
   if (a.o.emulated && !a.o.imu_uri.empty())  // was silently ignored: the emulated IMU ran instead

@@ -19,12 +19,7 @@ using Ctx = TomlReader;
 
 RouteFile load_route(const std::filesystem::path& file) {
   Ctx c{file.string()};
-  toml::table root;
-  try {
-    root = toml::parse(read_toml_text(file), file.string());
-  } catch (const toml::parse_error& e) {
-    throw InputError(file.string(), e.source().begin.line, "", std::string(e.description()));
-  }
+  const toml::table root = parse_toml_file(file);
   using units::kDeg;
   RouteFile rf;
   c.check_keys(root, "", {"name", "description", "start", "mounting", "imu", "reference", "gnss", "vehicle", "segment"});

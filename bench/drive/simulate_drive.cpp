@@ -39,9 +39,6 @@ NoiseSpec read_noise_file(const std::string& file) {
   }
   return n;
 }
-}  // namespace
-
-namespace {
 
 // One simulated unit: its truth (errors and true mounting) and what meta.json says of it.
 struct SimUnit {

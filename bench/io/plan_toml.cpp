@@ -29,13 +29,7 @@ struct Ctx : TomlReader {
 BenchPlan load_plan(const std::filesystem::path& file) {
   using namespace units;
   Ctx c{{file.string()}};
-  toml::table root;
-  try {
-    root = toml::parse(read_toml_text(file), file.string());
-  } catch (const toml::parse_error& e) {
-    if (!std::filesystem::exists(file)) throw InputError(c.file, 0, "", "cannot open: no such file");
-    throw InputError(c.file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
-  }
+  const toml::table root = parse_toml_file(file);
   c.check_keys(root, "", {"plan", "site", "table", "step", "temperature"});
   BenchPlan p;
   int repeat = 1;

@@ -67,4 +67,13 @@ std::string read_toml_text(const std::filesystem::path& file) {
   return text;
 }
 
+toml::table parse_toml_file(const std::filesystem::path& file) {
+  const std::string text = read_toml_text(file);
+  try {
+    return toml::parse(text, file.string());
+  } catch (const toml::parse_error& e) {
+    throw InputError(file.string(), e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
+  }
+}
+
 }  // namespace calbench

@@ -6,6 +6,7 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <toml++/toml.h>
 
 namespace calbench {
 
@@ -13,5 +14,8 @@ namespace calbench {
 std::string read_toml_text(const std::filesystem::path& file);
 // The same check on text already in memory.
 void check_toml_text(const std::string& text, const std::string& file);
+// Reads, checks and parses the file (plans, routes, fixtures); a syntax error is an InputError
+// "invalid TOML: ..." with the file and line.
+toml::table parse_toml_file(const std::filesystem::path& file);
 
 }  // namespace calbench

@@ -8,6 +8,7 @@
 #include "bench/io/slot_name.hpp"
 #include "bench/io/toml_read.hpp"
 #include "bench/io/toml_text.hpp"
+#include "calibration/ins/nav_math.hpp"
 #include "common/input_error.hpp"
 #include "common/units.hpp"
 
@@ -16,23 +17,14 @@ namespace {
 
 constexpr int kMaxSlots = 16;
 
-Mat3 rpy_rotation(const Vec3& rpy_deg) {
-  using units::kDeg;
-  return (Eigen::AngleAxisd(rpy_deg(2) * kDeg, Vec3::UnitZ()) * Eigen::AngleAxisd(rpy_deg(1) * kDeg, Vec3::UnitY()) *
-          Eigen::AngleAxisd(rpy_deg(0) * kDeg, Vec3::UnitX()))
-      .toRotationMatrix();
-}
+// Slot axes → fixture axes from roll, pitch, yaw in degrees (z-y-x, as a drive's mounting).
+Mat3 rpy_rotation(const Vec3& rpy_deg) { return ins::dcm_from_rpy(rpy_deg * units::kDeg); }
 
 }  // namespace
 
 Fixture load_fixture(const std::filesystem::path& file) {
   TomlReader c{file.string()};
-  toml::table root;
-  try {
-    root = toml::parse(read_toml_text(file), file.string());
-  } catch (const toml::parse_error& e) {
-    throw InputError(c.file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
-  }
+  const toml::table root = parse_toml_file(file);
   c.check_keys(root, "", {"fixture", "slot"});
   Fixture fx;
   fx.file = file.string();

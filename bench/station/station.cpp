@@ -24,6 +24,7 @@
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/earth.hpp"
 #include "common/imu_error_sim.hpp"
+#include "common/json_fields.hpp"
 #include "common/units.hpp"
 #include "db/journal.hpp"
 #include "db/store.hpp"
@@ -74,7 +75,6 @@ std::string iso_utc(std::chrono::system_clock::time_point tp) {
 // One unit of the fixture: its devices, the step being recorded, its output and its fate.
 struct Unit {
   FixtureSlot slot;
-  std::size_t index = 0;           // in the fixture
   bool at_centre = true;           // identity pose at the centre: the centre's kinematics as they are
   fs::path out, rec_dir;
   std::uint64_t seed = 1;
@@ -132,7 +132,7 @@ class Station {
   std::string step_check(const Unit& u) const;  // empty: the step's data passed
   void command_step(const PlanStep& s);
   void progress(const std::string& what, bool line = false);
-  void finish_unit(Unit& u, Result& res);
+  void finish_unit(Unit& u);
   void keep_partial(Unit& u);
   void record_aborted(Unit& u, const std::string& outcome, const std::string& why, Result& res);
   double now() const { return clock_ ? clock_->now() : units_.front()->bus->now(); }
@@ -193,9 +193,10 @@ void Station::make_units() {
   // Which fixture: --fixture, else --units N (emulated), else the plan's [plan] fixture, else one unit.
   fs::path ffile = o_.fixture_file;
   if (ffile.empty() && o_.units == 0 && !plan_.fixture_file.empty()) ffile = plan_.fixture_file;
-  if (!ffile.empty() && o_.units > 0)
-    throw std::invalid_argument("--units makes an emulated fixture: not with a fixture file (" + ffile.string() + ")");
-  if (o_.units > 0 && !o_.emulated) throw std::invalid_argument("--units needs --emulated (a real fixture is a fixture file)");
+  if (o_.units > 0 && !o_.emulated)
+    throw InputError("--units", 0, "", "an emulated fixture needs --emulated (a real fixture is a --fixture file)");
+  if (o_.units > 0 && !o_.fixture_file.empty())
+    throw InputError("--units", 0, "", "either --units (emulated units) or --fixture FILE, not both");
   if (!ffile.empty()) fixture_ = load_fixture(ffile);
   else if (o_.units > 0) fixture_ = emulated_fixture(o_.units);
   else fixture_ = single_unit_fixture(o_.emulated ? std::string() : o_.imu_uri);
@@ -227,7 +228,6 @@ void Station::make_units() {
   for (std::size_t k = 0; k < fixture_.slots.size(); ++k) {
     auto u = std::make_unique<Unit>();
     u->slot = fixture_.slots[k];
-    u->index = k;
     u->at_centre = u->slot.pose.C_f_s.isIdentity(0) && u->slot.pose.r_f.isZero(0);
     u->out = fixture_mode_ ? o_.out_dir / u->slot.name : o_.out_dir;
     u->rec_dir = u->out / "recording";
@@ -691,7 +691,7 @@ db::BenchRunInput Station::bench_run_record(const Unit& u, const db::Store& stor
 }
 
 // After the table cycle: the unit's recording is closed, fitted, its coefficients written and stored.
-void Station::finish_unit(Unit& u, Result& res) {
+void Station::finish_unit(Unit& u) {
   nlohmann::json& js = u.summary;
   u.writer->finish();
   u.writer.reset();
@@ -724,7 +724,6 @@ void Station::finish_unit(Unit& u, Result& res) {
   }
   js["coefficients"] = (u.out / "COEFFS.json").string();
   js["fit"] = bench_result_json(fr, cs);
-  (void)res;
 }
 
 // Nothing captured is lost: the step in progress did not pass its check (or was cut short), so its
@@ -789,8 +788,8 @@ Result Station::run() {
         meta.extra["station"].update({{"run_id", run_id_},
                                       {"fixture", fixture_.name},
                                       {"slot", u.slot.name},
-                                      {"rotation_deg", {u.slot.rotation_deg(0), u.slot.rotation_deg(1), u.slot.rotation_deg(2)}},
-                                      {"offset_mm", {u.slot.pose.r_f(0) * 1e3, u.slot.pose.r_f(1) * 1e3, u.slot.pose.r_f(2) * 1e3}}});
+                                      {"rotation_deg", to_json(u.slot.rotation_deg)},
+                                      {"offset_mm", to_json(Vec3(u.slot.pose.r_f * 1e3))}});
       if (fixture_mode_ && !u.slot.imu.empty()) meta.extra["station"]["imu"] = u.slot.imu;
       u.writer = std::make_unique<RecordingWriter>(u.rec_dir, meta, ImuForm::rates, true, true);
       if (u.emu && u.inj.skip_every) u.emu->faults().skip_every = u.inj.skip_every;
@@ -865,7 +864,7 @@ Result Station::run() {
       Unit& u = *up;
       if (u.failed) continue;
       try {
-        finish_unit(u, res);
+        finish_unit(u);
         ++done;
       } catch (const std::exception& e) {
         if (!fixture_mode_) throw;
