@@ -176,6 +176,11 @@ const bool registered = add_command(31, [](CLI::App& app) {
         ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(finite_pos);
   d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(finite_pos);
+  d->add_option("--covariance", a->covariance,
+                 "covariance arithmetic: structured (default: the moving rows only, bit for bit the dense results), "
+                 "joseph (the same with the Joseph-form update) or dense (full N x N products every step, the reference)")
+      ->check(CLI::IsMember({"structured", "joseph", "dense"}))
+      ->option_text("structured|joseph|dense");
   d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)")->check(finite_pos);
   d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)")->check(finite_pos);
   d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)")->check(finite_pos);

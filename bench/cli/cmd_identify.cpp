@@ -205,7 +205,7 @@ Loaded load_recording(const IdentifyArgs& a) {
   while (r.next(rec)) {
     if (rows == 0) t0 = rec.t;
     // Logger clocks jitter: ±10 % of the nominal step is accepted, a missing sample is not.
-    if (rows >= 1) check_step(L.file, r.csv().line(), t_prev, rec.t, dt_nom, 0.1);
+    if (rows >= 1) check_step(L.file, r.line(), t_prev, rec.t, dt_nom, 0.1);
     t_prev = rec.t;
     const double inv = r.form() == ImuForm::increments ? 1.0 / rec.dt : 1.0;
     for (std::size_t j = 0; j < pick.size(); ++j) {

@@ -37,16 +37,16 @@ std::shared_ptr<const SharedReference> load_shared_reference(const fs::path& fil
 }
 
 DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre, const EffectTerms* effects, Aiding aiding,
-                         std::shared_ptr<const SharedReference> shared)
+                         std::shared_ptr<const SharedReference> shared, bool digest)
     : dir_(dir), shared_(aiding == Aiding::gnss ? nullptr : std::move(shared)) {
   meta_ = read_meta(dir);
   if (meta_.kind != RecordingKind::drive)
     throw InputError((dir / "meta.json").string(), 0, "kind", "expected a drive recording (kind \"drive\")");
   if (!meta_.mounting) throw InputError((dir / "meta.json").string(), 0, "mounting", "a drive recording needs a mounting");
   if (!(meta_.imu_rate_hz > 0)) throw InputError((dir / "meta.json").string(), 0, "imu_rate_hz", "must be > 0");
-  imu_ = std::make_unique<ImuReader>(dir / "imu.csv", meta_.imu_rate_hz);
-  if (aiding == Aiding::gnss) gnss_ = std::make_unique<GnssReader>(dir / "gnss.csv");
-  else if (!shared_) ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv");
+  imu_ = std::make_unique<ImuReader>(dir / "imu.csv", meta_.imu_rate_hz, digest);
+  if (aiding == Aiding::gnss) gnss_ = std::make_unique<GnssReader>(dir / "gnss.csv", digest);
+  else if (!shared_) ref_ = std::make_unique<DriveRefReader>(dir / "reference.csv", digest);
   if (pre) {
     cg_ = TriadCorrector(pre->gyro);
     ca_ = TriadCorrector(pre->accel);
@@ -58,20 +58,31 @@ DriveStream::DriveStream(const fs::path& dir, const std::optional<SensorErrors>&
 
 bool DriveStream::read_epoch() {
   if (gnss_) {
-    GnssRow g;
-    if (!gnss_->next(g)) return false;
-    pending_ = to_ref_obs(g);
+    if (!gnss_->next(pending_gnss_)) {
+      gnss_done_ = true;
+      return false;
+    }
+    pending_ = to_ref_obs(pending_gnss_);
     return true;
   }
   if (shared_) {
     if (shared_next_ >= shared_->rows.size()) return false;
-    pending_ = to_ref_obs(shared_->rows[shared_next_++]);
+    pending_row_ = shared_->rows[shared_next_++];
+    pending_ = to_ref_obs(pending_row_);
     return true;
   }
-  DriveRefRow r;
-  if (!ref_->next(r)) return false;
-  pending_ = to_ref_obs(r);
+  if (!ref_->next(pending_row_)) {
+    ref_done_ = true;
+    return false;
+  }
+  pending_ = to_ref_obs(pending_row_);
   return true;
+}
+
+std::optional<std::string> DriveStream::aiding_sha256() const {
+  if (shared_) return shared_->sha256.empty() ? std::nullopt : std::optional<std::string>(shared_->sha256);
+  if (gnss_) return gnss_done_ ? gnss_->sha256() : std::nullopt;
+  return ref_done_ ? ref_->sha256() : std::nullopt;
 }
 
 Mat3 DriveStream::nominal_mounting() const { return ins::dcm_from_rpy(meta_.mounting->rpy_deg * units::kDeg); }
@@ -83,6 +94,9 @@ bool DriveStream::next(Event& e) {
     e.is_ref = true;
     e.t = pending_.t;
     e.ref = pending_;
+    if (gnss_) gnss_out_ = pending_gnss_;
+    else row_out_ = pending_row_;
+    have_row_ = true;
     have_ref_ = read_epoch();
     return true;
   }

@@ -40,8 +40,10 @@ class DriveStream {
  public:
   // effects: catalogue terms to compensate (with the set they belong to: pre_correction, or zero).
   // shared: the reference epochs from memory instead of dir/reference.csv (reference aiding only).
+  // digest: SHA-256 of the IMU and aiding files computed while they are read (imu_sha256(),
+  // aiding_sha256() once the stream has reached their ends).
   DriveStream(const fs::path& dir, const std::optional<SensorErrors>& pre_correction, const EffectTerms* effects = nullptr,
-              Aiding aiding = Aiding::reference, std::shared_ptr<const SharedReference> shared = nullptr);
+              Aiding aiding = Aiding::reference, std::shared_ptr<const SharedReference> shared = nullptr, bool digest = false);
   const RecordingMeta& meta() const { return meta_; }
   Mat3 nominal_mounting() const;  // C_mb from meta.json
   Vec3 lever_arm() const;
@@ -57,6 +59,12 @@ class DriveStream {
   bool next(Event& e);
   // IMU rows read so far that carried a temperature.
   long rows_with_temperature() const { return rows_temp_; }
+  // The reference.csv row of the reference epoch last returned (nullptr: GNSS aiding, or none yet).
+  const DriveRefRow* last_reference_row() const { return have_row_ && !gnss_ ? &row_out_ : nullptr; }
+  // The gnss.csv row of the fix last returned (nullptr: reference aiding, or none yet).
+  const GnssRow* last_gnss_row() const { return have_row_ && gnss_ ? &gnss_out_ : nullptr; }
+  std::optional<std::string> imu_sha256() const { return imu_->sha256(); }
+  std::optional<std::string> aiding_sha256() const;
 
  private:
   fs::path dir_;
@@ -74,6 +82,10 @@ class DriveStream {
   ins::RateIntegrator integ_;
   bool have_ref_ = false, imu_done_ = false;
   inmotion::RefObs pending_;  // the next epoch of the aiding file
+  DriveRefRow pending_row_, row_out_;  // its reference.csv row; that of the epoch last returned
+  GnssRow pending_gnss_, gnss_out_;    // the same of gnss.csv
+  bool have_row_ = false;
+  bool ref_done_ = false, gnss_done_ = false;  // the aiding file read to its end
   bool read_epoch();
   double last_imu_t_ = -1e300;
 };

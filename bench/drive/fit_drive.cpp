@@ -15,6 +15,7 @@
 #include "calibration/effects/effect_registry.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/input_warning.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
@@ -328,8 +329,8 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   const fs::path dir(a.dir);
   if (!a.aiding.empty() && a.aiding != "reference" && a.aiding != "gnss")
     throw InputError("--aiding", 0, "", "expected reference or gnss, got '" + a.aiding + "'");
-  const bool gnss = a.aiding == "gnss" || (a.aiding.empty() && !fs::exists(dir / "reference.csv") && fs::exists(dir / "gnss.csv"));
-  if (gnss && !fs::exists(dir / "gnss.csv"))
+  const bool gnss = a.aiding == "gnss" || (a.aiding.empty() && !recording_has_table(dir, "reference") && recording_has_table(dir, "gnss"));
+  if (gnss && !recording_has_table(dir, "gnss"))
     throw InputError((dir / "gnss.csv").string(), 0, "", "--aiding gnss needs gnss.csv in the recording (no such file)");
   if (gnss) {
     if (!a.obs_given) args.obs = "pos,vel";
@@ -363,6 +364,10 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   cfg.prior = pc.report.sigma;
   cfg.obs_rate_hz = a.obs_rate_hz;
   cfg.cov_dt = a.cov_dt;
+  if (a.covariance == "dense") cfg.covariance = inmotion::InMotionConfig::Covariance::dense;
+  else if (a.covariance == "joseph") cfg.covariance = inmotion::InMotionConfig::Covariance::joseph;
+  else if (a.covariance != "structured")
+    throw InputError("--covariance", 0, "", "expected structured, joseph or dense, got '" + a.covariance + "'");
   cfg.store_for_smoother = a.smooth;
   nlohmann::json models;
   if (!a.drift_models.empty()) models = apply_drift_models(a.drift_models, cfg);
@@ -395,7 +400,27 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // The series columns of the layout this configuration gives (the filter builds the same one).
   const std::vector<std::string> columns = inmotion::column_names(inmotion::make_layout(cfg));
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
-                 gnss ? Aiding::gnss : Aiding::reference, a.shared_reference);
+                 gnss ? Aiding::gnss : Aiding::reference, a.shared_reference, /*digest=*/true);
+  // The reference epochs the QC will need, kept as they pass (the QC then reads no reference.csv;
+  // memory bounded by its horizon): from the first epoch of the window over the horizon (in-sample),
+  // and around the end of a finite window over the horizon (out-of-sample), each up to and with the
+  // first epoch beyond it (the QC stops there).
+  const bool capture = a.qc && !gnss && !a.shared_reference;
+  std::vector<DriveRefRow> qc_in, qc_oos;
+  AidingStats aiding_stats;  // for reference_system, gathered as the rows pass
+  bool qc_in_full = false, qc_oos_full = false;
+  auto keep_for_qc = [&](double t, bool started) {
+    const DriveRefRow* row = st.last_reference_row();
+    if (!capture || !row) return;
+    if (started && !qc_in_full) {
+      qc_in.push_back(*row);
+      qc_in_full = t > qc_in.front().t + a.qc_horizon_s + 1e-9;
+    }
+    if (std::isfinite(t1) && !qc_oos_full && t >= t1 - 1.0) {
+      qc_oos.push_back(*row);
+      qc_oos_full = t > t1 + a.qc_horizon_s + 2.0;
+    }
+  };
   const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};  // observations: position, velocity, attitude
   std::unique_ptr<Filter> f;
   std::unique_ptr<DriveSeries> series;
@@ -411,6 +436,11 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   DriveStream::Event e;
   while (st.next(e)) {
     t_data_end = std::max(t_data_end, e.t);
+    if (e.is_ref) {
+      keep_for_qc(e.t, f != nullptr || (e.t >= t0 - 1e-9 && e.t <= t1 + 1e-9));
+      if (const DriveRefRow* r = st.last_reference_row()) aiding_stats.add(*r);
+      else if (const GnssRow* g = st.last_gnss_row()) aiding_stats.add(*g);
+    }
     if (e.t < t0 - 1e-9) continue;
     if (e.t > t1 + 1e-9) continue;  // keep reading to learn where the data end
     if (e.is_ref) {
@@ -479,15 +509,24 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   j["format"] = "calbench-inmotion-result/1";
   j["device"] = {{"model", dev.model}, {"serial", dev.serial}};
   const fs::path dir(a.dir);
+  // Digests of the files as they were read (computed while reading; a file the stream did not
+  // read to its end is hashed here).
+  const auto digest = [](std::optional<std::string> d, const fs::path& file) { return d ? *d : sha256_file(file); };
+  const fs::path imu_file = table_file(dir, "imu"), ref_file = table_file(dir, "reference");
+  const bool h5 = imu_file.filename() == kHdf5RecordingFile;
+  nlohmann::json ref_digest = nullptr;
+  if (a.shared_reference) ref_digest = a.shared_reference->sha256;
+  else if (!gnss && recording_has_table(dir, "reference")) ref_digest = digest(st.aiding_sha256(), ref_file);
+  else if (recording_has_table(dir, "reference")) ref_digest = sha256_file(ref_file);
   j["recording"] = {{"path", fs::absolute(dir).lexically_normal().string()},
-                    {"sha256", sha256_file(dir / "imu.csv")},
-                    {"sha256_reference", a.shared_reference ? nlohmann::json(a.shared_reference->sha256)
-                                         : fs::exists(dir / "reference.csv") ? nlohmann::json(sha256_file(dir / "reference.csv"))
-                                                                             : nlohmann::json(nullptr)},
+                    {"sha256", digest(st.imu_sha256(), imu_file)},
+                    {"sha256_reference", ref_digest},
                     {"sha256_meta", sha256_file(dir / "meta.json")}};
-  if (gnss) j["recording"]["sha256_gnss"] = sha256_file(dir / "gnss.csv");
+  // An HDF5 recording: the digests are of recording.h5 (every table), not of CSV files.
+  if (h5) j["recording"]["format"] = "hdf5";
+  if (gnss) j["recording"]["sha256_gnss"] = digest(st.aiding_sha256(), table_file(dir, "gnss"));
   j["recording"]["device"] = {{"model", meta.device.model}, {"serial", meta.device.serial}};  // the unit that drove
-  j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss);
+  j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
   j["window_s"] = {t_first, t_last};
   j["observations"] = a.obs;
   if (gnss) j["aiding"] = "gnss";
@@ -522,6 +561,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     j["recoveries"] = rj;
   }
   j["smoothed"] = a.smooth;
+  j["covariance"] = a.covariance;
   j["coefficients"] = set_json(dev, total);
   j["correction"] = set_json(dev, corr);
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
@@ -577,7 +617,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // QC: out-of-sample inertial-only navigation after the window, with the input set and with
   // the result, when the recording continues; otherwise in-sample from the window start.
   nlohmann::json qj;
-  if (a.qc && !fs::exists(dir / "reference.csv")) {
+  if (a.qc && !recording_has_table(dir, "reference")) {
     qj = {{"sample", "not run (no reference.csv: a GNSS-only recording has no reference to navigate against)"}};
   } else if (a.qc) {
     const bool oos = t_data_end > t_last + 10.0;
@@ -586,7 +626,15 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     if (a.coeffs_mounting_deg) before_mount = a.coeffs_mounting_deg->first;
     QcSet before{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, before_mount, std::nullopt, fx.terms, std::nullopt};
     QcSet after{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms, std::nullopt};
-    const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s, a.shared_reference);
+    std::shared_ptr<const SharedReference> qc_ref = a.shared_reference;
+    if (capture) {  // the epochs kept while fitting (the digest is the file's, from the fit's read)
+      auto kept = std::make_shared<SharedReference>();
+      kept->file = ref_file;
+      kept->rows = std::move(oos ? qc_oos : qc_in);
+      kept->sha256 = ref_digest.is_string() ? ref_digest.get<std::string>() : std::string();
+      qc_ref = std::move(kept);
+    }
+    const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s, qc_ref);
     qj = qc_json(q);
     qj["sample"] = oos ? "out-of-sample (after the fit window)" : "in-sample (no data after the fit window)";
   } else {

@@ -24,6 +24,7 @@ struct FitDriveArgs {
   std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
   double obs_rate_hz = 10, cov_dt = 0.1;
+  std::string covariance = "structured";  // structured, joseph or dense (InMotionConfig::covariance)
   double prior_gyro_bias_dps = 0, prior_accel_bias_mg = 0;  // > 0: override the bias priors
   // Stability allowances (how far a parameter may move between the input set's calibration and
   // the drive, 1σ; calibration/inmotion/priors.hpp); NaN: the device class's default.

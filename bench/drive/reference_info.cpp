@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "bench/io/hdf5_recording.hpp"
 #include "common/units.hpp"
 
 namespace calbench {
@@ -18,11 +19,20 @@ std::string g(double v) {
   return s.str();
 }
 
-// The '#' lines before the header of a CSV file, joined.
-std::string leading_comment(const fs::path& file) {
-  std::ifstream in(file);
-  std::string line, out;
-  while (std::getline(in, line) && !line.empty() && line[0] == '#') {
+// The '#' lines before the header of table `name` of the recording (its CSV file, or the
+// "comments" attribute of its HDF5 dataset), joined.
+std::string leading_comment(const fs::path& dir, const std::string& name) {
+  std::vector<std::string> lines;
+  const fs::path file = table_file(dir, name);
+  if (file.filename() == kHdf5RecordingFile) {
+    lines = hdf5_table_info(file, name).comments;
+  } else {
+    std::ifstream in(file);
+    std::string line;
+    while (std::getline(in, line) && !line.empty() && line[0] == '#') lines.push_back(line);
+  }
+  std::string out;
+  for (const std::string& line : lines) {
     const auto b = line.find_first_not_of("# \t");
     if (b == std::string::npos) continue;
     std::string t = line.substr(b);
@@ -32,15 +42,7 @@ std::string leading_comment(const fs::path& file) {
   return out;
 }
 
-struct Range {
-  double lo = std::numeric_limits<double>::infinity(), hi = -std::numeric_limits<double>::infinity();
-  void add(double v) {
-    if (!std::isfinite(v)) return;
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-  }
-  bool any() const { return lo <= hi; }
-};
+using Range = AidingStats::Range;
 
 // "0.02 m (sigma_pos_m of reference.csv)" and the like: which σ the filter used for one type.
 std::string sigma_text(double override_v, const Range& column, const char* column_name, double fallback,
@@ -54,23 +56,36 @@ std::string sigma_text(double override_v, const Range& column, const char* colum
 
 }  // namespace
 
+void AidingStats::Range::add(double v) {
+  if (!std::isfinite(v)) return;
+  lo = std::min(lo, v);
+  hi = std::max(hi, v);
+}
+
+void AidingStats::add(const DriveRefRow& r) {
+  if (n++ == 0) t0 = r.t;
+  t1 = r.t;
+  sp.add(r.sigma_pos_m);
+  sv.add(r.sigma_vel_m_s);
+  sa.add(r.sigma_att_deg);
+}
+
+void AidingStats::add(const GnssRow& r) {
+  if (n++ == 0) t0 = r.t;
+  t1 = r.t;
+  sp.add(r.sigma_h_m);
+  sv.add(r.sigma_v_m);
+  with_vel += r.v_ned && std::isfinite(r.sigma_vel_m_s) && r.sigma_vel_m_s < 1e3;
+}
+
 namespace {
 // GNSS-only aiding: the receiver's fixes are the reference (gnss.csv, antenna = reference origin).
-std::string describe_gnss(const fs::path& dir, const RecordingMeta& meta, const inmotion::InMotionConfig& cfg) {
-  const fs::path file = dir / "gnss.csv";
-  const std::string kind = leading_comment(file);
-  GnssReader rd(file);
-  GnssRow r;
-  long n = 0, with_vel = 0;
-  double t0 = 0, t1 = 0;
-  Range sh, sv;
-  while (rd.next(r)) {
-    if (n++ == 0) t0 = r.t;
-    t1 = r.t;
-    sh.add(r.sigma_h_m);
-    sv.add(r.sigma_v_m);
-    with_vel += r.v_ned && std::isfinite(r.sigma_vel_m_s) && r.sigma_vel_m_s < 1e3;
-  }
+std::string describe_gnss(const fs::path& dir, const RecordingMeta& meta, const inmotion::InMotionConfig& cfg,
+                          const AidingStats& st) {
+  const std::string kind = leading_comment(dir, "gnss");
+  const long n = st.n, with_vel = st.with_vel;
+  const double t0 = st.t0, t1 = st.t1;
+  const Range &sh = st.sp, &sv = st.sv;
   std::ostringstream s;
   s << "GNSS receiver only, no reference INS" << (kind.empty() ? "" : " (" + kind + ")") << " (gnss.csv: " << n
     << " fixes over " << g(t1 - t0) << " s";
@@ -87,22 +102,12 @@ std::string describe_gnss(const fs::path& dir, const RecordingMeta& meta, const 
 }  // namespace
 
 std::string describe_reference(const fs::path& dir, const RecordingMeta& meta, const FitDriveArgs& a,
-                               const inmotion::InMotionConfig& cfg, bool gnss) {
-  if (gnss) return describe_gnss(dir, meta, cfg);
-  const fs::path file = dir / "reference.csv";
-  const std::string kind = leading_comment(file);
-  DriveRefReader rd(file);
-  DriveRefRow r;
-  long n = 0;
-  double t0 = 0, t1 = 0;
-  Range sp, sv, sa;
-  while (rd.next(r)) {
-    if (n++ == 0) t0 = r.t;
-    t1 = r.t;
-    sp.add(r.sigma_pos_m);
-    sv.add(r.sigma_vel_m_s);
-    sa.add(r.sigma_att_deg);
-  }
+                               const inmotion::InMotionConfig& cfg, bool gnss, const AidingStats& st) {
+  if (gnss) return describe_gnss(dir, meta, cfg, st);
+  const std::string kind = leading_comment(dir, "reference");
+  const long n = st.n;
+  const double t0 = st.t0, t1 = st.t1;
+  const Range &sp = st.sp, &sv = st.sv, &sa = st.sa;
   std::ostringstream s;
   s << (kind.empty() ? "reference system not described in reference.csv" : kind) << " (reference.csv: " << n
     << " epochs over " << g(t1 - t0) << " s";

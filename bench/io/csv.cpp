@@ -8,6 +8,9 @@
 #include <cmath>
 #include <cstring>
 
+#include <fast_float/fast_float.h>
+#include <openssl/evp.h>
+
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/input_warning.hpp"
@@ -29,13 +32,26 @@ std::string_view trim(std::string_view s) {
 }
 }  // namespace
 
-CsvReader::CsvReader(std::string path) : path_(std::move(path)), buf_(kBufSize) {
+void CsvReader::DigestFree::operator()(void* ctx) const { EVP_MD_CTX_free(static_cast<EVP_MD_CTX*>(ctx)); }
+
+CsvReader::CsvReader(std::string path, bool digest) : path_(std::move(path)), buf_(kBufSize) {
   file_.reset(std::fopen(path_.c_str(), "rb"));
   if (!file_) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
+  if (digest) {
+    digest_.reset(EVP_MD_CTX_new());
+    if (!digest_ || EVP_DigestInit_ex(static_cast<EVP_MD_CTX*>(digest_.get()), EVP_sha256(), nullptr) != 1)
+      throw std::runtime_error("OpenSSL: cannot start a SHA-256 digest");
+  }
   std::string_view line;
   while (read_line(line)) {
     const auto t = trim(line);
-    if (t.empty() || t.front() == '#') continue;
+    if (t.empty()) continue;
+    if (t.front() == '#') {
+      std::string_view c = t.substr(1);
+      if (!c.empty() && c.front() == ' ') c.remove_prefix(1);
+      comments_.emplace_back(c);
+      continue;
+    }
     std::size_t pos = 0;
     while (true) {
       const std::size_t c = t.find(',', pos);
@@ -50,6 +66,11 @@ CsvReader::CsvReader(std::string path) : path_(std::move(path)), buf_(kBufSize) 
 }
 
 CsvReader::~CsvReader() = default;
+
+std::optional<std::string> CsvReader::sha256() const {
+  if (sha256_.empty()) return std::nullopt;
+  return sha256_;
+}
 
 bool CsvReader::has(std::string_view name) const {
   for (const auto& h : header_)
@@ -87,6 +108,30 @@ void CsvReader::fail(const std::string& column, const std::string& msg) const {
   throw InputError(path_, line_no_, column, msg);
 }
 
+void CsvReader::refill() {
+  beg_ = end_ = 0;
+  end_ = std::fread(buf_.data(), 1, buf_.size(), file_.get());
+  if (end_ < buf_.size()) {
+    if (std::ferror(file_.get())) fail("", std::string("read error: ") + std::strerror(errno));
+    eof_ = true;
+  }
+  if (digest_) {
+    auto* ctx = static_cast<EVP_MD_CTX*>(digest_.get());
+    EVP_DigestUpdate(ctx, buf_.data(), end_);
+    if (eof_) {  // the whole file has passed: the digest is complete
+      unsigned char md[EVP_MAX_MD_SIZE];
+      unsigned int len = 0;
+      EVP_DigestFinal_ex(ctx, md, &len);
+      static const char* hex = "0123456789abcdef";
+      for (unsigned i = 0; i < len; ++i) {
+        sha256_ += hex[md[i] >> 4];
+        sha256_ += hex[md[i] & 15];
+      }
+      digest_.reset();
+    }
+  }
+}
+
 bool CsvReader::read_line(std::string_view& out) {
   // Lines are returned as views into buf_ or carry_ (when a line spans a buffer refill).
   carry_.clear();
@@ -108,11 +153,7 @@ bool CsvReader::read_line(std::string_view& out) {
     carry_.append(b, end_ - beg_);
     beg_ = end_ = 0;
     if (eof_) break;
-    end_ = std::fread(buf_.data(), 1, buf_.size(), file_.get());
-    if (end_ < buf_.size()) {
-      if (std::ferror(file_.get())) fail("", std::string("read error: ") + std::strerror(errno));
-      eof_ = true;
-    }
+    refill();
   }
   // A last line without its line end was cut while being written (an interrupted logger, a copy
   // that stopped): its last field may be a cut number. It is dropped, with a warning, never used.
@@ -127,38 +168,58 @@ bool CsvReader::read_line(std::string_view& out) {
   return false;
 }
 
+// One data row (trimmed, not a comment) into values_: each selected field parsed where it lies (no
+// copies, no search for its end first); an unselected field is skipped to its comma.
+bool CsvReader::parse_row(std::string_view t) {
+  const char* p = t.data();
+  const char* const e = t.data() + t.size();
+  std::size_t field = 0;
+  while (field < max_field_) {
+    const int slot = slot_of_field_[field];
+    if (slot < 0) {
+      const void* c = std::memchr(p, ',', static_cast<std::size_t>(e - p));
+      ++field;
+      if (!c) break;
+      p = static_cast<const char*>(c) + 1;
+      continue;
+    }
+    const char* q = p;
+    while (q < e && (*q == ' ' || *q == '\t')) ++q;
+    const char* first = q < e && *q == '+' ? q + 1 : q;
+    double v = 0;
+    // fast_float (Debian libfast-float-dev): exact decimal-to-binary rounding, as strtod.
+    const auto r = fast_float::from_chars(first, e, v);
+    const char* end = r.ptr;
+    while (end < e && (*end == ' ' || *end == '\t')) ++end;
+    const bool bad = r.ec != std::errc() || (end < e && *end != ',') || r.ptr == first;
+    if (bad || !std::isfinite(v)) {
+      // The field as written, for the message.
+      const void* c = std::memchr(p, ',', static_cast<std::size_t>(e - p));
+      const auto f = trim(std::string_view(p, static_cast<std::size_t>((c ? static_cast<const char*>(c) : e) - p)));
+      if (f.empty()) fail(slot_names_[slot], "empty field");
+      if (bad) fail(slot_names_[slot], "not a number: '" + field_text(f) + "'");
+      if (f.find_first_of("nNiI") != std::string_view::npos) fail(slot_names_[slot], "NaN or infinity is not allowed");
+      fail(slot_names_[slot], "not a number: '" + field_text(f) + "' is out of the range of a double");
+    }
+    values_[slot] = v;
+    ++field;
+    if (end == e) break;
+    p = end + 1;
+  }
+  if (field < max_field_) {
+    // Name the first selected column that is missing from this row.
+    for (std::size_t i = field; i < max_field_; ++i)
+      if (slot_of_field_[i] >= 0) fail(slot_names_[slot_of_field_[i]], "missing field (row has too few columns)");
+  }
+  return true;
+}
+
 bool CsvReader::next() {
   std::string_view line;
   while (read_line(line)) {
     const auto t = trim(line);
     if (t.empty() || t.front() == '#') continue;
-    std::size_t field = 0, pos = 0;
-    while (field < max_field_) {
-      std::size_t c = t.find(',', pos);
-      const bool last = c == std::string_view::npos;
-      if (last) c = t.size();
-      const int slot = slot_of_field_[field];
-      if (slot >= 0) {
-        const auto f = trim(t.substr(pos, c - pos));
-        double v = 0;
-        const char* first = f.data();
-        if (!f.empty() && *first == '+') ++first;
-        const auto r = std::from_chars(first, f.data() + f.size(), v);
-        if (f.empty()) fail(slot_names_[slot], "empty field");
-        if (r.ec != std::errc() || r.ptr != f.data() + f.size())
-          fail(slot_names_[slot], "not a number: '" + field_text(f) + "'");
-        if (!std::isfinite(v)) fail(slot_names_[slot], "NaN or infinity is not allowed");
-        values_[slot] = v;
-      }
-      ++field;
-      if (last) break;
-      pos = c + 1;
-    }
-    if (field < max_field_) {
-      // Name the first selected column that is missing from this row.
-      for (std::size_t i = field; i < max_field_; ++i)
-        if (slot_of_field_[i] >= 0) fail(slot_names_[slot_of_field_[i]], "missing field (row has too few columns)");
-    }
+    parse_row(t);
     if (time_slot_ >= 0) {
       const double tv = values_[time_slot_];
       if (rows_ > 0) {

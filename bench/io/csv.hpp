@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/io/table_source.hpp"
+
 namespace calbench {
 
 struct FileCloser {
@@ -16,31 +18,44 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
-class CsvReader {
+class CsvReader final : public TableSource {
  public:
-  explicit CsvReader(std::string path);
-  ~CsvReader();
+  // digest: SHA-256 of the file's bytes as they are read (sha256() once read to the end).
+  explicit CsvReader(std::string path, bool digest = false);
+  ~CsvReader() override;
   CsvReader(const CsvReader&) = delete;
   CsvReader& operator=(const CsvReader&) = delete;
 
   // Select a column by name; returns a slot for value(). require() throws if it is absent.
-  int require(std::string_view name);
-  int optional(std::string_view name);  // −1 if absent
-  bool has(std::string_view name) const;
+  int require(std::string_view name) override;
+  int optional(std::string_view name) override;  // −1 if absent
+  bool has(std::string_view name) const override;
   // Enforce strictly increasing values in this slot (time).
-  void set_time_slot(int slot) { time_slot_ = slot; }
+  void set_time_slot(int slot) override { time_slot_ = slot; }
 
   // Parse the next data row; false at end of file. The first call fails if there is no data row.
-  bool next();
-  double value(int slot) const { return values_[static_cast<std::size_t>(slot)]; }
-  std::size_t line() const { return line_no_; }
-  const std::string& path() const { return path_; }
+  bool next() override;
+  double value(int slot) const override { return values_[static_cast<std::size_t>(slot)]; }
+  std::size_t line() const override { return line_no_; }
+  const std::string& path() const override { return path_; }
+  [[noreturn]] void fail_at(const std::string& column, const std::string& msg) const override { fail(column, msg); }
+  std::optional<std::string> sha256() const override;
   const std::vector<std::string>& header() const { return header_; }
+  // '#' comment lines before the header, without the '#' and one following blank.
+  const std::vector<std::string>& comments() const { return comments_; }
   std::size_t rows() const { return rows_; }
 
  private:
   bool read_line(std::string_view& out);
+  bool parse_row(std::string_view t);
+  void refill();
   [[noreturn]] void fail(const std::string& column, const std::string& msg) const;
+  struct DigestFree {
+    void operator()(void* ctx) const;
+  };
+  std::unique_ptr<void, DigestFree> digest_;  // EVP_MD_CTX, while reading
+  std::string sha256_;                         // the digest once the file is read to its end
+  std::vector<std::string> comments_;
 
   std::string path_;
   FilePtr file_;  // closed by its destructor, also when the constructor throws after opening

@@ -3,9 +3,15 @@
 #include <openssl/evp.h>
 
 #include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <fstream>
 
+#include "bench/io/hdf5_recording.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
@@ -75,131 +81,227 @@ void write_meta(const fs::path& dir, const RecordingMeta& m) {
 }
 
 // ---------------------------------------------------------------------------------------------
-ImuReader::ImuReader(const fs::path& file, double nominal_rate_hz)
-    : csv_(file.string()), nominal_dt_(1.0 / nominal_rate_hz) {
-  t_ = csv_.require("t_s");
-  csv_.set_time_slot(t_);
-  if (csv_.has("gx_rad_s") || !csv_.has("dax_rad")) {
+std::unique_ptr<TableSource> open_table(const fs::path& file, bool digest) {
+  if (file.extension() == ".csv" && !fs::exists(file)) {
+    const fs::path h5 = file.parent_path() / kHdf5RecordingFile;
+    if (fs::exists(h5)) return open_hdf5_table(h5, file.stem().string(), digest);
+  }
+  return std::make_unique<CsvReader>(file.string(), digest);
+}
+
+// Rows parsed ahead: blocks of kBatchRows, at most kQueueBatches waiting.
+struct ImuReader::Batch {
+  std::vector<ImuRecord> rows;
+  std::vector<std::size_t> lines;
+  std::exception_ptr error;  // after the rows: the input error met while parsing the next one
+  bool end = false;          // the table ends after these rows
+};
+
+struct ImuReader::Queue {
+  static constexpr std::size_t kBatchRows = 4096, kQueueBatches = 4;
+  std::mutex m;
+  std::condition_variable cv;
+  std::deque<std::unique_ptr<Batch>> ready;
+  bool stop = false;
+  std::thread worker;
+};
+
+ImuReader::ImuReader(const fs::path& file, double nominal_rate_hz, bool digest)
+    : tab_(open_table(file, digest)), nominal_dt_(1.0 / nominal_rate_hz) {
+  TableSource& c = *tab_;
+  t_ = c.require("t_s");
+  c.set_time_slot(t_);
+  if (c.has("gx_rad_s") || !c.has("dax_rad")) {
     form_ = ImuForm::rates;
     const char* g[] = {"gx_rad_s", "gy_rad_s", "gz_rad_s"};
     const char* a[] = {"ax_m_s2", "ay_m_s2", "az_m_s2"};
-    for (int i = 0; i < 3; ++i) g_[i] = csv_.require(g[i]);
-    for (int i = 0; i < 3; ++i) a_[i] = csv_.require(a[i]);
+    for (int i = 0; i < 3; ++i) g_[i] = c.require(g[i]);
+    for (int i = 0; i < 3; ++i) a_[i] = c.require(a[i]);
   } else {
     form_ = ImuForm::increments;
     const char* g[] = {"dax_rad", "day_rad", "daz_rad"};
     const char* a[] = {"dvx_m_s", "dvy_m_s", "dvz_m_s"};
-    for (int i = 0; i < 3; ++i) g_[i] = csv_.require(g[i]);
-    for (int i = 0; i < 3; ++i) a_[i] = csv_.require(a[i]);
+    for (int i = 0; i < 3; ++i) g_[i] = c.require(g[i]);
+    for (int i = 0; i < 3; ++i) a_[i] = c.require(a[i]);
   }
-  temp_ = csv_.optional("temp_c");
-  seq_ = csv_.optional("seq");
+  temp_ = c.optional("temp_c");
+  seq_ = c.optional("seq");
+  q_ = std::make_unique<Queue>();
+  q_->worker = std::thread([this] { produce(); });
+}
+
+ImuReader::~ImuReader() {
+  {
+    std::lock_guard<std::mutex> lk(q_->m);
+    q_->stop = true;
+  }
+  q_->cv.notify_all();
+  q_->worker.join();
+}
+
+void ImuReader::produce() {
+  TableSource& c = *tab_;
+  double last_t = 0;
+  bool first = true;
+  while (true) {
+    auto b = std::make_unique<Batch>();
+    b->rows.reserve(Queue::kBatchRows);
+    b->lines.reserve(Queue::kBatchRows);
+    try {
+      while (b->rows.size() < Queue::kBatchRows) {
+        if (!c.next()) {
+          b->end = true;
+          break;
+        }
+        ImuRecord& r = b->rows.emplace_back();
+        r.t = c.value(t_);
+        r.dt = first ? nominal_dt_ : r.t - last_t;
+        first = false;
+        last_t = r.t;
+        for (int i = 0; i < 3; ++i) {
+          r.gyro(i) = c.value(g_[i]);
+          r.accel(i) = c.value(a_[i]);
+        }
+        r.temp_c = temp_ >= 0 ? c.value(temp_) : std::numeric_limits<double>::quiet_NaN();
+        r.seq = seq_ >= 0 ? c.value(seq_) : -1;
+        b->lines.push_back(c.line());
+      }
+    } catch (...) {
+      b->error = std::current_exception();
+      b->end = true;
+    }
+    const bool end = b->end;
+    std::unique_lock<std::mutex> lk(q_->m);
+    q_->cv.wait(lk, [&] { return q_->stop || q_->ready.size() < Queue::kQueueBatches; });
+    if (q_->stop) return;
+    q_->ready.push_back(std::move(b));
+    lk.unlock();
+    q_->cv.notify_all();
+    if (end) return;
+  }
 }
 
 bool ImuReader::next(ImuRecord& r) {
-  if (!csv_.next()) return false;
-  r.t = csv_.value(t_);
-  r.dt = first_ ? nominal_dt_ : r.t - last_t_;
-  first_ = false;
-  last_t_ = r.t;
-  for (int i = 0; i < 3; ++i) {
-    r.gyro(i) = csv_.value(g_[i]);
-    r.accel(i) = csv_.value(a_[i]);
+  while (!cur_ || pos_ >= cur_->rows.size()) {
+    if (cur_ && cur_->error) {
+      const std::exception_ptr e = cur_->error;
+      cur_->error = nullptr;
+      done_ = true;
+      std::rethrow_exception(e);
+    }
+    if (done_ || (cur_ && cur_->end)) {
+      done_ = true;
+      return false;
+    }
+    std::unique_lock<std::mutex> lk(q_->m);
+    q_->cv.wait(lk, [&] { return !q_->ready.empty(); });
+    cur_ = std::move(q_->ready.front());
+    q_->ready.pop_front();
+    lk.unlock();
+    q_->cv.notify_all();
+    pos_ = 0;
   }
-  r.temp_c = temp_ >= 0 ? csv_.value(temp_) : std::numeric_limits<double>::quiet_NaN();
-  r.seq = seq_ >= 0 ? csv_.value(seq_) : -1;
+  r = cur_->rows[pos_];
+  line_ = cur_->lines[pos_];
+  ++pos_;
   return true;
 }
 
-BenchRefReader::BenchRefReader(const fs::path& file) : csv_(file.string()) {
-  t_ = csv_.require("t_s");
-  csv_.set_time_slot(t_);
+std::optional<std::string> ImuReader::sha256() const {
+  // The digest is complete only once the producer has read the table to its end.
+  if (!done_) return std::nullopt;
+  return tab_->sha256();
+}
+
+BenchRefReader::BenchRefReader(const fs::path& file) : csv_(open_table(file)) {
+  t_ = csv_->require("t_s");
+  csv_->set_time_slot(t_);
   const char* w[] = {"wx_rad_s", "wy_rad_s", "wz_rad_s"};
   const char* f[] = {"fx_m_s2", "fy_m_s2", "fz_m_s2"};
-  for (int i = 0; i < 3; ++i) w_[i] = csv_.require(w[i]);
-  for (int i = 0; i < 3; ++i) f_[i] = csv_.require(f[i]);
-  step_ = csv_.require("step");
-  angle_ = csv_.optional("angle_deg");
+  for (int i = 0; i < 3; ++i) w_[i] = csv_->require(w[i]);
+  for (int i = 0; i < 3; ++i) f_[i] = csv_->require(f[i]);
+  step_ = csv_->require("step");
+  angle_ = csv_->optional("angle_deg");
 }
 
 bool BenchRefReader::next(BenchRefRow& r) {
-  if (!csv_.next()) return false;
-  r.t = csv_.value(t_);
+  if (!csv_->next()) return false;
+  r.t = csv_->value(t_);
   for (int i = 0; i < 3; ++i) {
-    r.w(i) = csv_.value(w_[i]);
-    r.f(i) = csv_.value(f_[i]);
+    r.w(i) = csv_->value(w_[i]);
+    r.f(i) = csv_->value(f_[i]);
   }
-  const double s = csv_.value(step_);
+  const double s = csv_->value(step_);
   if (s != std::floor(s) || s < -1 || s > 1e6)
-    throw InputError(csv_.path(), csv_.line(), "step", "must be an integer from −1 to 1000000 (a plan step index)");
+    csv_->fail_at("step", "must be an integer from −1 to 1000000 (a plan step index)");
   r.step = static_cast<int>(s);
-  r.angle_deg = angle_ >= 0 ? csv_.value(angle_) : std::numeric_limits<double>::quiet_NaN();
+  r.angle_deg = angle_ >= 0 ? csv_->value(angle_) : std::numeric_limits<double>::quiet_NaN();
   return true;
 }
 
-DriveRefReader::DriveRefReader(const fs::path& file) : csv_(file.string()) {
-  t_ = csv_.require("t_s");
-  csv_.set_time_slot(t_);
-  lat_ = csv_.require("lat_deg");
-  lon_ = csv_.require("lon_deg");
-  h_ = csv_.require("h_m");
+DriveRefReader::DriveRefReader(const fs::path& file, bool digest) : csv_(open_table(file, digest)) {
+  t_ = csv_->require("t_s");
+  csv_->set_time_slot(t_);
+  lat_ = csv_->require("lat_deg");
+  lon_ = csv_->require("lon_deg");
+  h_ = csv_->require("h_m");
   const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
   const char* a[] = {"roll_deg", "pitch_deg", "yaw_deg"};
-  for (int i = 0; i < 3; ++i) v_[i] = csv_.require(v[i]);
-  for (int i = 0; i < 3; ++i) att_[i] = csv_.require(a[i]);
-  sp_ = csv_.optional("sigma_pos_m");
-  sv_ = csv_.optional("sigma_vel_m_s");
-  sa_ = csv_.optional("sigma_att_deg");
+  for (int i = 0; i < 3; ++i) v_[i] = csv_->require(v[i]);
+  for (int i = 0; i < 3; ++i) att_[i] = csv_->require(a[i]);
+  sp_ = csv_->optional("sigma_pos_m");
+  sv_ = csv_->optional("sigma_vel_m_s");
+  sa_ = csv_->optional("sigma_att_deg");
 }
 
 bool DriveRefReader::next(DriveRefRow& r) {
-  if (!csv_.next()) return false;
+  if (!csv_->next()) return false;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-  r.t = csv_.value(t_);
-  r.lat_deg = csv_.value(lat_);
-  r.lon_deg = csv_.value(lon_);
-  r.h_m = csv_.value(h_);
-  if (std::abs(r.lat_deg) > 90) throw InputError(csv_.path(), csv_.line(), "lat_deg", "latitude outside ±90°");
+  r.t = csv_->value(t_);
+  r.lat_deg = csv_->value(lat_);
+  r.lon_deg = csv_->value(lon_);
+  r.h_m = csv_->value(h_);
+  if (std::abs(r.lat_deg) > 90) csv_->fail_at("lat_deg", "latitude outside ±90°");
   for (int i = 0; i < 3; ++i) {
-    r.v_ned(i) = csv_.value(v_[i]);
-    r.rpy_deg(i) = csv_.value(att_[i]);
+    r.v_ned(i) = csv_->value(v_[i]);
+    r.rpy_deg(i) = csv_->value(att_[i]);
   }
-  r.sigma_pos_m = sp_ >= 0 ? csv_.value(sp_) : nan;
-  r.sigma_vel_m_s = sv_ >= 0 ? csv_.value(sv_) : nan;
-  r.sigma_att_deg = sa_ >= 0 ? csv_.value(sa_) : nan;
+  r.sigma_pos_m = sp_ >= 0 ? csv_->value(sp_) : nan;
+  r.sigma_vel_m_s = sv_ >= 0 ? csv_->value(sv_) : nan;
+  r.sigma_att_deg = sa_ >= 0 ? csv_->value(sa_) : nan;
   return true;
 }
 
-GnssReader::GnssReader(const fs::path& file) : csv_(file.string()) {
-  t_ = csv_.require("t_s");
-  csv_.set_time_slot(t_);
-  lat_ = csv_.require("lat_deg");
-  lon_ = csv_.require("lon_deg");
-  h_ = csv_.require("h_m");
+GnssReader::GnssReader(const fs::path& file, bool digest) : csv_(open_table(file, digest)) {
+  t_ = csv_->require("t_s");
+  csv_->set_time_slot(t_);
+  lat_ = csv_->require("lat_deg");
+  lon_ = csv_->require("lon_deg");
+  h_ = csv_->require("h_m");
   const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
-  for (int i = 0; i < 3; ++i) v_[i] = csv_.optional(v[i]);
+  for (int i = 0; i < 3; ++i) v_[i] = csv_->optional(v[i]);
   // Velocity is all three columns or none: a partial set is a broken file, not "no velocity".
   if ((v_[0] >= 0 || v_[1] >= 0 || v_[2] >= 0) && !(v_[0] >= 0 && v_[1] >= 0 && v_[2] >= 0))
     for (int i = 0; i < 3; ++i)
       if (v_[i] < 0)
-        throw InputError(file.string(), 1, v[i], "missing column (a velocity needs vn_m_s, ve_m_s and vd_m_s)");
-  sh_ = csv_.optional("sigma_h_m");
-  sv_ = csv_.optional("sigma_v_m");
-  svel_ = csv_.optional("sigma_vel_m_s");
+        throw InputError(csv_->path(), 1, v[i], "missing column (a velocity needs vn_m_s, ve_m_s and vd_m_s)");
+  sh_ = csv_->optional("sigma_h_m");
+  sv_ = csv_->optional("sigma_v_m");
+  svel_ = csv_->optional("sigma_vel_m_s");
 }
 
 bool GnssReader::next(GnssRow& r) {
-  if (!csv_.next()) return false;
+  if (!csv_->next()) return false;
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-  r.t = csv_.value(t_);
-  r.lat_deg = csv_.value(lat_);
-  r.lon_deg = csv_.value(lon_);
-  r.h_m = csv_.value(h_);
-  if (v_[0] >= 0 && v_[1] >= 0 && v_[2] >= 0) r.v_ned = Vec3(csv_.value(v_[0]), csv_.value(v_[1]), csv_.value(v_[2]));
+  r.t = csv_->value(t_);
+  r.lat_deg = csv_->value(lat_);
+  r.lon_deg = csv_->value(lon_);
+  r.h_m = csv_->value(h_);
+  if (v_[0] >= 0 && v_[1] >= 0 && v_[2] >= 0) r.v_ned = Vec3(csv_->value(v_[0]), csv_->value(v_[1]), csv_->value(v_[2]));
   else r.v_ned.reset();
-  r.sigma_h_m = sh_ >= 0 ? csv_.value(sh_) : nan;
-  r.sigma_v_m = sv_ >= 0 ? csv_.value(sv_) : nan;
-  r.sigma_vel_m_s = svel_ >= 0 ? csv_.value(svel_) : nan;
+  r.sigma_h_m = sh_ >= 0 ? csv_->value(sh_) : nan;
+  r.sigma_v_m = sv_ >= 0 ? csv_->value(sv_) : nan;
+  r.sigma_vel_m_s = svel_ >= 0 ? csv_->value(svel_) : nan;
   return true;
 }
 

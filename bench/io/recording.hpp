@@ -53,22 +53,41 @@ struct ImuRecord {
 
 enum class ImuForm { rates, increments };
 
+// A table of the recording: `file` (dir/NAME.csv) when it exists, else the dataset NAME of
+// dir/recording.h5 when that file exists (hdf5_recording.hpp). digest: SHA-256 of the file read
+// alongside (TableSource::sha256()).
+std::unique_ptr<TableSource> open_table(const fs::path& file, bool digest = false);
+
+// IMU rows, parsed ahead on a thread of their own into a bounded queue (a few blocks of rows), so
+// that the consumer (the filter) does not wait for parsing when a second core is free. An input
+// error is raised at the row where it was found, after the rows before it.
 class ImuReader {
  public:
   // nominal_rate_hz gives dt of the first row.
-  ImuReader(const fs::path& file, double nominal_rate_hz);
+  ImuReader(const fs::path& file, double nominal_rate_hz, bool digest = false);
+  ~ImuReader();
+  ImuReader(const ImuReader&) = delete;
+  ImuReader& operator=(const ImuReader&) = delete;
   bool next(ImuRecord& r);
   ImuForm form() const { return form_; }
   bool has_temperature() const { return temp_ >= 0; }
-  CsvReader& csv() { return csv_; }
+  const std::string& path() const { return tab_->path(); }
+  std::size_t line() const { return line_; }  // line (CSV) or row (HDF5) of the row last returned
+  // SHA-256 of the file once read to its end with digest requested; nullopt otherwise.
+  std::optional<std::string> sha256() const;
 
  private:
-  CsvReader csv_;
+  struct Batch;
+  struct Queue;
+  void produce();
+  std::unique_ptr<TableSource> tab_;
   ImuForm form_ = ImuForm::rates;
   int t_, g_[3], a_[3], temp_, seq_;
   double nominal_dt_;
-  double last_t_ = 0;
-  bool first_ = true;
+  std::unique_ptr<Queue> q_;
+  std::unique_ptr<Batch> cur_;
+  std::size_t pos_ = 0, line_ = 0;
+  bool done_ = false;
 };
 
 struct BenchRefRow {
@@ -86,7 +105,7 @@ class BenchRefReader {
   bool has_angle() const { return angle_ >= 0; }
 
  private:
-  CsvReader csv_;
+  std::unique_ptr<TableSource> csv_;
   int t_, w_[3], f_[3], step_, angle_;
 };
 
@@ -102,11 +121,12 @@ struct DriveRefRow {
 
 class DriveRefReader {
  public:
-  explicit DriveRefReader(const fs::path& file);
+  explicit DriveRefReader(const fs::path& file, bool digest = false);
   bool next(DriveRefRow& r);
+  std::optional<std::string> sha256() const { return csv_->sha256(); }
 
  private:
-  CsvReader csv_;
+  std::unique_ptr<TableSource> csv_;
   int t_, lat_, lon_, h_, v_[3], att_[3], sp_, sv_, sa_;
 };
 
@@ -121,11 +141,12 @@ struct GnssRow {
 
 class GnssReader {
  public:
-  explicit GnssReader(const fs::path& file);
+  explicit GnssReader(const fs::path& file, bool digest = false);
   bool next(GnssRow& r);
+  std::optional<std::string> sha256() const { return csv_->sha256(); }
 
  private:
-  CsvReader csv_;
+  std::unique_ptr<TableSource> csv_;
   int t_, lat_, lon_, h_, v_[3], sh_, sv_, svel_;
 };
 

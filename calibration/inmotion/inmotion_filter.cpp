@@ -126,8 +126,8 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
 void InMotionFilter::propagate() {
   const double T = acc_.T;
   if (!(T > 0)) return;
-  Mat F = Mat::Zero(N_, N_);
-  Mat Q = Mat::Zero(N_, N_);
+  F_.setZero(N_, N_);
+  Q_.setZero(N_, N_);
   NavBlockInputs in;
   in.lat = nav_.state().lat;
   in.h = nav_.state().h;
@@ -137,11 +137,67 @@ void InMotionFilter::propagate() {
   // Each block's F entries and process noise (state_blocks.cpp), in layout order.
   const BlockDynamics dyn{cfg_, acc_, in, T, drift_};
   for (const BlockSpec* b : layout_.specs)
-    if (b->dynamics) b->dynamics(dyn, layout_.L, layout_.L.offset(static_cast<int>(b->id)), F, Q);
-  const Mat FT = F * T;
-  const Mat Phi = Mat::Identity(N_, N_) + FT + 0.5 * FT * FT;
-  Mat P_next = Phi * P_ * Phi.transpose() + Q;
-  P_next = 0.5 * (P_next + P_next.transpose()).eval();
+    if (b->dynamics) b->dynamics(dyn, layout_.L, layout_.L.offset(static_cast<int>(b->id)), F_, Q_);
+  Mat Phi;  // the full transition, for the dense path and the smoother's store only
+  Mat P_next;
+  if (cfg_.covariance == InMotionConfig::Covariance::dense) {
+    const Mat FT = F_ * T;
+    Phi = Mat::Identity(N_, N_) + FT + 0.5 * FT * FT;
+    P_next = Phi * P_ * Phi.transpose() + Q_;
+    P_next = 0.5 * (P_next + P_next.transpose()).eval();
+  } else {
+    // Rows that move: a nonzero entry in F or Q. Every other row of Φ = I + FT + ½(FT)² is a row of
+    // the identity (F's rows there are zero, so are those of F²) and has no process noise. With M
+    // the moving rows and C the rest: Φ_M = I_M + (FT)_M + ½(FT)_MM·(FT)_M, G = Φ_M·P, and
+    //   P'_MM = G·Φ_Mᵀ + Q_MM,  P'_MC = G_C,  P'_CC = P_CC  (unchanged).
+    moving_.clear();
+    for (int i = 0; i < N_; ++i)
+      if (F_.row(i).cwiseAbs().maxCoeff() > 0 || Q_.row(i).cwiseAbs().maxCoeff() > 0) moving_.push_back(i);
+    const int m = static_cast<int>(moving_.size());
+    // The products are summed term by term in the order of the state (each sum starts at zero and
+    // adds its products one after the other, as the dense path's matrix products do), skipping the
+    // terms whose factor from Φ or F is zero (adding 0·x changes no sum): the moving rows come out
+    // as the dense path computes them, in a fraction of the work.
+    const Mat FM = F_(moving_, Eigen::all) * T;
+    Mat FF = Mat::Zero(m, N_);  // ½·((FT)²)_M = ½·(FT)_MM·(FT)_M
+    for (int j = 0; j < N_; ++j)
+      for (int k = 0; k < m; ++k) {
+        const double b = FM(k, j);
+        if (b != 0.0) FF.col(j) += FM.col(moving_[k]) * b;
+      }
+    Mat PhiM = FM;  // I_M + (FT)_M + ½(FT)²_M, added in the dense path's order
+    for (int k = 0; k < m; ++k) PhiM(k, moving_[k]) += 1.0;
+    PhiM += 0.5 * FF;
+    // G = Φ_M·P, kept as Gᵀ (N×m): column i is Σ_k Φ(i,k)·P(k,:)ᵀ, P's rows as the columns of Pᵀ.
+    work_Pt_ = P_.transpose();
+    work_G_.setZero(N_, m);
+    for (int k = 0; k < N_; ++k) {
+      const auto pk = work_Pt_.col(k);
+      for (int i = 0; i < m; ++i) {
+        const double a = PhiM(i, k);
+        if (a != 0.0) work_G_.col(i) += a * pk;
+      }
+    }
+    // P'_MM = G·Φ_Mᵀ + Q_MM: column j is Σ_k G(:,k)·Φ(j,k), G(:,k) the row k of Gᵀ.
+    Mat Pmm = Mat::Zero(m, m);
+    const Mat Gk = work_G_.transpose();  // m×N
+    for (int k = 0; k < N_; ++k)
+      for (int j = 0; j < m; ++j) {
+        const double a = PhiM(j, k);
+        if (a != 0.0) Pmm.col(j) += Gk.col(k) * a;
+      }
+    Pmm += Q_(moving_, moving_);
+    Pmm = 0.5 * (Pmm + Pmm.transpose()).eval();
+    if (cfg_.store_for_smoother) {
+      Phi = Mat::Identity(N_, N_);
+      Phi(moving_, Eigen::all) = PhiM;
+      P_next = P_;
+    }
+    Mat& Pn = cfg_.store_for_smoother ? P_next : P_;
+    Pn(moving_, Eigen::all) = Gk;
+    Pn(Eigen::all, moving_) = work_G_;
+    Pn(moving_, moving_) = Pmm;
+  }
 
   if (cfg_.store_for_smoother) {
     if (!store_.empty()) store_.back().dx_next = pending_dx_.template cast<float>();
@@ -157,9 +213,34 @@ void InMotionFilter::propagate() {
     store_.push_back(std::move(s));
     pending_dx_.setZero(N_);
   }
-  P_ = P_next;
+  if (cfg_.covariance == InMotionConfig::Covariance::dense || cfg_.store_for_smoother) P_ = P_next;
   propagate_drift_nominal(T);
   acc_.clear();
+}
+
+template <int M>
+void InMotionFilter::update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynamic>& H, const Eigen::Matrix<double, M, M>& R,
+                            const Eigen::Matrix<double, Eigen::Dynamic, M>& PHt, const Eigen::Matrix<double, Eigen::Dynamic, M>& K,
+                            const Eigen::Matrix<double, M, 1>& nu) {
+  if (cfg_.covariance != InMotionConfig::Covariance::joseph) {
+    apply_update<M>(P_, dx, K, PHt, nu);
+    return;
+  }
+  dx += K * nu;
+  // Joseph form P' = (I − KH)·P·(I − KH)ᵀ + K·R·Kᵀ, without forming I − KH (N×N): with HP = PHtᵀ,
+  //   X = P − K·PHtᵀ = (I − KH)·P,   P' = X − (X·Hᵀ)·Kᵀ + K·R·Kᵀ,
+  // where X·Hᵀ uses only the columns H touches. O(N²·M) instead of O(N³); positive semi-definite
+  // for any K (the short form P − K·HP is so only for the exact optimal gain, and loses digits when
+  // an observation shrinks a variance by orders of magnitude).
+  std::vector<int>& J = moving_;  // reused as the column list of H
+  J.clear();
+  for (int c = 0; c < N_; ++c)
+    if (H.col(c).cwiseAbs().maxCoeff() > 0) J.push_back(c);
+  P_.noalias() -= K * PHt.transpose();
+  const Eigen::Matrix<double, Eigen::Dynamic, M> XHt = P_(Eigen::all, J) * H(Eigen::all, J).transpose();
+  P_.noalias() -= XHt * K.transpose();
+  P_.noalias() += K * (R * K.transpose());
+  P_ = 0.5 * (P_ + P_.transpose()).eval();
 }
 
 bool InMotionFilter::reference(const RefObs& r_in) {
@@ -290,7 +371,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       if (nis <= kChi2_3_95) ++st.within95;
     }
     const Eigen::Matrix<double, Eigen::Dynamic, 3> K = Sl.solve(PHt.transpose()).transpose();
-    apply_update<3>(P_, dx, K, PHt, nu);
+    update<3>(dx, H, o.R, PHt, K, nu);
   }
   // The course over ground as a heading observation while the heading is poorly known.
   if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && cfg_.course_update_s > 0 &&
@@ -310,7 +391,8 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       const Vec PHt = P_ * H.transpose();
       const double S = (H * PHt)(0) + sc * sc;
       if (nu * nu / S <= cfg_.gate_nis / 3) {  // the gate per degree of freedom
-        apply_update<1>(P_, dx, Eigen::Matrix<double, Eigen::Dynamic, 1>(PHt / S), PHt, Eigen::Matrix<double, 1, 1>(nu));
+        update<1>(dx, H, Eigen::Matrix<double, 1, 1>(sc * sc), PHt, Eigen::Matrix<double, Eigen::Dynamic, 1>(PHt / S),
+                  Eigen::Matrix<double, 1, 1>(nu));
         ++align_.course_updates;
       } else {
         ++align_.course_rejected;

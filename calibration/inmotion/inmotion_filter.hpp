@@ -90,6 +90,15 @@ struct InMotionConfig {
   // taken as exact), and blocks declared outside the filter's files, appended to the layout.
   bool mounting = true;
   std::vector<BlockSpec> extra_blocks;
+  // Covariance arithmetic (docs/in-motion.md, "Covariance arithmetic"). structured (default): the
+  // propagation touches only the rows that move (the navigation and drift-shaping states; the
+  // constant parameters have identity transitions and no process noise, so their block of P stays
+  // as it is) and sums each product in the dense path's order, the update is the dense path's:
+  // the results are bit for bit those of dense. joseph: the same propagation, the Joseph-form update
+  // (positive semi-definite for any gain; differs from dense at the rounding floor). dense: the
+  // full N×N ΦPΦᵀ of every step, the former path, kept as the reference the others are proven against.
+  enum class Covariance { structured, joseph, dense };
+  Covariance covariance = Covariance::structured;
 };
 
 // How the filter got (and kept) its heading: for RESULT.json and the summary.
@@ -238,6 +247,12 @@ class InMotionFilter {
 
  private:
   void propagate();
+  // The measurement update of one observation (rows of H, its R): dx += K·ν and P by the
+  // configured covariance form; K = P·Hᵀ·S⁻¹ from the caller's PHt and factorised S.
+  template <int M>
+  void update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynamic>& H, const Eigen::Matrix<double, M, M>& R,
+              const Eigen::Matrix<double, Eigen::Dynamic, M>& PHt, const Eigen::Matrix<double, Eigen::Dynamic, M>& K,
+              const Eigen::Matrix<double, M, 1>& nu);
   void feedback(const Vec& dx);
   void propagate_drift_nominal(double T);
   void refresh_correctors();
@@ -263,6 +278,10 @@ class InMotionFilter {
   Mat3 Ag_ = Mat3::Identity(), Aa_ = Mat3::Identity();
   DriftModels drift_;
   Mat P_;
+  // Structured covariance: the rows of the last step that moved, and work matrices kept between
+  // steps (no allocation per step).
+  std::vector<int> moving_;
+  Mat F_, Q_, work_G_, work_Pt_;
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
   double last_obs_t_ = -1e300;
