@@ -11,6 +11,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/json_util.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
 #include "db/connection.hpp"
@@ -32,7 +33,8 @@ InMotionResult read_result(const std::string& file) {
   ss << in.rdbuf();
   const InMotionResult r = parse_inmotion_result(ss.str(), file);
   // Where the recording is at hand, it must still be the one the result was fitted on.
-  const std::filesystem::path imu = std::filesystem::path(r.recording_path) / "imu.csv";
+  // (imu.csv, or recording.h5 for an HDF5 recording: the file the fit's digest is of)
+  const std::filesystem::path imu = table_file(r.recording_path, "imu");
   if (std::filesystem::is_regular_file(imu) && sha256_file(imu) != r.recording_sha256)
     throw InputError(file, 0, "recording.sha256",
                      imu.string() + " has changed since the fit (its SHA-256 differs): refit, or import on the machine "
@@ -151,8 +153,8 @@ void cmd_store_bench(const DbArgs& a) {
   run.recording_path = a.recording;
   run.recording_sha256 = a.sha256;
   if (run.recording_sha256.empty() && !a.recording.empty()) {
-    const std::filesystem::path imu = std::filesystem::path(a.recording) / "imu.csv";
-    if (!std::filesystem::exists(imu)) throw InputError(imu.string(), 0, "", "recording has no imu.csv");
+    const std::filesystem::path imu = table_file(a.recording, "imu");  // imu.csv, or recording.h5
+    if (!std::filesystem::exists(imu)) throw InputError(imu.string(), 0, "", "recording has no imu.csv (and no recording.h5)");
     run.recording_sha256 = sha256_file(imu);
   }
   run.started_at = a.started;

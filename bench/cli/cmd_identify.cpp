@@ -175,8 +175,8 @@ Loaded load_recording(const IdentifyArgs& a) {
   const fs::path dir(a.input);
   const RecordingMeta meta = read_meta(dir);
   const fs::path imu = dir / "imu.csv";
-  L.file = imu.string();
-  ImuReader r(imu, meta.imu_rate_hz);
+  ImuReader r(imu, meta.imu_rate_hz);  // imu.csv, or the imu dataset of recording.h5
+  L.file = r.path();
   const char* names[6] = {"gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"};
   std::vector<int> pick;
   if (a.columns.empty()) {

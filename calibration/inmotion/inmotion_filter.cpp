@@ -24,6 +24,50 @@ void apply_update(Eigen::MatrixXd& P, Eigen::VectorXd& dx, const Eigen::Matrix<d
   P = 0.5 * (P + P.transpose()).eval();
 }
 
+// Gᵀ = (Φ_M·P)ᵀ, N×m: Gᵀ(j,i) = Σ_k Φ_M(i,k)·P(k,j), each sum from zero over k in order, as a
+// matrix product sums it; the terms with Φ_M(i,k) = 0 change no sum (x + 0·p = x) and are skipped
+// where the R rows of a block all have them. P's rows are read as the columns of Pᵀ. R rows and
+// 8 columns of Gᵀ at a time in registers.
+template <int R>
+void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Gt) {
+  const int N = static_cast<int>(Pt.rows());
+  int ks[256];
+  int nk = 0;
+  for (int k = 0; k < N && nk < 256; ++k) {
+    bool any = false;
+    for (int r = 0; r < R; ++r) any = any || PhiM(i0 + r, k) != 0.0;
+    if (any) ks[nk++] = k;
+  }
+  int j0 = 0;
+  for (; j0 + 8 <= N; j0 += 8) {
+    double acc[R][8] = {};
+    for (int q = 0; q < nk; ++q) {
+      const int k = ks[q];
+      const double* p = Pt.data() + static_cast<std::ptrdiff_t>(k) * N + j0;
+      for (int r = 0; r < R; ++r) {
+        const double a = PhiM(i0 + r, k);
+        for (int jj = 0; jj < 8; ++jj) acc[r][jj] += a * p[jj];
+      }
+    }
+    for (int r = 0; r < R; ++r)
+      for (int jj = 0; jj < 8; ++jj) Gt(j0 + jj, i0 + r) = acc[r][jj];
+  }
+  const int J = N - j0;
+  if (J > 0) {
+    double acc[R][8] = {};
+    for (int q = 0; q < nk; ++q) {
+      const int k = ks[q];
+      const double* p = Pt.data() + static_cast<std::ptrdiff_t>(k) * N + j0;
+      for (int r = 0; r < R; ++r) {
+        const double a = PhiM(i0 + r, k);
+        for (int jj = 0; jj < J; ++jj) acc[r][jj] += a * p[jj];
+      }
+    }
+    for (int r = 0; r < R; ++r)
+      for (int jj = 0; jj < J; ++jj) Gt(j0 + jj, i0 + r) = acc[r][jj];
+  }
+}
+
 DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, const TriadNoise& n) {
   return v ? (*v)[static_cast<std::size_t>(i)] : DriftPrior{n.drift_sigma, n.drift_tau_s};
 }
@@ -126,8 +170,12 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
 void InMotionFilter::propagate() {
   const double T = acc_.T;
   if (!(T > 0)) return;
-  F_.setZero(N_, N_);
-  Q_.setZero(N_, N_);
+  // F and Q start at zero: all of them for the dense path; the structured path cleared, after its
+  // last step, the rows that moved (every nonzero entry of F and Q is in them).
+  if (F_.rows() != N_ || cfg_.covariance == InMotionConfig::Covariance::dense) {
+    F_.setZero(N_, N_);
+    Q_.setZero(N_, N_);
+  }
   NavBlockInputs in;
   in.lat = nav_.state().lat;
   in.h = nav_.state().h;
@@ -151,8 +199,9 @@ void InMotionFilter::propagate() {
     // the moving rows and C the rest: Φ_M = I_M + (FT)_M + ½(FT)_MM·(FT)_M, G = Φ_M·P, and
     //   P'_MM = G·Φ_Mᵀ + Q_MM,  P'_MC = G_C,  P'_CC = P_CC  (unchanged).
     moving_.clear();
+    const Eigen::VectorXd rowmax = F_.cwiseAbs().rowwise().maxCoeff().cwiseMax(Q_.cwiseAbs().rowwise().maxCoeff());
     for (int i = 0; i < N_; ++i)
-      if (F_.row(i).cwiseAbs().maxCoeff() > 0 || Q_.row(i).cwiseAbs().maxCoeff() > 0) moving_.push_back(i);
+      if (rowmax(i) > 0) moving_.push_back(i);
     const int m = static_cast<int>(moving_.size());
     // The products are summed term by term in the order of the state (each sum starts at zero and
     // adds its products one after the other, as the dense path's matrix products do), skipping the
@@ -168,15 +217,13 @@ void InMotionFilter::propagate() {
     Mat PhiM = FM;  // I_M + (FT)_M + ½(FT)²_M, added in the dense path's order
     for (int k = 0; k < m; ++k) PhiM(k, moving_[k]) += 1.0;
     PhiM += 0.5 * FF;
-    // G = Φ_M·P, kept as Gᵀ (N×m): column i is Σ_k Φ(i,k)·P(k,:)ᵀ, P's rows as the columns of Pᵀ.
+    // G = Φ_M·P, kept as Gᵀ (N×m).
     work_Pt_ = P_.transpose();
-    work_G_.setZero(N_, m);
-    for (int k = 0; k < N_; ++k) {
-      const auto pk = work_Pt_.col(k);
-      for (int i = 0; i < m; ++i) {
-        const double a = PhiM(i, k);
-        if (a != 0.0) work_G_.col(i) += a * pk;
-      }
+    work_G_.resize(N_, m);
+    {
+      int i = 0;
+      for (; i + 3 <= m; i += 3) phi_block_times_p<3>(PhiM, i, work_Pt_, work_G_);
+      for (; i < m; ++i) phi_block_times_p<1>(PhiM, i, work_Pt_, work_G_);
     }
     // P'_MM = G·Φ_Mᵀ + Q_MM: column j is Σ_k G(:,k)·Φ(j,k), G(:,k) the row k of Gᵀ.
     Mat Pmm = Mat::Zero(m, m);
@@ -197,6 +244,8 @@ void InMotionFilter::propagate() {
     Pn(moving_, Eigen::all) = Gk;
     Pn(Eigen::all, moving_) = work_G_;
     Pn(moving_, moving_) = Pmm;
+    F_(moving_, Eigen::all).setZero();
+    Q_(moving_, moving_).setZero();
   }
 
   if (cfg_.store_for_smoother) {
