@@ -1,6 +1,9 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
 
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
@@ -24,48 +27,102 @@ void apply_update(Eigen::MatrixXd& P, Eigen::VectorXd& dx, const Eigen::Matrix<d
   P = 0.5 * (P + P.transpose()).eval();
 }
 
+// The same short-form update without the general matrix product's packing: P − K·PHtᵀ column by
+// column (each entry's M terms summed in order, then subtracted, as the product does), then
+// ½(P + Pᵀ): bit for bit apply_update's P.
+template <int M>
+void apply_update_fused(Eigen::MatrixXd& P, Eigen::VectorXd& dx, const Eigen::Matrix<double, Eigen::Dynamic, M>& K,
+                        const Eigen::Matrix<double, Eigen::Dynamic, M>& PHt, const Eigen::Matrix<double, M, 1>& nu) {
+  dx += K * nu;
+  const int N = static_cast<int>(P.rows());
+  const double* k = K.data();  // column-major: K(i,r) = k[r·N + i]
+  for (int j = 0; j < N; ++j) {
+    double pj[M];
+    for (int r = 0; r < M; ++r) pj[r] = PHt(j, r);
+    double* pc = P.data() + static_cast<std::ptrdiff_t>(j) * N;
+    for (int i = 0; i < N; ++i) {
+      double s = k[i] * pj[0];
+      for (int r = 1; r < M; ++r) s += k[r * N + i] * pj[r];
+      pc[i] -= s;
+    }
+  }
+  P = 0.5 * (P + P.transpose()).eval();
+}
+
+// P·Hᵀ over the columns H touches: (P·Hᵀ)(i,r) = Σ_k P(i,k)·H(r,k) in the order of k, the zero
+// terms of H skipped (bit for bit the matrix product, which sums them in that order too).
+template <int M>
+Eigen::Matrix<double, Eigen::Dynamic, M> p_times_ht(const Eigen::MatrixXd& P, const Eigen::Matrix<double, M, Eigen::Dynamic>& H) {
+  const int N = static_cast<int>(P.rows());
+  int cols[256];
+  int nc = 0;
+  for (int k = 0; k < N && nc < 256; ++k)
+    if (H.col(k).cwiseAbs().maxCoeff() > 0) cols[nc++] = k;
+  Eigen::Matrix<double, Eigen::Dynamic, M> out = Eigen::Matrix<double, Eigen::Dynamic, M>::Zero(N, M);
+  for (int q = 0; q < nc; ++q)
+    for (int r = 0; r < M; ++r) {
+      const double h = H(r, cols[q]);
+      if (h != 0.0) out.col(r) += P.col(cols[q]) * h;
+    }
+  return out;
+}
+
 // Gᵀ = (Φ_M·P)ᵀ, N×m: Gᵀ(j,i) = Σ_k Φ_M(i,k)·P(k,j), each sum from zero over k in order, as a
-// matrix product sums it; the terms with Φ_M(i,k) = 0 change no sum (x + 0·p = x) and are skipped
-// where the R rows of a block all have them. P's rows are read as the columns of Pᵀ. R rows and
-// 8 columns of Gᵀ at a time in registers.
+// matrix product sums it (a product, then an add: no fused multiply-add, as the build has none);
+// the terms with Φ_M(i,k) = 0 change no sum (x + 0·p = x) and are skipped where the R rows of a
+// block all have them. P's rows are read as the columns of Pᵀ. R rows and 8 columns of Gᵀ at a
+// time in registers (SSE2 pairs where the compiler has them).
 template <int R>
 void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Gt) {
   const int N = static_cast<int>(Pt.rows());
   int ks[256];
+  double as[R][256];
   int nk = 0;
   for (int k = 0; k < N && nk < 256; ++k) {
     bool any = false;
     for (int r = 0; r < R; ++r) any = any || PhiM(i0 + r, k) != 0.0;
-    if (any) ks[nk++] = k;
+    if (!any) continue;
+    for (int r = 0; r < R; ++r) as[r][nk] = PhiM(i0 + r, k);
+    ks[nk++] = k;
   }
   int j0 = 0;
+#if defined(__SSE2__)
   for (; j0 + 8 <= N; j0 += 8) {
-    double acc[R][8] = {};
+    __m128d acc[R][4];
+    for (int r = 0; r < R; ++r)
+      for (int c = 0; c < 4; ++c) acc[r][c] = _mm_setzero_pd();
     for (int q = 0; q < nk; ++q) {
-      const int k = ks[q];
-      const double* p = Pt.data() + static_cast<std::ptrdiff_t>(k) * N + j0;
+      const double* p = Pt.data() + static_cast<std::ptrdiff_t>(ks[q]) * N + j0;
+      const __m128d p0 = _mm_loadu_pd(p), p1 = _mm_loadu_pd(p + 2), p2 = _mm_loadu_pd(p + 4), p3 = _mm_loadu_pd(p + 6);
       for (int r = 0; r < R; ++r) {
-        const double a = PhiM(i0 + r, k);
-        for (int jj = 0; jj < 8; ++jj) acc[r][jj] += a * p[jj];
+        const __m128d a = _mm_set1_pd(as[r][q]);
+        acc[r][0] = _mm_add_pd(acc[r][0], _mm_mul_pd(a, p0));
+        acc[r][1] = _mm_add_pd(acc[r][1], _mm_mul_pd(a, p1));
+        acc[r][2] = _mm_add_pd(acc[r][2], _mm_mul_pd(a, p2));
+        acc[r][3] = _mm_add_pd(acc[r][3], _mm_mul_pd(a, p3));
       }
     }
-    for (int r = 0; r < R; ++r)
-      for (int jj = 0; jj < 8; ++jj) Gt(j0 + jj, i0 + r) = acc[r][jj];
-  }
-  const int J = N - j0;
-  if (J > 0) {
-    double acc[R][8] = {};
-    for (int q = 0; q < nk; ++q) {
-      const int k = ks[q];
-      const double* p = Pt.data() + static_cast<std::ptrdiff_t>(k) * N + j0;
-      for (int r = 0; r < R; ++r) {
-        const double a = PhiM(i0 + r, k);
-        for (int jj = 0; jj < J; ++jj) acc[r][jj] += a * p[jj];
-      }
+    for (int r = 0; r < R; ++r) {
+      double* g = Gt.data() + static_cast<std::ptrdiff_t>(i0 + r) * N + j0;
+      for (int c = 0; c < 4; ++c) _mm_storeu_pd(g + 2 * c, acc[r][c]);
     }
-    for (int r = 0; r < R; ++r)
-      for (int jj = 0; jj < J; ++jj) Gt(j0 + jj, i0 + r) = acc[r][jj];
   }
+  for (; j0 + 2 <= N; j0 += 2) {
+    __m128d acc[R];
+    for (int r = 0; r < R; ++r) acc[r] = _mm_setzero_pd();
+    for (int q = 0; q < nk; ++q) {
+      const __m128d p0 = _mm_loadu_pd(Pt.data() + static_cast<std::ptrdiff_t>(ks[q]) * N + j0);
+      for (int r = 0; r < R; ++r) acc[r] = _mm_add_pd(acc[r], _mm_mul_pd(_mm_set1_pd(as[r][q]), p0));
+    }
+    for (int r = 0; r < R; ++r) _mm_storeu_pd(Gt.data() + static_cast<std::ptrdiff_t>(i0 + r) * N + j0, acc[r]);
+  }
+#endif
+  for (; j0 < N; ++j0)
+    for (int r = 0; r < R; ++r) {
+      double acc = 0;
+      for (int q = 0; q < nk; ++q) acc += as[r][q] * Pt(j0, ks[q]);
+      Gt(j0, i0 + r) = acc;
+    }
 }
 
 DriftPrior prior_of(const std::optional<std::array<DriftPrior, 3>>& v, int i, const TriadNoise& n) {
@@ -188,11 +245,17 @@ void InMotionFilter::propagate() {
     if (b->dynamics) b->dynamics(dyn, layout_.L, layout_.L.offset(static_cast<int>(b->id)), F_, Q_);
   Mat Phi;  // the full transition, for the dense path and the smoother's store only
   Mat P_next;
-  if (cfg_.covariance == InMotionConfig::Covariance::dense) {
+  // The dense products: always for the dense path; for the structured one after something left P
+  // not exactly symmetric (a re-alignment's rotation), where its blocks would not be the dense ones.
+  const bool dense = cfg_.covariance == InMotionConfig::Covariance::dense || !p_symmetric_;
+  if (dense) {
     const Mat FT = F_ * T;
     Phi = Mat::Identity(N_, N_) + FT + 0.5 * FT * FT;
     P_next = Phi * P_ * Phi.transpose() + Q_;
     P_next = 0.5 * (P_next + P_next.transpose()).eval();
+    F_.setZero();  // the structured path's next step finds F and Q at zero
+    Q_.setZero();
+    p_symmetric_ = true;
   } else {
     // Rows that move: a nonzero entry in F or Q. Every other row of Φ = I + FT + ½(FT)² is a row of
     // the identity (F's rows there are zero, so are those of F²) and has no process noise. With M
@@ -218,12 +281,13 @@ void InMotionFilter::propagate() {
     for (int k = 0; k < m; ++k) PhiM(k, moving_[k]) += 1.0;
     PhiM += 0.5 * FF;
     // G = Φ_M·P, kept as Gᵀ (N×m).
-    work_Pt_ = P_.transpose();
+    // P's rows are its columns: P is exactly symmetric here.
+    const Mat& Pt = P_;
     work_G_.resize(N_, m);
     {
       int i = 0;
-      for (; i + 3 <= m; i += 3) phi_block_times_p<3>(PhiM, i, work_Pt_, work_G_);
-      for (; i < m; ++i) phi_block_times_p<1>(PhiM, i, work_Pt_, work_G_);
+      for (; i + 2 <= m; i += 2) phi_block_times_p<2>(PhiM, i, Pt, work_G_);
+      for (; i < m; ++i) phi_block_times_p<1>(PhiM, i, Pt, work_G_);
     }
     // P'_MM = G·Φ_Mᵀ + Q_MM: column j is Σ_k G(:,k)·Φ(j,k), G(:,k) the row k of Gᵀ.
     Mat Pmm = Mat::Zero(m, m);
@@ -246,6 +310,7 @@ void InMotionFilter::propagate() {
     Pn(moving_, moving_) = Pmm;
     F_(moving_, Eigen::all).setZero();
     Q_(moving_, moving_).setZero();
+    // (P_next, assigned below with the smoother, is symmetric by construction too)
   }
 
   if (cfg_.store_for_smoother) {
@@ -262,17 +327,28 @@ void InMotionFilter::propagate() {
     store_.push_back(std::move(s));
     pending_dx_.setZero(N_);
   }
-  if (cfg_.covariance == InMotionConfig::Covariance::dense || cfg_.store_for_smoother) P_ = P_next;
+  if (dense || cfg_.store_for_smoother) P_ = P_next;
   propagate_drift_nominal(T);
   acc_.clear();
+}
+
+template <int M>
+Eigen::Matrix<double, Eigen::Dynamic, M> InMotionFilter::pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H) const {
+  if (cfg_.covariance == InMotionConfig::Covariance::dense) return P_ * H.transpose();
+  return p_times_ht<M>(P_, H);
 }
 
 template <int M>
 void InMotionFilter::update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynamic>& H, const Eigen::Matrix<double, M, M>& R,
                             const Eigen::Matrix<double, Eigen::Dynamic, M>& PHt, const Eigen::Matrix<double, Eigen::Dynamic, M>& K,
                             const Eigen::Matrix<double, M, 1>& nu) {
-  if (cfg_.covariance != InMotionConfig::Covariance::joseph) {
+  p_symmetric_ = true;  // every form ends with ½(P + Pᵀ)
+  if (cfg_.covariance == InMotionConfig::Covariance::dense) {
     apply_update<M>(P_, dx, K, PHt, nu);
+    return;
+  }
+  if (cfg_.covariance == InMotionConfig::Covariance::structured) {
+    apply_update_fused<M>(P_, dx, K, PHt, nu);
     return;
   }
   dx += K * nu;
@@ -372,7 +448,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     for (const BlockSpec* b : layout_.specs)
       if (b->observe) b->observe(BlockObsInput{c, r}, n_, type, layout_.L.offset(static_cast<int>(b->id)), H, z);
     const Vec3 nu = z - H * dx;
-    Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = P_ * H.transpose();
+    Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = pht<3>(H);
     Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
     const double nis = nu.dot(Sl.solve(nu));
     ConsistencyStats& st = stats_[type];
@@ -405,13 +481,14 @@ bool InMotionFilter::reference(const RefObs& r_in) {
         (nu.dot(Sx.solve(nu)) > cfg_.gate_nis ? lo : hi) = lam;
       }
       const double d = std::sqrt(hi);
+      p_symmetric_ = false;
       P_.template middleRows<9>(kPos) *= d;
       P_.template middleCols<9>(kPos) *= d;
       static const char* tn[3] = {"position", "velocity", "attitude"};
       recoveries_.push_back({r.t, std::string("lost track: ") + tn[type] + " rejected by the gate for " +
                                       std::to_string(static_cast<int>(cfg_.gate_recover_s)) + " s",
                              "navigation covariance widened x" + factor_text(hi) + " until NIS = gate, epoch used"});
-      PHt = P_ * H.transpose();
+      PHt = pht<3>(H);
       Sl.compute(H * PHt + o.R);
     } else {
       st.rejected_since = -1;
@@ -437,7 +514,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       if (off(Block::mount) >= 0) H.template segment<3>(off(Block::mount)) = -C_nb.row(2);
       const double z = std::remainder(cog - ins::rpy_from_dcm(C_nb)(2), 2 * units::kPi);
       const double nu = z - (H * dx)(0);
-      const Vec PHt = P_ * H.transpose();
+      const Vec PHt = pht<1>(H);
       const double S = (H * PHt)(0) + sc * sc;
       if (nu * nu / S <= cfg_.gate_nis / 3) {  // the gate per degree of freedom
         update<1>(dx, H, Eigen::Matrix<double, 1, 1>(sc * sc), PHt, Eigen::Matrix<double, Eigen::Dynamic, 1>(PHt / S),
@@ -526,6 +603,7 @@ bool InMotionFilter::course(double& cog, double& sigma, std::string& how) const 
 
 void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {
   ins::NavState& s = nav_.state();
+  p_symmetric_ = false;  // the rotation of the NED blocks need not keep P exactly symmetric
   if (phase_ == Phase::heading_unknown && cfg_.restart_at_heading) {
     // Keep the attitude (the standstill's tilt), forget the sensor-error states' standstill.
     P_ = lvl_snap_.P;

@@ -253,6 +253,9 @@ class InMotionFilter {
   void update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynamic>& H, const Eigen::Matrix<double, M, M>& R,
               const Eigen::Matrix<double, Eigen::Dynamic, M>& PHt, const Eigen::Matrix<double, Eigen::Dynamic, M>& K,
               const Eigen::Matrix<double, M, 1>& nu);
+  // P·Hᵀ: the dense product, or over the columns H touches (the same sums).
+  template <int M>
+  Eigen::Matrix<double, Eigen::Dynamic, M> pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H) const;
   void feedback(const Vec& dx);
   void propagate_drift_nominal(double T);
   void refresh_correctors();
@@ -281,7 +284,8 @@ class InMotionFilter {
   // Structured covariance: the rows of the last step that moved, and work matrices kept between
   // steps (no allocation per step).
   std::vector<int> moving_;
-  Mat F_, Q_, work_G_, work_Pt_;
+  Mat F_, Q_, work_G_;
+  bool p_symmetric_ = false;  // P_ known to equal its transpose bit for bit (set where that is so)
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
   double last_obs_t_ = -1e300;
