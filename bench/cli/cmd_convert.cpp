@@ -19,7 +19,7 @@ struct ConvertArgs {
   bool json = false;
 };
 
-const bool registered = add_command(12, [](CLI::App& app) {
+const bool registered = add_command(96, [](CLI::App& app) {
   auto a = std::make_shared<ConvertArgs>();
   auto* sub = app.add_subcommand(
       "convert",

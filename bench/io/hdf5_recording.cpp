@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cmath>
 #include <future>
 #include <mutex>
@@ -370,19 +371,27 @@ Hdf5RecordingWriter::~Hdf5RecordingWriter() {
 
 void Hdf5RecordingWriter::begin_table(const std::string& name, const std::vector<std::string>& columns,
                                       const std::vector<std::string>& comments) {
-  std::lock_guard<std::recursive_mutex> lk(h5_mutex());
+  // The dataset is created with the first block of rows: a table shorter than a chunk gets chunks
+  // of its own length (a small file stays small).
+  table_ = name;
+  columns_ = columns;
+  comments_ = comments;
   ncol_ = columns.size();
   rows_ = 0;
   pending_.clear();
-  const hsize_t dims[2] = {0, ncol_}, maxd[2] = {H5S_UNLIMITED, ncol_}, chunk[2] = {kChunkRows, ncol_};
+}
+
+void Hdf5RecordingWriter::create_dataset(unsigned long long chunk_rows) {
+  std::lock_guard<std::recursive_mutex> lk(h5_mutex());
+  const hsize_t dims[2] = {0, ncol_}, maxd[2] = {H5S_UNLIMITED, ncol_}, chunk[2] = {std::max<hsize_t>(chunk_rows, 1), std::max<hsize_t>(ncol_, 1)};
   Hid sp(H5Screate_simple(2, dims, maxd), H5Sclose);
   Hid pl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
   H5Pset_chunk(pl.id, 2, chunk);
-  did_ = H5Dcreate2(fid_, ("/" + name).c_str(), H5T_IEEE_F64LE, sp.id, H5P_DEFAULT, pl.id, H5P_DEFAULT);
-  if (did_ < 0) throw std::runtime_error(file_.string() + ": cannot create dataset /" + name);
-  write_string_array_attr(did_, "columns", columns);
+  did_ = H5Dcreate2(fid_, ("/" + table_).c_str(), H5T_IEEE_F64LE, sp.id, H5P_DEFAULT, pl.id, H5P_DEFAULT);
+  if (did_ < 0) throw std::runtime_error(file_.string() + ": cannot create dataset /" + table_);
+  write_string_array_attr(did_, "columns", columns_);
   std::string c;
-  for (std::size_t i = 0; i < comments.size(); ++i) c += (i ? "\n" : "") + comments[i];
+  for (std::size_t i = 0; i < comments_.size(); ++i) c.append(i ? "\n" : "").append(comments_[i]);
   write_string_attr(did_, "comments", c);
 }
 
@@ -392,6 +401,7 @@ void Hdf5RecordingWriter::row(const double* v) {
 }
 
 void Hdf5RecordingWriter::flush_rows() {
+  if (did_ < 0 && !table_.empty()) create_dataset(ncol_ ? pending_.size() / ncol_ : 0);
   if (pending_.empty()) return;
   std::lock_guard<std::recursive_mutex> lk(h5_mutex());
   const hsize_t n = pending_.size() / ncol_;
@@ -412,6 +422,7 @@ void Hdf5RecordingWriter::end_table() {
   std::lock_guard<std::recursive_mutex> lk(h5_mutex());
   if (did_ >= 0) H5Dclose(did_);
   did_ = -1;
+  table_.clear();
 }
 
 void Hdf5RecordingWriter::close() {

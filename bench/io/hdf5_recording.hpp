@@ -45,7 +45,10 @@ class Hdf5RecordingWriter {
 
  private:
   void flush_rows();
+  void create_dataset(unsigned long long chunk_rows);
   std::filesystem::path file_;
+  std::string table_;
+  std::vector<std::string> columns_, comments_;
   long long fid_ = -1, did_ = -1;
   std::size_t ncol_ = 0, rows_ = 0;
   std::vector<double> pending_;
