@@ -86,7 +86,7 @@ const bool registered = add_command(60, [](CLI::App& app) {
   auto* d = app.add_subcommand("diagnose",
                                "Physics discovery: locate where recording and model disagree, name the missing effect, "
                                "model it, show the fit improve (bench and drive recordings)");
-  d->add_option("dir", a->dir, "recording folder (bench or drive)")->check(CLI::ExistingDirectory);
+  d->add_option("dir", a->dir, "recording folder (bench or drive; CSV or HDF5, docs/recording-hdf5.md)")->check(CLI::ExistingDirectory);
   d->add_flag("--list-effects", a->list_effects,
               "print the catalogue of effects (docs/diagnosis.md, generated from the effect registry) and exit; "
               "with --json as JSON");

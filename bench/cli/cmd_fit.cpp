@@ -88,7 +88,7 @@ const bool registered = add_command(30, [](CLI::App& app) {
   auto a = std::make_shared<FitBenchArgs>();
   auto* b = fit->add_subcommand("bench", "Factory calibration from a bench recording: gyro drift, skews, scale; "
                                          "accelerometer bias, skews, scale; each with its 1σ");
-  b->add_option("dir", a->dir, "bench recording folder")->required()->check(CLI::ExistingDirectory);
+  b->add_option("dir", a->dir, "bench recording folder (CSV or HDF5)")->required()->check(CLI::ExistingDirectory);
   b->add_option("--out", a->out, "write the coefficients here (coefficients.json schema)");
   b->add_option("--method", a->method, "lsq: generalised least squares; ekf: the paper's sequential EKF")
       ->check(CLI::IsMember({"lsq", "ekf"}));

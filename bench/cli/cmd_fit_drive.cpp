@@ -133,7 +133,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
   // Numbers from the command line: decimal, finite; NaN, inf, hex and negatives are bad input (exit 2).
   const CLI::Validator finite_nonneg = finite_non_negative(), finite_pos = finite_positive();
   d->add_option("dir", a->dir,
-                "drive recording folder, or a multi-unit drive (units.json: every unit fitted against the reference, "
+                "drive recording folder (CSV or HDF5, docs/recording-hdf5.md), or a multi-unit drive (units.json: every unit fitted against the reference, "
                 "parsed once; --out then names a folder, OUT/SLOT/RESULT.json)")
       ->required()
       ->check(CLI::ExistingDirectory);

@@ -556,7 +556,7 @@ const bool registered = add_command(40, [](CLI::App& app) {
       "exponential-cosine fits (paper's log-linear and NLS), shaping filters, Allan deviation");
   sub->add_option("input", a->input,
                   "CSV with a t_s column and value columns at a constant step, or a recording folder "
-                  "(imu.csv per axis; increments are divided by dt)")
+                  "(imu.csv, or the imu dataset of recording.h5, per axis; increments are divided by dt)")
       ->required()
       ->check(CLI::ExistingPath);
   sub->add_option("--column", a->columns, "columns to identify (default: all value columns)");

@@ -74,7 +74,7 @@ const bool registered = add_command(50, [](CLI::App& app) {
   auto a = std::make_shared<QcArgs>();
   auto* q = app.add_subcommand("qc", "Quality control by inertial-only navigation: circular position error (eq 39) "
                                      "per coefficient set against the reference of a drive");
-  q->add_option("dir", a->dir, "drive recording folder")->required()->check(CLI::ExistingDirectory);
+  q->add_option("dir", a->dir, "drive recording folder (CSV or HDF5)")->required()->check(CLI::ExistingDirectory);
   q->add_option("--coeffs", a->coeffs,
                  "coefficients.json, in-motion RESULT.json, or 'none' (repeatable); catalogue keys of a set "
                  "(IMPROVED.json) are compensated on the IMU samples")

@@ -59,28 +59,43 @@ struct Hid {
   explicit operator bool() const { return id >= 0; }
 };
 
-// A string attribute (variable or fixed length, scalar) of an object; false if absent or not text.
-bool read_string_attr(hid_t obj, const char* name, std::string& out) {
+// Strings in attributes are read only in fixed length. The HDF5 library keeps variable-length
+// strings in a global heap, and its reader of that heap overruns its buffer on a damaged file
+// (found by tests/fuzz/hdf5_table in Debian 12's libhdf5 1.10.8): calbench writes fixed-length
+// strings and refuses the other kind rather than hand a damaged heap to the library.
+constexpr const char* kVlenRefused =
+    "variable-length strings are not read (the HDF5 library's reader of them is unsafe on damaged files): "
+    "write fixed-length strings (h5py: numpy.array(names, dtype='S'))";
+
+// A scalar string attribute; false if absent; `error` set if present but not a fixed-length string.
+bool read_string_attr(hid_t obj, const char* name, std::string& out, std::string& error) {
   if (H5Aexists(obj, name) <= 0) return false;
   Hid a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
-  if (!a) return false;
+  if (!a) {
+    error = "cannot read the attribute";
+    return true;
+  }
   Hid t(H5Aget_type(a.id), H5Tclose);
-  if (H5Tget_class(t.id) != H5T_STRING) return false;
-  Hid mem(H5Tcopy(H5T_C_S1), H5Tclose);
-  if (H5Tis_variable_str(t.id) > 0) {
-    H5Tset_size(mem.id, H5T_VARIABLE);
-    H5Tset_cset(mem.id, H5T_CSET_UTF8);
-    char* s = nullptr;
-    if (H5Aread(a.id, mem.id, &s) < 0) return false;
-    out = s ? s : "";
-    Hid sp(H5Aget_space(a.id), H5Sclose);
-    H5Dvlen_reclaim(mem.id, sp.id, H5P_DEFAULT, &s);
+  Hid sp(H5Aget_space(a.id), H5Sclose);
+  if (H5Tget_class(t.id) != H5T_STRING || H5Sget_simple_extent_npoints(sp.id) != 1) {
+    error = "expected a string";
+    return true;
+  }
+  if (H5Tis_variable_str(t.id) != 0) {
+    error = kVlenRefused;
     return true;
   }
   const std::size_t n = H5Tget_size(t.id);
+  if (n == 0 || n > (std::size_t{64} << 20)) {
+    error = "implausible string length";
+    return true;
+  }
   std::string b(n, '\0');
-  H5Tset_size(mem.id, n);
-  if (H5Aread(a.id, mem.id, b.data()) < 0) return false;
+  Hid mem(H5Tcopy(t.id), H5Tclose);  // the file's fixed-length type (pad and character set as written)
+  if (H5Aread(a.id, mem.id, b.data()) < 0) {
+    error = "cannot read the attribute";
+    return true;
+  }
   out = b.substr(0, b.find('\0'));
   return true;
 }
@@ -111,57 +126,56 @@ bool read_string_array_attr(hid_t obj, const char* name, std::vector<std::string
     return true;
   }
   out.clear();
-  Hid mem(H5Tcopy(H5T_C_S1), H5Tclose);
-  if (H5Tis_variable_str(t.id) > 0) {
-    H5Tset_size(mem.id, H5T_VARIABLE);
-    H5Tset_cset(mem.id, H5T_CSET_UTF8);
-    std::vector<char*> v(n, nullptr);
-    if (H5Aread(a.id, mem.id, v.data()) < 0) {
-      error = "cannot read the attribute";
-      return true;
-    }
-    for (char* s : v) out.emplace_back(s ? s : "");
-    H5Dvlen_reclaim(mem.id, sp.id, H5P_DEFAULT, v.data());
-  } else {
+  if (H5Tis_variable_str(t.id) != 0) {
+    error = kVlenRefused;
+    return true;
+  }
+  Hid mem(H5Tcopy(t.id), H5Tclose);  // the file's fixed-length type (pad and character set as written)
+  {
     const std::size_t len = H5Tget_size(t.id);
     if (len == 0 || len > 4096) {
       error = "implausible string length";
       return true;
     }
     std::vector<char> b(len * n);
-    H5Tset_size(mem.id, len);
     if (H5Aread(a.id, mem.id, b.data()) < 0) {
       error = "cannot read the attribute";
       return true;
     }
     for (hsize_t i = 0; i < n; ++i) {
-      std::string s(b.data() + i * len, len);
-      out.push_back(s.substr(0, s.find('\0')));
+      std::string str(b.data() + i * len, len);
+      out.push_back(str.substr(0, str.find('\0')));
     }
   }
   return true;
 }
 
+// Fixed-length, null-padded UTF-8 strings (read_string_attr says why not variable length).
 void write_string_attr(hid_t obj, const char* name, const std::string& v) {
   Hid t(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(t.id, H5T_VARIABLE);
+  H5Tset_size(t.id, std::max<std::size_t>(v.size(), 1));
+  H5Tset_strpad(t.id, H5T_STR_NULLPAD);
   H5Tset_cset(t.id, H5T_CSET_UTF8);
   Hid sp(H5Screate(H5S_SCALAR), H5Sclose);
   Hid a(H5Acreate2(obj, name, t.id, sp.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  const char* p = v.c_str();
-  if (!a || H5Awrite(a.id, t.id, &p) < 0) throw std::runtime_error(std::string("HDF5: cannot write attribute ") + name);
+  std::string buf = v;
+  buf.resize(std::max<std::size_t>(v.size(), 1), '\0');
+  if (!a || H5Awrite(a.id, t.id, buf.data()) < 0) throw std::runtime_error(std::string("HDF5: cannot write attribute ") + name);
 }
 
 void write_string_array_attr(hid_t obj, const char* name, const std::vector<std::string>& v) {
+  std::size_t len = 1;
+  for (const auto& s : v) len = std::max(len, s.size());
   Hid t(H5Tcopy(H5T_C_S1), H5Tclose);
-  H5Tset_size(t.id, H5T_VARIABLE);
+  H5Tset_size(t.id, len);
+  H5Tset_strpad(t.id, H5T_STR_NULLPAD);
   H5Tset_cset(t.id, H5T_CSET_UTF8);
   const hsize_t n = v.size();
   Hid sp(H5Screate_simple(1, &n, nullptr), H5Sclose);
   Hid a(H5Acreate2(obj, name, t.id, sp.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  std::vector<const char*> p;
-  for (const auto& s : v) p.push_back(s.c_str());
-  if (!a || H5Awrite(a.id, t.id, p.data()) < 0) throw std::runtime_error(std::string("HDF5: cannot write attribute ") + name);
+  std::vector<char> buf(len * v.size(), '\0');
+  for (std::size_t i = 0; i < v.size(); ++i) std::copy(v[i].begin(), v[i].end(), buf.begin() + static_cast<std::ptrdiff_t>(i * len));
+  if (!a || H5Awrite(a.id, t.id, buf.data()) < 0) throw std::runtime_error(std::string("HDF5: cannot write attribute ") + name);
 }
 
 std::string lower_dataset(const std::string& d) { return d.empty() || d[0] != '/' ? "/" + d : d; }
@@ -205,7 +219,9 @@ OpenedTable open_checked(const fs::path& file, const std::string& dataset) {
     throw InputError(f, 0, ds, "dataset " + ds + " has the wrong shape: " + std::to_string(o.ncol) + " columns but " +
                                   std::to_string(o.columns.size()) + " names in attribute 'columns'");
   std::string c;
-  if (read_string_attr(o.dset.id, "comments", c) && !c.empty()) {
+  if (read_string_attr(o.dset.id, "comments", c, err) && !err.empty())
+    throw InputError(f, 0, ds, "dataset " + ds + " attribute 'comments': " + err);
+  if (!c.empty()) {
     std::size_t p = 0;
     while (true) {
       const std::size_t n = c.find('\n', p);

@@ -244,12 +244,19 @@ bool BenchRefReader::next(BenchRefRow& r) {
   return true;
 }
 
+namespace {
+// The leading columns of a drive's reference.csv and gnss.csv: time (strictly increasing) and position.
+void require_time_position(TableSource& c, int& t, int& lat, int& lon, int& h) {
+  t = c.require("t_s");
+  c.set_time_slot(t);
+  lat = c.require("lat_deg");
+  lon = c.require("lon_deg");
+  h = c.require("h_m");
+}
+}  // namespace
+
 DriveRefReader::DriveRefReader(const fs::path& file, bool digest) : csv_(open_table(file, digest)) {
-  t_ = csv_->require("t_s");
-  csv_->set_time_slot(t_);
-  lat_ = csv_->require("lat_deg");
-  lon_ = csv_->require("lon_deg");
-  h_ = csv_->require("h_m");
+  require_time_position(*csv_, t_, lat_, lon_, h_);
   const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
   const char* a[] = {"roll_deg", "pitch_deg", "yaw_deg"};
   for (int i = 0; i < 3; ++i) v_[i] = csv_->require(v[i]);
@@ -278,11 +285,7 @@ bool DriveRefReader::next(DriveRefRow& r) {
 }
 
 GnssReader::GnssReader(const fs::path& file, bool digest) : csv_(open_table(file, digest)) {
-  t_ = csv_->require("t_s");
-  csv_->set_time_slot(t_);
-  lat_ = csv_->require("lat_deg");
-  lon_ = csv_->require("lon_deg");
-  h_ = csv_->require("h_m");
+  require_time_position(*csv_, t_, lat_, lon_, h_);
   const char* v[] = {"vn_m_s", "ve_m_s", "vd_m_s"};
   for (int i = 0; i < 3; ++i) v_[i] = csv_->optional(v[i]);
   // Velocity is all three columns or none: a partial set is a broken file, not "no velocity".

@@ -28,13 +28,14 @@ done
 "$CALBENCH" convert drive --to csv 2>err.txt && fail "converting CSV to CSV must fail"
 grep -q "already CSV" err.txt || fail "$(cat err.txt)"
 
-# h5py reads it as documented: one 2-D float64 dataset per table, names in "columns", the
-# meta.json text as a root attribute; the values equal the CSV's.
+# h5py reads it as documented: one 2-D float64 dataset per table, names in "columns" (fixed-length
+# strings), the meta.json text as a root attribute; the values equal the CSV's.
 $PY - <<'PY'
 import h5py, json, csv, numpy as np
 f = h5py.File("drive-h5/recording.h5", "r")
-assert f.attrs["format"] == "calbench-recording-hdf5/1", f.attrs["format"]
-assert json.loads(f.attrs["meta_json"])["kind"] == "drive"
+txt = lambda v: v.decode() if isinstance(v, bytes) else str(v)
+assert txt(f.attrs["format"]) == "calbench-recording-hdf5/1", f.attrs["format"]
+assert json.loads(txt(f.attrs["meta_json"]))["kind"] == "drive"
 for name in ("imu", "reference", "gnss"):
     d = f[name]
     assert d.dtype == np.float64 and d.ndim == 2 and d.chunks is not None, (name, d.dtype, d.shape, d.chunks)
@@ -93,18 +94,20 @@ def retype(f):  # imu as 32-bit integers
 def reshape(f):  # imu as a 1-D array
     d = f["imu"][...]; cols = f["imu"].attrs["columns"]
     del f["imu"]; n = f.create_dataset("imu", data=d.ravel()); n.attrs["columns"] = cols
-def rename(f):   # a required column renamed away
-    cols = [c.decode() if isinstance(c, bytes) else c for c in f["imu"].attrs["columns"]]
-    f["imu"].attrs["columns"] = [c.replace("gz_rad_s", "gz") for c in cols]
+def names(f):
+    return [c.decode() if isinstance(c, bytes) else c for c in f["imu"].attrs["columns"]]
+def rename(f):   # a required column renamed away (fixed-length strings, as the format has them)
+    f["imu"].attrs["columns"] = np.array([c.replace("gz_rad_s", "gz") for c in names(f)], dtype="S")
 def shorten(f):  # fewer names than columns
-    cols = [c.decode() if isinstance(c, bytes) else c for c in f["imu"].attrs["columns"]]
-    f["imu"].attrs["columns"] = cols[:-1]
+    f["imu"].attrs["columns"] = np.array(names(f)[:-1], dtype="S")
+def vlen(f):     # the names as variable-length strings (h5py's default for a list of str)
+    f["imu"].attrs["columns"] = names(f)
 def nan(f):
     d = f["reference"]; d[5, 1] = np.nan
 def drop(f):
     del f["reference"]
 variant("bad2", retype); variant("bad3", reshape); variant("bad4", rename); variant("bad5", shorten)
-variant("bad6", nan); variant("bad7", drop)
+variant("bad6", nan); variant("bad7", drop); variant("bad8", vlen)
 PY
 expect2 "bad2/recording\.h5: '/imu': dataset /imu has the wrong type" "$CALBENCH" fit drive bad2 --out x.json
 expect2 "bad3/recording\.h5: '/imu': dataset /imu has the wrong shape: expected 2 dimensions" "$CALBENCH" fit drive bad3 --out x.json
@@ -112,6 +115,7 @@ expect2 "bad4/recording\.h5: 'gz_rad_s': dataset /imu: missing required column" 
 expect2 "bad5/recording\.h5: '/imu': dataset /imu has the wrong shape: [0-9]+ columns but [0-9]+ names" "$CALBENCH" fit drive bad5 --out x.json
 expect2 "bad6/recording\.h5: 'lat_deg': dataset /reference, row 6: NaN or infinity" "$CALBENCH" fit drive bad6 --out x.json
 expect2 "bad7/recording\.h5: .*(reference|gnss)" "$CALBENCH" fit drive bad7 --aiding reference --out x.json
+expect2 "bad8/recording\.h5: '/imu': dataset /imu attribute 'columns': variable-length strings are not read" "$CALBENCH" fit drive bad8 --out x.json
 expect2 "bad2/recording\.h5: '/imu': dataset /imu has the wrong type" "$CALBENCH" convert bad2 --to csv
 test ! -e bad2-csv || fail "a failed conversion left bad2-csv"
 ls -a | grep -q "partial" && fail "a failed conversion left a partial folder"

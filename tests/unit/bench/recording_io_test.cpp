@@ -7,23 +7,13 @@
 
 #include "bench/io/coefficients_json.hpp"
 #include "common/input_error.hpp"
+#include "tests/support/temp_dir.hpp"
 #include "bench/io/recording.hpp"
 
 namespace calbench {
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    char tmpl[] = "/tmp/calbench-test-XXXXXX";
-    path_ = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using test::TempDir;
 
 void write_file(const fs::path& p, const std::string& text) {
   std::ofstream(p, std::ios::binary) << text;

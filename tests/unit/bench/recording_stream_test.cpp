@@ -12,22 +12,12 @@
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace calbench {
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    char tmpl[] = "/tmp/calbench-test-XXXXXX";
-    path_ = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using test::TempDir;
 
 // n rows of rates, t = k/100, values drawn from seed; bad_row (0: none) gets a non-number gz.
 std::vector<std::array<double, 7>> write_imu(const fs::path& file, int n, int bad_row, unsigned seed) {
