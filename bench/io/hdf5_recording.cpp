@@ -1,8 +1,18 @@
 #include "bench/io/hdf5_recording.hpp"
 
+#include <fcntl.h>
 #include <hdf5.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <new>
+#include <map>
+#include <sys/stat.h>
+#include <cstring>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <future>
 #include <mutex>
@@ -11,11 +21,14 @@
 #include "bench/io/message_text.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
+#include <nlohmann/json.hpp>
 
 namespace calbench {
 namespace {
 
 namespace fs = std::filesystem;
+// The reader takes the stored little-endian doubles as they are.
+static_assert(std::endian::native == std::endian::little, "HDF5 recordings are read on little-endian machines");
 
 // Rows per chunk of a dataset (and per read of the reader): 8192 rows of 8–16 columns are
 // 0.5–1 MiB, HDF5's default chunk cache size.
@@ -27,13 +40,14 @@ std::recursive_mutex& h5_mutex() {
   return m;
 }
 
-// HDF5 prints its error stack to stderr by default; calbench reports its own messages.
+// HDF5 prints its error stack to stderr by default; calbench reports its own messages. Debian's
+// library is built thread-safe, where that setting is each thread's own: every thread that calls
+// into the library turns it off first.
 void quiet_hdf5() {
-  static const bool done = [] {
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-    return true;
-  }();
-  (void)done;
+  thread_local bool done = false;
+  if (done) return;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  done = true;
 }
 
 struct Hid {
@@ -180,72 +194,252 @@ void write_string_array_attr(hid_t obj, const char* name, const std::vector<std:
 
 std::string lower_dataset(const std::string& d) { return d.empty() || d[0] != '/' ? "/" + d : d; }
 
-// An open dataset with its checked shape and columns.
-struct OpenedTable {
-  Hid file, dset, space;
-  hsize_t rows = 0, ncol = 0;
+// What a reader needs of one dataset, found by the HDF5 library in a child process (survey()):
+// shape, names, comments, and where every block of values lies in the file. The values themselves
+// are read by calbench (pread), never by the library.
+struct TableMeta {
+  bool present = false;
+  std::string error_field, error;  // set: the dataset is refused (InputError: field, message)
+  std::uint64_t rows = 0, ncol = 0, chunk_rows = 0, offset = 0;  // chunk_rows 0: contiguous at offset
   std::vector<std::string> columns, comments;
+  std::vector<std::uint64_t> chunk_addr;  // chunk k holds rows [k·chunk_rows, (k+1)·chunk_rows)
+};
+struct FileMeta {
+  std::string error;  // set: the file is refused as a whole
+  std::map<std::string, TableMeta> tables;
 };
 
-OpenedTable open_checked(const fs::path& file, const std::string& dataset) {
-  std::lock_guard<std::recursive_mutex> lk(h5_mutex());
-  quiet_hdf5();
-  const std::string f = file.string(), ds = lower_dataset(dataset);
-  OpenedTable o;
-  if (!fs::exists(file)) throw InputError(f, 0, "", "cannot open: no such file");
-  if (H5Fis_hdf5(f.c_str()) <= 0) throw InputError(f, 0, "", "not an HDF5 file (no HDF5 signature, or cut short)");
-  o.file = Hid(H5Fopen(f.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!o.file) throw InputError(f, 0, "", "cannot open as HDF5 (damaged or truncated file)");
-  if (H5Lexists(o.file.id, ds.c_str() + 1, H5P_DEFAULT) <= 0)
-    throw InputError(f, 0, ds, "no dataset " + ds + " in the file");
-  o.dset = Hid(H5Dopen2(o.file.id, ds.c_str(), H5P_DEFAULT), H5Dclose);
-  if (!o.dset) throw InputError(f, 0, ds, "cannot open dataset " + ds + " (not a dataset, or a damaged file)");
-  Hid t(H5Dget_type(o.dset.id), H5Tclose);
-  if (H5Tget_class(t.id) != H5T_FLOAT || H5Tget_size(t.id) != 8)
-    throw InputError(f, 0, ds, "dataset " + ds + " has the wrong type: expected 64-bit floats (H5T_IEEE_F64LE)");
-  o.space = Hid(H5Dget_space(o.dset.id), H5Sclose);
-  if (H5Sget_simple_extent_ndims(o.space.id) != 2)
-    throw InputError(f, 0, ds, "dataset " + ds + " has the wrong shape: expected 2 dimensions (rows x columns), got " +
-                                  std::to_string(H5Sget_simple_extent_ndims(o.space.id)));
-  hsize_t dims[2];
-  H5Sget_simple_extent_dims(o.space.id, dims, nullptr);
-  o.rows = dims[0];
-  o.ncol = dims[1];
+const char* const kTableNames[] = {"imu", "reference", "gnss"};
+
+// In the child: one table, checked as the format says. Errors are returned, not thrown.
+TableMeta survey_table(hid_t file, const std::string& name, std::uintmax_t file_size) {
+  TableMeta m;
+  const std::string ds = "/" + name;
+  auto fail = [&](const std::string& field, const std::string& msg) {
+    m.error_field = field;
+    m.error = msg;
+    return m;
+  };
+  if (H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0) return m;
+  m.present = true;
+  Hid d(H5Dopen2(file, ds.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!d) return fail(ds, "cannot open dataset " + ds + " (not a dataset, or a damaged file)");
+  Hid t(H5Dget_type(d.id), H5Tclose);
+  if (!t || H5Tget_class(t.id) != H5T_FLOAT || H5Tget_size(t.id) != 8 || H5Tequal(t.id, H5T_IEEE_F64LE) <= 0)
+    return fail(ds, "dataset " + ds + " has the wrong type: expected 64-bit floats (H5T_IEEE_F64LE)");
+  Hid sp(H5Dget_space(d.id), H5Sclose);
+  const int rank = sp ? H5Sget_simple_extent_ndims(sp.id) : -1;
+  if (rank != 2)
+    return fail(ds, "dataset " + ds + " has the wrong shape: expected 2 dimensions (rows x columns), got " + std::to_string(rank));
+  hsize_t dims[2] = {0, 0};
+  H5Sget_simple_extent_dims(sp.id, dims, nullptr);
+  m.rows = dims[0];
+  m.ncol = dims[1];
   std::string err;
-  if (!read_string_array_attr(o.dset.id, "columns", o.columns, err))
-    throw InputError(f, 0, ds, "dataset " + ds + " has no attribute 'columns' (the column names)");
-  if (!err.empty()) throw InputError(f, 0, ds, "dataset " + ds + " attribute 'columns': " + err);
-  if (o.columns.size() != o.ncol)
-    throw InputError(f, 0, ds, "dataset " + ds + " has the wrong shape: " + std::to_string(o.ncol) + " columns but " +
-                                  std::to_string(o.columns.size()) + " names in attribute 'columns'");
+  if (!read_string_array_attr(d.id, "columns", m.columns, err))
+    return fail(ds, "dataset " + ds + " has no attribute 'columns' (the column names)");
+  if (!err.empty()) return fail(ds, "dataset " + ds + " attribute 'columns': " + err);
+  if (m.columns.size() != m.ncol)
+    return fail(ds, "dataset " + ds + " has the wrong shape: " + std::to_string(m.ncol) + " columns but " +
+                        std::to_string(m.columns.size()) + " names in attribute 'columns'");
+  if (m.ncol == 0 || m.ncol > 4096)
+    return fail(ds, "dataset " + ds + " has the wrong shape: " + std::to_string(m.ncol) + " columns (1 to 4096)");
   std::string c;
-  if (read_string_attr(o.dset.id, "comments", c, err) && !err.empty())
-    throw InputError(f, 0, ds, "dataset " + ds + " attribute 'comments': " + err);
+  if (read_string_attr(d.id, "comments", c, err) && !err.empty()) return fail(ds, "dataset " + ds + " attribute 'comments': " + err);
   if (!c.empty()) {
     std::size_t p = 0;
     while (true) {
       const std::size_t n = c.find('\n', p);
-      o.comments.push_back(c.substr(p, n == std::string::npos ? std::string::npos : n - p));
+      m.comments.push_back(c.substr(p, n == std::string::npos ? std::string::npos : n - p));
       if (n == std::string::npos) break;
       p = n + 1;
     }
   }
-  return o;
+  // Storage: no filter (the values as they are), chunks of whole rows, or one contiguous block.
+  Hid dcpl(H5Dget_create_plist(d.id), H5Pclose);
+  if (!dcpl || H5Pget_nfilters(dcpl.id) != 0)
+    return fail(ds, "dataset " + ds + " is compressed or filtered: the format stores the values as they are (no filters)");
+  const std::uint64_t row_bytes = m.ncol * 8;
+  const H5D_layout_t layout = H5Pget_layout(dcpl.id);
+  const auto damaged = [&](std::uint64_t r0) {
+    return fail(ds, "dataset " + ds + ", rows from " + std::to_string(r0 + 1) + ": their values lie outside the file or are "
+                    "not stored (truncated or damaged)");
+  };
+  if (layout == H5D_CHUNKED) {
+    hsize_t cd[2] = {0, 0};
+    if (H5Pget_chunk(dcpl.id, 2, cd) != 2 || cd[1] != m.ncol || cd[0] == 0 || cd[0] * m.ncol > (hsize_t{1} << 25))
+      return fail(ds, "dataset " + ds + " has the wrong chunk shape: expected chunks of whole rows (every column), at most 2^25 values each");
+    m.chunk_rows = cd[0];
+    for (std::uint64_t r0 = 0; r0 < m.rows; r0 += m.chunk_rows) {
+      const hsize_t at[2] = {r0, 0};
+      unsigned mask = 0;
+      haddr_t addr = HADDR_UNDEF;
+      hsize_t size = 0;
+      if (H5Dget_chunk_info_by_coord(d.id, at, &mask, &addr, &size) < 0 || addr == HADDR_UNDEF ||
+          size != m.chunk_rows * row_bytes || addr > file_size || size > file_size - addr)
+        return damaged(r0);
+      m.chunk_addr.push_back(addr);
+    }
+  } else if (layout == H5D_CONTIGUOUS) {
+    const haddr_t off = H5Dget_offset(d.id);
+    if (m.rows > 0 && (off == HADDR_UNDEF || off > file_size || m.rows > (file_size - off) / row_bytes)) return damaged(0);
+    m.offset = off == HADDR_UNDEF ? 0 : off;
+  } else {
+    return fail(ds, "dataset " + ds + " has a layout calbench does not read (chunked or contiguous expected)");
+  }
+  return m;
+}
+
+nlohmann::json to_json(const FileMeta& f) {
+  nlohmann::json j = {{"error", f.error}, {"tables", nlohmann::json::object()}};
+  for (const auto& [name, m] : f.tables)
+    j["tables"][name] = {{"present", m.present}, {"error_field", m.error_field}, {"error", m.error}, {"rows", m.rows},
+                         {"ncol", m.ncol}, {"chunk_rows", m.chunk_rows}, {"offset", m.offset}, {"columns", m.columns},
+                         {"comments", m.comments}, {"chunk_addr", m.chunk_addr}};
+  return j;
+}
+
+FileMeta from_json(const nlohmann::json& j) {
+  FileMeta f;
+  f.error = j.at("error").get<std::string>();
+  for (const auto& [name, t] : j.at("tables").items()) {
+    TableMeta m;
+    m.present = t.at("present").get<bool>();
+    m.error_field = t.at("error_field").get<std::string>();
+    m.error = t.at("error").get<std::string>();
+    m.rows = t.at("rows").get<std::uint64_t>();
+    m.ncol = t.at("ncol").get<std::uint64_t>();
+    m.chunk_rows = t.at("chunk_rows").get<std::uint64_t>();
+    m.offset = t.at("offset").get<std::uint64_t>();
+    m.columns = t.at("columns").get<std::vector<std::string>>();
+    m.comments = t.at("comments").get<std::vector<std::string>>();
+    m.chunk_addr = t.at("chunk_addr").get<std::vector<std::uint64_t>>();
+    f.tables[name] = std::move(m);
+  }
+  return f;
+}
+
+// In the child: the whole file.
+FileMeta survey_file(const fs::path& file) {
+  FileMeta f;
+  quiet_hdf5();
+  const std::string p = file.string();
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(file, ec);
+  if (H5Fis_hdf5(p.c_str()) <= 0) {
+    f.error = "not an HDF5 file (no HDF5 signature, or cut short)";
+    return f;
+  }
+  Hid h(H5Fopen(p.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!h) {
+    f.error = "cannot open as HDF5 (damaged or truncated file)";
+    return f;
+  }
+  for (const char* t : kTableNames) f.tables[t] = survey_table(h.id, t, size);
+  return f;
+}
+
+// The HDF5 library (Debian 12's 1.10.8) overruns its buffers on some damaged files, inside its own
+// parsing of object headers, attribute messages and chunk indexes (found by tests/fuzz/hdf5_table),
+// where no check of calbench's can come first. So the library reads a file's structure in a child
+// process (fork) and hands over what the readers need as JSON through a pipe; a crash there ends
+// the child and the file is reported damaged (exit 2). This process never gives the library a file
+// it reads; the values are read from the offsets the child found, checked against the file's size.
+// Once per file (path, size, modification time) and process.
+const FileMeta& survey(const fs::path& file) {
+  std::error_code ec;
+  const auto size = fs::file_size(file, ec);
+  if (ec) throw InputError(file.string(), 0, "", "cannot open: " + ec.message());
+  const auto mtime = fs::last_write_time(file, ec).time_since_epoch().count();
+  const std::string key = file.string() + "|" + std::to_string(size) + "|" + std::to_string(mtime);
+  static std::mutex m;
+  static std::map<std::string, FileMeta> done;
+  std::lock_guard<std::mutex> lk(m);
+  const auto it = done.find(key);
+  if (it != done.end()) return it->second;
+  int fds[2];
+  if (::pipe(fds) != 0) throw std::runtime_error(std::string("cannot make a pipe: ") + std::strerror(errno));
+  pid_t pid = -1;
+  {
+    std::lock_guard<std::recursive_mutex> h5(h5_mutex());  // no thread of ours inside the library while forking
+    pid = ::fork();
+  }
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw std::runtime_error(file.string() + ": cannot fork to read the HDF5 structure: " + std::strerror(errno));
+  }
+  if (pid == 0) {  // the child: one thread; our lock of the library re-made (the parent's thread holds its copy)
+    ::close(fds[0]);
+    new (&h5_mutex()) std::recursive_mutex();
+    std::string out;
+    try {
+      out = to_json(survey_file(file)).dump();
+    } catch (...) {
+      ::_exit(3);
+    }
+    std::size_t w = 0;
+    while (w < out.size()) {
+      const ssize_t n = ::write(fds[1], out.data() + w, out.size() - w);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) ::_exit(4);
+      w += static_cast<std::size_t>(n);
+    }
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string in;
+  char buf[65536];
+  while (true) {
+    const ssize_t n = ::read(fds[0], buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    in.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw InputError(file.string(), 0, "",
+                     "damaged HDF5 file: the HDF5 library failed while reading its structure" +
+                         (WIFSIGNALED(status) ? " (signal " + std::to_string(WTERMSIG(status)) + ")" : std::string()) +
+                         "; nothing read from it");
+  FileMeta f;
+  try {
+    f = from_json(nlohmann::json::parse(in));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file.string() + ": the HDF5 survey's answer is unreadable: " + e.what());
+  }
+  return done[key] = std::move(f);
+}
+
+// The table `dataset` of a surveyed file, or the InputError the survey found.
+const TableMeta& table_meta(const fs::path& file, const std::string& dataset) {
+  const std::string f = file.string(), name = dataset.empty() || dataset[0] != '/' ? dataset : dataset.substr(1);
+  if (!fs::exists(file)) throw InputError(f, 0, "", "cannot open: no such file");
+  const FileMeta& fm = survey(file);
+  if (!fm.error.empty()) throw InputError(f, 0, "", fm.error);
+  const auto it = fm.tables.find(name);
+  if (it == fm.tables.end() || !it->second.present) throw InputError(f, 0, "/" + name, "no dataset /" + name + " in the file");
+  if (!it->second.error.empty()) throw InputError(f, 0, it->second.error_field, it->second.error);
+  return it->second;
 }
 
 class Hdf5Table final : public TableSource {
  public:
   Hdf5Table(const fs::path& file, const std::string& dataset, bool digest)
-      : path_(file.string()), ds_(lower_dataset(dataset)), t_(open_checked(file, dataset)) {
+      : path_(file.string()), ds_(lower_dataset(dataset)), t_(table_meta(file, dataset)) {
     slot_of_col_.assign(t_.ncol, -1);
+    fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
+    struct stat st {};
+    file_size_ = ::fstat(fd_, &st) == 0 ? static_cast<std::uint64_t>(st.st_size) : 0;
     if (digest) digest_ = std::async(std::launch::async, [f = file] { return sha256_file(f); });
   }
   ~Hdf5Table() override {
+    if (fd_ >= 0) ::close(fd_);
     if (digest_.valid()) digest_.wait();
-    std::lock_guard<std::recursive_mutex> lk(h5_mutex());
-    t_.space.reset();
-    t_.dset.reset();
-    t_.file.reset();
   }
   int optional(std::string_view name) override {
     for (std::size_t i = 0; i < t_.columns.size(); ++i)
@@ -274,7 +468,7 @@ class Hdf5Table final : public TableSource {
       if (t_.rows == 0) fail_at("", "no data rows");
       return false;
     }
-    if (row_ >= block0_ + block_rows_) read_block();
+    if (row_ >= block0_ + block_rows_ || row_ < block0_) read_block();
     const double* r = buf_.data() + (row_ - block0_) * t_.ncol;
     ++row_;
     for (std::size_t s = 0; s < cols_.size(); ++s) {
@@ -309,26 +503,48 @@ class Hdf5Table final : public TableSource {
   }
 
  private:
+  // The block of rows holding row_: a chunk (at the address the survey found), or kChunkRows rows of
+  // the contiguous block; read with pread, each range checked against the file's size again.
   void read_block() {
-    std::lock_guard<std::recursive_mutex> lk(h5_mutex());
-    block0_ = row_;
-    block_rows_ = std::min<hsize_t>(kChunkRows, t_.rows - row_);
+    const std::uint64_t row_bytes = t_.ncol * 8;
+    std::uint64_t addr = 0;
+    if (t_.chunk_rows > 0) {
+      const std::uint64_t k = row_ / t_.chunk_rows;
+      block0_ = k * t_.chunk_rows;
+      block_rows_ = std::min<std::uint64_t>(t_.chunk_rows, t_.rows - block0_);
+      if (k >= t_.chunk_addr.size()) damaged();
+      addr = t_.chunk_addr[k];
+    } else {
+      block0_ = row_;
+      block_rows_ = std::min<std::uint64_t>(kChunkRows, t_.rows - block0_);
+      addr = t_.offset + block0_ * row_bytes;
+    }
+    const std::uint64_t want = block_rows_ * row_bytes;
+    if (addr > file_size_ || want > file_size_ - addr) damaged();
     buf_.resize(block_rows_ * t_.ncol);
-    const hsize_t start[2] = {block0_, 0}, count[2] = {block_rows_, t_.ncol};
-    H5Sselect_hyperslab(t_.space.id, H5S_SELECT_SET, start, nullptr, count, nullptr);
-    Hid mem(H5Screate_simple(2, count, nullptr), H5Sclose);
-    if (H5Dread(t_.dset.id, H5T_NATIVE_DOUBLE, mem.id, t_.space.id, H5P_DEFAULT, buf_.data()) < 0)
-      throw InputError(path_, 0, ds_,
-                       "dataset " + ds_ + ", rows " + std::to_string(block0_ + 1) + "-" + std::to_string(block0_ + block_rows_) +
-                           ": cannot read (the file is truncated or damaged)");
+    std::uint64_t got = 0;
+    while (got < want) {
+      const ssize_t n = ::pread(fd_, reinterpret_cast<char*>(buf_.data()) + got, want - got, static_cast<off_t>(addr + got));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) damaged();
+      got += static_cast<std::uint64_t>(n);
+    }
+  }
+  [[noreturn]] void damaged() const {
+    throw InputError(path_, 0, ds_,
+                     "dataset " + ds_ + ", rows " + std::to_string(block0_ + 1) + "-" +
+                         std::to_string(block0_ + std::max<std::uint64_t>(block_rows_, 1)) +
+                         ": cannot read (the file is truncated or damaged)");
   }
 
   std::string path_, ds_;
-  OpenedTable t_;
+  TableMeta t_;
+  int fd_ = -1;
+  std::uint64_t file_size_ = 0;
   std::vector<int> slot_of_col_;
   std::vector<std::size_t> cols_;
   std::vector<double> values_, buf_;
-  hsize_t row_ = 0, block0_ = 0, block_rows_ = 0;
+  std::uint64_t row_ = 0, block0_ = 0, block_rows_ = 0;
   int time_slot_ = -1;
   double last_time_ = 0;
   mutable std::shared_future<std::string> digest_;
@@ -346,11 +562,13 @@ bool recording_has_table(const fs::path& dir, const std::string& name) {
   if (fs::exists(dir / (name + ".csv"))) return true;
   const fs::path h5 = dir / kHdf5RecordingFile;
   if (!fs::exists(h5)) return false;
-  std::lock_guard<std::recursive_mutex> lk(h5_mutex());
-  quiet_hdf5();
-  if (H5Fis_hdf5(h5.string().c_str()) <= 0) return false;
-  Hid f(H5Fopen(h5.string().c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  return f && H5Lexists(f.id, name.c_str(), H5P_DEFAULT) > 0;
+  try {
+    const FileMeta& fm = survey(h5);
+    const auto it = fm.tables.find(name);
+    return fm.error.empty() && it != fm.tables.end() && it->second.present;
+  } catch (const InputError&) {
+    return false;  // a damaged file: its reader says so
+  }
 }
 
 fs::path table_file(const fs::path& dir, const std::string& name) {
@@ -360,13 +578,8 @@ fs::path table_file(const fs::path& dir, const std::string& name) {
 }
 
 Hdf5TableInfo hdf5_table_info(const fs::path& file, const std::string& dataset) {
-  OpenedTable o = open_checked(file, dataset);
-  std::lock_guard<std::recursive_mutex> lk(h5_mutex());
-  Hdf5TableInfo i{o.columns, o.comments, static_cast<std::size_t>(o.rows)};
-  o.space.reset();
-  o.dset.reset();
-  o.file.reset();
-  return i;
+  const TableMeta& m = table_meta(file, dataset);
+  return Hdf5TableInfo{m.columns, m.comments, static_cast<std::size_t>(m.rows)};
 }
 
 // ---------------------------------------------------------------------------------------------
