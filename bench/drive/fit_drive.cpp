@@ -513,18 +513,19 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // read to its end is hashed here).
   const auto digest = [](std::optional<std::string> d, const fs::path& file) { return d ? *d : sha256_file(file); };
   const fs::path imu_file = table_file(dir, "imu"), ref_file = table_file(dir, "reference");
-  const bool h5 = imu_file.filename() == kHdf5RecordingFile;
+  const bool h5 = imu_file.filename() == kHdf5RecordingFile, has_ref = recording_has_table(dir, "reference");
+  // (An HDF5 recording is one file: every table's digest is that of recording.h5, computed once.)
+  const std::string imu_digest = digest(st.imu_sha256(), imu_file);
   nlohmann::json ref_digest = nullptr;
   if (a.shared_reference) ref_digest = a.shared_reference->sha256;
-  else if (!gnss && recording_has_table(dir, "reference")) ref_digest = digest(st.aiding_sha256(), ref_file);
-  else if (recording_has_table(dir, "reference")) ref_digest = sha256_file(ref_file);
+  else if (has_ref) ref_digest = h5 ? imu_digest : gnss ? sha256_file(ref_file) : digest(st.aiding_sha256(), ref_file);
   j["recording"] = {{"path", fs::absolute(dir).lexically_normal().string()},
-                    {"sha256", digest(st.imu_sha256(), imu_file)},
+                    {"sha256", imu_digest},
                     {"sha256_reference", ref_digest},
                     {"sha256_meta", sha256_file(dir / "meta.json")}};
   // An HDF5 recording: the digests are of recording.h5 (every table), not of CSV files.
   if (h5) j["recording"]["format"] = "hdf5";
-  if (gnss) j["recording"]["sha256_gnss"] = digest(st.aiding_sha256(), table_file(dir, "gnss"));
+  if (gnss) j["recording"]["sha256_gnss"] = h5 ? imu_digest : digest(st.aiding_sha256(), table_file(dir, "gnss"));
   j["recording"]["device"] = {{"model", meta.device.model}, {"serial", meta.device.serial}};  // the unit that drove
   j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
   j["window_s"] = {t_first, t_last};
@@ -617,7 +618,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // QC: out-of-sample inertial-only navigation after the window, with the input set and with
   // the result, when the recording continues; otherwise in-sample from the window start.
   nlohmann::json qj;
-  if (a.qc && !recording_has_table(dir, "reference")) {
+  if (a.qc && !has_ref) {
     qj = {{"sample", "not run (no reference.csv: a GNSS-only recording has no reference to navigate against)"}};
   } else if (a.qc) {
     const bool oos = t_data_end > t_last + 10.0;

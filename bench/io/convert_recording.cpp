@@ -17,11 +17,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* const kTables[] = {"imu", "reference", "gnss"};
-
 bool is_table_file(const fs::path& name) {
   if (name == kHdf5RecordingFile) return true;
-  for (const char* t : kTables)
+  for (const char* t : kRecordingTables)
     if (name == std::string(t) + ".csv") return true;
   return false;
 }
@@ -95,7 +93,7 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
     std::stringstream meta_text;
     meta_text << m.rdbuf();
     Hdf5RecordingWriter w(tmp.path / kHdf5RecordingFile, meta_text.str());
-    for (const char* t : kTables) {
+    for (const char* t : kRecordingTables) {
       const fs::path f = dir / (std::string(t) + ".csv");
       if (!fs::exists(f)) continue;
       CsvReader r(f.string());
@@ -121,7 +119,7 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
     fsync_path(tmp.path / kHdf5RecordingFile);
   } else {
     const fs::path h5 = dir / kHdf5RecordingFile;
-    for (const char* t : kTables) {
+    for (const char* t : kRecordingTables) {
       if (!recording_has_table(dir, t)) continue;
       const Hdf5TableInfo info = hdf5_table_info(h5, t);
       const auto src = open_hdf5_table(h5, t);

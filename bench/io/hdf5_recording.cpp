@@ -209,8 +209,6 @@ struct FileMeta {
   std::map<std::string, TableMeta> tables;
 };
 
-const char* const kTableNames[] = {"imu", "reference", "gnss"};
-
 // In the child: one table, checked as the format says. Errors are returned, not thrown.
 TableMeta survey_table(hid_t file, const std::string& name, std::uintmax_t file_size) {
   TableMeta m;
@@ -335,7 +333,7 @@ FileMeta survey_file(const fs::path& file) {
     f.error = "cannot open as HDF5 (damaged or truncated file)";
     return f;
   }
-  for (const char* t : kTableNames) f.tables[t] = survey_table(h.id, t, size);
+  for (const char* t : kRecordingTables) f.tables[t] = survey_table(h.id, t, size);
   return f;
 }
 
@@ -346,12 +344,29 @@ FileMeta survey_file(const fs::path& file) {
 // the child and the file is reported damaged (exit 2). This process never gives the library a file
 // it reads; the values are read from the offsets the child found, checked against the file's size.
 // Once per file (path, size, modification time) and process.
-const FileMeta& survey(const fs::path& file) {
+// A file as it is now: its path, size and modification time (what the caches below key on).
+std::string file_key(const fs::path& file) {
   std::error_code ec;
   const auto size = fs::file_size(file, ec);
   if (ec) throw InputError(file.string(), 0, "", "cannot open: " + ec.message());
   const auto mtime = fs::last_write_time(file, ec).time_since_epoch().count();
-  const std::string key = file.string() + "|" + std::to_string(size) + "|" + std::to_string(mtime);
+  return file.string() + "|" + std::to_string(size) + "|" + std::to_string(mtime);
+}
+
+// The SHA-256 of a file, computed once on a thread of its own however many of its tables ask.
+std::shared_future<std::string> file_digest(const fs::path& file) {
+  const std::string key = file_key(file);
+  static std::mutex m;
+  static std::map<std::string, std::shared_future<std::string>> started;
+  std::lock_guard<std::mutex> lk(m);
+  auto it = started.find(key);
+  if (it == started.end())
+    it = started.emplace(key, std::async(std::launch::async, [f = file] { return sha256_file(f); }).share()).first;
+  return it->second;
+}
+
+const FileMeta& survey(const fs::path& file) {
+  const std::string key = file_key(file);
   static std::mutex m;
   static std::map<std::string, FileMeta> done;
   std::lock_guard<std::mutex> lk(m);
@@ -435,10 +450,11 @@ class Hdf5Table final : public TableSource {
     if (fd_ < 0) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
     struct stat st {};
     file_size_ = ::fstat(fd_, &st) == 0 ? static_cast<std::uint64_t>(st.st_size) : 0;
-    if (digest) digest_ = std::async(std::launch::async, [f = file] { return sha256_file(f); });
+    if (digest) digest_ = file_digest(file);
   }
   ~Hdf5Table() override {
     if (fd_ >= 0) ::close(fd_);
+    // No hashing thread outlives the tables that asked for it (at exit, OpenSSL is torn down).
     if (digest_.valid()) digest_.wait();
   }
   int optional(std::string_view name) override {
@@ -495,11 +511,7 @@ class Hdf5Table final : public TableSource {
   }
   std::optional<std::string> sha256() const override {
     if (!digest_.valid()) return std::nullopt;
-    if (!digest_done_) {
-      digest_value_ = digest_.get();
-      digest_done_ = true;
-    }
-    return digest_value_;
+    return digest_.get();
   }
 
  private:
@@ -547,9 +559,7 @@ class Hdf5Table final : public TableSource {
   std::uint64_t row_ = 0, block0_ = 0, block_rows_ = 0;
   int time_slot_ = -1;
   double last_time_ = 0;
-  mutable std::shared_future<std::string> digest_;
-  mutable std::string digest_value_;
-  mutable bool digest_done_ = false;
+  std::shared_future<std::string> digest_;
 };
 
 }  // namespace

@@ -15,11 +15,14 @@ namespace calbench {
 
 inline constexpr const char* kHdf5RecordingFile = "recording.h5";
 inline constexpr const char* kHdf5RecordingFormat = "calbench-recording-hdf5/1";
+// The tables of a recording, by name: NAME.csv, or the dataset /NAME of recording.h5.
+inline constexpr const char* kRecordingTables[] = {"imu", "reference", "gnss"};
 
 // One dataset of recording.h5 as a table. Its shape, type and "columns" are checked at open: a
 // missing dataset, a wrong rank, type or column count, a file that is not HDF5 or is cut short
 // are InputErrors naming the file, the dataset and (where there is one) the column.
-// digest: SHA-256 of the file's bytes (sha256()), read alongside on a thread of its own.
+// digest: SHA-256 of the file's bytes (sha256()), read alongside on a thread of its own, once per
+// file however many of its tables ask.
 std::unique_ptr<TableSource> open_hdf5_table(const std::filesystem::path& file, const std::string& dataset, bool digest = false);
 
 // Does the recording folder hold table `name` ("imu", "reference", "gnss"), as name.csv or as a
