@@ -9,7 +9,6 @@
 #include <cstring>
 
 #include <fast_float/fast_float.h>
-#include <openssl/evp.h>
 
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
@@ -32,16 +31,10 @@ std::string_view trim(std::string_view s) {
 }
 }  // namespace
 
-void CsvReader::DigestFree::operator()(void* ctx) const { EVP_MD_CTX_free(static_cast<EVP_MD_CTX*>(ctx)); }
-
 CsvReader::CsvReader(std::string path, bool digest) : path_(std::move(path)), buf_(kBufSize) {
   file_.reset(std::fopen(path_.c_str(), "rb"));
   if (!file_) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
-  if (digest) {
-    digest_.reset(EVP_MD_CTX_new());
-    if (!digest_ || EVP_DigestInit_ex(static_cast<EVP_MD_CTX*>(digest_.get()), EVP_sha256(), nullptr) != 1)
-      throw std::runtime_error("OpenSSL: cannot start a SHA-256 digest");
-  }
+  if (digest) digest_ = std::make_unique<Sha256>();
   std::string_view line;
   while (read_line(line)) {
     const auto t = trim(line);
@@ -116,17 +109,9 @@ void CsvReader::refill() {
     eof_ = true;
   }
   if (digest_) {
-    auto* ctx = static_cast<EVP_MD_CTX*>(digest_.get());
-    EVP_DigestUpdate(ctx, buf_.data(), end_);
+    digest_->update(buf_.data(), end_);
     if (eof_) {  // the whole file has passed: the digest is complete
-      unsigned char md[EVP_MAX_MD_SIZE];
-      unsigned int len = 0;
-      EVP_DigestFinal_ex(ctx, md, &len);
-      static const char* hex = "0123456789abcdef";
-      for (unsigned i = 0; i < len; ++i) {
-        sha256_ += hex[md[i] >> 4];
-        sha256_ += hex[md[i] & 15];
-      }
+      sha256_ = digest_->hex();
       digest_.reset();
     }
   }

@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/io/sha256.hpp"
 #include "bench/io/table_source.hpp"
 
 namespace calbench {
@@ -50,11 +51,8 @@ class CsvReader final : public TableSource {
   bool parse_row(std::string_view t);
   void refill();
   [[noreturn]] void fail(const std::string& column, const std::string& msg) const;
-  struct DigestFree {
-    void operator()(void* ctx) const;
-  };
-  std::unique_ptr<void, DigestFree> digest_;  // EVP_MD_CTX, while reading
-  std::string sha256_;                         // the digest once the file is read to its end
+  std::unique_ptr<Sha256> digest_;  // while reading
+  std::string sha256_;              // the digest once the file is read to its end
   std::vector<std::string> comments_;
 
   std::string path_;

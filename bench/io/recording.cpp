@@ -1,12 +1,5 @@
 #include "bench/io/recording.hpp"
 
-#include <fcntl.h>
-#include <openssl/evp.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <cerrno>
-
 #include <cmath>
 #include <condition_variable>
 #include <deque>
@@ -17,6 +10,7 @@
 #include <fstream>
 
 #include "bench/io/hdf5_recording.hpp"
+#include "bench/io/sha256.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
@@ -397,38 +391,16 @@ void RecordingWriter::finish() {
 }
 
 std::string sha256_file(const fs::path& file) {
-  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
-  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
-  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    EVP_MD_CTX_free(ctx);
-    throw InputError(file.string(), 0, "", "cannot open");
-  }
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), 0, "", "cannot open");
+  Sha256 h;
   std::vector<char> buf(1 << 20);
-  while (true) {
-    const ssize_t n = ::read(fd, buf.data(), buf.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int err = errno;
-      ::close(fd);
-      EVP_MD_CTX_free(ctx);
-      throw InputError(file.string(), 0, "", std::string("read error: ") + std::strerror(err));
-    }
-    if (n == 0) break;
-    EVP_DigestUpdate(ctx, buf.data(), static_cast<std::size_t>(n));
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    h.update(buf.data(), static_cast<std::size_t>(in.gcount()));
   }
-  ::close(fd);
-  unsigned char md[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_DigestFinal_ex(ctx, md, &len);
-  EVP_MD_CTX_free(ctx);
-  std::string hex;
-  char b[3];
-  for (unsigned i = 0; i < len; ++i) {
-    std::snprintf(b, sizeof b, "%02x", md[i]);
-    hex += b;
-  }
-  return hex;
+  if (in.bad()) throw InputError(file.string(), 0, "", "read error");
+  return h.hex();
 }
 
 }  // namespace calbench
