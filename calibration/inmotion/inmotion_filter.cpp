@@ -49,20 +49,25 @@ void apply_update_fused(Eigen::MatrixXd& P, Eigen::VectorXd& dx, const Eigen::Ma
   P = 0.5 * (P + P.transpose()).eval();
 }
 
+// The columns an observation's H touches (a nonzero entry), in state order.
+template <int M>
+void touched_columns(const Eigen::Matrix<double, M, Eigen::Dynamic>& H, std::vector<int>& cols) {
+  cols.clear();
+  for (int k = 0; k < H.cols(); ++k)
+    if (H.col(k).cwiseAbs().maxCoeff() > 0) cols.push_back(k);
+}
+
 // P·Hᵀ over the columns H touches: (P·Hᵀ)(i,r) = Σ_k P(i,k)·H(r,k) in the order of k, the zero
 // terms of H skipped (bit for bit the matrix product, which sums them in that order too).
 template <int M>
-Eigen::Matrix<double, Eigen::Dynamic, M> p_times_ht(const Eigen::MatrixXd& P, const Eigen::Matrix<double, M, Eigen::Dynamic>& H) {
-  const int N = static_cast<int>(P.rows());
-  int cols[256];
-  int nc = 0;
-  for (int k = 0; k < N && nc < 256; ++k)
-    if (H.col(k).cwiseAbs().maxCoeff() > 0) cols[nc++] = k;
-  Eigen::Matrix<double, Eigen::Dynamic, M> out = Eigen::Matrix<double, Eigen::Dynamic, M>::Zero(N, M);
-  for (int q = 0; q < nc; ++q)
+Eigen::Matrix<double, Eigen::Dynamic, M> p_times_ht(const Eigen::MatrixXd& P, const Eigen::Matrix<double, M, Eigen::Dynamic>& H,
+                                                    std::vector<int>& cols) {
+  touched_columns<M>(H, cols);
+  Eigen::Matrix<double, Eigen::Dynamic, M> out = Eigen::Matrix<double, Eigen::Dynamic, M>::Zero(P.rows(), M);
+  for (const int k : cols)
     for (int r = 0; r < M; ++r) {
-      const double h = H(r, cols[q]);
-      if (h != 0.0) out.col(r) += P.col(cols[q]) * h;
+      const double h = H(r, k);
+      if (h != 0.0) out.col(r) += P.col(k) * h;
     }
   return out;
 }
@@ -72,19 +77,21 @@ Eigen::Matrix<double, Eigen::Dynamic, M> p_times_ht(const Eigen::MatrixXd& P, co
 // the terms with Φ_M(i,k) = 0 change no sum (x + 0·p = x) and are skipped where the R rows of a
 // block all have them. P's rows are read as the columns of Pᵀ. R rows and 8 columns of Gᵀ at a
 // time in registers (SSE2 pairs where the compiler has them).
+// ks, as: work space (the q-th term kept: its k at ks[q], Φ_M(i0+r, k) at as[q·R + r]).
 template <int R>
-void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Gt) {
+void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixXd& Pt, Eigen::MatrixXd& Gt,
+                       std::vector<int>& ks, std::vector<double>& as) {
   const int N = static_cast<int>(Pt.rows());
-  int ks[256];
-  double as[R][256];
-  int nk = 0;
-  for (int k = 0; k < N && nk < 256; ++k) {
+  ks.clear();
+  as.clear();
+  for (int k = 0; k < N; ++k) {
     bool any = false;
     for (int r = 0; r < R; ++r) any = any || PhiM(i0 + r, k) != 0.0;
     if (!any) continue;
-    for (int r = 0; r < R; ++r) as[r][nk] = PhiM(i0 + r, k);
-    ks[nk++] = k;
+    for (int r = 0; r < R; ++r) as.push_back(PhiM(i0 + r, k));
+    ks.push_back(k);
   }
+  const int nk = static_cast<int>(ks.size());
   int j0 = 0;
 #if defined(__SSE2__)
   for (; j0 + 8 <= N; j0 += 8) {
@@ -95,7 +102,7 @@ void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixX
       const double* p = Pt.data() + static_cast<std::ptrdiff_t>(ks[q]) * N + j0;
       const __m128d p0 = _mm_loadu_pd(p), p1 = _mm_loadu_pd(p + 2), p2 = _mm_loadu_pd(p + 4), p3 = _mm_loadu_pd(p + 6);
       for (int r = 0; r < R; ++r) {
-        const __m128d a = _mm_set1_pd(as[r][q]);
+        const __m128d a = _mm_set1_pd(as[static_cast<std::size_t>(q) * R + r]);
         acc[r][0] = _mm_add_pd(acc[r][0], _mm_mul_pd(a, p0));
         acc[r][1] = _mm_add_pd(acc[r][1], _mm_mul_pd(a, p1));
         acc[r][2] = _mm_add_pd(acc[r][2], _mm_mul_pd(a, p2));
@@ -112,7 +119,7 @@ void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixX
     for (int r = 0; r < R; ++r) acc[r] = _mm_setzero_pd();
     for (int q = 0; q < nk; ++q) {
       const __m128d p0 = _mm_loadu_pd(Pt.data() + static_cast<std::ptrdiff_t>(ks[q]) * N + j0);
-      for (int r = 0; r < R; ++r) acc[r] = _mm_add_pd(acc[r], _mm_mul_pd(_mm_set1_pd(as[r][q]), p0));
+      for (int r = 0; r < R; ++r) acc[r] = _mm_add_pd(acc[r], _mm_mul_pd(_mm_set1_pd(as[static_cast<std::size_t>(q) * R + r]), p0));
     }
     for (int r = 0; r < R; ++r) _mm_storeu_pd(Gt.data() + static_cast<std::ptrdiff_t>(i0 + r) * N + j0, acc[r]);
   }
@@ -120,7 +127,7 @@ void phi_block_times_p(const Eigen::MatrixXd& PhiM, int i0, const Eigen::MatrixX
   for (; j0 < N; ++j0)
     for (int r = 0; r < R; ++r) {
       double acc = 0;
-      for (int q = 0; q < nk; ++q) acc += as[r][q] * Pt(j0, ks[q]);
+      for (int q = 0; q < nk; ++q) acc += as[static_cast<std::size_t>(q) * R + r] * Pt(j0, ks[q]);
       Gt(j0, i0 + r) = acc;
     }
 }
@@ -286,8 +293,8 @@ void InMotionFilter::propagate() {
     work_G_.resize(N_, m);
     {
       int i = 0;
-      for (; i + 2 <= m; i += 2) phi_block_times_p<2>(PhiM, i, Pt, work_G_);
-      for (; i < m; ++i) phi_block_times_p<1>(PhiM, i, Pt, work_G_);
+      for (; i + 2 <= m; i += 2) phi_block_times_p<2>(PhiM, i, Pt, work_G_, work_k_, work_a_);
+      for (; i < m; ++i) phi_block_times_p<1>(PhiM, i, Pt, work_G_, work_k_, work_a_);
     }
     // P'_MM = G·Φ_Mᵀ + Q_MM: column j is Σ_k G(:,k)·Φ(j,k), G(:,k) the row k of Gᵀ.
     Mat Pmm = Mat::Zero(m, m);
@@ -333,9 +340,9 @@ void InMotionFilter::propagate() {
 }
 
 template <int M>
-Eigen::Matrix<double, Eigen::Dynamic, M> InMotionFilter::pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H) const {
+Eigen::Matrix<double, Eigen::Dynamic, M> InMotionFilter::pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H) {
   if (cfg_.covariance == InMotionConfig::Covariance::dense) return P_ * H.transpose();
-  return p_times_ht<M>(P_, H);
+  return p_times_ht<M>(P_, H, work_k_);
 }
 
 template <int M>
@@ -357,10 +364,8 @@ void InMotionFilter::update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynam
   // where X·Hᵀ uses only the columns H touches. O(N²·M) instead of O(N³); positive semi-definite
   // for any K (the short form P − K·HP is so only for the exact optimal gain, and loses digits when
   // an observation shrinks a variance by orders of magnitude).
-  std::vector<int>& J = moving_;  // reused as the column list of H
-  J.clear();
-  for (int c = 0; c < N_; ++c)
-    if (H.col(c).cwiseAbs().maxCoeff() > 0) J.push_back(c);
+  std::vector<int>& J = work_k_;
+  touched_columns<M>(H, J);
   P_.noalias() -= K * PHt.transpose();
   const Eigen::Matrix<double, Eigen::Dynamic, M> XHt = P_(Eigen::all, J) * H(Eigen::all, J).transpose();
   P_.noalias() -= XHt * K.transpose();

@@ -255,7 +255,7 @@ class InMotionFilter {
               const Eigen::Matrix<double, M, 1>& nu);
   // P·Hᵀ: the dense product, or over the columns H touches (the same sums).
   template <int M>
-  Eigen::Matrix<double, Eigen::Dynamic, M> pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H) const;
+  Eigen::Matrix<double, Eigen::Dynamic, M> pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H);
   void feedback(const Vec& dx);
   void propagate_drift_nominal(double T);
   void refresh_correctors();
@@ -283,7 +283,8 @@ class InMotionFilter {
   Mat P_;
   // Structured covariance: the rows of the last step that moved, and work matrices kept between
   // steps (no allocation per step).
-  std::vector<int> moving_;
+  std::vector<int> moving_, work_k_;
+  std::vector<double> work_a_;
   Mat F_, Q_, work_G_;
   bool p_symmetric_ = false;  // P_ known to equal its transpose bit for bit (set where that is so)
   FAccumulator acc_;
