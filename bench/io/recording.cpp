@@ -81,9 +81,9 @@ void write_meta(const fs::path& dir, const RecordingMeta& m) {
 
 // ---------------------------------------------------------------------------------------------
 std::unique_ptr<TableSource> open_table(const fs::path& file, bool digest) {
-  if (file.extension() == ".csv" && !fs::exists(file)) {
-    const fs::path h5 = file.parent_path() / kHdf5RecordingFile;
-    if (fs::exists(h5)) return open_hdf5_table(h5, file.stem().string(), digest);
+  if (file.extension() == ".csv") {  // NAME.csv, or else the dataset NAME of recording.h5 (table_file's rule)
+    const fs::path f = table_file(file.parent_path(), file.stem().string());
+    if (f.filename() == kHdf5RecordingFile) return open_hdf5_table(f, file.stem().string(), digest);
   }
   return std::make_unique<CsvReader>(file.string(), digest);
 }
