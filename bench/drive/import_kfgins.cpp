@@ -12,6 +12,7 @@
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/recording.hpp"
+#include "bench/io/staging_folder.hpp"
 
 namespace calbench {
 namespace {
@@ -112,25 +113,16 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
                (a.gnss.empty() ? std::string() : ", GNSS " + a.gnss);
   // Written into a folder beside --out and renamed into place at the end: an import that fails
   // (bad input, a full disk) or is killed leaves no half-written recording under --out.
-  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-  fs::create_directories(parent);
-  std::string tmp_name(".");  // built with append(): GCC 12 warns falsely (-Wrestrict) on chained operator+
-  tmp_name.append(out.filename().string()).append(".importing-").append(std::to_string(::getpid()));
-  const fs::path tmp = parent / tmp_name;
-  fs::remove_all(tmp);
-  try {
-    write_recording(a, meta, tmp, sum, v);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    throw;
-  }
+  fs::create_directories(out.has_parent_path() ? out.parent_path() : fs::path("."));
+  StagingFolder staging(out, "importing");
+  const fs::path& tmp = staging.path();
+  write_recording(a, meta, tmp, sum, v);
   if (!fs::exists(out)) {
     fs::rename(tmp, out);
+    staging.keep();
   } else {  // --force into an existing folder: replace the recording's files, meta.json last; keep the rest
     for (const char* f : {"imu.csv", "reference.csv", "gnss.csv", "meta.json"})
       if (fs::exists(tmp / f)) fs::rename(tmp / f, out / f);
-    fs::remove_all(tmp);
   }
   return sum;
 }

@@ -10,6 +10,7 @@
 #include "bench/io/csv.hpp"
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
+#include "bench/io/staging_folder.hpp"
 #include "common/input_error.hpp"
 
 namespace calbench {
@@ -35,17 +36,6 @@ void fsync_path(const fs::path& p) {
     ::close(fd);
   }
 }
-
-// Removes the temporary folder unless released (the conversion completed and it was renamed).
-struct TempDir {
-  fs::path path;
-  bool keep = false;
-  ~TempDir() {
-    if (keep) return;
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
 
 void copy_other_files(const fs::path& dir, const fs::path& tmp) {
   for (const auto& e : fs::directory_iterator(dir)) {
@@ -81,18 +71,14 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
     throw InputError("--out", 0, "", "no such directory: " + out.parent_path().string());
 
   ConvertResult res{out, from, to, {}};
-  std::string tmp_name = ".";
-  tmp_name.append(out.filename().string()).append(".partial-").append(std::to_string(::getpid()));
-  TempDir tmp{out.parent_path() / tmp_name};
-  fs::remove_all(tmp.path);
-  fs::create_directory(tmp.path);
-  copy_other_files(dir, tmp.path);
+  StagingFolder tmp(out, "partial");
+  copy_other_files(dir, tmp.path());
 
   if (to == "h5") {
     std::ifstream m(dir / "meta.json");
     std::stringstream meta_text;
     meta_text << m.rdbuf();
-    Hdf5RecordingWriter w(tmp.path / kHdf5RecordingFile, meta_text.str());
+    Hdf5RecordingWriter w(tmp.path() / kHdf5RecordingFile, meta_text.str());
     for (const char* t : kRecordingTables) {
       const fs::path f = dir / (std::string(t) + ".csv");
       if (!fs::exists(f)) continue;
@@ -116,7 +102,7 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
     }
     check_stop(stop);
     w.close();
-    fsync_path(tmp.path / kHdf5RecordingFile);
+    fsync_path(tmp.path() / kHdf5RecordingFile);
   } else {
     const fs::path h5 = dir / kHdf5RecordingFile;
     for (const char* t : kRecordingTables) {
@@ -131,7 +117,7 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
       }
       std::string comment;
       for (std::size_t i = 0; i < info.comments.size(); ++i) comment.append(i ? "\n# " : "").append(info.comments[i]);
-      CsvWriter w((tmp.path / (std::string(t) + ".csv")).string(), info.columns, comment);
+      CsvWriter w((tmp.path() / (std::string(t) + ".csv")).string(), info.columns, comment);
       std::vector<double> row(slot.size());
       std::size_t n = 0;
       while (src->next()) {
@@ -144,9 +130,9 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
     }
   }
   check_stop(stop);
-  fsync_path(tmp.path);
-  fs::rename(tmp.path, out);
-  tmp.keep = true;
+  fsync_path(tmp.path());
+  fs::rename(tmp.path(), out);
+  tmp.keep();
   fsync_path(out.parent_path().empty() ? fs::path(".") : out.parent_path());
   return res;
 }

@@ -1,0 +1,38 @@
+// A folder written beside its final place under a hidden name (.NAME.TAG-PID) and renamed into
+// place only when complete, so that a writer that fails or is killed leaves nothing half written
+// under NAME: removed with this object unless kept.
+#pragma once
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+namespace calbench {
+
+class StagingFolder {
+ public:
+  // out: the final folder; its parent must exist. Any stale staging folder of this process goes.
+  StagingFolder(const std::filesystem::path& out, const char* tag) {
+    const std::filesystem::path parent = out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
+    std::string name(".");  // built with append(): GCC 12 warns falsely (-Wrestrict) on chained operator+
+    name.append(out.filename().string()).append(".").append(tag).append("-").append(std::to_string(::getpid()));
+    path_ = parent / name;
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directory(path_);
+  }
+  ~StagingFolder() {
+    if (kept_) return;
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  StagingFolder(const StagingFolder&) = delete;
+  StagingFolder& operator=(const StagingFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  void keep() { kept_ = true; }  // it was renamed or emptied: nothing to remove
+
+ private:
+  std::filesystem::path path_;
+  bool kept_ = false;
+};
+
+}  // namespace calbench
