@@ -91,8 +91,11 @@ void print_summary(const nlohmann::json& j) {
     if (al["mode"] == "gnss") {
       std::cout << "GNSS fixes, levelled " << al["level"]["t_s"][0].get<double>() << "–" << al["level"]["t_s"][1].get<double>()
                 << " s; heading ";
-      if (al["heading"]["t_s"].is_null()) std::cout << "never found (no straight stretch)";
-      else std::cout << "from the course over ground at " << al["heading"]["t_s"].get<double>() << " s";
+      if (al["heading"]["t_s"].is_null()) std::cout << "never found (no straight stretch, no hypothesis chosen)";
+      else
+        std::cout << (al["heading"]["source"].get<std::string>().rfind("hypotheses", 0) == 0 ? "chosen among heading hypotheses"
+                                                                                                      : "from the course over ground")
+                  << " at " << al["heading"]["t_s"].get<double>() << " s";
       std::cout << " (" << al["epochs_skipped_before_heading"] << " epochs skipped while moving without it)";
     } else {
       std::cout << "reference attitude at the start";
@@ -103,6 +106,10 @@ void print_summary(const nlohmann::json& j) {
       std::cout << "    t " << r["t_s"].get<double>() << " s: " << r["reason"].get<std::string>() << " -> "
                 << r["action"].get<std::string>() << "\n";
   }
+  if (j.contains("adaptive_noise") && j["adaptive_noise"]["scale_max"].get<double>() > 1)
+    std::cout << "  adaptive noise   navigation noise variance scaled up " << j["adaptive_noise"]["increases"]
+              << " time(s), at most x" << std::setprecision(3) << j["adaptive_noise"]["scale_max"].get<double>() << ", x"
+              << j["adaptive_noise"]["scale_end"].get<double>() << std::setprecision(6) << " at the end\n";
   for (const auto& [k, v] : j["consistency"].items()) {
     std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
               << " (expected 3), " << v["rejected"] << " rejected";
@@ -181,6 +188,13 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "joseph (the same with the Joseph-form update) or dense (full N x N products every step, the reference)")
       ->check(CLI::IsMember({"structured", "joseph", "dense"}))
       ->option_text("structured|joseph|dense");
+  d->add_option("--adaptive", a->adaptive,
+                 "adaptive process noise: auto (default: on with GNSS aiding, off against a reference INS, whose "
+                 "inconsistencies are findings for diagnose), on, or off; on: the navigation noise is scaled by covariance "
+                 "matching when the innovations are inconsistent with the model (docs/in-motion.md, \"Adaptive process "
+                 "noise and the robust gate\")")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->option_text("auto|on|off");
   d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)")->check(finite_pos);
   d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)")->check(finite_pos);
   d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)")->check(finite_pos);

@@ -369,6 +369,9 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   else if (a.covariance != "structured")
     throw InputError("--covariance", 0, "", "expected structured, joseph or dense, got '" + a.covariance + "'");
   cfg.store_for_smoother = a.smooth;
+  if (a.adaptive != "auto" && a.adaptive != "on" && a.adaptive != "off")
+    throw InputError("--adaptive", 0, "", "expected auto, on or off, got '" + a.adaptive + "'");
+  cfg.adaptive.enabled = a.adaptive == "on" || (a.adaptive == "auto" && gnss);
   nlohmann::json models;
   if (!a.drift_models.empty()) models = apply_drift_models(a.drift_models, cfg);
   // correlated_drift (drift σ, τ beyond the data sheet's) becomes the filter's first-order drift
@@ -544,7 +547,10 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
                      {"assumes", "a standstill over the levelling window"}};
       aj["heading"] = al.heading_t >= 0
                           ? nlohmann::json{{"t_s", al.heading_t},
-                                           {"source", "course over ground of the fixes (forward motion, nominal mounting)"}}
+                                           {"source", al.heading_hypotheses > 0
+                                                          ? "hypotheses: " + std::to_string(al.heading_hypotheses) +
+                                                                " headings round the circle, the most likely by the fixes (no forward motion assumed)"
+                                                          : std::string("course over ground of the fixes (forward motion, nominal mounting)")}}
                           : nlohmann::json{{"t_s", nullptr}, {"source", "none: the vehicle never drove straight far enough"}};
       aj["epochs_skipped_before_heading"] = al.skipped_unaligned;
       aj["heading_known_at_end"] = f->heading_known();
@@ -613,6 +619,17 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
                       {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
   }
   j["consistency"] = cons;
+  {
+    const inmotion::AdaptiveNoise& an = f->adaptive_noise();
+    j["adaptive_noise"] = {
+        {"enabled", cfg.adaptive.enabled},
+        {"option", a.adaptive},
+        {"method", "covariance matching of the innovations (Mehra 1972; Mohamed & Schwarz 1999; scale form of Ding et al. 2007): "
+                   "the navigation states' white-noise variances scaled when a 10 s block's NIS is beyond its chi-square quantile at p = 1e-5"},
+        {"scale_end", an.scale()},
+        {"scale_max", an.max_scale_reached()},
+        {"increases", an.increases()}};
+  }
   if (!models.is_null()) j["drift_models"] = models;
 
   // QC: out-of-sample inertial-only navigation after the window, with the input set and with

@@ -25,6 +25,9 @@ struct FitDriveArgs {
   bool smooth = false;
   double obs_rate_hz = 10, cov_dt = 0.1;
   std::string covariance = "structured";  // structured, joseph or dense (InMotionConfig::covariance)
+  // Adaptive process noise (calibration/inmotion/adaptive_noise.hpp): "on", "off", or "auto" = on
+  // with GNSS aiding, off against a reference INS (whose inconsistencies are findings for diagnose).
+  std::string adaptive = "auto";
   double prior_gyro_bias_dps = 0, prior_accel_bias_mg = 0;  // > 0: override the bias priors
   // Stability allowances (how far a parameter may move between the input set's calibration and
   // the drive, 1σ; calibration/inmotion/priors.hpp); NaN: the device class's default.

@@ -1,5 +1,6 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
 
+#include <algorithm>
 #include <cmath>
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -159,7 +160,7 @@ const identification::DiscreteShapingFilter& DriftModels::discrete(int k, double
 }
 
 InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
-    : cfg_(cfg), layout_(make_layout(cfg_)), N_(layout_.size()), lever_(lever) {
+    : cfg_(cfg), layout_(make_layout(cfg_)), N_(layout_.size()), lever_(lever), adapt_(cfg.adaptive) {
   n_.nav = &nav_.state();
   n_.C_mb = C_mb;
   n_.extra = Vec::Zero(N_);
@@ -213,6 +214,11 @@ void InMotionFilter::refresh_correctors() {
 
 void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
   if (!(dt > 0) || t <= nav_.state().t) return;
+  if (!bank_.f.empty()) {  // the hypotheses navigate; this filter only keeps the time
+    for (auto& h : bank_.f) h->imu(t, dth_raw, dv_raw, dt);
+    nav_.state().t = t;
+    return;
+  }
   const Vec3 dth = Ag_ * (dth_raw - (n_.bg + n_.dg) * dt);
   const Vec3 dv = Aa_ * (dv_raw - (n_.ba + n_.da) * dt);
   if (phase_ == Phase::levelling) {  // standing: accumulate for the levelling, no navigation yet
@@ -247,7 +253,7 @@ void InMotionFilter::propagate() {
   in.f_n = acc_.f_n / T;
   in.earth = ins::local_earth(in.lat, in.h, in.v_ned);
   // Each block's F entries and process noise (state_blocks.cpp), in layout order.
-  const BlockDynamics dyn{cfg_, acc_, in, T, drift_};
+  const BlockDynamics dyn{cfg_, acc_, in, T, drift_, adapt_.scale()};
   for (const BlockSpec* b : layout_.specs)
     if (b->dynamics) b->dynamics(dyn, layout_.L, layout_.L.offset(static_cast<int>(b->id)), F_, Q_);
   Mat Phi;  // the full transition, for the dense path and the smoother's store only
@@ -374,6 +380,7 @@ void InMotionFilter::update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynam
 }
 
 bool InMotionFilter::reference(const RefObs& r_in) {
+  if (!bank_.f.empty()) return bank_reference(r_in);
   if (r_in.t < last_obs_t_ + 1.0 / cfg_.obs_rate_hz - 1e-6) return false;
   if (r_in.t > nav_.state().t + 1e-6) return false;  // not reached yet: caller's ordering error
   last_obs_t_ = r_in.t;
@@ -402,14 +409,17 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     if (lvl_T_ < cfg_.align_level_s) return false;
     finish_levelling(r);
   }
-  if (phase_ == Phase::heading_unknown || (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading)) {
+  if (phase_ == Phase::heading_unknown || (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && !in_bank_)) {
     double cog = 0, sc = 0;
     std::string how;
     const bool mv = moving();
     if (phase_ == Phase::heading_unknown) {
+      if (!mv) moving_since_ = -1;
       if (mv) {
-        if (!course(cog, sc, how)) {  // moving without a heading: skip until the course gives one
+        if (moving_since_ < 0) moving_since_ = r.t;
+        if (!course(cog, sc, how)) {  // moving without a heading: skip until the course or the hypotheses give one
           ++align_.skipped_unaligned;
+          if (cfg_.align_hypotheses > 1 && r.t - moving_since_ >= cfg_.align_bank_wait_s) start_bank(r);
           return false;
         }
         realign(r, cog, sc, "start of motion without a heading (GNSS-only start)", how);
@@ -463,9 +473,14 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     rec.S = H * PHt + o.R;
     rec.nis = nis;
     rec.status = InnovationRecord::used;
+    {  // the adaptive process noise sees every innovation, a rejected one capped at the gate
+      const double cap = nis > cfg_.gate_nis ? cfg_.gate_nis / nis : 1.0;
+      adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace()});
+    }
+    if (in_bank_) loglik_ -= 0.5 * (nis + std::log(rec.S.determinant()));
     if (!(nis <= cfg_.gate_nis)) {
       if (st.rejected_since < 0) st.rejected_since = r.t;
-      if (!std::isfinite(nis) || r.t - st.rejected_since < cfg_.gate_recover_s) {
+      if (!std::isfinite(nis) || r.t - st.rejected_since < cfg_.gate_recover_s || in_bank_) {
         ++st.rejected;
         rec.status = InnovationRecord::rejected;
         continue;
@@ -505,7 +520,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     update<3>(dx, H, o.R, PHt, K, nu);
   }
   // The course over ground as a heading observation while the heading is poorly known.
-  if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && cfg_.course_update_s > 0 &&
+  if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && !in_bank_ && cfg_.course_update_s > 0 &&
       r.t - last_course_t_ >= cfg_.course_update_s && P_(kAtt + 2, kAtt + 2) > cfg_.course_update_sigma * cfg_.course_update_sigma &&
       moving()) {
     double cog = 0, sc = 0;
@@ -568,6 +583,17 @@ bool InMotionFilter::moving() const {
   if (fixes_.empty()) return false;
   const Fix& n = fixes_.back();
   if (n.has_vel && std::hypot(n.v(0), n.v(1)) >= 1.0) return true;
+  if (phase_ == Phase::heading_unknown) {
+    // Without a heading a fix is used only while the unit stands: walking pace and slower counts as
+    // motion here (speed beyond 4σ of the fix velocity; displacement over 5 s beyond 4·√2·σ).
+    if (n.has_vel) return std::hypot(n.v(0), n.v(1)) >= std::max(0.1, 4.0 * n.sigma_vel);
+    for (const Fix& f : fixes_) {
+      if (f.t < n.t - 5.0) continue;
+      const Vec3 d = ins::geodetic_diff_ned(n.lat, n.lon, n.h, f.lat, f.lon, f.h);
+      return std::hypot(d(0), d(1)) >= std::max(0.5, 4.0 * std::sqrt(2.0) * n.sigma_h);
+    }
+    return false;
+  }
   // The INS speed once it has a heading (before, its velocity is only held by the fixes).
   if (phase_ == Phase::aligned && std::hypot(nav_.state().v(0), nav_.state().v(1)) >= 1.0) return true;
   // The fixes alone: displacement over the last 5 s beyond what their noise makes.
@@ -604,6 +630,66 @@ bool InMotionFilter::course(double& cog, double& sigma, std::string& how) const 
     return true;
   }
   return false;
+}
+
+void InMotionFilter::rebind() {
+  n_.nav = &nav_.state();
+  layout_ = make_layout(cfg_);  // its extra blocks' specs are those of this filter's configuration
+}
+
+void InMotionFilter::start_bank(const RefObs& r) {
+  const int K = cfg_.align_hypotheses;
+  const double psi0 = ins::rpy_from_dcm(nav_.state().C_nb() * n_.C_mb.transpose())(2);
+  const double spacing = 2 * units::kPi / K;
+  for (int k = 0; k < K; ++k) {
+    auto h = std::make_unique<InMotionFilter>(*this);
+    h->rebind();
+    h->in_bank_ = true;
+    h->loglik_ = 0;
+    // Each hypothesis: its heading and a σ that covers its share of the circle (uniform over the
+    // spacing: spacing/√12), in the linear range of the error model.
+    h->realign(r, psi0 + k * spacing, spacing / std::sqrt(12.0), "", "hypothesis");
+    h->recoveries_.pop_back();
+    h->phase_ = Phase::aligned;
+    bank_.f.push_back(std::move(h));
+  }
+  bank_.t0 = r.t;
+}
+
+bool InMotionFilter::bank_reference(const RefObs& r) {
+  for (auto& h : bank_.f) h->reference(r);
+  const double T = r.t - bank_.t0;
+  if (T < cfg_.align_bank_min_s) return false;
+  std::vector<std::size_t> order(bank_.f.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return bank_.f[a]->loglik_ > bank_.f[b]->loglik_; });
+  const double lead = bank_.f[order[0]]->loglik_ - bank_.f[order[1]]->loglik_;
+  if (!(lead >= cfg_.align_bank_select) && T < cfg_.align_bank_max_s) return false;
+  // The most likely hypothesis becomes the filter (its statistics include its bank epochs).
+  std::unique_ptr<InMotionFilter> best = std::move(bank_.f[order[0]]);
+  const int K = static_cast<int>(bank_.f.size());
+  const Vec3 rpy = ins::rpy_from_dcm(best->nav_.state().C_nb() * best->n_.C_mb.transpose());
+  const double sig = std::sqrt(std::max(0.0, best->P_(kAtt + 2, kAtt + 2)));
+  std::vector<Recovery> rec = std::move(recoveries_);
+  AlignmentReport al = align_;
+  *this = std::move(*best);
+  rebind();
+  in_bank_ = false;
+  loglik_ = 0;
+  bank_.f.clear();
+  al.heading_t = r.t;
+  al.heading_hypotheses = K;
+  al.heading_lead = lead;
+  al.skipped_unaligned = align_.skipped_unaligned;
+  align_ = al;
+  rec.push_back({r.t, "motion without a course over ground (GNSS-only start)",
+                 "heading chosen among " + std::to_string(K) + " hypotheses by the fixes' likelihood over " + fmt1(T) +
+                     " s (lead " + fmt1(lead) + (lead >= cfg_.align_bank_select ? "" : ", below the selection margin: the bank's time ran out") +
+                     "): " + fmt1(rpy(2) / units::kDeg) + " deg, sigma " + fmt1(sig / units::kDeg) + " deg"});
+  recoveries_ = std::move(rec);
+  last_realign_t_ = r.t;
+  phase_ = Phase::aligned;
+  return true;
 }
 
 void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {

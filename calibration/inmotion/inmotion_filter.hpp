@@ -8,10 +8,12 @@
 #pragma once
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "calibration/inmotion/adaptive_noise.hpp"
 #include "calibration/inmotion/error_model.hpp"
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/inmotion/priors.hpp"
@@ -46,6 +48,9 @@ struct InMotionConfig {
   // Reference accuracy when reference.csv has no sigma columns.
   double ref_sigma_pos = 0.1, ref_sigma_vel = 0.02, ref_sigma_att = 0.01 * units::kDeg;
   double gate_nis = 50;        // innovation gate (3 dof); larger NIS is rejected and counted
+  // Adaptive process noise (adaptive_noise.hpp): the navigation states' white-noise densities
+  // scaled by covariance matching of the innovations when these are inconsistent with the model.
+  AdaptiveNoiseConfig adaptive;
   // When one observation type has been rejected for this long without a break, the filter has
   // lost track (its navigation covariance is too optimistic, e.g. a heading error grown beyond
   // the linear range before the first manoeuvre): the next epoch is used anyway after the
@@ -75,6 +80,18 @@ struct InMotionConfig {
   double align_max_turn = 10 * units::kDeg;   // largest heading change (INS) along the chord
   double align_sideslip = 1.0 * units::kDeg;  // 1σ of the body's course-heading difference
   double align_heading_sigma = 5 * units::kDeg;
+  // Heading hypotheses (GNSS-only start, when motion has gone on for align_bank_wait_s without a
+  // course over ground: slow or winding motion, a handheld unit): a Gaussian sum (Alspach &
+  // Sorenson 1972) of align_hypotheses copies of the filter, headings evenly spaced round the
+  // circle, each in its linear range; each takes the fixes, and the copy whose innovations are the
+  // most likely (Σ −½(NIS + ln det S)) becomes the filter once it leads the next by
+  // align_bank_select (a likelihood ratio of e^select), at the latest align_bank_max_s after the
+  // start. Needs no forward motion and no mounting. 0 or 1 hypotheses: off (skip until a course).
+  int align_hypotheses = 12;
+  double align_bank_wait_s = 5;
+  double align_bank_min_s = 10;
+  double align_bank_max_s = 60;
+  double align_bank_select = 20;
   // Course updates: while the heading σ exceeds course_update_sigma (the yaw-gyro drift not yet
   // learnt, typically the first minutes of a GNSS-only drive on raw data), the course over ground
   // is also a heading observation (forward motion, sideslip as above), at most every
@@ -109,6 +126,8 @@ struct AlignmentReport {
   double level_accel_std = 0;      // m/s², std of the specific-force norm over the levelling window
   double level_gyro_mean = 0;      // rad/s, |mean rate| over the window (turn-on bias + Earth rate at rest)
   double heading_t = -1;           // first heading from the course (−1: none)
+  int heading_hypotheses = 0;      // > 0: the first heading chosen among this many hypotheses (not the course)
+  double heading_lead = 0;         // the chosen hypothesis's log-likelihood lead over the next
   long skipped_unaligned = 0;      // epochs skipped while moving before the heading was known
   long course_updates = 0, course_rejected = 0;  // course over ground used as a heading observation
 };
@@ -176,6 +195,7 @@ struct BlockDynamics {
   const NavBlockInputs& nav;
   double T;
   const DriftModels& drift;
+  double q_nav = 1;  // adaptive scale of the navigation states' white-noise variances (1: the model's)
 };
 
 struct BlockObsInput {
@@ -221,6 +241,8 @@ class InMotionFilter {
   const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
   const InnovationRecord& last_innovation(int type) const { return innov_[type]; }
   const AlignmentReport& alignment() const { return align_; }
+  // The adaptive process noise: its scale now, the largest it reached, how often it was raised.
+  const AdaptiveNoise& adaptive_noise() const { return adapt_; }
   // Re-alignments and forced recoveries, in time order.
   const std::vector<Recovery>& recoveries() const { return recoveries_; }
   // True while the filter has no heading yet (GNSS-only start before the first course).
@@ -268,6 +290,10 @@ class InMotionFilter {
     double sigma_h, sigma_vel;
   };
   bool course(double& cog, double& sigma, std::string& how) const;
+  // Heading hypotheses (InMotionConfig::align_hypotheses).
+  void start_bank(const RefObs& r);
+  void rebind();  // after a copy or move: the pointers into this filter (nominal nav state, layout)
+  bool bank_reference(const RefObs& r);
   bool moving() const;
   void realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how);
   void finish_levelling(const RefObs& r);
@@ -302,11 +328,25 @@ class InMotionFilter {
   Vec3 lvl_dth_ = Vec3::Zero(), lvl_dv_ = Vec3::Zero();
   double lvl_T_ = 0, lvl_f2_ = 0;  // levelling sums: time, Σ|f|²·dt
   std::deque<Fix> fixes_;
+  double moving_since_ = -1;  // start of the current motion without a heading (−1: standing)
+  // The bank of heading hypotheses while it runs; a copy of the filter starts with an empty one.
+  struct Bank {
+    std::vector<std::unique_ptr<InMotionFilter>> f;
+    double t0 = 0;
+    Bank() = default;
+    Bank(const Bank&) {}
+    Bank& operator=(const Bank&) { return *this; }
+    Bank(Bank&&) = default;
+    Bank& operator=(Bank&&) = default;
+  } bank_;
+  bool in_bank_ = false;  // this filter is one hypothesis of a bank
+  double loglik_ = 0;     // its innovations' log-likelihood since the bank started
   double last_realign_t_ = -1e300;
   bool motion_check_ = true;  // the heading σ is checked at the next start of motion
   double last_course_t_ = -1e300;
   AlignmentReport align_;
   std::vector<Recovery> recoveries_;
+  AdaptiveNoise adapt_;
 
   // Smoother storage (float to halve memory): per propagation step k → k+1.
   struct Stored {

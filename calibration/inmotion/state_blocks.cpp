@@ -62,7 +62,7 @@ BlockSpec pos_block() {
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
     nav_block(d.nav, F);
     const double qa = d.cfg.noise.accel.white_density;
-    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T * d.T * d.T / 3.0;
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T * d.T * d.T / 3.0 * d.q_nav;
   };
   b.total = [](const Nominal& n, int, double* x) {
     x[0] = n.nav->lat;
@@ -81,7 +81,7 @@ BlockSpec vel_block() {
   b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.nav->v -= dx.segment<3>(off); };
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef, MatRef Q) {
     const double qa = d.cfg.noise.accel.white_density;
-    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T;
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T * d.q_nav;
   };
   b.total = [](const Nominal& n, int, double* x) { put3(n.nav->v, x); };
   return b;
@@ -106,7 +106,7 @@ BlockSpec att_block() {
   };
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef, MatRef Q) {
     const double qg = d.cfg.noise.gyro.white_density;
-    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qg * qg * d.T;
+    for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qg * qg * d.T * d.q_nav;
   };
   b.total = [](const Nominal& n, int, double* x) { put3(ins::rpy_from_dcm(n.nav->C_nb()), x); };
   return b;

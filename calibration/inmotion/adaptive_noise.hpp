@@ -1,0 +1,77 @@
+// Adaptive process noise of the in-motion filter by covariance matching of the innovations
+// (innovation-based adaptive estimation): Mehra, "Approaches to adaptive filtering", IEEE Trans.
+// Automatic Control 17(5), 1972; Mohamed & Schwarz, "Adaptive Kalman filtering for INS/GPS",
+// Journal of Geodesy 73, 1999; in the scale-factor form for GNSS/INS of Ding, Wang, Rizos &
+// Kinlyside, "Improving adaptive Kalman estimation in GPS/INS integration", Journal of Navigation
+// 60(3), 2007 (docs/in-motion.md, "Adaptive process noise and the robust gate").
+//
+// The filter predicts each innovation's covariance S = H·P⁻·Hᵀ + R. Over a block of epochs of one
+// observation type (10 s; blocks do not overlap, so each innovation is tested once) the
+// innovations' actual power Σ νᵀν is compared with the predicted Σ tr S; when the block's Σ NIS lies
+// beyond the upper χ² quantile of its degrees of freedom (p = 1e-5: a false alarm in about one of
+// 140 one-hour drives at 1 Hz with two observation types; the filter is inconsistent, not unlucky),
+// the part of S the process noise feeds, H·P⁻·Hᵀ, is scaled
+// so that the predicted power matches the actual (covariance matching):
+//     s = (Σ νᵀν − Σ tr R) / Σ tr(H·P⁻·Hᵀ),   q ← q·s   (bounded, q ≥ 1),
+// where q multiplies the white-noise densities (squared) that drive the navigation states (ARW on
+// the attitude, VRW on velocity and position). Each increase rests on a new block's evidence.
+// While a block's mean NIS stays at or below its expectation, q relaxes
+// towards 1 with time constant relax_s. On innovations consistent with the model q stays 1 and the
+// filter is the non-adaptive one, bit for bit.
+//
+// Gate-rejected innovations (outliers by the single-epoch gate) enter the block with their NIS
+// and power capped at the gate: one outlier moves nothing, a run of rejections (a filter that
+// is wrong, not a fix that is) raises q until the innovations pass the gate again. The filter's
+// former last resort, the widening of the navigation covariance after a run of rejections,
+// therefore stays a last resort (docs/in-motion.md).
+#pragma once
+#include <deque>
+
+namespace calbench::inmotion {
+
+struct AdaptiveNoiseConfig {
+  bool enabled = true;
+  int min_epochs = 5;        // a block is tested when it holds this many innovations
+  double window_s = 10;      // and spans this long (blocks do not overlap)
+  double z_trigger = 4.264891;  // standard normal quantile of the χ² test (p = 1e-5 per block)
+  double max_step = 100;     // largest factor of one increase
+  double max_scale = 1e6;    // largest q (variance scale; ×1000 on the noise densities)
+  double relax_s = 120;      // e-folding time of q back towards 1 while consistent
+};
+
+// One observation type's innovations, as the adaptation sees them.
+struct AdaptiveSample {
+  double t = 0;
+  double nis = 0;   // νᵀS⁻¹ν (capped at the gate for a rejected epoch)
+  int dof = 3;
+  double nu2 = 0;   // νᵀν (scaled like the NIS when capped)
+  double trR = 0;   // tr R
+  double trHPH = 0; // tr(H·P⁻·Hᵀ)
+};
+
+class AdaptiveNoise {
+ public:
+  explicit AdaptiveNoise(const AdaptiveNoiseConfig& cfg = {}) : cfg_(cfg) {}
+  // One innovation of observation type `type` (0..kTypes−1). Returns true when q changed.
+  bool add(int type, const AdaptiveSample& s);
+  // Relaxation of q towards 1 up to time t (called with the epochs' times).
+  double scale() const { return q_; }
+  double max_scale_reached() const { return q_max_; }
+  long increases() const { return increases_; }
+  static constexpr int kTypes = 8;
+
+ private:
+  struct Window {
+    std::deque<AdaptiveSample> s;
+    double nis = 0, nu2 = 0, trR = 0, trHPH = 0;
+    int dof = 0;
+    void push(const AdaptiveSample& x);
+    void clear() { *this = Window{}; }
+  };
+  AdaptiveNoiseConfig cfg_;
+  Window w_[kTypes];
+  double q_ = 1, q_max_ = 1, last_t_ = -1e300;
+  long increases_ = 0;
+};
+
+}  // namespace calbench::inmotion
