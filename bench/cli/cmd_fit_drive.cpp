@@ -112,9 +112,27 @@ void print_summary(const nlohmann::json& j) {
               << j["adaptive_noise"]["scale_end"].get<double>() << std::setprecision(6) << " at the end\n";
   for (const auto& [k, v] : j["consistency"].items()) {
     std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
-              << " (expected 3), " << v["rejected"] << " rejected";
+              << " (expected " << v["expected_nis"].get<double>() << "), " << v["rejected"] << " rejected";
+    if (j.contains("vehicle_constraints") && (k == "nhc" || k == "zupt" || k == "zero_rate"))
+      std::cout << ", " << v["epochs"] << " used";
     if (v["forced"].get<long>() > 0) std::cout << ", " << v["forced"] << " forced after a run of rejections";
     std::cout << "\n";
+  }
+  if (j.contains("vehicle_constraints")) {
+    const auto& vc = j["vehicle_constraints"];
+    std::cout << "  standstills      " << vc["standstills_s"].size() << " found (" << std::setprecision(4)
+              << vc["standstill_total_s"].get<double>() << std::setprecision(6) << " s in all)";
+    for (const auto& s : vc["standstills_s"]) std::cout << "  " << s[0].get<double>() << "–" << s[1].get<double>() << " s";
+    std::cout << "\n";
+    if (vc.contains("mounting_sigma_deg")) {
+      const auto& m = vc["mounting_sigma_deg"];
+      std::cout << "  mounting sigma   prior -> posterior (deg):";
+      const char* ax[3] = {"roll", "pitch", "yaw"};
+      for (int i = 0; i < 3; ++i)
+        std::cout << ' ' << ax[i] << ' ' << std::setprecision(3) << m["prior"][i].get<double>() << " -> " << m["posterior"][i].get<double>()
+                  << std::setprecision(6) << (m["observable"][i].get<bool>() ? " (observable)" : "") << (i < 2 ? "," : "");
+      std::cout << "\n";
+    }
   }
   if (j["qc"].contains("sets"))
     for (const auto& s : j["qc"]["sets"])
@@ -154,8 +172,11 @@ const bool registered = add_command(31, [](CLI::App& app) {
       ->check(CLI::ExistingPath);
   d->add_option("--out", a->out, "RESULT.json to write (a multi-unit drive: a folder)")->required();
   CLI::Option* obs = d->add_option("--obs", a->obs,
-                                   "observations to use: any of pos,vel,att (eqs 13, 14, 15); default pos,vel,att, with "
-                                   "GNSS aiding pos,vel (velocity where gnss.csv has it)");
+                                   "observations to use: any of pos,vel,att (eqs 13, 14, 15) and the vehicle constraints nhc "
+                                   "(non-holonomic: no lateral/vertical velocity of the vehicle while moving) and zupt (zero "
+                                   "velocity and angular rate at standstills detected from the IMU), which need pos, vel or att "
+                                   "besides and a land vehicle (never for a handheld or pedestrian recording); default "
+                                   "pos,vel,att, with GNSS aiding pos,vel (velocity where gnss.csv has it)");
   d->add_option("--aiding", a->aiding,
                  "aiding source: reference (reference.csv, a reference INS) or gnss (gnss.csv fixes of the antenna: "
                  "position, velocity where given, no attitude; levelled at the opening standstill, heading from the "
@@ -182,6 +203,14 @@ const bool registered = add_command(31, [](CLI::App& app) {
         ->check(finite_nonneg)
         ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(finite_pos);
+  d->add_option("--constraint-rate", a->constraint_rate_hz,
+                "with --obs ...,nhc and/or zupt: at most this many constraint updates per second, taken from the IMU "
+                "stream at the covariance steps (default 10)")
+      ->check(finite_pos);
+  d->add_option("--nhc-sigma", a->nhc_sigma, "with --obs ...,nhc: 1-sigma of the vehicle's lateral and vertical velocity, m/s (default 0.1, a car)")
+      ->check(finite_pos);
+  d->add_option("--zupt-sigma", a->zupt_sigma, "with --obs ...,zupt: 1-sigma of the velocity at a standstill, m/s (default 0.01)")
+      ->check(finite_pos);
   d->add_option("--cov-dt", a->cov_dt, "covariance propagation interval, s (default 0.1)")->check(finite_pos);
   d->add_option("--covariance", a->covariance,
                  "covariance arithmetic: structured (default: the moving rows only, bit for bit the dense results), "

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_series.hpp"
@@ -303,6 +304,51 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss);
 
+// RESULT.json "vehicle_constraints": the rule and settings, the standstills found, and the
+// mounting's prior and posterior σ per axis (an axis the drive made observable: posterior below
+// half the prior).
+nlohmann::json vehicle_constraints_json(const inmotion::InMotionConfig& cfg, const inmotion::InMotionFilter& f, const Vec3& prior_mount) {
+  using namespace units;
+  nlohmann::json st = nlohmann::json::array();
+  double total = 0;
+  for (const inmotion::Standstill& s : f.standstills()) {
+    st.push_back({s.t0, s.t1});
+    total += s.t1 - s.t0;
+  }
+  nlohmann::json j = {
+      {"nhc", cfg.obs_nhc},
+      {"zupt", cfg.obs_zupt},
+      {"zero_rate", cfg.obs_zupt && cfg.zupt_zero_rate},
+      {"rate_hz", cfg.constraint_rate_hz},
+      {"nhc_sigma_m_s", cfg.nhc_sigma},
+      {"zupt_sigma_m_s", cfg.zupt_sigma},
+      {"rule",
+       {{"standstill", "IMU quiet over the window (every gyro and accelerometer axis's spread <= factor x its white-noise "
+                       "variance q^2/dt + lsb^2/12) and INS speed and last fix's horizontal speed < max_speed: ZUPT"},
+        {"moving", "no standstill, INS horizontal speed >= min_speed, |yaw rate| <= max_turn and speed x |yaw rate| <= "
+                   "max_lateral_accel: NHC"},
+        {"window_s", cfg.standstill_window_s},
+        {"factor", cfg.standstill_factor},
+        {"max_speed_m_s", cfg.standstill_max_speed},
+        {"nhc_min_speed_m_s", cfg.nhc_min_speed},
+        {"nhc_max_turn_dps", cfg.nhc_max_turn_rate / kDeg},
+        {"nhc_max_lateral_accel_m_s2", cfg.nhc_max_lateral_accel}}},
+      {"standstills_s", st},
+      {"standstill_total_s", total}};
+  const int mo = f.offset(inmotion::Block::mount);
+  if (mo >= 0) {
+    const Vec3 post = f.P().block<3, 3>(mo, mo).diagonal().cwiseSqrt();
+    nlohmann::json obs = nlohmann::json::array();
+    for (int i = 0; i < 3; ++i) obs.push_back(post(i) < 0.5 * prior_mount(i));
+    j["mounting_sigma_deg"] = {{"axes", "roll, pitch, yaw (misalignment about the vehicle axes)"},
+                               {"prior", to_json(Vec3(prior_mount / kDeg))},
+                               {"posterior", to_json(Vec3(post / kDeg))},
+                               {"observable", obs},
+                               {"rule", "observable: posterior sigma below half the prior"}};
+  }
+  return j;
+}
+
 }  // namespace
 
 nlohmann::json fit_drive(const FitDriveArgs& a) {
@@ -354,9 +400,26 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
       if (tok == "pos") cfg.obs_pos = true;
       else if (tok == "vel") cfg.obs_vel = true;
       else if (tok == "att") cfg.obs_att = true;
-      else throw InputError("--obs", 0, "", "unknown observation '" + tok + "' (pos, vel, att)");
+      else if (tok == "nhc") cfg.obs_nhc = true;
+      else if (tok == "zupt") cfg.obs_zupt = true;
+      else throw InputError("--obs", 0, "", "unknown observation '" + tok + "' (pos, vel, att, nhc, zupt)");
     }
-    if (!cfg.obs_pos && !cfg.obs_vel && !cfg.obs_att) throw InputError("--obs", 0, "", "no observation selected");
+    if (!cfg.obs_pos && !cfg.obs_vel && !cfg.obs_att)
+      throw InputError("--obs", 0, "",
+                       cfg.obs_nhc || cfg.obs_zupt ? "nhc and zupt constrain the velocity only: add pos, vel or att"
+                                                   : "no observation selected");
+  }
+  // Vehicle constraints (docs/in-motion.md, "Vehicle constraints"); their options act only with them.
+  if (!(a.constraint_rate_hz > 0) || !std::isfinite(a.constraint_rate_hz))
+    throw InputError("--constraint-rate", 0, "", "expected a finite rate > 0 Hz");
+  cfg.constraint_rate_hz = a.constraint_rate_hz;
+  for (const auto& [opt, given, on, field] :
+       {std::tuple{"--nhc-sigma", a.nhc_sigma, cfg.obs_nhc, &inmotion::InMotionConfig::nhc_sigma},
+        std::tuple{"--zupt-sigma", a.zupt_sigma, cfg.obs_zupt, &inmotion::InMotionConfig::zupt_sigma}}) {
+    if (given == 0) continue;
+    if (!(given > 0) || !std::isfinite(given)) throw InputError(opt, 0, "", "expected a finite sigma > 0 m/s");
+    if (on) cfg.*field = given;
+    else input_warning(opt, 0, std::string("has no effect here: --obs does not name ") + (opt[2] == 'n' ? "nhc" : "zupt"));
   }
   // Priors of the constant parameters: the input set's σ combined with the device class's
   // stability allowance, or the data-sheet class for raw data; --prior-* override the biases.
@@ -617,6 +680,20 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     cons[names[i]] = {{"equation", eqs[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
                       {"expected_nis", 3.0},
                       {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
+  }
+  if (cfg.obs_nhc || cfg.obs_zupt) {
+    const char* cn[3] = {"nhc", "zupt", "zero_rate"};
+    const char* ce[3] = {"obs_nhc.cpp", "obs_zupt.cpp (velocity)", "obs_zupt.cpp (angular rate)"};
+    const bool on[3] = {cfg.obs_nhc, cfg.obs_zupt, cfg.obs_zupt && cfg.zupt_zero_rate};
+    const int dof[3] = {2, 3, 3};
+    for (int i = 0; i < 3; ++i) {
+      if (!on[i]) continue;
+      const auto& c = f->consistency(inmotion::kObsNhc + i);
+      cons[cn[i]] = {{"equation", ce[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
+                     {"expected_nis", static_cast<double>(dof[i])},
+                     {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
+    }
+    j["vehicle_constraints"] = vehicle_constraints_json(cfg, *f, cfg.prior.mount);
   }
   j["consistency"] = cons;
   {

@@ -24,6 +24,9 @@ struct FitDriveArgs {
   std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
   double obs_rate_hz = 10, cov_dt = 0.1;
+  // Vehicle constraints (--obs …,nhc,zupt): at most constraint_rate_hz updates a second; their σ
+  // (0: InMotionConfig's defaults, 0.1 m/s NHC, 0.01 m/s ZUPT).
+  double constraint_rate_hz = 10, nhc_sigma = 0, zupt_sigma = 0;
   std::string covariance = "structured";  // structured, joseph or dense (InMotionConfig::covariance)
   // Adaptive process noise (calibration/inmotion/adaptive_noise.hpp): "on", "off", or "auto" = on
   // with GNSS aiding, off against a reference INS (whose inconsistencies are findings for diagnose).

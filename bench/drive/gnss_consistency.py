@@ -126,7 +126,7 @@ def main():
                                                                   s["realign_after_first"], nis, s["q_max"], coef, mount))
     if tot[1]:
         worst_rej = max(s["rejected_pct"] for s in rows)
-        nis_all = [v for s in rows for v in s["nis"].values()]
+        nis_all = [v for s in rows for k, v in s["nis"].items() if k in ("position", "velocity")]
         print("\nSimulated drives: coefficients within 3σ %d/%d (%.1f %%), mounting %d/%d (%.1f %%); fixes rejected at most "
               "%.1f %%; forced widenings %d; re-alignments after the first %d; mean NIS / expected %.2f–%.2f."
               % (tot[0], tot[1], 100.0 * tot[0] / tot[1], tot[2], tot[3], 100.0 * tot[2] / tot[3], worst_rej,

@@ -152,26 +152,15 @@ bool needs_augmented_layout(const InMotionConfig& cfg) {
   return false;
 }
 
-const identification::DiscreteShapingFilter& DriftModels::discrete(int k, double T) const {
-  // The propagation step takes few distinct values (cov_dt plus whole IMU intervals, and the
-  // remainders at reference epochs); recompute only when it changes.
-  if (disc_[k].dt != T) disc_[k] = identification::discretise(sf[k], T);
-  return disc_[k];
-}
-
-InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
-    : cfg_(cfg), layout_(make_layout(cfg_)), N_(layout_.size()), lever_(lever), adapt_(cfg.adaptive) {
-  n_.nav = &nav_.state();
-  n_.C_mb = C_mb;
-  n_.extra = Vec::Zero(N_);
-  pending_dx_ = Vec::Zero(N_);
+DriftModels drift_models(const InMotionConfig& cfg) {
+  DriftModels d;
   for (int i = 0; i < 3; ++i) {
-    const DriftPrior g = prior_of(cfg_.gyro_drift, i, cfg_.noise.gyro);
-    const DriftPrior a = prior_of(cfg_.accel_drift, i, cfg_.noise.accel);
-    drift_.alpha_g(i) = g.tau_s > 0 ? 1.0 / g.tau_s : 0.0;
-    drift_.alpha_a(i) = a.tau_s > 0 ? 1.0 / a.tau_s : 0.0;
-    drift_.sig_g(i) = g.sigma;
-    drift_.sig_a(i) = a.sigma;
+    const DriftPrior g = prior_of(cfg.gyro_drift, i, cfg.noise.gyro);
+    const DriftPrior a = prior_of(cfg.accel_drift, i, cfg.noise.accel);
+    d.alpha_g(i) = g.tau_s > 0 ? 1.0 / g.tau_s : 0.0;
+    d.alpha_a(i) = a.tau_s > 0 ? 1.0 / a.tau_s : 0.0;
+    d.sig_g(i) = g.sigma;
+    d.sig_a(i) = a.sigma;
     const DriftPrior* pr[2] = {&g, &a};
     for (int s = 0; s < 2; ++s) {
       if (!pr[s]->exp_cosine) continue;
@@ -180,10 +169,27 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
       m.sigma = pr[s]->sigma;
       m.alpha = 1.0 / pr[s]->tau_s;
       m.beta = pr[s]->beta;
-      drift_.sf[3 * s + i] = identification::shaping_filter(m);
-      drift_.expcos[3 * s + i] = true;
+      d.sf[3 * s + i] = identification::shaping_filter(m);
+      d.expcos[3 * s + i] = true;
     }
   }
+  return d;
+}
+
+const identification::DiscreteShapingFilter& DriftModels::discrete(int k, double T) const {
+  // The propagation step takes few distinct values (cov_dt plus whole IMU intervals, and the
+  // remainders at reference epochs); recompute only when it changes.
+  if (disc_[k].dt != T) disc_[k] = identification::discretise(sf[k], T);
+  return disc_[k];
+}
+
+InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
+    : cfg_(cfg), layout_(make_layout(cfg_)), N_(layout_.size()), lever_(lever), still_(cfg_.standstill_window_s), adapt_(cfg.adaptive) {
+  n_.nav = &nav_.state();
+  n_.C_mb = C_mb;
+  n_.extra = Vec::Zero(N_);
+  pending_dx_ = Vec::Zero(N_);
+  drift_ = drift_models(cfg_);
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
   nav_.reset(mems_state_from_reference(first, n_.C_mb, lever_));
@@ -219,6 +225,8 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
     nav_.state().t = t;
     return;
   }
+  const bool constraints = cfg_.obs_nhc || cfg_.obs_zupt;
+  if (constraints) constraint_sample(t, dth_raw, dv_raw, dt);
   const Vec3 dth = Ag_ * (dth_raw - (n_.bg + n_.dg) * dt);
   const Vec3 dv = Aa_ * (dv_raw - (n_.ba + n_.da) * dt);
   if (phase_ == Phase::levelling) {  // standing: accumulate for the levelling, no navigation yet
@@ -234,7 +242,10 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
   w_last_ = dth / dt;
   acc_.add(C0, Ag_, Aa_, w_last_, dv / dt, dt);
   nav_.state().t = t;
-  if (acc_.T >= cfg_.cov_dt) propagate();
+  if (acc_.T >= cfg_.cov_dt) {
+    propagate();
+    if (constraints) constrain();
+  }
 }
 
 void InMotionFilter::propagate() {
@@ -379,8 +390,34 @@ void InMotionFilter::update(Vec& dx, const Eigen::Matrix<double, M, Eigen::Dynam
   P_ = 0.5 * (P_ + P_.transpose()).eval();
 }
 
+// The update template and P·Hᵀ for the vehicle constraints' sizes (vehicle_constraints.cpp).
+template void InMotionFilter::update<2>(Vec&, const Eigen::Matrix<double, 2, Eigen::Dynamic>&, const Eigen::Matrix<double, 2, 2>&,
+                                        const Eigen::Matrix<double, Eigen::Dynamic, 2>&, const Eigen::Matrix<double, Eigen::Dynamic, 2>&,
+                                        const Eigen::Matrix<double, 2, 1>&);
+template void InMotionFilter::update<3>(Vec&, const Eigen::Matrix<double, 3, Eigen::Dynamic>&, const Eigen::Matrix<double, 3, 3>&,
+                                        const Eigen::Matrix<double, Eigen::Dynamic, 3>&, const Eigen::Matrix<double, Eigen::Dynamic, 3>&,
+                                        const Eigen::Matrix<double, 3, 1>&);
+template Eigen::Matrix<double, Eigen::Dynamic, 2> InMotionFilter::pht<2>(const Eigen::Matrix<double, 2, Eigen::Dynamic>&);
+template Eigen::Matrix<double, Eigen::Dynamic, 3> InMotionFilter::pht<3>(const Eigen::Matrix<double, 3, Eigen::Dynamic>&);
+
+ObsContext InMotionFilter::obs_context() const {
+  ObsContext c;
+  c.mems = &nav_.state();
+  c.C_mb = n_.C_mb;
+  c.lever = lever_;
+  c.n_states = N_;
+  c.mount = off(Block::mount);
+  c.gyro_bias = off(Block::bg);
+  c.gyro_drift = off(Block::dg);
+  c.gyro_M = off(Block::Mg);
+  const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
+  c.w_eb_b = n_.C_mb * w_last_ - w_ie_b;
+  return c;
+}
+
 bool InMotionFilter::reference(const RefObs& r_in) {
   if (!bank_.f.empty()) return bank_reference(r_in);
+  constraint_note_fix(r_in);
   if (r_in.t < last_obs_t_ + 1.0 / cfg_.obs_rate_hz - 1e-6) return false;
   if (r_in.t > nav_.state().t + 1e-6) return false;  // not reached yet: caller's ordering error
   last_obs_t_ = r_in.t;
@@ -443,14 +480,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     }
   }
 
-  ObsContext c;
-  c.mems = &nav_.state();
-  c.C_mb = n_.C_mb;
-  c.lever = lever_;
-  c.n_states = N_;
-  c.mount = off(Block::mount);
-  const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
-  c.w_eb_b = n_.C_mb * w_last_ - w_ie_b;
+  const ObsContext c = obs_context();
 
   Vec dx = Vec::Zero(N_);
   const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};
@@ -764,7 +794,9 @@ void InMotionFilter::feedback(const Vec& dx) {
   refresh_correctors();
 }
 
-void InMotionFilter::propagate_drift_nominal(double T) {
+void InMotionFilter::propagate_drift_nominal(double T) { propagate_drift(drift_, n_, T); }
+
+void propagate_drift(const DriftModels& drift, Nominal& n, double T) {
   // Between updates the drift estimates move with their shaping filters: x̂ ← Φ·x̂, the filter's
   // prediction (for a first-order axis d̂ ← e^{−αT}·d̂). The error state's F (δḋ = −α·δd,
   // error_model.hpp) assumes the estimate decays with the drift; held constant instead, the real
@@ -772,14 +804,14 @@ void InMotionFilter::propagate_drift_nominal(double T) {
   // be overconfident about the drift (before 2026-11-23 the estimates were held: with a reference
   // INS always, GNSS-only until 3f38af4; docs/in-motion.md, "GNSS-only drives").
   for (int k = 0; k < 6; ++k) {
-    double& d = k < 3 ? n_.dg(k) : n_.da(k - 3);
-    if (drift_.expcos[k]) {
-      double& x0 = k < 3 ? n_.xg0(k) : n_.xa0(k - 3);
-      const Eigen::Vector2d x = drift_.discrete(k, T).Phi * Eigen::Vector2d(x0, d);
+    double& d = k < 3 ? n.dg(k) : n.da(k - 3);
+    if (drift.expcos[k]) {
+      double& x0 = k < 3 ? n.xg0(k) : n.xa0(k - 3);
+      const Eigen::Vector2d x = drift.discrete(k, T).Phi * Eigen::Vector2d(x0, d);
       x0 = x(0);
       d = x(1);
     } else {
-      d *= std::exp(-(k < 3 ? drift_.alpha_g(k) : drift_.alpha_a(k - 3)) * T);
+      d *= std::exp(-(k < 3 ? drift.alpha_g(k) : drift.alpha_a(k - 3)) * T);
     }
   }
 }

@@ -17,6 +17,7 @@
 #include "calibration/inmotion/error_model.hpp"
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/inmotion/priors.hpp"
+#include "calibration/inmotion/standstill.hpp"
 #include "common/noise_spec.hpp"
 #include "common/sensor_model.hpp"
 
@@ -58,6 +59,24 @@ struct InMotionConfig {
   // gate (the parameters keep what they learnt), and counted as `forced`.
   double gate_recover_s = 10;
   bool store_for_smoother = false;
+  // Vehicle constraints (docs/in-motion.md, "Vehicle constraints"), applied from the IMU stream at
+  // the covariance propagation steps, at most constraint_rate_hz times a second; off by default
+  // (a handheld or pedestrian carrier does not obey the non-holonomic constraint).
+  //   ZUPT (obs_zupt.cpp) while standing: standstill = the IMU quiet over standstill_window_s
+  //     (StandstillDetector, spread ≤ standstill_factor × white noise) and the INS speed and the
+  //     last fix's horizontal speed (where fixes carry velocity) below standstill_max_speed; with
+  //     zupt_zero_rate the zero angular rate too (a gyro-bias observation).
+  //   NHC (obs_nhc.cpp) while moving: no standstill, INS horizontal speed ≥ nhc_min_speed, and the
+  //     vehicle not turning faster than nhc_max_turn_rate nor with a lateral acceleration (speed ×
+  //     yaw rate) above nhc_max_lateral_accel, where a car's tyres slip and its sideslip exceeds σ.
+  bool obs_nhc = false, obs_zupt = false, zupt_zero_rate = true;
+  double constraint_rate_hz = 10;
+  double nhc_sigma = 0.1;    // m/s, lateral and vertical (a car's departure from the constraint)
+  double zupt_sigma = 0.01;  // m/s per axis
+  double nhc_min_speed = 1.0;
+  double nhc_max_turn_rate = 15 * units::kDeg;  // rad/s
+  double nhc_max_lateral_accel = 3.0;           // m/s²
+  double standstill_window_s = 1.0, standstill_factor = 3.0, standstill_max_speed = 0.5;
   // Heading from the course over ground (docs/in-motion.md, "GNSS-only drives"). Without attitude
   // observations the heading is observable only through the vehicle's accelerations; after a
   // standstill, or without any reference attitude at the start, its error can lie far outside the
@@ -137,6 +156,14 @@ struct Recovery {
   std::string reason, action;
 };
 
+// The observation types of consistency(): the reference's (eqs 13–15) and the vehicle constraints.
+enum ObsType { kObsPosition = 0, kObsVelocity = 1, kObsAttitude = 2, kObsNhc = 3, kObsZupt = 4, kObsZeroRate = 5, kObsTypes = 6 };
+
+// A standstill found by the detector (InMotionConfig, vehicle constraints), s.
+struct Standstill {
+  double t0 = 0, t1 = 0;
+};
+
 struct ConsistencyStats {
   long used = 0, rejected = 0, within95 = 0, forced = 0;
   double rejected_since = -1;  // time of the first rejection of the current streak, s (−1: none)
@@ -171,6 +198,9 @@ struct DriftModels {
   mutable identification::DiscreteShapingFilter disc_[6];
 };
 
+// The drift models of a configuration (its gyro_drift/accel_drift, else the noise's first-order ones).
+DriftModels drift_models(const InMotionConfig& cfg);
+
 // The nominal state the error state is relative to: the MEMS INS, the sensor model, the mounting,
 // the drift shaping states, and the values of blocks declared outside (at their layout offsets).
 struct Nominal {
@@ -180,6 +210,9 @@ struct Nominal {
   Mat3 Mg = Mat3::Zero(), Ma = Mat3::Zero(), C_mb = Mat3::Identity();
   Eigen::VectorXd extra;
 };
+
+// The drift estimates between updates (x̂ ← Φ·x̂ of their shaping filters over T seconds).
+void propagate_drift(const DriftModels& drift, Nominal& n, double T);
 
 struct BlockInit {
   const InMotionConfig& cfg;
@@ -238,7 +271,10 @@ class InMotionFilter {
   const Mat3& mounting() const { return n_.C_mb; }
   // Mounting as roll, pitch, yaw (rad) and their 1σ (through the Jacobian of the angles).
   void mounting_rpy(Vec3& rpy, Vec3& sigma) const;
-  const ConsistencyStats& consistency(int type) const { return stats_[type]; }  // 0 pos, 1 vel, 2 att
+  // 0 pos, 1 vel, 2 att, 3 nhc, 4 zupt, 5 zero rate (ObsType)
+  const ConsistencyStats& consistency(int type) const { return type < 3 ? stats_[type] : cstats_[type - 3]; }
+  // Standstills found (vehicle constraints on), in time order; the last may be open (t1 = now).
+  std::vector<Standstill> standstills() const;
   const InnovationRecord& last_innovation(int type) const { return innov_[type]; }
   const AlignmentReport& alignment() const { return align_; }
   // The adaptive process noise: its scale now, the largest it reached, how often it was raised.
@@ -279,6 +315,15 @@ class InMotionFilter {
   template <int M>
   Eigen::Matrix<double, Eigen::Dynamic, M> pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H);
   void feedback(const Vec& dx);
+  // The observation context at the current nominal state (reference epochs, vehicle constraints).
+  ObsContext obs_context() const;
+  // Vehicle constraints (vehicle_constraints.cpp): every IMU sample, the fix speed of every
+  // reference epoch, and the updates after a propagation step.
+  void constraint_sample(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt);
+  void constraint_note_fix(const RefObs& r);
+  void constrain();
+  template <int M>
+  bool constraint_update(Vec& dx, const ObservationM<M>& o, ConsistencyStats& st);
   void propagate_drift_nominal(double T);
   void refresh_correctors();
   int off(Block b) const { return layout_.offset(b); }
@@ -317,6 +362,16 @@ class InMotionFilter {
   Vec3 w_last_ = Vec3::Zero();
   double last_obs_t_ = -1e300;
   ConsistencyStats stats_[3];
+  // Vehicle constraints: stats of nhc, zupt, zero rate; the standstill detector and what it found;
+  // the raw gyro increments since the last constraint step; the last fix's horizontal speed.
+  ConsistencyStats cstats_[3];
+  StandstillDetector still_;
+  bool standing_ = false;
+  std::vector<Standstill> standstills_;
+  double last_still_eval_t_ = -1e300, last_constraint_t_ = -1e300;
+  Vec3 c_dth_raw_ = Vec3::Zero();
+  double c_T_ = 0;
+  double fix_speed_ = 0, fix_speed_t_ = -1e300;
   InnovationRecord innov_[3];
   enum class Phase { levelling, heading_unknown, aligned };
   Phase phase_ = Phase::aligned;

@@ -1,6 +1,8 @@
 // Observations of the in-motion filter against the reference inertial-satellite system
 // (paper eqs 13–15), one file per equation: obs_position.cpp (13), obs_velocity.cpp (14),
-// obs_attitude.cpp (15). Each forms the reference quantity predicted from the MEMS INS through
+// obs_attitude.cpp (15); and the vehicle constraints, taken from the IMU stream (no reference
+// epoch needed): obs_nhc.cpp (non-holonomic: no lateral or vertical velocity of the vehicle) and
+// obs_zupt.cpp (zero velocity, zero angular rate w.r.t. the Earth at a standstill). Each forms the reference quantity predicted from the MEMS INS through
 // the mounting (C_mb, MEMS → reference body) and the lever arm r (MEMS origin in reference body
 // axes), subtracts the reference's reading, and gives the Jacobian H w.r.t. the error state:
 //   z = predicted − reference = H·δx + noise.
@@ -37,17 +39,31 @@ struct ObsContext {
   // The filter's layout: its size and where the mounting block is (−1: not estimated).
   int n_states = kStates;
   int mount = kMount;
+  // The gyro blocks (the zero-rate observation reads the gyro's sensor model): bias, in-run drift, M.
+  int gyro_bias = kBg, gyro_drift = kDg, gyro_M = kMg;
 };
 
-struct Observation {
-  Vec3 z = Vec3::Zero();
-  Eigen::Matrix<double, 3, Eigen::Dynamic> H;  // 3 × the layout's size
-  Mat3 R = Mat3::Identity();
+template <int M>
+struct ObservationM {
+  Eigen::Matrix<double, M, 1> z = Eigen::Matrix<double, M, 1>::Zero();
+  Eigen::Matrix<double, M, Eigen::Dynamic> H;  // M × the layout's size
+  Eigen::Matrix<double, M, M> R = Eigen::Matrix<double, M, M>::Identity();
 };
+using Observation = ObservationM<3>;
 
 Observation position_observation(const ObsContext& c, const RefObs& r);  // eq 13
 Observation velocity_observation(const ObsContext& c, const RefObs& r);  // eq 14
 Observation attitude_observation(const ObsContext& c, const RefObs& r);  // eq 15
+
+// Non-holonomic constraint (obs_nhc.cpp): the vehicle (= reference body) moves along its x axis;
+// z = (lateral, vertical) velocity of the reference body origin in its own axes, σ per axis.
+ObservationM<2> nhc_observation(const ObsContext& c, double sigma);
+// Zero-velocity update (obs_zupt.cpp): at a standstill z = the MEMS velocity (NED), σ per axis.
+Observation zupt_observation(const ObsContext& c, double sigma);
+// Zero angular rate w.r.t. the Earth at a standstill (obs_zupt.cpp), an observation of the gyro's
+// sensor model: z = Â_g·(ȳ − b̂_g − d̂_g) − Ĉ_mn·ω_ie^n, ȳ the mean raw gyro rate of the data
+// over the interval, σ per axis (the white noise of that mean).
+Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const Vec3& y_mean, double sigma);
 
 // The MEMS INS state at a reference epoch, transferred through the mounting C_mb and the lever
 // arm (initial alignment from the reference system, paper section III). Used to start the

@@ -66,12 +66,7 @@ for i in range(3):
 PY
 
 # Bad input: exit 2 naming what is wrong.
-expect2() {  # expect2 PATTERN CMD...
-  local pat=$1; shift
-  set +e; "$@" > "$T/out.txt" 2>&1; local rc=$?; set -e
-  [ $rc -eq 2 ] || { echo "expected exit 2, got $rc: $*"; cat "$T/out.txt"; exit 1; }
-  grep -q -- "$pat" "$T/out.txt" || { echo "message lacks '$pat':"; cat "$T/out.txt"; exit 1; }
-}
+source "$SRC/tests/support/cli_expect.sh"
 expect2 "att" "$CALBENCH" fit drive "$T/rec" --obs pos,att --out "$T/x.json"
 mkdir "$T/nognss" && cp "$T/rec/meta.json" "$T/rec/imu.csv" "$T/nognss/"
 expect2 "gnss.csv" "$CALBENCH" fit drive "$T/nognss" --aiding gnss --out "$T/x.json"

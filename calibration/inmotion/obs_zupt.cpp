@@ -1,0 +1,46 @@
+// Zero-velocity update (ZUPT) and zero angular-rate update (ZARU) at a standstill of the vehicle
+// (detected from the IMU data, calibration/inmotion/standstill.hpp). Standing, every point of the
+// vehicle has zero velocity w.r.t. the Earth, and the body turns with the Earth only.
+//
+// ZUPT: z = v̂_m^n − 0 = δv + n,   n ~ N(0, σ²·I₃)     (H: identity on the velocity block)
+//   σ: what a standing vehicle still moves (engine, wind, occupants); 0.01 m/s by default.
+//
+// ZARU: the mean raw gyro rate ȳ over the interval, corrected by the current sensor model, minus
+// the Earth rate the nominal attitude predicts in MEMS axes:
+//   z = Â_g·(ȳ − b̂_g − d̂_g) − Ĉ_mn·ω_ie^n,   Â_g = (I + M̂_g)⁻¹.
+// The correction error is Â_g(ȳ − b̂ − d̂) − ω = −Â_g·(δb_g + δd_g + δM_g·ω) (error_model.hpp), and
+// with Ĉ_nm = (I − φ×)·C_nm, Ĉ_mn·ω_ie = C_mn·ω_ie − C_mn·(ω_ie×)·φ, so
+//   z = −Â_g·δb_g − Â_g·δd_g − Â_g·W(ω̂)·vec(δM_g) + C_mn·(ω_ie×)·φ + n,
+// W(x) the 3×9 of δM·x (m_jacobian). σ: the white noise of a mean over the interval (the caller's,
+// from the gyro's density and the standstill's measured spread).
+#include "calibration/inmotion/inmotion_filter.hpp"
+#include "calibration/inmotion/observation.hpp"
+
+namespace calbench::inmotion {
+
+Observation zupt_observation(const ObsContext& c, double sigma) {
+  Observation o;
+  o.H.setZero(3, c.n_states);
+  o.z = c.mems->v;
+  o.H.block<3, 3>(0, kVel) = Mat3::Identity();
+  o.R = Mat3::Identity() * (sigma * sigma);
+  return o;
+}
+
+Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const Vec3& y_mean, double sigma) {
+  Observation o;
+  o.H.setZero(3, c.n_states);
+  const Mat3 A = (Mat3::Identity() + n.Mg).inverse();
+  const Vec3 w_hat = A * (y_mean - n.bg - n.dg);
+  const Mat3 C_mn = c.mems->C_nb().transpose();
+  const Vec3 w_ie = ins::earth_rate_ned_at(c.mems->lat);
+  o.z = w_hat - C_mn * w_ie;
+  o.H.block<3, 3>(0, kAtt) = C_mn * ins::skew(w_ie);
+  if (c.gyro_bias >= 0) o.H.block<3, 3>(0, c.gyro_bias) = -A;
+  if (c.gyro_drift >= 0) o.H.block<3, 3>(0, c.gyro_drift) = -A;
+  if (c.gyro_M >= 0) o.H.block<3, 9>(0, c.gyro_M) = -A * m_jacobian(w_hat);
+  o.R = Mat3::Identity() * (sigma * sigma);
+  return o;
+}
+
+}  // namespace calbench::inmotion
