@@ -157,6 +157,10 @@ void outage_metrics(const json& o, const std::string& f, const std::string& qc_s
       }
     }
   }
+  // The errors are measured against the fixes: a difference within their noise (3σ of the stated
+  // horizontal σ, fix_sigma_h_m) is not a worse set.
+  double noise = 0;
+  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * finite(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
   for (auto& [len, by_set] : median_at) {
     auto r = by_set.find(kQcResultSet);
     if (r == by_set.end()) continue;
@@ -164,10 +168,12 @@ void outage_metrics(const json& o, const std::string& f, const std::string& qc_s
       auto base = by_set.find(b);
       if (base == by_set.end()) continue;
       QcResult& q = out[r->second];
-      q.threshold = out[base->second].value;
+      q.threshold = out[base->second].value + noise;
       q.pass = q.value <= *q.threshold;
+      char tol[64];
+      std::snprintf(tol, sizeof tol, " + %g m (3 sigma of the fixes)", noise);
       q.criterion = std::string("never worse than the set the fit started from: value <= the median largest outage error of set '") +
-                    b + "'";
+                    b + "'" + (noise > 0 ? tol : "");
       break;
     }
   }

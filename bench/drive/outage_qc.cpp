@@ -66,6 +66,7 @@ namespace {
 struct OutageRun {
   std::vector<double> max_m, end_m;
   long fixes = 0;
+  std::vector<double> sigma_h;  // the fixes' stated horizontal σ (where gnss.csv gives one)
 };
 
 // One pass over the recording for the sets idx (one time offset), every planned outage in turn.
@@ -104,6 +105,7 @@ void outage_pass(const std::filesystem::path& dir, const std::vector<QcSet>& set
     if (e.t <= po.start_s + 1e-9 || e.t > runs[0]->time() + 1e-6) continue;
     OutageRun& o = out[next];
     ++o.fixes;
+    if (e.ref.sigma_pos > 0 && idx[0] == 0) o.sigma_h.push_back(e.ref.sigma_pos);
     for (std::size_t i = 0; i < idx.size(); ++i) {
       const double d = runs[i]->cpe(e.ref);
       o.max_m[idx[i]] = std::max(o.max_m[idx[i]], d);
@@ -153,6 +155,11 @@ nlohmann::json run_outage_qc(const std::filesystem::path& dir, const std::vector
   j["earliest_s"] = o.request.earliest_s > -1e299 ? nlohmann::json(o.request.earliest_s) : nlohmann::json(nullptr);
   j["start_condition"] = {{"min_speed_m_s", kOutageMinSpeed}, {"max_heading_sigma_deg", kOutageMaxHeadingSigmaDeg}};
   j["nhc"] = o.nhc;
+  // The fixes' own noise: the median stated horizontal σ of the fixes the errors were measured
+  // against (null: gnss.csv states none). An error below a few σ is the fixes', not the navigation's.
+  std::vector<double> sig;
+  for (const OutageRun& r : runs) sig.insert(sig.end(), r.sigma_h.begin(), r.sigma_h.end());
+  j["fix_sigma_h_m"] = sig.empty() ? nlohmann::json(nullptr) : nlohmann::json(median_of(sig));
   j["error"] = "horizontal distance of the antenna (MEMS position - C_nb * lever arm) from each fix during the outage, "
                "m: the largest (max_m) and at the outage's last fix (end_m)";
   nlohmann::json names = nlohmann::json::array();

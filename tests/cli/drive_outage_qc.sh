@@ -97,6 +97,23 @@ json.dump(c, open(d + "/bench.json", "w"))
 PY
 "$CALBENCH" db store-bench --coeffs "$T/bench.json" --sha256 "$(printf 'a%.0s' {1..64})" --qc r=1:2 >/dev/null
 "$CALBENCH" db import-inmotion "$T/r.json" --json > "$T/imp.json"
+python3 - "$T" <<'PY'
+import json, sys
+d = sys.argv[1]
+o = json.load(open(d + "/r.json"))["qc"]["outages"]
+assert o["fix_sigma_h_m"] == 0.3, o["fix_sigma_h_m"]
+import sqlite3
+db = sqlite3.connect(d + "/m.db")
+rows = {m: (v, th, p, s) for m, v, th, p, s in
+        db.execute("SELECT metric, value, threshold, pass, sample FROM qc_results WHERE metric LIKE 'outages.%'")}
+raw = {s["name"]: {p["length_s"]: p for p in s["per_length"]} for s in o["sets"]}
+for length in (10, 20):
+    v, th, ok, smp = rows["outages.in-motion.%ds.median_max_m" % length]
+    base = raw["none"][length]["median_max_m"]
+    assert abs(v - raw["in-motion"][length]["median_max_m"]) < 1e-9 and smp == "in-sample", rows
+    assert abs(th - (base + 3 * 0.3)) < 1e-9 and ok == 1, (th, base, ok)   # never worse than raw, beyond the fixes' noise
+    assert rows["outages.none.%ds.median_max_m" % length][1] is None         # the raw figures are informative
+PY
 SERIAL=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['device']['serial'])" "$T/r.json")
 "$CALBENCH" report "$SERIAL" --html "$T/report.html" >/dev/null
 python3 - "$T" <<'PY'
