@@ -21,6 +21,7 @@ struct QcArgs {
   std::vector<std::string> coeffs;
   double from = std::numeric_limits<double>::quiet_NaN();
   double horizon = 600;
+  bool horizon_given = false;
   bool json = false;
   OutageArgs outage;
   OutageOptions outages;
@@ -36,6 +37,8 @@ void run_outages(const QcArgs& a, const std::vector<QcSet>& sets, std::optional<
     throw InputError((fs::path(a.dir) / "gnss.csv").string(), 0, "", "the outage QC needs gnss.csv in the recording (no such file)");
   if (!a.plot.empty())
     throw InputError("--plot", 0, "", "not available with the outage QC (the device report plots the outage errors)");
+  if (a.horizon_given)
+    throw InputError("--horizon", 0, "", "not used by the outage QC (its lengths are --outages)");
   if (from) o.request.earliest_s = *from;
   FitDriveArgs f;
   f.dir = a.dir;
@@ -128,11 +131,15 @@ const bool registered = add_command(50, [](CLI::App& app) {
       ->required();
   q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)")
       ->check(finite_number());
-  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(finite_positive());
+  CLI::Option* horizon =
+      q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600; not with the outage QC)")->check(finite_positive());
   add_outage_options(q, a->outage, a->outages);
   q->add_flag("--json", a->json, "machine output");
   q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)");
-  q->callback([a] { run(*a); });
+  q->callback([a, horizon] {
+    a->horizon_given = horizon->count() > 0;
+    run(*a);
+  });
 });
 
 }  // namespace

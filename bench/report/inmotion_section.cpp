@@ -386,7 +386,8 @@ std::string inmotion_section(Store& store, const InMotionRun& r, const Coefficie
   std::ostringstream h;
   h << "<h3>In-motion run " << r.id << " → set " << set.id << " (" << to_string(set.source)
     << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
-    << run_table(r, res) << stage_table(r, set, sets, res) << cpe_part(qc, res, r) << outage_part(qc, r) << "<h4>QC metrics</h4>\n"
+    << run_table(r, res) << stage_table(r, set, sets, res) << (qc.contains("outages") && !qc.contains("sets") ? std::string() : cpe_part(qc, res, r))  // GNSS-only: outages only
+    << outage_part(qc, r) << "<h4>QC metrics</h4>\n"
     << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(cons, r);
   return h.str();
 }

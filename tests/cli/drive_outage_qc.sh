@@ -80,6 +80,10 @@ done
 grep -q "longer than the drive" "$T/err.txt" || fail "1000 s: $(cat "$T/err.txt")"
 set +e; "$CALBENCH" qc "$T/rec" --coeffs none --outages abc 2> "$T/err.txt"; rc=$?; set -e
 [ $rc -eq 2 ] && grep -q -- "--outages" "$T/err.txt" || fail "qc --outages abc: exit $rc $(cat "$T/err.txt")"
+for opt in "--horizon 50" "--plot $T/x.png"; do   # options of the reference QC that cannot act here
+  set +e; "$CALBENCH" qc "$T/rec" --coeffs none $opt 2> "$T/err.txt"; rc=$?; set -e
+  [ $rc -eq 2 ] && grep -q -- "${opt%% *}" "$T/err.txt" || fail "qc $opt: exit $rc $(cat "$T/err.txt")"
+done
 set +e; "$CALBENCH" fit drive "$T/rec" --outage-count 0 --out "$T/bad.json" 2> "$T/err.txt"; rc=$?; set -e
 [ $rc -eq 2 ] || fail "--outage-count 0: exit $rc"
 
@@ -120,6 +124,7 @@ python3 - "$T" <<'PY'
 import re, sys
 h = open(sys.argv[1] + "/report.html").read()
 assert "Simulated GNSS outages" in h, "no outage part in the report"
+assert "Circular position error ΔS(t)" not in h, "a GNSS-only run has no reference ΔS(t) to show"
 m = re.search(r'<svg[^>]*class="outages"[^>]*>(.*?)</svg>', h, re.S)
 assert m, "no outage plot"
 curves = re.findall(r'data-curve="([^"]+)"', m.group(1))
