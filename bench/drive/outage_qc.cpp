@@ -70,6 +70,8 @@ struct OutageRun {
 };
 
 // One pass over the recording for the sets idx (one time offset), every planned outage in turn.
+// The start states carry the aided filter's time stamps (its input set's time offset, if any); a
+// group with another offset starts at the same state a few milliseconds of its own data apart.
 void outage_pass(const std::filesystem::path& dir, const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx,
                  const std::vector<OutageEpoch>& epochs, const qc::OutagePlan& plan, std::vector<OutageRun>& out) {
   const EffectTerms shift = time_stamp_terms(sets[idx[0]].effects);
