@@ -1,6 +1,7 @@
 #include "db/approval.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -8,6 +9,7 @@
 #include "common/input_error.hpp"
 #include "common/json_parse.hpp"
 #include "common/units.hpp"
+#include "db/inmotion_import.hpp"
 
 namespace calbench::db {
 namespace {
@@ -99,10 +101,24 @@ Thresholds parse_thresholds(const std::string& text, const std::string& f) {
         if (!m.is_string()) throw InputError(f, 0, k, "expected an array of metric names");
         t.required_qc_metrics.push_back(m.get<std::string>());
       }
+    } else if (k == "max_outage_median_m") {
+      if (!it->is_object()) throw InputError(f, 0, k, "expected an object {\"LENGTH_S\": METRES, ...}, e.g. {\"15\": 10}");
+      t.max_outage_median_m.clear();
+      for (auto e = it->begin(); e != it->end(); ++e) {
+        const std::string key = k + "." + e.key();
+        char* end = nullptr;
+        const double L = std::strtod(e.key().c_str(), &end);
+        if (e.key().empty() || !end || *end != 0 || !std::isfinite(L) || !(L > 0))
+          throw InputError(f, 0, key, "expected an outage length in seconds (> 0) as the key");
+        if (!e->is_number() || !std::isfinite(e->get<double>()) || e->get<double>() < 0)
+          throw InputError(f, 0, key, "expected a finite non-negative number of metres");
+        t.max_outage_median_m[L] = e->get<double>();
+      }
     } else if (k == "model" || k == "comment") {
       // informative
     } else {
-      throw InputError(f, 0, k, "unknown key (expected gyro, accel, allow_unknown_sigma, require_qc, required_qc_metrics)");
+      throw InputError(f, 0, k, "unknown key (expected gyro, accel, allow_unknown_sigma, require_qc, required_qc_metrics, "
+                                    "max_outage_median_m)");
     }
   }
   return t;
@@ -135,6 +151,13 @@ ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vecto
       r.reasons.push_back("QC " + q.metric + " = " + fmt(q.value) + (q.unit.empty() ? "" : " " + q.unit) + " failed" +
                           (q.threshold ? " (threshold " + fmt(*q.threshold) + ")" : "") +
                           (q.criterion.empty() ? "" : ": " + q.criterion) + (q.sample.empty() ? "" : ", " + q.sample));
+  for (const auto& [L, lim] : t.max_outage_median_m) {
+    const std::string m = outage_metric("in-motion", L, "median_max_m");
+    for (const auto& q : qc)
+      if (q.metric == m && q.value > lim)
+        r.reasons.push_back("QC " + m + " = " + fmt(q.value) + " m exceeds the outage threshold " + fmt(lim) + " m" +
+                            (q.sample.empty() ? "" : ", " + q.sample));
+  }
   for (const auto& m : t.required_qc_metrics) {
     bool found = false;
     for (const auto& q : qc) found = found || q.metric == m;
@@ -178,6 +201,11 @@ std::vector<std::string> describe_thresholds(const Thresholds& t) {
   out.push_back(t.allow_unknown_sigma ? "unknown σ (not estimated) allowed" : "every σ known (a null σ refuses approval)");
   out.push_back(t.require_qc ? "QC: at least one result recorded with the set's run; every check passes"
                              : "QC: every recorded check passes (none required)");
+  if (!t.max_outage_median_m.empty()) {
+    std::string m;
+    for (const auto& [L, lim] : t.max_outage_median_m) m += (m.empty() ? "" : ", ") + f(L) + " s ≤ " + f(lim) + " m";
+    out.push_back("outage QC (GNSS-only drives), median of the largest horizontal error of the result set: " + m);
+  }
   if (!t.required_qc_metrics.empty()) {
     std::string m;
     for (const auto& x : t.required_qc_metrics) m += (m.empty() ? "" : ", ") + x;

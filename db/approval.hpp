@@ -4,9 +4,11 @@
 //              "max_sigma_bias_dph": 10, "max_sigma_M_ppm": 500},
 //    "accel": {"max_abs_bias_mg": 80, "max_abs_scale_ppm": 25000, "max_abs_skew_ppm": 5000,
 //              "max_sigma_bias_mg": 2, "max_sigma_M_ppm": 500},
-//    "allow_unknown_sigma": false, "require_qc": true, "required_qc_metrics": []}
+//    "allow_unknown_sigma": false, "require_qc": true, "required_qc_metrics": [],
+//    "max_outage_median_m": {"15": 10, "30": 30, "60": 100}}   (outage QC, GNSS-only drives; none by default)
 // See docs/database.md.
 #pragma once
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,10 @@ struct Thresholds {
   bool allow_unknown_sigma = false;  // a σ of null (not estimated) refuses approval unless true
   bool require_qc = true;            // at least one QC result recorded with the set's run
   std::vector<std::string> required_qc_metrics;  // these metrics must be present (and pass)
+  // Outage QC of a GNSS-only drive: per outage length (s), the largest median of the per-outage
+  // maximum horizontal error (m) of the result set (metric outages.in-motion.Ls.median_max_m).
+  // Checked where the run has the metric; none by default.
+  std::map<double, double> max_outage_median_m;
   std::string source = "built-in ADIS16488A defaults";
 };
 

@@ -22,16 +22,6 @@ void display_unit(const std::string& name, std::string& unit, double& to_display
   }
 }
 
-double median_of(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  const std::size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
-  const double hi = v[m];
-  if (v.size() % 2) return hi;
-  const double lo = *std::max_element(v.begin(), v.begin() + static_cast<long>(m));
-  return 0.5 * (lo + hi);
-}
-
 std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values) {
   std::map<std::string, CoefficientStats> by;
   for (const auto& name : coefficient_names()) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "common/statistics.hpp"  // median_of
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -28,7 +29,6 @@ struct CoefficientStats {
 
 // Display unit of a coefficient name: gyro bias °/h, accelerometer bias mg, M ppm.
 void display_unit(const std::string& name, std::string& unit, double& to_display);
-double median_of(std::vector<double> v);
 std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values);
 
 // Per station: do its units agree with the other stations' units? A table or fixture fault moves

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "common/input_error.hpp"
@@ -125,6 +127,58 @@ void never_worse_than_baseline(std::vector<QcResult>& out, std::size_t first, co
                       base_name + "'";
 }
 
+// qc.outages (fit drive on a GNSS-only drive, docs/in-motion.md "Outage QC"): per set and outage
+// length the median and the largest of the per-outage maxima and end errors, as
+// outages.SET.Ls.FIELD (unit m, the outages' sample). One check: the result set's median maximum
+// error of each length is never worse than that of the set the fit started from.
+void outage_metrics(const json& o, const std::string& f, const std::string& qc_sample, std::vector<QcResult>& out) {
+  const std::string key = "qc.outages";
+  if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
+  const std::string sample = sample_of(o, f, key, qc_sample);
+  if (!o.contains("sets")) return;
+  if (!o["sets"].is_array()) throw InputError(f, 0, key + ".sets", "expected an array");
+  // length (as in the metric name) → set name → median_max_m
+  std::map<std::string, std::map<std::string, std::size_t>> median_at;
+  for (std::size_t i = 0; i < o["sets"].size(); ++i) {
+    const json& s = o["sets"][i];
+    const std::string sk = key + ".sets[" + std::to_string(i) + "]";
+    const std::string name = req_string(s, "name", f, sk);
+    if (!s.contains("per_length") || !s["per_length"].is_array()) throw InputError(f, 0, sk + ".per_length", "expected an array");
+    for (std::size_t k = 0; k < s["per_length"].size(); ++k) {
+      const json& p = s["per_length"][k];
+      const std::string pk = sk + ".per_length[" + std::to_string(k) + "]";
+      if (!p.is_object() || !p.contains("length_s")) throw InputError(f, 0, pk, "expected an object with length_s");
+      const double L = finite(p["length_s"], f, pk + ".length_s");
+      const std::string len = outage_metric("", L, "");
+      for (const char* fk : {"median_max_m", "max_max_m", "median_end_m", "max_end_m"}) {
+        if (!p.contains(fk)) continue;
+        if (std::string(fk) == "median_max_m") median_at[len][name] = out.size();
+        out.push_back(QcResult{outage_metric(name, L, fk), finite(p[fk], f, pk + "." + fk), std::nullopt, true, "m", sample, ""});
+      }
+    }
+  }
+  // The errors are measured against the fixes: a difference within their noise (3σ of the stated
+  // horizontal σ, fix_sigma_h_m) is not a worse set.
+  double noise = 0;
+  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * finite(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
+  for (auto& [len, by_set] : median_at) {
+    auto r = by_set.find(kQcResultSet);
+    if (r == by_set.end()) continue;
+    for (const char* b : kQcBaselines) {
+      auto base = by_set.find(b);
+      if (base == by_set.end()) continue;
+      QcResult& q = out[r->second];
+      q.threshold = out[base->second].value + noise;
+      q.pass = q.value <= *q.threshold;
+      char tol[64];
+      std::snprintf(tol, sizeof tol, " + %g m (3 sigma of the fixes)", noise);
+      q.criterion = std::string("never worse than the set the fit started from: value <= the median largest outage error of set '") +
+                    b + "'" + (noise > 0 ? tol : "");
+      break;
+    }
+  }
+}
+
 std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
   std::vector<QcResult> out;
   const std::string sample = sample_of(qc, f, "qc", "");
@@ -161,6 +215,10 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
   for (auto it = qc.begin(); it != qc.end(); ++it) {
     const std::string key = "qc." + it.key();
     if (it.key() == "from_s" || it.key() == "horizon_s") continue;  // when and how long: context, not figures
+    if (it.key() == "outages") {
+      outage_metrics(*it, f, sample, out);
+      continue;
+    }
     if (it->is_number()) {
       out.push_back(QcResult{it.key(), finite(*it, f, key), std::nullopt, true, "", sample, ""});
     } else if (it->is_boolean()) {
@@ -233,6 +291,12 @@ std::optional<DeterminedBy> determined_by_of(const json& j, const std::string& f
   return out;
 }
 }  // namespace
+
+std::string outage_metric(const std::string& set, double length_s, const std::string& field) {
+  char len[32];
+  std::snprintf(len, sizeof len, "%gs", length_s);
+  return "outages." + set + "." + len + "." + field;
+}
 
 InMotionResult parse_inmotion_result(const std::string& text, const std::string& f) {
   const json j = parse_json_text(text, f);

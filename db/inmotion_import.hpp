@@ -8,7 +8,8 @@
 // QC metrics from "qc": numbers, {"value", "threshold", "pass"} objects, and the numeric figures of
 // "sets" entries (sets.NAME.final_cpe_m, unit m), each marked with qc.sample (in-/out-of-sample).
 // The figures are informative (no threshold) except the result set's final ΔS ("in-motion"), which
-// must not exceed that of the set the fit started from ("input", or "none" on raw data).
+// must not exceed that of the set the fit started from ("input", or "none" on raw data); the same
+// for the outage QC of a GNSS-only drive ("outages": outage_metric() below).
 // The result is stored against the device named in it (which must already be in the database) as
 // one in-motion run, its QC results and one coefficient set:
 //  - source "combined" with the bench (or other) parent set P when "coefficients" equals
@@ -54,6 +55,11 @@ struct InMotionResult {
   std::vector<QcResult> qc;  // metrics extracted from "qc"
   std::optional<DeterminedBy> determined_by;
 };
+
+// The name of an outage-QC metric (qc.outages of a GNSS-only drive): outages.SET.15s.FIELD, e.g.
+// outages.in-motion.15s.median_max_m (FIELD median_max_m, max_max_m, median_end_m, max_end_m).
+// The result set's median_max_m of each length must not exceed the input set's (or raw data's).
+std::string outage_metric(const std::string& set, double length_s, const std::string& field);
 
 // Parse and validate RESULT.json text; `file` names it in errors.
 InMotionResult parse_inmotion_result(const std::string& text, const std::string& file);

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "bench/cli/number_options.hpp"
+#include "bench/cli/outage_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/drive_units.hpp"
 #include "bench/drive/fit_drive.hpp"
@@ -139,6 +140,7 @@ void print_summary(const nlohmann::json& j) {
       std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"].get<double>() << " s over "
                 << j["qc"]["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
                 << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
+  if (j["qc"].contains("outages")) print_outage_summary(j["qc"]["outages"], std::cout);
   std::cout << std::flush;
 }
 
@@ -232,9 +234,12 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "drift_models): they replace the data-sheet shaping filters per axis (exp_cosine: 2 states, eqs 35-36)")
       ->check(CLI::ExistingFile);
   d->add_option("--qc-horizon", a->qc_horizon_s, "horizon of the QC run in RESULT.json, s (default 600)")->check(finite_pos);
+  auto outage = std::make_shared<OutageArgs>();
+  add_outage_options(d, *outage, a->outages);
   d->add_flag("--json", *json, "print RESULT.json to stdout");
-  d->callback([a, json, obs] {
+  d->callback([a, json, obs, outage] {
     a->obs_given = obs->count() > 0;
+    outage_options(*outage, a->outages);
     if (is_multi_unit_drive(a->dir)) {  // several units against one reference (docs/recording-units.md)
       nlohmann::json s;
       const std::vector<UnitFit> fits = fit_drive_units(*a, 0, &s);

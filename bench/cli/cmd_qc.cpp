@@ -1,10 +1,14 @@
 // calbench qc DIR --coeffs A.json [--coeffs B.json ...|none] [--from T0] [--horizon S] [--json] [--plot OUT.png]
+//              [--outages 15,30,60 --outage-count N --outage-gap S]   (GNSS-only recordings: outage QC)
 #include <iomanip>
 #include <iostream>
 
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
+#include "bench/cli/outage_options.hpp"
+#include "bench/drive/fit_drive.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "common/input_error.hpp"
 #include "calibration/effects/effect_compensation.hpp"
@@ -17,8 +21,47 @@ struct QcArgs {
   std::vector<std::string> coeffs;
   double from = std::numeric_limits<double>::quiet_NaN();
   double horizon = 600;
+  bool horizon_given = false;
   bool json = false;
+  OutageArgs outage;
+  OutageOptions outages;
 };
+
+// Outage QC (docs/in-motion.md, "Outage QC"): the aided filter is fit drive's GNSS filter with the
+// first --coeffs set as its input (none: raw data, data-sheet priors), over the whole recording.
+void run_outages(const QcArgs& a, const std::vector<QcSet>& sets, std::optional<double> from, const std::string& sample) {
+  OutageOptions o = a.outages;
+  outage_options(a.outage, o);
+  if (!o.enabled) throw InputError("--outages", 0, "", "none: nothing to do (the recording has no reference.csv)");
+  if (!recording_has_table(a.dir, "gnss"))
+    throw InputError((fs::path(a.dir) / "gnss.csv").string(), 0, "", "the outage QC needs gnss.csv in the recording (no such file)");
+  if (!a.plot.empty())
+    throw InputError("--plot", 0, "", "not available with the outage QC (the device report plots the outage errors)");
+  if (a.horizon_given)
+    throw InputError("--horizon", 0, "", "not used by the outage QC (its lengths are --outages)");
+  if (from) o.request.earliest_s = *from;
+  FitDriveArgs f;
+  f.dir = a.dir;
+  f.aiding = "gnss";
+  f.obs_given = false;
+  f.qc = false;
+  f.write_out = false;
+  f.coeffs = a.coeffs.front() == "none" ? std::string() : a.coeffs.front();
+  OutageRecorder rec;
+  f.on_epoch = [&rec](const inmotion::InMotionFilter& g, const inmotion::RefObs& r, bool took) { rec.epoch(g, r, took); };
+  fit_drive(f);
+  const std::string aided_by = "fit drive's GNSS filter over the whole recording with the first --coeffs set (" +
+                               a.coeffs.front() + ") as its input, its state recorded at every fix";
+  const std::string smp = from ? sample : "in-sample unless the sets were fitted on other data (outages over the whole drive)";
+  nlohmann::json j = {{"sample", smp}, {"outages", run_outage_qc(a.dir, sets, rec.epochs(), o, aided_by, smp)}};
+  if (a.json) {
+    print_json(j.dump(2));
+    return;
+  }
+  std::cout << "QC of " << a.dir << " (GNSS-only): simulated GNSS outages, aided by " << aided_by << "\n";
+  print_outage_summary(j["outages"], std::cout);
+  std::cout << std::flush;
+}
 
 void run(const QcArgs& a) {
   std::vector<QcSet> sets;
@@ -35,6 +78,12 @@ void run(const QcArgs& a) {
       if (s.fit_window_s) from = std::max(from.value_or(0.0), s.fit_window_s->second);
     sample = from ? "out-of-sample (from the end of the fit window of the in-motion result)"
                   : "from the start of the recording (no fit window known: in-sample if the sets were fitted on this drive)";
+  }
+  // A GNSS-only recording (or --outages given): simulated GNSS outages instead of the reference run.
+  const bool outage_mode = a.outage.given() || (!recording_has_table(a.dir, "reference") && recording_has_table(a.dir, "gnss"));
+  if (outage_mode) {
+    run_outages(a, sets, from, sample);
+    return;
   }
   const QcOutcome q = run_qc(a.dir, sets, from, a.horizon);
   nlohmann::json j = qc_json(q);
@@ -73,7 +122,8 @@ void run(const QcArgs& a) {
 const bool registered = add_command(50, [](CLI::App& app) {
   auto a = std::make_shared<QcArgs>();
   auto* q = app.add_subcommand("qc", "Quality control by inertial-only navigation: circular position error (eq 39) "
-                                     "per coefficient set against the reference of a drive");
+                                     "per coefficient set against the reference of a drive; on a GNSS-only drive "
+                                     "(gnss.csv, no reference.csv) the errors of simulated GNSS outages against the fixes");
   q->add_option("dir", a->dir, "drive recording folder (CSV or HDF5)")->required()->check(CLI::ExistingDirectory);
   q->add_option("--coeffs", a->coeffs,
                  "coefficients.json, in-motion RESULT.json, or 'none' (repeatable); catalogue keys of a set "
@@ -81,10 +131,15 @@ const bool registered = add_command(50, [](CLI::App& app) {
       ->required();
   q->add_option("--from", a->from, "start time T0, s (default: end of the fit window of a RESULT.json, else the start)")
       ->check(finite_number());
-  q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600)")->check(finite_positive());
+  CLI::Option* horizon =
+      q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600; not with the outage QC)")->check(finite_positive());
+  add_outage_options(q, a->outage, a->outages);
   q->add_flag("--json", a->json, "machine output");
   q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)");
-  q->callback([a] { run(*a); });
+  q->callback([a, horizon] {
+    a->horizon_given = horizon->count() > 0;
+    run(*a);
+  });
 });
 
 }  // namespace

@@ -488,6 +488,13 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     }
   };
   const bool used[3] = {cfg.obs_pos, cfg.obs_vel, cfg.obs_att};  // observations: position, velocity, attitude
+  // Outage QC: the filter's state at every fix, recorded during this pass when it covers the whole
+  // drive (no --window), else by a second pass over the whole drive after the fit (below).
+  const bool outages = a.qc && gnss && a.outages.enabled;
+  if (outages) check_outage_options(a.outages);
+  const bool whole = !std::isfinite(t0) && !std::isfinite(t1);
+  std::optional<OutageRecorder> record;
+  if (outages && whole) record.emplace();
   std::unique_ptr<Filter> f;
   std::unique_ptr<DriveSeries> series;
   if (!a.series.empty() && !a.smooth)
@@ -517,6 +524,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
         continue;
       }
       const bool took = f->reference(e.ref);
+      if (record) record->epoch(*f, e.ref, took);
+      if (a.on_epoch) a.on_epoch(*f, e.ref, took);
       if (took && a.on_innovation) {
         for (int k = 0; k < 3; ++k)
           if (used[k]) a.on_innovation(k, f->last_innovation(k));
@@ -712,8 +721,39 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   // QC: out-of-sample inertial-only navigation after the window, with the input set and with
   // the result, when the recording continues; otherwise in-sample from the window start.
   nlohmann::json qj;
+  nlohmann::json oj;  // outage QC (GNSS aiding)
+  if (outages) {
+    const bool oos = !whole && t_data_end > t_last + 10.0;
+    std::string aided_by = "the fit's filter pass (input set, priors and observations as the fit), its state recorded at every fix";
+    if (!whole) {  // the same filter over the whole drive, to have its state after the window
+      FitDriveArgs b = a;
+      b.window.clear();
+      b.qc = false;
+      b.write_out = false;
+      b.series.clear();
+      b.smooth = false;
+      b.on_innovation = nullptr;
+      b.coeffs_set = bench;
+      record.emplace();
+      b.on_epoch = [&record](const Filter& g, const inmotion::RefObs& r, bool took) { record->epoch(g, r, took); };
+      fit_drive(b);
+      aided_by = "a second pass of the fit's filter (input set, priors and observations as the fit) over the whole "
+                 "drive, its state recorded at every fix";
+    }
+    OutageOptions oo = a.outages;
+    if (oos) oo.request.earliest_s = t_last;
+    std::optional<Vec3> before_mount;
+    if (a.coeffs_mounting_deg) before_mount = a.coeffs_mounting_deg->first;
+    std::vector<QcSet> sets;
+    if (bench) sets.push_back(QcSet{"none", SensorErrors{}, std::nullopt, std::nullopt, EffectTerms{}, std::nullopt});
+    sets.push_back(QcSet{bench ? "input" : "none", bench ? bench->errors : SensorErrors{}, before_mount, std::nullopt, fx.terms, std::nullopt});
+    sets.push_back(QcSet{"in-motion", total, Vec3(mr / kDeg), std::nullopt, fx.terms, std::nullopt});
+    oj = run_outage_qc(a.dir, sets, record->epochs(), oo, aided_by,
+                       oos ? "out-of-sample (outages after the fit window)" : "in-sample (outages inside the data the fit used)");
+  }
   if (a.qc && !has_ref) {
-    qj = {{"sample", "not run (no reference.csv: a GNSS-only recording has no reference to navigate against)"}};
+    if (outages) qj = {{"sample", oj["sample"]}, {"outages", oj}};
+    else qj = {{"sample", "not run (no reference.csv: a GNSS-only recording has no reference to navigate against)"}};
   } else if (a.qc) {
     const bool oos = t_data_end > t_last + 10.0;
     const double from = oos ? t_last : t_first;
@@ -732,6 +772,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     const QcOutcome q = run_qc(a.dir, {before, after}, from, a.qc_horizon_s, qc_ref);
     qj = qc_json(q);
     qj["sample"] = oos ? "out-of-sample (after the fit window)" : "in-sample (no data after the fit window)";
+    if (outages) qj["outages"] = oj;
   } else {
     qj = {{"sample", "not run"}};
   }

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "bench/drive/drive_stream.hpp"
+#include "bench/drive/outage_qc.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 
@@ -48,6 +49,10 @@ struct FitDriveArgs {
   std::string coeffs_recording_sha256;  // of the drive a RESULT.json input was fitted on
   // Called after every reference epoch the filter took, per observation type (0 pos, 1 vel, 2 att).
   std::function<void(int type, const inmotion::InnovationRecord&)> on_innovation;
+  // Outage QC of a GNSS-aided fit (docs/in-motion.md, "Outage QC"): RESULT.json qc.outages.
+  OutageOptions outages;
+  // Called after every reference epoch the filter handled (took: used), e.g. to record its state.
+  std::function<void(const inmotion::InMotionFilter&, const inmotion::RefObs&, bool took)> on_epoch;
   bool write_out = true;      // false: return RESULT.json without writing a.out
   // A multi-unit drive: the reference parsed once for every unit (fit and QC read no reference.csv).
   std::shared_ptr<const SharedReference> shared_reference;

@@ -44,6 +44,38 @@ QcSet load_qc_set(const std::string& arg) {
   return s;
 }
 
+std::vector<std::vector<std::size_t>> time_offset_groups(const std::vector<QcSet>& sets) {
+  std::vector<std::vector<std::size_t>> groups;  // by time offset, in order of appearance
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    bool placed = false;
+    for (auto& g : groups)
+      if (time_stamp_offset(sets[g[0]].effects) == time_stamp_offset(sets[i].effects)) {
+        g.push_back(i);
+        placed = true;
+        break;
+      }
+    if (!placed) groups.push_back({i});
+  }
+  return groups;
+}
+
+std::vector<std::optional<ImuEffectCompensator>> qc_compensators(const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx) {
+  std::vector<std::optional<ImuEffectCompensator>> comp(idx.size());
+  for (std::size_t i = 0; i < idx.size(); ++i)
+    if (sets[idx[i]].effects.any_sensor_side()) comp[i].emplace(sets[idx[i]].effects, sets[idx[i]].errors);
+  return comp;
+}
+
+void qc_imu(qc::InertialRun& run, std::optional<ImuEffectCompensator>& comp, const DriveStream::Event& e) {
+  if (!comp) {
+    run.imu(e.t, e.dtheta, e.dv, e.dt);
+    return;
+  }
+  Vec3 dth = e.dtheta, dv = e.dv;
+  comp->increments(dth, dv, e.dt, e.temp_c);
+  run.imu(e.t, dth, dv, e.dt);
+}
+
 namespace {
 // One pass over the recording for the sets `idx` (all with the same time offset).
 void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx,
@@ -55,9 +87,7 @@ void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std
   const Mat3 C_nom = st.nominal_mounting();
   const Vec3 lever = st.lever_arm();
   std::vector<std::unique_ptr<qc::InertialRun>> runs(idx.size());
-  std::vector<std::optional<ImuEffectCompensator>> comp(idx.size());
-  for (std::size_t i = 0; i < idx.size(); ++i)
-    if (sets[idx[i]].effects.any_sensor_side()) comp[i].emplace(sets[idx[i]].effects, sets[idx[i]].errors);
+  std::vector<std::optional<ImuEffectCompensator>> comp = qc_compensators(sets, idx);
   bool started = false;
   double t0 = 0;
   DriveStream::Event e;
@@ -82,15 +112,7 @@ void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std
         q.curves[idx[i]].cpe.push_back(runs[i]->cpe(e.ref));
       }
     } else if (started) {
-      for (std::size_t i = 0; i < idx.size(); ++i) {
-        if (!comp[i]) {
-          runs[i]->imu(e.t, e.dtheta, e.dv, e.dt);
-          continue;
-        }
-        Vec3 dth = e.dtheta, dv = e.dv;
-        comp[i]->increments(dth, dv, e.dt, e.temp_c);
-        runs[i]->imu(e.t, dth, dv, e.dt);
-      }
+      for (std::size_t i = 0; i < idx.size(); ++i) qc_imu(*runs[i], comp[i], e);
     }
   }
   if (!started) throw InputError(dir.string(), 0, "--from", "no reference epoch at or after the start time");
@@ -103,18 +125,7 @@ QcOutcome run_qc(const fs::path& dir, const std::vector<QcSet>& sets, std::optio
   QcOutcome q;
   q.horizon_s = horizon_s;
   for (const QcSet& s : sets) q.curves.push_back(QcCurve{s.name, {}, {}});
-  std::vector<std::vector<std::size_t>> groups;  // by time offset, in order of appearance
-  for (std::size_t i = 0; i < sets.size(); ++i) {
-    bool placed = false;
-    for (auto& g : groups)
-      if (time_stamp_offset(sets[g[0]].effects) == time_stamp_offset(sets[i].effects)) {
-        g.push_back(i);
-        placed = true;
-        break;
-      }
-    if (!placed) groups.push_back({i});
-  }
-  for (const auto& g : groups) run_qc_group(dir, sets, g, from_s, horizon_s, q, shared);
+  for (const auto& g : time_offset_groups(sets)) run_qc_group(dir, sets, g, from_s, horizon_s, q, shared);
   if (!q.curves.empty() && !q.curves[0].t.empty()) q.horizon_s = std::min(horizon_s, q.curves[0].t.back());
   return q;
 }

@@ -10,6 +10,7 @@
 
 #include "bench/drive/drive_stream.hpp"
 #include "calibration/effects/effect_terms.hpp"
+#include "calibration/qc/inertial_qc.hpp"
 #include "common/sensor_model.hpp"
 
 namespace calbench {
@@ -25,6 +26,14 @@ struct QcSet {
 // A coefficients.json, an in-motion RESULT.json (its "coefficients" and "mounting_rpy_deg"), or "none".
 // Catalogue keys (docs/diagnosis.md) of the set are read into `effects`.
 QcSet load_qc_set(const std::string& arg);
+
+// The sets in groups of equal time offset (a catalogue term moves the time stamps: one pass over
+// the data per group), in order of appearance.
+std::vector<std::vector<std::size_t>> time_offset_groups(const std::vector<QcSet>& sets);
+// Sensor-side catalogue terms of the sets idx (none: nullopt), and one IMU interval into a QC run
+// with them removed first.
+std::vector<std::optional<ImuEffectCompensator>> qc_compensators(const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx);
+void qc_imu(qc::InertialRun& run, std::optional<ImuEffectCompensator>& comp, const DriveStream::Event& e);
 
 struct QcCurve {
   std::string name;

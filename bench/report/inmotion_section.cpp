@@ -239,6 +239,78 @@ std::string cpe_part(const json& qc, const json& res, const InMotionRun& r) {
   return h.str();
 }
 
+// ---- simulated GNSS outages (GNSS-only drives, qc.outages) ----
+std::string outage_part(const json& qc, const InMotionRun& r) {
+  if (!qc.is_object() || !qc.contains("outages") || !qc["outages"].is_object()) return "";
+  const json& o = qc["outages"];
+  std::ostringstream h;
+  h << "<h4>Simulated GNSS outages, inertial-only navigation (ΔS against the fixes)</h4>\n";
+  std::string ctx = "Each outage navigated inertial-only with each set from the aided filter's state at its start (" +
+                    string_or(o, "aided_by", "aiding not stated") + "); error: " + string_or(o, "error", "not stated") +
+                    "; data: " + string_or(o, "sample", "not stated whether in- or out-of-sample");
+  h << "<p class=\"note\">" << html_escape(ctx) << ".</p>\n";
+  if (o.contains("not_placed") && o["not_placed"].is_array() && !o["not_placed"].empty())
+    h << "<p class=\"note\">" << o["not_placed"].size() << " requested outage(s) not placed: "
+      << html_escape(string_or(o["not_placed"][0], "reason", "reason not stated")) << ".</p>\n";
+  const json sets = o.value("sets", json::array()), list = o.value("outages", json::array());
+  if (!sets.is_array() || sets.empty() || !list.is_array() || list.empty())
+    return h.str() + "<p class=\"muted\">no outage could be placed on this drive</p>\n";
+  // Median of the per-outage maxima against the outage length, and each outage's maximum against its start.
+  std::vector<PlotCurve> by_length, by_start;
+  for (const auto& s : sets) {
+    if (!s.is_object()) continue;
+    const std::string name = string_or(s, "name", "set");
+    PlotCurve c{name, {}, {}}, d{name, {}, {}};
+    for (const auto& p : s.value("per_length", json::array())) {
+      c.x.push_back(number_or_nan(p, "length_s"));
+      c.y.push_back(number_or_nan(p, "median_max_m"));
+    }
+    for (const auto& e : list) {
+      if (!e.is_object() || !e.contains("max_m")) continue;
+      d.x.push_back(number_or_nan(e, "start_s"));
+      d.y.push_back(number_or_nan(e["max_m"], name.c_str()));
+    }
+    by_length.push_back(std::move(c));
+    by_start.push_back(std::move(d));
+  }
+  PlotSpec p;
+  p.css_class = "outages";
+  p.log_y = true;
+  p.title = "median of the largest error per outage length";
+  p.x_label = "outage length [s]";
+  p.y_label = "median largest error [m]";
+  p.x_min = 0;
+  h << "<div class=\"plots\">" << svg_line_plot(by_length, p);
+  p.title = "largest error of each outage";
+  p.x_label = "outage start [s]";
+  p.y_label = "largest error [m]";
+  h << svg_line_plot(by_start, p) << "</div>\n";
+  h << "<table class=\"outages\" id=\"outages-" << r.id << "\"><tr><th class=\"l\">set</th><th>length [s]</th><th>outages</th>"
+       "<th>median largest [m]</th><th>largest [m]</th><th>median at the end [m]</th><th>largest at the end [m]</th></tr>\n";
+  for (const auto& s : sets)
+    for (const auto& q : s.value("per_length", json::array()))
+      h << "<tr><td class=\"l\">" << html_escape(string_or(s, "name", "set")) << "</td><td>" << num(number_or_nan(q, "length_s"))
+        << "</td><td>" << num(number_or_nan(q, "count")) << "</td><td>" << num(number_or_nan(q, "median_max_m"), 4) << "</td><td>"
+        << num(number_or_nan(q, "max_max_m"), 4) << "</td><td>" << num(number_or_nan(q, "median_end_m"), 4) << "</td><td>"
+        << num(number_or_nan(q, "max_end_m"), 4) << "</td></tr>\n";
+  h << "</table>\n<table class=\"outage-list\" id=\"outage-list-" << r.id
+    << "\"><tr><th>start [s]</th><th>length [s]</th><th>fixes</th>";
+  for (const auto& s : sets) h << "<th>" << html_escape(string_or(s, "name", "set")) << ": largest / end [m]</th>";
+  h << "</tr>\n";
+  for (const auto& e : list) {
+    h << "<tr><td>" << num(number_or_nan(e, "start_s")) << "</td><td>" << num(number_or_nan(e, "length_s")) << "</td><td>"
+      << num(number_or_nan(e, "fixes")) << "</td>";
+    for (const auto& s : sets) {
+      const std::string name = string_or(s, "name", "set");
+      h << "<td>" << num(e.contains("max_m") ? number_or_nan(e["max_m"], name.c_str()) : std::nan(""), 4) << " / "
+        << num(e.contains("end_m") ? number_or_nan(e["end_m"], name.c_str()) : std::nan(""), 4) << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "</table>\n";
+  return h.str();
+}
+
 // ---- innovation consistency ----
 struct NisWords {
   const char *tag, *cls, *text;
@@ -314,7 +386,8 @@ std::string inmotion_section(Store& store, const InMotionRun& r, const Coefficie
   std::ostringstream h;
   h << "<h3>In-motion run " << r.id << " → set " << set.id << " (" << to_string(set.source)
     << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
-    << run_table(r, res) << stage_table(r, set, sets, res) << cpe_part(qc, res, r) << "<h4>QC metrics</h4>\n"
+    << run_table(r, res) << stage_table(r, set, sets, res) << (qc.contains("outages") && !qc.contains("sets") ? std::string() : cpe_part(qc, res, r))  // GNSS-only: outages only
+    << outage_part(qc, r) << "<h4>QC metrics</h4>\n"
     << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(cons, r);
   return h.str();
 }

@@ -7,6 +7,11 @@ InertialRun::InertialRun(const SensorErrors& e, const Mat3& C_mb, const Vec3& le
   nav_.reset(inmotion::mems_state_from_reference(r, C_mb_, lever_));
 }
 
+InertialRun::InertialRun(const SensorErrors& e, const Mat3& C_mb, const Vec3& lever, const ins::NavState& start)
+    : g_(e.gyro), a_(e.accel), C_mb_(C_mb), lever_(lever) {
+  nav_.reset(start);
+}
+
 void InertialRun::imu(double t, const Vec3& dth, const Vec3& dv, double dt) {
   if (!(dt > 0) || t <= nav_.state().t) return;
   nav_.update(g_.increment(dth, dt), a_.increment(dv, dt), dt);

@@ -15,6 +15,9 @@ class InertialRun {
  public:
   // errors: the coefficient set (measured = (I+M)·true + b); C_mb: MEMS → reference body.
   InertialRun(const SensorErrors& errors, const Mat3& C_mb, const Vec3& lever, const inmotion::RefObs& start);
+  // From a MEMS navigation state (an aided filter's at the start of a simulated GNSS outage,
+  // outage_plan.hpp); ΔS is then measured against fixes of the antenna (the reference body origin).
+  InertialRun(const SensorErrors& errors, const Mat3& C_mb, const Vec3& lever, const ins::NavState& start);
   // One IMU interval ending at t with raw increments.
   void imu(double t, const Vec3& dtheta, const Vec3& dv, double dt);
   // ΔS (m) against a reference epoch at (about) the current time.

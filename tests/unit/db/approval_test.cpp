@@ -3,6 +3,7 @@
 #include "common/input_error.hpp"
 #include "common/units.hpp"
 #include "db/approval.hpp"
+#include "db/inmotion_import.hpp"
 #include "db_test_util.hpp"
 
 namespace calbench::db {
@@ -129,6 +130,33 @@ TEST(DbApproval, ThresholdCheckIgnoresStatusAndQcReasonSaysWhy) {
     required = required || l.find("m1") != std::string::npos;
   }
   EXPECT_TRUE(sigma && required);
+}
+
+TEST(DbApproval, OutageThresholdPerLengthOnTheResultSet) {
+  CoefficientSetRecord set;
+  set.id = 8;
+  set.errors = test::random_errors(5);
+  const Thresholds t = parse_thresholds(R"({"allow_unknown_sigma": true, "max_outage_median_m": {"15": 5, "60": 40}})", "t.json");
+  ASSERT_EQ(t.max_outage_median_m.size(), 2u);
+  EXPECT_DOUBLE_EQ(t.max_outage_median_m.at(15.0), 5.0);
+  // Informative outage figures as db import-inmotion stores them (outage_metric names them).
+  const auto metric = [](const std::string& set_name, double L, double v) {
+    return QcResult{outage_metric(set_name, L, "median_max_m"), v, std::nullopt, true, "m", kInSample, ""};
+  };
+  EXPECT_EQ(outage_metric("in-motion", 15, "median_max_m"), "outages.in-motion.15s.median_max_m");
+  // Within the limits; the raw data's large errors are not the set's.
+  EXPECT_TRUE(check_thresholds(set, {metric("in-motion", 15, 4.9), metric("in-motion", 60, 39), metric("none", 15, 900)}, t).ok);
+  const auto r = check_thresholds(set, {metric("in-motion", 15, 4.9), metric("in-motion", 60, 41)}, t);
+  ASSERT_EQ(r.reasons.size(), 1u);
+  EXPECT_TRUE(has_reason(r, "outages.in-motion.60s.median_max_m = 41 m exceeds the outage threshold 40 m"));
+  // A drive without outage QC (a reference drive) is not refused for it.
+  EXPECT_TRUE(check_thresholds(set, {QcResult{"x", 1, 2, true, "m", kInSample, "|value| ≤ threshold"}}, t).ok);
+  bool described = false;
+  for (const auto& l : describe_thresholds(t)) described = described || l.find("60 s ≤ 40 m") != std::string::npos;
+  EXPECT_TRUE(described);
+  EXPECT_THROW(parse_thresholds(R"({"max_outage_median_m": {"abc": 5}})", "t.json"), InputError);
+  EXPECT_THROW(parse_thresholds(R"({"max_outage_median_m": {"15": -1}})", "t.json"), InputError);
+  EXPECT_THROW(parse_thresholds(R"({"max_outage_median_m": [5]})", "t.json"), InputError);
 }
 
 TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {

@@ -167,6 +167,55 @@ TEST_F(ImportFixture, FitDriveQcChecksTheResultAgainstTheSetItStartedFrom) {
   EXPECT_NE(back.criterion.find("'none'"), std::string::npos) << back.criterion;
 }
 
+// qc.outages of a GNSS-only drive: per set and length the figures, informative except the result's
+// median largest error, checked against the input set's plus 3σ of the fixes.
+TEST_F(ImportFixture, OutageQcFiguresAndTheNeverWorseCheck) {
+  const SensorErrors total = compose(bench, corr);
+  const auto with = [&](double input_60, double result_60, const json& fix_sigma) {
+    json r = result("M1", total, corr);
+    const auto per = [](double m15, double m60) {
+      return json::array({{{"length_s", 15}, {"count", 3}, {"median_max_m", m15}, {"max_max_m", m15 + 1}, {"median_end_m", m15},
+                           {"max_end_m", m15 + 1}},
+                          {{"length_s", 60}, {"count", 1}, {"median_max_m", m60}, {"max_max_m", m60}, {"median_end_m", m60},
+                           {"max_end_m", m60}}});
+    };
+    r["qc"] = {{"sample", "in-sample (outages inside the data the fit used)"},
+               {"outages", {{"sample", "out-of-sample (outages after the fit window)"}, {"fix_sigma_h_m", fix_sigma},
+                            {"sets", json::array({{{"name", "none"}, {"per_length", per(30, 1800)}},
+                                                  {{"name", "input"}, {"per_length", per(2.8, input_60)}},
+                                                  {{"name", "in-motion"}, {"per_length", per(2.7, result_60)}}})}}}};
+    return parse_inmotion_result(r.dump(), "RESULT.json").qc;
+  };
+  const auto find = [](const std::vector<QcResult>& qc, const std::string& m) {
+    for (const auto& q : qc)
+      if (q.metric == m) return q;
+    ADD_FAILURE() << "no metric " << m;
+    return QcResult{};
+  };
+  const auto qc = with(19.4, 20.0, 1.0);
+  EXPECT_EQ(qc.size(), 3u * 2u * 4u);  // 3 sets x 2 lengths x 4 figures
+  const QcResult r60 = find(qc, "outages.in-motion.60s.median_max_m");
+  ASSERT_TRUE(r60.threshold);
+  EXPECT_DOUBLE_EQ(*r60.threshold, 19.4 + 3.0);  // the input's, plus 3σ of the fixes
+  EXPECT_TRUE(r60.pass);
+  EXPECT_EQ(r60.sample, kOutOfSample);
+  EXPECT_EQ(r60.unit, "m");
+  EXPECT_NE(r60.criterion.find("'input'"), std::string::npos) << r60.criterion;
+  EXPECT_TRUE(find(qc, "outages.none.60s.median_max_m").informative());
+  EXPECT_TRUE(find(qc, "outages.in-motion.60s.max_max_m").informative());
+  EXPECT_FALSE(find(with(19.4, 23.0, 1.0), "outages.in-motion.60s.median_max_m").pass);
+  EXPECT_FALSE(find(with(19.4, 19.5, nullptr), "outages.in-motion.60s.median_max_m").pass);  // no σ stated: no allowance
+  // Malformed: named by key.
+  json bad = result("M1", total, corr);
+  bad["qc"] = {{"outages", {{"sets", json::array({{{"name", "none"}, {"per_length", json::array({{{"length_s", "x"}}})}}})}}}};
+  try {
+    parse_inmotion_result(bad.dump(), "R.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "qc.outages.sets[0].per_length[0].length_s");
+  }
+}
+
 TEST_F(ImportFixture, DeterminedByIsReadAndValidated) {
   const SensorErrors total = compose(bench, corr);
   json r = result("M1", total, corr);
