@@ -140,7 +140,7 @@ nlohmann::json run_outage_qc(const std::filesystem::path& dir, const std::vector
     eligible[k] = epochs[k].eligible;
   }
   const qc::OutagePlan plan = qc::plan_outages(t, eligible, epochs.back().t, o.request);
-  std::vector<OutageRun> runs(plan.outages.size(), OutageRun{std::vector<double>(sets.size(), 0.0), std::vector<double>(sets.size(), 0.0), 0});
+  std::vector<OutageRun> runs(plan.outages.size(), OutageRun{std::vector<double>(sets.size(), 0.0), std::vector<double>(sets.size(), 0.0), 0, {}});
   if (!plan.outages.empty())
     for (const auto& g : time_offset_groups(sets)) outage_pass(dir, sets, g, epochs, plan, runs);
 
