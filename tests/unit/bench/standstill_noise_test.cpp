@@ -26,7 +26,9 @@ struct Phase {
 // and accelerations of 1 m/s² varying at 0.5–2 Hz.
 StandstillDetector run(const NoiseSpec& truth, const NoiseSpec& detector_class, const std::vector<Phase>& phases, double rate_hz,
                        std::uint64_t seed) {
-  ImuErrorSimulator sim(draw_random_unit(seed), truth, seed);
+  NoiseSpec n = truth;
+  n.output_rate_hz = rate_hz;  // the simulator's per-sample σ is density·√(output rate), as drivesim sets it
+  ImuErrorSimulator sim(draw_random_unit(seed), n, seed);
   StandstillDetector det(detector_class);
   double t = 0;
   const double dt = 1.0 / rate_hz;
