@@ -307,7 +307,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
 // filter takes.
 identification::NoiseMeasurement scan_white_noise(const fs::path& dir, const RecordingMeta& meta, const NoiseSpec& cls) {
   identification::StandstillDetector det(cls);
-  ImuReader rd(table_file(dir, "imu"), meta.imu_rate_hz);
+  ImuReader rd(dir / "imu.csv", meta.imu_rate_hz);  // imu.csv, or the imu dataset of recording.h5
   ImuRecord r;
   const bool inc = rd.form() == ImuForm::increments;
   while (rd.next(r)) {
@@ -333,11 +333,14 @@ nlohmann::json white_noise_json(const identification::NoiseMeasurement& m, bool 
   };
   nlohmann::json st = nlohmann::json::array();
   for (const auto& s : m.standstills) st.push_back({{"t_s", {s.t0, s.t1}}, {"samples", s.samples}, {"dt_s", s.dt}, {"level", split(s.level)}});
+  std::ostringstream method;
+  method << "standstills: windows of " << sc.window_s << " s whose sample sigma is at most " << sc.ratio
+         << "x the class's white-noise sigma on all six axes, at least " << sc.min_duration_s
+         << " s long; level per axis N = Allan deviation at tau = dt times sqrt(dt) (identification/allan), pooled over "
+            "the standstills; used where an axis differs from the class by more than "
+         << m.factor << "x (largest axis of the triad)";
   nlohmann::json j = {
-      {"method", "standstills: windows of " + std::to_string(sc.window_s).substr(0, 3) + " s whose sample sigma is at most " +
-                     std::to_string(static_cast<int>(sc.ratio)) + "x the class's white-noise sigma on all six axes, at least " +
-                     std::to_string(sc.min_duration_s).substr(0, 3) + " s long; level per axis N = Allan deviation at tau = dt "
-                     "times sqrt(dt) (identification/allan), pooled over the standstills"},
+      {"method", method.str()},
       {"scanned", scanned},
       {"class", split(m.cls)},
       {"measured", m.measured ? split(m.level) : nlohmann::json(nullptr)},
@@ -402,7 +405,6 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   const RecordingMeta meta0 = read_meta(dir);
   const ImuClassChoice cls = choose_imu_class(a.device_class, meta0.device.model, (dir / "meta.json").string());
   inmotion::InMotionConfig cfg;
-  cfg.noise = cls.cls.noise;
   // The unit learned from the data: white noise measured on the standstills.
   identification::NoiseMeasurement wn;
   if (a.measure_noise) wn = scan_white_noise(dir, meta0, cls.cls.noise);
