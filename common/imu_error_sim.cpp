@@ -56,20 +56,25 @@ ImuErrorSimulator::Output ImuErrorSimulator::sample(double t, const Vec3& w_true
   return o;
 }
 
-SensorErrors draw_random_unit(std::uint64_t seed) {
-  using namespace units;
+SensorErrors draw_random_unit(std::uint64_t seed, const UnitSpread& sp) {
   std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ULL);
   std::normal_distribution<double> n(0.0, 1.0);
   SensorErrors e;
   for (int i = 0; i < 3; ++i) {
-    e.gyro.bias(i) = 0.2 * kDeg * n(rng);     // turn-on bias, data-sheet class ±0.2 °/s
-    e.accel.bias(i) = 16.0 * kMilliG * n(rng);
+    e.gyro.bias(i) = sp.gyro_bias * n(rng);
+    e.accel.bias(i) = sp.accel_bias * n(rng);
     for (int j = 0; j < 3; ++j) {
-      e.gyro.M(i, j) = (i == j ? 5e-3 : 5e-4) * n(rng);
-      e.accel.M(i, j) = (i == j ? 5e-3 : 5e-4) * n(rng);
+      e.gyro.M(i, j) = (i == j ? sp.gyro_scale : sp.gyro_skew) * n(rng);
+      e.accel.M(i, j) = (i == j ? sp.accel_scale : sp.accel_skew) * n(rng);
     }
   }
   return e;
+}
+
+SensorErrors draw_random_unit(std::uint64_t seed) {
+  using namespace units;
+  // Turn-on bias, data-sheet class ±0.2 °/s and ±16 mg; scale 0.5 %, skew 0.05 %.
+  return draw_random_unit(seed, UnitSpread{0.2 * kDeg, 16.0 * kMilliG, 5e-3, 5e-4, 5e-3, 5e-4});
 }
 
 }  // namespace calbench

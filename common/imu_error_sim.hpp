@@ -38,8 +38,20 @@ class ImuErrorSimulator {
   bool started_ = false;
 };
 
+// Spread (1σ) of an uncalibrated part of a device class, as its data sheet states it (SI):
+// turn-on bias, scale error (diagonal of M) and skew (off-diagonal).
+struct UnitSpread {
+  double gyro_bias = 0, accel_bias = 0;    // rad/s, m/s²
+  double gyro_scale = 0, gyro_skew = 0;    // dimensionless
+  double accel_scale = 0, accel_skew = 0;
+};
+
+// Draw a unit of a device class (bench/imu_classes/*.toml, [spread]).
+SensorErrors draw_random_unit(std::uint64_t seed, const UnitSpread& spread);
 // Draw a realistic ADIS16488A-class unit: turn-on biases, scale errors and skews of data-sheet
-// magnitude (gyro bias ~0.2 °/s, accel bias ~16 mg, scale ~0.5 %, skews ~0.05 %).
+// magnitude (gyro bias ~0.2 °/s, accel bias ~16 mg, scale ~0.5 %, skews ~0.05 %) — the built-in
+// default of the simulators; bench/imu_classes/adis16488a.toml holds the same figures (a unit test
+// pins them equal).
 SensorErrors draw_random_unit(std::uint64_t seed);
 
 }  // namespace calbench

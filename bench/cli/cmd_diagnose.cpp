@@ -16,7 +16,7 @@ namespace calbench::cli {
 namespace {
 
 struct DiagnoseArgs {
-  std::string dir, coeffs, report, out, plan;
+  std::string dir, coeffs, report, out, plan, device_class;
   bool json = false;
   bool no_innovations = false;
   bool list_effects = false;
@@ -31,7 +31,8 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
     given = read_drive_coeffs(a.coeffs);
     check_same_unit(given->set.device, a.coeffs, a.dir);
   }
-  const DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
+  DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
+  in.device_class = a.device_class;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
   const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr, !a.no_innovations);
   // An IMPROVED.json claims an improvement: without a finding there is none, and none is written.
@@ -98,6 +99,9 @@ const bool registered = add_command(60, [](CLI::App& app) {
   d->add_option("--out", a->out, "write IMPROVED.json: coefficients refitted with the new terms as extra keys");
   d->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
+  d->add_option("--device-class", a->device_class,
+                 "drives: the IMU device class of the in-motion filter runs (as fit drive --device-class: a class file "
+                 "or a built-in class name; default from meta.json device.model)");
   d->add_flag("--no-innovations", a->no_innovations,
               "drives: skip the in-motion filter runs whose innovation statistics are reported (before/after the "
               "new terms)");

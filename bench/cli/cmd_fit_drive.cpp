@@ -10,6 +10,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/drive/drive_units.hpp"
 #include "bench/drive/fit_drive.hpp"
+#include "bench/io/imu_class_toml.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "calibration/inmotion/priors.hpp"
 #include "common/input_error.hpp"
@@ -44,6 +45,35 @@ void print_summary(const nlohmann::json& j) {
             << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
+  if (j.contains("device_class")) {
+    const auto& dc = j["device_class"];
+    std::cout << "  device class     " << dc["name"].get<std::string>() << " (" << dc["grade"].get<std::string>() << "; "
+              << dc["file"].get<std::string>() << ", by " << dc["chosen_by"].get<std::string>() << ")\n";
+  }
+  if (j.contains("white_noise")) {
+    // The unit's white noise measured on the standstills against the class (docs/in-motion.md).
+    const auto& w = j["white_noise"];
+    std::cout << "  white noise      ";
+    if (w["measured"].is_null()) {
+      std::cout << (w["scanned"].get<bool>() ? "no standstill found" : "not measured (--no-noise-scan)")
+                << ": the class's ARW " << w["class"]["gyro_deg_sqrt_h"][0].get<double>() << " deg/sqrt(h), VRW "
+                << w["class"]["accel_m_s_sqrt_h"][0].get<double>() << " m/s/sqrt(h)\n";
+    } else {
+      auto three = [](const nlohmann::json& v) {
+        std::ostringstream o;
+        o << std::setprecision(3) << v[0].get<double>() << " " << v[1].get<double>() << " " << v[2].get<double>();
+        return o.str();
+      };
+      std::cout << "measured on " << w["standstills"].size() << " standstill(s): ARW xyz "
+                << three(w["measured"]["gyro_deg_sqrt_h"]) << " deg/sqrt(h) (class " << std::setprecision(3)
+                << w["class"]["gyro_deg_sqrt_h"][0].get<double>() << "), VRW xyz " << three(w["measured"]["accel_m_s_sqrt_h"])
+                << " m/s/sqrt(h) (class " << w["class"]["accel_m_s_sqrt_h"][0].get<double>() << ")" << std::setprecision(6) << "\n";
+      for (const char* s : {"gyro", "accel"})
+        if (w["used"][s]["source"].get<std::string>().rfind("measured", 0) == 0)
+          std::cout << "  NOTE             the " << s << " white noise differs from the class by more than 2x: the filter uses the "
+                    << "measured " << w["used"][s]["value"].get<double>() << " " << w["used"][s]["unit"].get<std::string>() << "\n";
+    }
+  }
   if (j.contains("priors")) {
     const auto& p = j["priors"];
     if (p["mode"] == "input set")
@@ -184,24 +214,31 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "position, velocity where given, no attitude; levelled at the opening standstill, heading from the "
                  "course over ground); default reference.csv when present, else gnss.csv")
       ->check(CLI::IsMember({"reference", "gnss"}));
+  d->add_option("--device-class", a->device_class,
+                 "IMU device class: a class file (bench/imu_classes/<name>.toml or your own, docs/in-motion.md \"Device "
+                 "classes\") or the name or alias of a built-in class; default: the class of meta.json device.model "
+                 "(an unknown model is bad input). Its noise, drift, raw priors and stability allowances are the fit's");
+  d->add_flag("!--no-noise-scan", a->measure_noise,
+              "do not measure the white noise on the recording's standstills (default: measured, and used where it "
+              "differs from the class by more than 2x)");
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
   d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
   d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
   d->add_option("--prior-gyro-bias", a->prior_gyro_bias_dps,
-                 "prior 1-sigma of the gyro drift, deg/s, overriding the default (0.5 for raw data; with --coeffs the "
+                 "prior 1-sigma of the gyro drift, deg/s, overriding the default (the device class's prior for raw data, ADIS16488A 0.5; with --coeffs the "
                  "set's sigma combined with the allowance)")
       ->check(finite_pos);
   d->add_option("--prior-accel-bias", a->prior_accel_bias_mg,
-                 "prior 1-sigma of the accelerometer bias, mg, overriding the default (30 for raw data; with --coeffs "
+                 "prior 1-sigma of the accelerometer bias, mg, overriding the default (the device class's prior for raw data, ADIS16488A 30; with --coeffs "
                  "the set's sigma combined with the allowance)")
       ->check(finite_pos);
   // Stability allowances (docs/in-motion.md, "Priors"): finite and >= 0; NaN and negatives are bad input (exit 2).
-  const inmotion::StabilityAllowance& def = inmotion::stability_allowance_table().front();
+  const inmotion::StabilityAllowance& def = builtin_imu_class("ADIS16488A").allowance;
   for (const AllowanceOption& al : allowance_options())
     d->add_option(al.option, a->allowance.*al.given,
                   std::string("with --coeffs: stability allowance (1-sigma, how far it can move between the set's "
-                              "calibration and the drive) of the ") + al.what + " (" + def.device_class + " default " +
-                      fmt_default(def.*al.field / al.unit) + ")")
+                              "calibration and the drive) of the ") + al.what + " (default: the device class's; " +
+                      def.device_class + " " + fmt_default(def.*al.field / al.unit) + ")")
         ->check(finite_nonneg)
         ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(finite_pos);

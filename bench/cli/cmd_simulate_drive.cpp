@@ -30,6 +30,10 @@ const bool registered = add_command(11, [](CLI::App& app) {
                 "JSON with the unit's in-run drift instead of the data sheet's: {\"gyro\": {\"drift_sigma_deg_h\", "
                 "\"drift_tau_s\"}, \"accel\": {\"drift_sigma_mg\", \"drift_tau_s\"}} (kept in truth.json)")
       ->check(CLI::ExistingFile);
+  d->add_option("--device-class", a->device_class,
+                 "the simulated unit's IMU class: a class file (bench/imu_classes/<name>.toml) or the name or alias of a "
+                 "built-in class; its white noise, in-run drift, ranges and LSB, and with --truth random its data-sheet "
+                 "spread; meta.json device.model names it (default ADIS16488A)");
   d->add_option("--units", a->units,
                  "several MEMS units on the vehicle against one reference: unit k (1..N) with errors and mounting "
                  "from --seed + k-1, turned 90° in yaw from the last, 0.15 m round the route's lever arm; writes "

@@ -23,6 +23,7 @@ DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun&
     FitDriveArgs a;
     a.dir = in.dir.string();
     a.coeffs_set = set;
+    a.device_class = in.device_class;
     a.qc = false;
     a.write_out = false;
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {

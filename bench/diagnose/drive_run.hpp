@@ -33,6 +33,8 @@ struct DriveDiagInput {
   Vec3 mounting_rpy_deg = Vec3::Zero();  // used for the prediction
   std::string mounting_source;           // "meta.json (nominal)" or the coefficients file
   std::size_t imu_rows = 0, ref_rows = 0;
+  // The device class of the in-motion filter runs (fit drive --device-class); "" = meta.json's model.
+  std::string device_class;
 };
 
 // One pass over imu.csv and reference.csv; mounting_rpy_deg overrides meta.json's rotation.

@@ -19,6 +19,8 @@
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/json_util.hpp"
+#include "bench/io/imu_class_toml.hpp"
+#include "calibration/identification/standstill_noise.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "common/units.hpp"
 
@@ -165,17 +167,13 @@ struct PriorChoice {
   std::optional<Mat3> C_mb_start;  // a mounting carried by the input set
 };
 
-PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<CoefficientSet>& bench) {
+PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<CoefficientSet>& bench, const ImuClass& cls) {
   using namespace units;
   PriorChoice pc;
   nlohmann::json j;
   if (bench) {
-    const inmotion::StabilityAllowance* row = inmotion::stability_allowance(bench->device.model);
-    inmotion::StabilityAllowance al = row ? *row : inmotion::stability_allowance_table().front();
+    inmotion::StabilityAllowance al = cls.allowance;
     j["device_class"] = al.device_class;
-    if (!row)
-      j["device_class_note"] = "no allowance row for model '" + bench->device.model + "': the " + al.device_class +
-                               " class is used (override with --allowance-*)";
     nlohmann::json over = nlohmann::json::array(), shown = nlohmann::json::object();
     for (const AllowanceOption& o : allowance_options()) {
       const double v = a.allowance.*o.given;
@@ -195,10 +193,10 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
       j["mounting_from_input_deg"] = {{"value", to_json(a.coeffs_mounting_deg->first)},
                                       {"sigma", sigma_json(a.coeffs_mounting_deg->second)}};
     }
-    pc.report = inmotion::priors_from_set(bench->errors, al, mount_sigma);
+    pc.report = inmotion::priors_from_set(bench->errors, al, mount_sigma, cls.priors);
     // A σ far beyond anything a calibration of this class produces is a broken file, not a prior:
     // the filter would run with P of 1e300 and return nothing meaningful.
-    const inmotion::ParameterPriors ds = inmotion::datasheet_priors();
+    const inmotion::ParameterPriors& ds = cls.priors;
     for (std::size_t k = 0; k < 24; ++k) {
       const double sgm = pc.report.set_sigma[k], lim = 100 * inmotion::prior_value(ds, k);
       if (std::isfinite(sgm) && sgm > lim) {
@@ -216,7 +214,7 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
     j["mode"] = "input set";
     j["input"] = a.coeffs.empty() ? nlohmann::json("in memory") : nlohmann::json(a.coeffs);
   } else {
-    pc.report = inmotion::priors_datasheet();
+    pc.report = inmotion::priors_datasheet(cls.priors);
     j["mode"] = "data-sheet";
     j["input"] = nullptr;
   }
@@ -302,7 +300,69 @@ nlohmann::json determined_by(const inmotion::ParameterPriors& prior, const inmot
 
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
-                       bool gnss);
+                       bool gnss, const nlohmann::json& unit);
+
+// The white noise of the unit measured on the standstills of the whole recording (a pass over
+// imu.csv before the fit; calibration/identification/standstill_noise.hpp), and RESULT.json's
+// "white_noise": the class's and the measured level per axis, the standstills used, and what the
+// filter takes.
+identification::NoiseMeasurement scan_white_noise(const fs::path& dir, const RecordingMeta& meta, const NoiseSpec& cls) {
+  identification::StandstillDetector det(cls);
+  ImuReader rd(dir / "imu.csv", meta.imu_rate_hz);  // imu.csv, or the imu dataset of recording.h5
+  ImuRecord r;
+  const bool inc = rd.form() == ImuForm::increments;
+  while (rd.next(r)) {
+    if (inc && !(r.dt > 0)) continue;
+    det.add(r.t, inc ? Vec3(r.gyro / r.dt) : r.gyro, inc ? Vec3(r.accel / r.dt) : r.accel);
+  }
+  det.finish();
+  return identification::measure_white_noise(det.standstills(), cls);
+}
+
+nlohmann::json white_noise_json(const identification::NoiseMeasurement& m, bool scanned) {
+  using namespace units;
+  const identification::StandstillConfig sc;
+  // Per axis: gyro x, y, z in deg/sqrt(h) (ARW), accelerometer x, y, z in m/s/sqrt(h) (VRW).
+  auto three = [](const identification::AxisLevels& l, std::size_t from, double unit) {
+    nlohmann::json a = nlohmann::json::array();
+    for (std::size_t i = from; i < from + 3; ++i)
+      a.push_back(std::isfinite(l.v[i]) ? nlohmann::json(l.v[i] / unit) : nlohmann::json(nullptr));
+    return a;
+  };
+  auto split = [&](const identification::AxisLevels& l) {
+    return nlohmann::json{{"gyro_deg_sqrt_h", three(l, 0, kDeg / kSqrtHour)}, {"accel_m_s_sqrt_h", three(l, 3, 1.0 / kSqrtHour)}};
+  };
+  nlohmann::json st = nlohmann::json::array();
+  for (const auto& s : m.standstills) st.push_back({{"t_s", {s.t0, s.t1}}, {"samples", s.samples}, {"dt_s", s.dt}, {"level", split(s.level)}});
+  std::ostringstream method;
+  method << "standstills: windows of " << sc.window_s << " s whose sample sigma is at most " << sc.ratio
+         << "x the class's white-noise sigma on all six axes, at least " << sc.min_duration_s
+         << " s long; level per axis N = Allan deviation at tau = dt times sqrt(dt) (identification/allan), pooled over "
+            "the standstills; used where an axis differs from the class by more than "
+         << m.factor << "x (largest axis of the triad)";
+  nlohmann::json j = {
+      {"method", method.str()},
+      {"scanned", scanned},
+      {"class", split(m.cls)},
+      {"measured", m.measured ? split(m.level) : nlohmann::json(nullptr)},
+      {"ratio", m.measured ? nlohmann::json{{"gyro", three(m.ratio, 0, 1.0)}, {"accel", three(m.ratio, 3, 1.0)}}
+                           : nlohmann::json(nullptr)},
+      {"standstills", st},
+      {"factor", m.factor}};
+  const char* names[2] = {"gyro", "accel"};
+  const double units_[2] = {kDeg / kSqrtHour, 1.0 / kSqrtHour};
+  for (int k = 0; k < 2; ++k) {
+    const std::string why = !scanned ? "class (--no-noise-scan)"
+                            : !m.measured ? "class (no standstill found)"
+                            : m.zero[static_cast<std::size_t>(k)] ? "class (an axis measured zero: a noise-free signal or noise below the LSB)"
+                            : m.differs[static_cast<std::size_t>(k)] ? "measured (an axis differs from the class by more than 2x)"
+                                                                     : "class (every axis within 2x of it)";
+    j["used"][names[k]] = {{"value", m.used[static_cast<std::size_t>(k)] / units_[k]},
+                           {"unit", k == 0 ? "deg/sqrt(h)" : "m/s/sqrt(h)"},
+                           {"source", why}};
+  }
+  return j;
+}
 
 // RESULT.json "vehicle_constraints": the rule and settings, the standstills found, and the
 // mounting's prior and posterior σ per axis (an axis the drive made observable: posterior below
@@ -387,7 +447,16 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
         throw InputError("--obs", 0, "att",
                          "GNSS aiding (gnss.csv) has no attitude: use pos or pos,vel (att needs a reference INS, reference.csv)");
   }
+  // The device class (bench/imu_classes): --device-class, else meta.json device.model.
+  const RecordingMeta meta0 = read_meta(dir);
+  const ImuClassChoice cls = choose_imu_class(a.device_class, meta0.device.model, (dir / "meta.json").string());
   inmotion::InMotionConfig cfg;
+  // The unit learned from the data: white noise measured on the standstills.
+  identification::NoiseMeasurement wn;
+  if (a.measure_noise) wn = scan_white_noise(dir, meta0, cls.cls.noise);
+  else wn = identification::measure_white_noise({}, cls.cls.noise);
+  cfg.noise = identification::apply_measured_noise(cls.cls.noise, wn);
+  nlohmann::json unit = {{"device_class", imu_class_json(cls)}, {"white_noise", white_noise_json(wn, a.measure_noise)}};
   if (gnss) {  // GNSS defaults where gnss.csv has no sigma columns
     cfg.ref_sigma_pos = 2.0;
     cfg.ref_sigma_vel = 0.1;
@@ -423,7 +492,7 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   }
   // Priors of the constant parameters: the input set's σ combined with the device class's
   // stability allowance, or the data-sheet class for raw data; --prior-* override the biases.
-  const PriorChoice pc = choose_priors(args, bench);
+  const PriorChoice pc = choose_priors(args, bench, cls.cls);
   cfg.prior = pc.report.sigma;
   cfg.obs_rate_hz = a.obs_rate_hz;
   cfg.cov_dt = a.cov_dt;
@@ -453,14 +522,14 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
     (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
     fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
   }
-  return run_fit(args, cfg, bench, t0, t1, models, fx, pc, gnss);
+  return run_fit(args, cfg, bench, t0, t1, models, fx, pc, gnss, unit);
 }
 
 namespace {
 
 nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
-                       bool gnss) {
+                       bool gnss, const nlohmann::json& unit) {
   using namespace units;
   using Filter = inmotion::InMotionFilter;
   // The series columns of the layout this configuration gives (the filter builds the same one).
@@ -602,6 +671,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   if (h5) j["recording"]["format"] = "hdf5";
   if (gnss) j["recording"]["sha256_gnss"] = h5 ? imu_digest : digest(st.aiding_sha256(), table_file(dir, "gnss"));
   j["recording"]["device"] = {{"model", meta.device.model}, {"serial", meta.device.serial}};  // the unit that drove
+  j["device_class"] = unit["device_class"];
+  j["white_noise"] = unit["white_noise"];
   j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
   j["window_s"] = {t_first, t_last};
   j["observations"] = a.obs;

@@ -24,6 +24,12 @@ struct FitDriveArgs {
   bool obs_given = true;      // false: --obs not given (GNSS aiding then uses pos,vel)
   std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
+  // The device class (bench/imu_classes, docs/in-motion.md "Device classes"): a class file, or the
+  // name or alias of a built-in class; "" = from meta.json device.model (unknown: bad input).
+  std::string device_class;
+  // Measure the white noise on the recording's standstills and use it where it differs from the
+  // class by more than 2x (docs/in-motion.md, "White noise measured on standstills").
+  bool measure_noise = true;
   double obs_rate_hz = 10, cov_dt = 0.1;
   // Vehicle constraints (--obs …,nhc,zupt): at most constraint_rate_hz updates a second; their σ
   // (0: InMotionConfig's defaults, 0.1 m/s NHC, 0.01 m/s ZUPT).

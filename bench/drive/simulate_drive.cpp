@@ -1,8 +1,11 @@
 #include "bench/drive/simulate_drive.hpp"
 
+#include <optional>
+
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "bench/io/coefficients_json.hpp"
+#include "bench/io/imu_class_toml.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
@@ -13,8 +16,8 @@ namespace calbench {
 
 namespace {
 // --noise NOISE.json (see simulate_drive.hpp): the unit's drift levels, data-sheet default else.
-NoiseSpec read_noise_file(const std::string& file) {
-  NoiseSpec n = adis16488a_noise();
+NoiseSpec read_noise_file(const std::string& file, const NoiseSpec& base) {
+  NoiseSpec n = base;
   const nlohmann::json j = read_json_file(file);
   if (!j.is_object()) throw InputError(file, 0, "", "not a JSON object");
   for (auto it = j.begin(); it != j.end(); ++it) {
@@ -64,6 +67,8 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
   if (a.units < 1 || a.units > 16) throw InputError("--units", 0, "", "1 to 16 units, not " + std::to_string(a.units));
   if (a.units > 1 && a.truth != "random")
     throw InputError("--units", 0, "", "several units need --truth random (each unit its own errors, drawn from --seed + k)");
+  std::optional<ImuClassChoice> cls;
+  if (!a.device_class.empty()) cls = choose_imu_class(a.device_class, "", "--device-class");
   std::vector<SimUnit> sim(static_cast<std::size_t>(a.units));
   for (int k = 0; k < a.units; ++k) {
     SimUnit& u = sim[static_cast<std::size_t>(k)];
@@ -78,7 +83,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     }
     u.true_rpy_deg = u.nominal_rpy_deg;
     if (a.truth == "random") {
-      u.truth.errors = draw_random_unit(seed);
+      u.truth.errors = cls ? draw_random_unit(seed, cls->cls.spread) : draw_random_unit(seed);
       u.truth.device.serial = a.serial.empty() ? "SIM-" + std::to_string(seed) : (a.units > 1 ? a.serial + "-" + u.slot : a.serial);
       RouteFile r = rf;
       r.mounting_rpy_deg = u.nominal_rpy_deg;
@@ -93,6 +98,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
         if (m.contains("lever_arm_m")) u.lever = jvec3(m["lever_arm_m"], a.truth, "mounting.lever_arm_m");
       }
     }
+    if (cls) u.truth.device.model = cls->cls.name;  // the unit is of the simulated class
   }
   // Physics beyond the spec's model: the truth's own catalogue keys, an effects file, --inject (every unit).
   const EffectTerms effects = simulation_effects(sim.front().truth.extra, a.truth, a.effects, a.inject);
@@ -101,7 +107,8 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     for (const EffectSpec& x : effect_specs())
       if (x.drive_sim_refusal && effect_present(x, effects)) throw InputError(src, 0, x.key, x.drive_sim_refusal);
   }
-  const NoiseSpec noise = a.noise.empty() ? adis16488a_noise() : read_noise_file(a.noise);
+  const NoiseSpec base = cls ? cls->cls.noise : adis16488a_noise();
+  const NoiseSpec noise = a.noise.empty() ? base : read_noise_file(a.noise, base);
   for (SimUnit& u : sim) {
     if (effects.any()) replace_effect_keys(effects, u.truth.extra);
     // The true mounting (what the filter should find); meta.json carries the nominal one. A
@@ -146,6 +153,7 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     RecordingMeta meta;
     meta.kind = RecordingKind::drive;
     meta.device = u.truth.device;
+    if (cls) meta.device.model = cls->cls.name;
     if (meta.device.model.empty()) meta.device.model = "ADIS16488A";
     meta.imu_rate_hz = rf.imu_rate_hz;
     meta.mounting = Mounting{u.nominal_rpy_deg, u.lever};

@@ -21,6 +21,10 @@ struct SimulateDriveArgs {
   // Gauss–Markov per sensor): {"gyro": {"drift_sigma_deg_h": 20, "drift_tau_s": 60},
   // "accel": {"drift_sigma_mg": 0.1, "drift_tau_s": 300}}; every key optional; kept in truth.json.
   std::string noise;
+  // --device-class: the simulated unit's class (a class file, or the name or alias of a built-in
+  // class): its white noise, drift, ranges and LSB, and for --truth random its spread; meta.json
+  // device.model names it. "" = ADIS16488A (the built-in default, unchanged).
+  std::string device_class;
   // Several MEMS units on the vehicle (issue 21): N > 1 writes a multi-unit drive (units.json, the
   // reference once, one recording folder per unit; docs/recording-units.md), unit k with the errors
   // and mounting drawn from seed + k, turned 90°·k in yaw and 0.15 m round the route's lever arm.

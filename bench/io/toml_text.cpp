@@ -67,13 +67,22 @@ std::string read_toml_text(const std::filesystem::path& file) {
   return text;
 }
 
-toml::table parse_toml_file(const std::filesystem::path& file) {
-  const std::string text = read_toml_text(file);
+namespace {
+// Text already checked by check_toml_text.
+toml::table parse_checked(const std::string& text, const std::string& file) {
   try {
-    return toml::parse(text, file.string());
+    return toml::parse(text, file);
   } catch (const toml::parse_error& e) {
-    throw InputError(file.string(), e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
+    throw InputError(file, e.source().begin.line, "", std::string("invalid TOML: ") + std::string(e.description()));
   }
 }
+}  // namespace
+
+toml::table parse_toml_text(const std::string& text, const std::string& file) {
+  check_toml_text(text, file);
+  return parse_checked(text, file);
+}
+
+toml::table parse_toml_file(const std::filesystem::path& file) { return parse_checked(read_toml_text(file), file.string()); }
 
 }  // namespace calbench

@@ -17,5 +17,7 @@ void check_toml_text(const std::string& text, const std::string& file);
 // Reads, checks and parses the file (plans, routes, fixtures); a syntax error is an InputError
 // "invalid TOML: ..." with the file and line.
 toml::table parse_toml_file(const std::filesystem::path& file);
+// The same on text already in memory (checked here), `file` naming it in messages.
+toml::table parse_toml_text(const std::string& text, const std::string& file);
 
 }  // namespace calbench

@@ -32,26 +32,6 @@ ParameterPriors datasheet_priors() {
   return p;
 }
 
-const std::vector<StabilityAllowance>& stability_allowance_table() {
-  using namespace units;
-  // Sources (docs/in-motion.md, "Priors"): bias — half the data sheet's initial bias error
-  // (±0.2 °/s, ±16 mg is the spread of uncalibrated parts; a calibrated part moves between
-  // power-ups and with age by less); scale — a residual sensitivity temperature coefficient of
-  // ≈ 20 ppm/°C of the factory-compensated part over a 15 °C difference between bench and vehicle;
-  // skew — axis-to-axis alignment is fixed by die and package and moves only with mounting stress
-  // (≈ 10″); mounting — an installation left in place between two drives (bracket flex, thermal).
-  static const std::vector<StabilityAllowance> t = {
-      {"ADIS16488A", 0.1 * kDeg, 5 * kMilliG, 300 * kPpm, 50 * kPpm, 300 * kPpm, 50 * kPpm, 0.1 * kDeg},
-  };
-  return t;
-}
-
-const StabilityAllowance* stability_allowance(const std::string& model) {
-  for (const auto& a : stability_allowance_table())
-    if (a.device_class == model) return &a;
-  return nullptr;
-}
-
 const std::vector<std::string>& prior_parameter_names() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> n;

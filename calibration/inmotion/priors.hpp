@@ -9,7 +9,8 @@
 //     The filter then estimates the correction to the set; its posterior σ is the σ of the fused
 //     (combined) set, and can never exceed σ_prior (a Kalman update only removes variance from
 //     constant states). A parameter the drive does not inform keeps the set's value with σ_prior.
-// The device-class table and the source of each figure: docs/in-motion.md, "Priors".
+// The device classes and the source of each figure: bench/imu_classes/*.toml, docs/in-motion.md
+// ("Priors", "Device classes").
 #pragma once
 #include <string>
 #include <vector>
@@ -31,10 +32,13 @@ ParameterPriors sigma_of(const SensorErrors& e, const Vec3& mount_sigma = Vec3::
 
 // Data-sheet class of a raw ADIS16488A (no calibration applied): initial bias 0.5 °/s and 30 mg
 // (2.5× and 1.9× the data sheet's ±0.2 °/s and ±16 mg initial bias error), scale 1 %, skew 0.2 %,
-// mounting 1° per axis (the installation tolerance of a vehicle bracket).
+// mounting 1° per axis (the installation tolerance of a vehicle bracket). The library's default
+// (InMotionConfig); `fit drive` takes the priors of the recording's device class instead
+// (bench/imu_classes/*.toml [priors]; adis16488a.toml holds these figures, pinned by a test).
 ParameterPriors datasheet_priors();
 
-// How far each constant parameter can move between a calibration and a drive, 1σ.
+// How far each constant parameter can move between a calibration and a drive, 1σ. One per device
+// class (bench/imu_classes/*.toml [allowance], read into calibration/imu_class.hpp).
 struct StabilityAllowance {
   std::string device_class;
   double gyro_bias = 0;    // rad/s
@@ -45,11 +49,6 @@ struct StabilityAllowance {
   double accel_skew = 0;
   double mount = 0;        // rad per axis (only where the input carries a mounting estimate)
 };
-
-// One row per device class (ADIS16488A first).
-const std::vector<StabilityAllowance>& stability_allowance_table();
-// The row of `model`; nullptr when the table has none.
-const StabilityAllowance* stability_allowance(const std::string& model);
 
 // Where a prior came from, per parameter.
 enum class PriorSource {

@@ -35,7 +35,7 @@ else
   [ -e imp.json ] || fail "a finding but no IMPROVED.json"
 fi
 grep -q "(white)" diag.txt && fail "'white' without its level"
-"$CALBENCH" diagnose "$SHARED/data/psins-vehicle-100s" > psins.txt
+"$CALBENCH" diagnose "$SHARED/data/psins-vehicle-100s" --device-class ADIS16488A > psins.txt
 grep -q "attitude innovations: NIS/dof .* → 0.049.*far below 1: the assumed noise is too large" psins.txt || { grep innovations psins.txt; fail "NIS far below 1 not read as too large a noise"; }
 grep -q "Ljung–Box p, worst component) 0 → 0 (not white at the 5 % level)" psins.txt || fail "whiteness level"
 

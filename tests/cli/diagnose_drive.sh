@@ -38,7 +38,7 @@ grep -q "pre{white-space:pre-wrap" "$T/report.html" && grep -q "img{max-width:10
 "$CALBENCH" diagnose "$T/rec" --coeffs "$T/improved.json" --json >"$T/d2.json"
 python3 -c "import json; d=json.load(open('$T/d2.json')); assert d['findings'] == [], d['findings']"
 # The real drive runs and reports in the same schema.
-"$CALBENCH" diagnose "$SHARED/data/psins-vehicle-100s" --json >"$T/psins.json"
+"$CALBENCH" diagnose "$SHARED/data/psins-vehicle-100s" --device-class ADIS16488A --json >"$T/psins.json"
 python3 -c "import json; d=json.load(open('$T/psins.json')); assert 'findings' in d and 'unexplained' in d and d['data']['blocks'] >= 90, d['data']"
 # Bad input: a temperature term on a drive without temperature, an unknown effect → exit 2.
 for opt in "temperature_bias:sensor=gyro,axis=x,value=1e-5" "wobble:x=1"; do

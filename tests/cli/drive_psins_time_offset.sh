@@ -10,7 +10,7 @@ D="$SHARED/data/psins-vehicle-100s"
 test -d "$D" || { echo "no $D: skipped"; exit 0; }
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
-"$CALBENCH" diagnose "$D" --json --out "$T/imp.json" >"$T/d.json"
+"$CALBENCH" diagnose "$D" --device-class ADIS16488A --json --out "$T/imp.json" >"$T/d.json"
 python3 - "$T" <<'PY'
 import json, sys
 t = sys.argv[1]
@@ -31,7 +31,7 @@ json.dump(dict(base, time_offset={"s": imp["time_offset"]["s"]}), open(t + "/to.
 json.dump(dict(base, time_offset={"s": -imp["time_offset"]["s"]}), open(t + "/wrong.json", "w"))
 PY
 for s in zero to wrong; do
-  "$CALBENCH" fit drive "$D" --coeffs "$T/$s.json" --prior-gyro-bias 0.5 --prior-accel-bias 30 --window 0:50 \
+  "$CALBENCH" fit drive "$D" --device-class ADIS16488A --coeffs "$T/$s.json" --prior-gyro-bias 0.5 --prior-accel-bias 30 --window 0:50 \
     --out "$T/r_$s.json" >/dev/null
 done
 python3 - "$T" <<'PY'

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/io/imu_class_toml.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
@@ -175,7 +176,7 @@ SeedResult run_seed(const RouteFile& rf, std::uint64_t seed, bool att, double qc
   const drivesim::RouteProfile prof(rf.route);
   const double t_fit = prof.duration() - qc_horizon - 1.0;
   const TriadCorrector cg(bench.gyro), ca(bench.accel);
-  const inmotion::StabilityAllowance& allow = inmotion::stability_allowance_table().front();
+  const inmotion::StabilityAllowance allow = builtin_imu_class("ADIS16488A").allowance;
   const Mat3 C_nom = ins::dcm_from_rpy(rf.mounting_rpy_deg * kDeg);
 
   inmotion::InMotionConfig fc;

@@ -30,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench/io/imu_class_toml.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/drive/route_toml.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
@@ -114,7 +115,7 @@ std::vector<RunResult> run_drive(const RouteFile& rf, std::uint64_t seed, double
     fc[k].ref_sigma_vel = 0.1;
     if (k >= 2)
       fc[k].prior =
-          inmotion::priors_from_set(bench, inmotion::stability_allowance_table().front(), Vec3::Constant(kUnknownSigma)).sigma;
+          inmotion::priors_from_set(bench, builtin_imu_class("ADIS16488A").allowance, Vec3::Constant(kUnknownSigma)).sigma;
     if (no_drift) {
       fc[k].gyro_drift = std::array<inmotion::DriftPrior, 3>{};
       for (auto& d : *fc[k].gyro_drift) d = inmotion::DriftPrior{1e-3 * units::kDegPerHour, 300};

@@ -27,7 +27,8 @@ TEST(InmotionPriors, FromSetCombineSigmaWithAllowanceElementwise) {
   set.gyro.sigma_M = Mat3::Constant(3e-6);
   set.gyro.sigma_M(0, 1) = kUnknownSigma;
   set.accel.sigma_M = Mat3::Constant(1e-5);
-  const StabilityAllowance& a = *stability_allowance("ADIS16488A");
+  // An allowance of the ADIS16488A's size (bench/imu_classes/adis16488a.toml [allowance]).
+  const StabilityAllowance a{"ADIS16488A", 0.1 * kDeg, 5 * kMilliG, 300 * kPpm, 50 * kPpm, 300 * kPpm, 50 * kPpm, 0.1 * kDeg};
   const PriorReport r = priors_from_set(set, a, Vec3(1e-3, kUnknownSigma, 2e-3));
   const ParameterPriors ds = datasheet_priors();
   // In raw-data coefficients hypot(set σ, allowance); the filter's prior is that in the frame of
@@ -129,7 +130,8 @@ TEST(InmotionPriors, CombinedSetRefinesTheBenchSetAndNeverWidensIt) {
   const Vec3 shift_g(0.02 * kDeg, -0.02 * kDeg, 0.02 * kDeg), shift_a(-2 * kMilliG, 2 * kMilliG, -2 * kMilliG);
   cfg.mems.gyro.bias += shift_g;
   cfg.mems.accel.bias += shift_a;
-  const StabilityAllowance& al = stability_allowance_table().front();
+  // An allowance of the ADIS16488A's size (bench/imu_classes/adis16488a.toml [allowance]).
+  const StabilityAllowance al{"ADIS16488A", 0.1 * kDeg, 5 * kMilliG, 300 * kPpm, 50 * kPpm, 300 * kPpm, 50 * kPpm, 0.1 * kDeg};
   InMotionConfig fc;
   const PriorReport pr = priors_from_set(bench, al, Vec3::Constant(kUnknownSigma));
   fc.prior = pr.sigma;
