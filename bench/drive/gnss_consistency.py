@@ -9,7 +9,8 @@ re-alignments after the first, mean NIS over its expectation per observation, co
 mounting angles (3) within 3 sigma of the truth. Prints a Markdown table (stdout).
 
 Usage: bench/drive/gnss_consistency.py CALBENCH [--seeds 1,2,3,4,5] [--routes short,rtk_town]
-       [--grades rtk,1hz] [--extra-args "..."] [--real DIR ...]
+       [--grades rtk,rtk10,1hz] [--classes ADIS16488A,ICM-42688-P,...] [--obs pos,vel] [--extra-args "..."]
+       [--real DIR ...]
 """
 import argparse
 import json
@@ -79,6 +80,7 @@ def main():
     ap.add_argument("--seeds", default="1,2,3,4,5")
     ap.add_argument("--routes", default="short,rtk_town")
     ap.add_argument("--grades", default="rtk,rtk10,1hz")
+    ap.add_argument("--classes", default="ADIS16488A", help="device classes to simulate (simulate drive --device-class)")
     ap.add_argument("--obs", default="pos,vel")
     ap.add_argument("--extra-args", default="")
     ap.add_argument("--real", nargs="*", default=[])
@@ -86,7 +88,8 @@ def main():
     work = tempfile.mkdtemp(prefix="gnss_consistency.")
     rows = []
     try:
-        for route in a.routes.split(","):
+        for cls in a.classes.split(","):
+          for route in a.routes.split(","):
             for grade in a.grades.split(","):
                 for seed in a.seeds.split(","):
                     rt = os.path.join(work, "route.toml")
@@ -94,13 +97,13 @@ def main():
                     d = os.path.join(work, "drive")
                     shutil.rmtree(d, ignore_errors=True)
                     subprocess.run([a.calbench, "simulate", "drive", "--route", rt, "--truth", "random", "--seed", seed,
-                                    "--out", d], check=True, stdout=subprocess.DEVNULL)
+                                    "--device-class", cls, "--out", d], check=True, stdout=subprocess.DEVNULL)
                     os.remove(os.path.join(d, "reference.csv"))
                     res = os.path.join(work, "r.json")
                     subprocess.run([a.calbench, "fit", "drive", d, "--aiding", "gnss", "--obs", a.obs, "--out", res]
                                    + a.extra_args.split(), check=True, stdout=subprocess.DEVNULL)
                     s = score(res, os.path.join(d, "truth.json"))
-                    s.update(name="%s %s seed %s" % (route, grade, seed))
+                    s.update(name="%s, %s %s seed %s" % (cls, route, grade, seed))
                     rows.append(s)
                     print(s, file=sys.stderr)
         for d in a.real:

@@ -8,7 +8,8 @@
 // The filter predicts each innovation's covariance S = H·P⁻·Hᵀ + R. Over a block of epochs of one
 // observation type (10 s; blocks do not overlap, so each innovation is tested once) the
 // innovations' actual power Σ νᵀν is compared with the predicted Σ tr S; when the block's Σ NIS lies
-// beyond the upper χ² quantile of its degrees of freedom (p = 1e-5: a false alarm in about one of
+// beyond the upper χ² quantile of its degrees of freedom (p = 1e-5; and at every epoch within the
+// block beyond the quantile at p = 1e-7, so that a block far off is decided at once: a false alarm in about one of
 // 140 one-hour drives at 1 Hz with two observation types; the filter is inconsistent, not unlucky),
 // the part of S the process noise feeds, H·P⁻·Hᵀ, is scaled
 // so that the predicted power matches the actual (covariance matching):
@@ -33,7 +34,10 @@ struct AdaptiveNoiseConfig {
   bool enabled = true;
   int min_epochs = 5;        // a block is tested when it holds this many innovations
   double window_s = 10;      // and spans this long (blocks do not overlap)
-  double z_trigger = 4.264891;  // standard normal quantile of the χ² test (p = 1e-5 per block)
+  double z_trigger = 4.264891;  // standard normal quantile of the χ² test at a block's end (p = 1e-5)
+  double z_early = 5.199338;    // the same at every epoch within a block (p = 1e-7 per test)
+  int min_epochs_early = 10;    // from this many innovations on (one outlier capped at the gate
+                                // among them stays below that quantile)
   double max_step = 100;     // largest factor of one increase
   double max_scale = 1e6;    // largest q (variance scale; ×1000 on the noise densities)
   double relax_s = 120;      // e-folding time of q back towards 1 while consistent
@@ -61,6 +65,8 @@ class AdaptiveNoise {
   static constexpr int kTypes = 8;
 
  private:
+  struct Window;
+  bool raise(const Window& b);
   struct Window {
     std::deque<AdaptiveSample> s;
     double nis = 0, nu2 = 0, trR = 0, trHPH = 0;

@@ -503,7 +503,8 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     rec.S = H * PHt + o.R;
     rec.nis = nis;
     rec.status = InnovationRecord::used;
-    {  // the adaptive process noise sees every innovation, a rejected one capped at the gate
+    if (!in_bank_) {  // the adaptive process noise sees every innovation, a rejected one capped at the gate
+      // (not in a heading hypothesis: there a wrong heading would buy itself noise to explain its misfit)
       const double cap = nis > cfg_.gate_nis ? cfg_.gate_nis / nis : 1.0;
       adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace()});
     }
