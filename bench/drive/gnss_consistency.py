@@ -118,23 +118,27 @@ def main():
     print("| drive | fixes rejected | forced widenings | re-alignments after the first | mean NIS / expected (pos, vel) "
           "| noise scale max | coefficients within 3σ | mounting within 3σ |")
     print("|---|---|---|---|---|---|---|---|")
-    tot = [0, 0, 0, 0]
     for s in rows:
         nis = ", ".join("%.2f" % s["nis"][k] for k in ("position", "velocity") if k in s["nis"])
         coef = "%d/%d" % s["coef"] if "coef" in s else "—"
         mount = "%d/%d" % s["mount"] if "mount" in s else "—"
-        if "coef" in s:
-            tot[0] += s["coef"][0]; tot[1] += s["coef"][1]; tot[2] += s["mount"][0]; tot[3] += s["mount"][1]
         print("| %s | %.1f %% | %d | %d | %s | %.3g | %s | %s |" % (s["name"], s["rejected_pct"], s["widenings"],
                                                                   s["realign_after_first"], nis, s["q_max"], coef, mount))
-    if tot[1]:
-        worst_rej = max(s["rejected_pct"] for s in rows)
-        nis_all = [v for s in rows for k, v in s["nis"].items() if k in ("position", "velocity")]
-        print("\nSimulated drives: coefficients within 3σ %d/%d (%.1f %%), mounting %d/%d (%.1f %%); fixes rejected at most "
-              "%.1f %%; forced widenings %d; re-alignments after the first %d; mean NIS / expected %.2f–%.2f."
-              % (tot[0], tot[1], 100.0 * tot[0] / tot[1], tot[2], tot[3], 100.0 * tot[2] / tot[3], worst_rej,
-                 sum(s["widenings"] for s in rows), sum(s["realign_after_first"] for s in rows), min(nis_all), max(nis_all)))
-
+    sim = [s for s in rows if "coef" in s]
+    groups = {}
+    for s in sim:
+        groups.setdefault(s["name"].split(",")[0], []).append(s)
+    if len(groups) > 1:
+        groups["all classes"] = sim
+    for name, g in groups.items():
+        c = [sum(s["coef"][i] for s in g) for i in (0, 1)]
+        m = [sum(s["mount"][i] for s in g) for i in (0, 1)]
+        nis = [v for s in g for k, v in s["nis"].items() if k in ("position", "velocity")]
+        print("\n%s, %d simulated drives: coefficients within 3σ %d/%d (%.1f %%), mounting %d/%d (%.1f %%); fixes "
+              "rejected at most %.1f %%; forced widenings %d; re-alignments after the first %d; mean NIS / expected "
+              "%.2f–%.2f." % (name, len(g), c[0], c[1], 100.0 * c[0] / c[1], m[0], m[1], 100.0 * m[0] / m[1],
+                             max(s["rejected_pct"] for s in g), sum(s["widenings"] for s in g),
+                             sum(s["realign_after_first"] for s in g), min(nis), max(nis)))
 
 if __name__ == "__main__":
     main()
