@@ -8,6 +8,14 @@
 
 namespace calbench::db {
 namespace {
+
+// The QC metric of that name among the imported ones (a test failure when it is missing).
+QcResult find(const std::vector<QcResult>& qc, const std::string& m) {
+  for (const auto& q : qc)
+    if (q.metric == m) return q;
+  ADD_FAILURE() << "no metric " << m;
+  return QcResult{};
+}
 using nlohmann::json;
 
 json block(const std::string& serial, const SensorErrors& e) { return json::parse(test::payload(serial, e)); }
@@ -131,12 +139,6 @@ TEST_F(ImportFixture, FitDriveQcChecksTheResultAgainstTheSetItStartedFrom) {
                                      {{"name", "in-motion"}, {"final_cpe_m", result_m}, {"max_cpe_m", result_m}}})}};
     return parse_inmotion_result(r.dump(), "RESULT.json").qc;
   };
-  const auto find = [](const std::vector<QcResult>& qc, const std::string& m) {
-    for (const auto& q : qc)
-      if (q.metric == m) return q;
-    ADD_FAILURE() << "no metric " << m;
-    return QcResult{};
-  };
   const auto better = qc_of(206.2, 10.1, "out-of-sample (after the fit window)");
   ASSERT_EQ(better.size(), 4u);  // final and largest ΔS of both sets
   const QcResult res = find(better, "sets.in-motion.final_cpe_m");
@@ -185,12 +187,6 @@ TEST_F(ImportFixture, OutageQcFiguresAndTheNeverWorseCheck) {
                                                   {{"name", "input"}, {"per_length", per(2.8, input_60)}},
                                                   {{"name", "in-motion"}, {"per_length", per(2.7, result_60)}}})}}}};
     return parse_inmotion_result(r.dump(), "RESULT.json").qc;
-  };
-  const auto find = [](const std::vector<QcResult>& qc, const std::string& m) {
-    for (const auto& q : qc)
-      if (q.metric == m) return q;
-    ADD_FAILURE() << "no metric " << m;
-    return QcResult{};
   };
   const auto qc = with(19.4, 20.0, 1.0);
   EXPECT_EQ(qc.size(), 3u * 2u * 4u);  // 3 sets x 2 lengths x 4 figures
