@@ -185,6 +185,10 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "course over ground); default reference.csv when present, else gnss.csv")
       ->check(CLI::IsMember({"reference", "gnss"}));
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
+  d->add_option("--series-every", a->series_every_s,
+                "with --series (forward pass): also a row every SECONDS of IMU data between the epochs the filter used "
+                "(the navigation solution through a GNSS outage; default 0: rows at the used epochs only)")
+      ->check(finite_positive());
   d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
   d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
   d->add_option("--prior-gyro-bias", a->prior_gyro_bias_dps,

@@ -24,6 +24,10 @@ struct FitDriveArgs {
   bool obs_given = true;      // false: --obs not given (GNSS aiding then uses pos,vel)
   std::string drift_models;   // MODELS.json (identify --out) or a coefficients.json with drift_models
   bool smooth = false;
+  // > 0: the forward-pass series also gets a row at the first IMU sample every series_every_s
+  // seconds (the navigation solution between fixes, e.g. through a GNSS outage); 0: rows at the
+  // epochs the filter used only.
+  double series_every_s = 0;
   double obs_rate_hz = 10, cov_dt = 0.1;
   // Vehicle constraints (--obs …,nhc,zupt): at most constraint_rate_hz updates a second; their σ
   // (0: InMotionConfig's defaults, 0.1 m/s NHC, 0.01 m/s ZUPT).
