@@ -195,7 +195,9 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
       g.lat_deg = v[G::lat];
       g.lon_deg = v[G::lon];
       g.h_m = v[G::h];
-      g.sigma_h_m = std::hypot(v[G::sigma_n], v[G::sigma_e]) / std::sqrt(2.0);
+      // The horizontal σ per axis (RMS of north and east); equal σ taken as they are, so that an
+      // exported .pos file reads back to the values written (hypot/√2 is off by an ulp).
+      g.sigma_h_m = v[G::sigma_n] == v[G::sigma_e] ? v[G::sigma_n] : std::hypot(v[G::sigma_n], v[G::sigma_e]) / std::sqrt(2.0);
       g.sigma_v_m = v[G::sigma_d];
       // .pos files carry no velocity; RecordingWriter always writes the velocity columns, so it
       // is written as 0 with sigma_vel_m_s = 1e6 (unknown).
