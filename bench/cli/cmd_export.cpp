@@ -25,12 +25,20 @@ const bool registered = add_command(97, [](CLI::App& app) {
                 "start time of KF-GINS, s on the recording clock: its initial state is the first reference epoch (else fix) "
                 "at or after it (default: the first IMU sample)")
       ->check(finite_number(0, 1e9));
+  k->add_option("--standstill", a->standstill_s,
+                "the first SECONDS after the start are a standstill: KF-GINS's initial gyro bias is their mean rate less "
+                "the Earth rate (default 0: bias 0 with the raw-data prior 0.5 deg/s)")
+      ->check(finite_positive());
   k->add_flag("--force", a->force, "overwrite an earlier export in --out");
   k->callback([a] {
     const ExportSummary s = export_kf_gins(*a);
     std::cout << "exported " << s.imu_rows << " IMU rows, " << s.gnss_rows << " GNSS fixes, " << s.truth_rows
               << " reference rows into " << a->out << "; KF-GINS starts at " << s.start_s << " s from the "
-              << (s.init_from_reference ? "reference" : "first fix") << " (run: KF-GINS " << a->out << "/kf-gins.yaml)"
+              << (s.init_from_reference ? "reference" : "first fix");
+    if (a->standstill_s > 0)
+      std::cout << ", initial gyro bias " << s.gyro_bias_dph(0) << ", " << s.gyro_bias_dph(1) << ", " << s.gyro_bias_dph(2)
+                << " deg/h from the standstill";
+    std::cout << " (run: KF-GINS " << a->out << "/kf-gins.yaml)"
               << std::endl;
   });
 });

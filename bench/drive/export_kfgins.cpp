@@ -67,6 +67,14 @@ std::string yaml_string(const std::string& s) {
   return q + "\"";
 }
 
+// A geodetic position in degrees moved by a small NED displacement (m).
+void move_deg(double& lat_deg, double& lon_deg, double& h, const Vec3& d_ned) {
+  double lat = lat_deg * kDeg, lon = lon_deg * kDeg;
+  ins::geodetic_add_ned(lat, lon, h, d_ned);
+  lat_deg = lat / kDeg;
+  lon_deg = lon / kDeg;
+}
+
 // The state KF-GINS starts from: position and velocity of its IMU, attitude of its IMU frame, σ.
 struct Start {
   double t = 0, lat = 0, lon = 0, h = 0;
@@ -99,6 +107,10 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
   StagingFolder staging(out, "exporting");
   const fs::path& tmp = staging.path();
   double t_imu0 = NAN, t_imu1 = NAN;
+  // The opening standstill (--standstill): sums of the increments in the IMU frame over it.
+  Vec3 still_dtheta = Vec3::Zero(), still_f_sum = Vec3::Zero(), still_f_sq = Vec3::Zero();
+  double still_t = 0;
+  long still_n = 0;
   {
     std::ofstream f(tmp / "imu.txt");
     ImuReader r(dir / "imu.csv", meta.imu_rate_hz);
@@ -107,10 +119,20 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
     Line l;
     while (r.next(rec)) {
       const double k = rates ? rec.dt : 1.0;
-      l << rec.t << Vec3(C_mb * (rec.gyro * k)) << Vec3(C_mb * (rec.accel * k));
+      const Vec3 dth = C_mb * (rec.gyro * k), dv = C_mb * (rec.accel * k);
+      l << rec.t << dth << dv;
       l.to(f);
       if (sum.imu_rows++ == 0) t_imu0 = rec.t;
       t_imu1 = rec.t;
+      const double from = a.start_s >= 0 ? a.start_s : t_imu0;
+      if (a.standstill_s > 0 && rec.t - rec.dt >= from - 1e-9 && rec.t <= from + a.standstill_s + 1e-9 && rec.dt > 0) {
+        still_dtheta += dth;
+        still_t += rec.dt;
+        const Vec3 fs = dv / rec.dt;
+        still_f_sum += fs;
+        still_f_sq += fs.cwiseProduct(fs);
+        ++still_n;
+      }
     }
     check_written(f, tmp / "imu.txt");
   }
@@ -144,7 +166,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
         s.sigma_att_deg = Vec3(5, 5, moving ? 10 : 180);
         // The fix is of the antenna (body origin); KF-GINS starts at its IMU: the lever arm in the
         // horizontal plane is turned by the heading only.
-        ins::geodetic_add_ned(s.lat, s.lon, s.h, ins::dcm_from_rpy(s.rpy_deg * kDeg) * lever);
+        move_deg(s.lat, s.lon, s.h, ins::dcm_from_rpy(s.rpy_deg * kDeg) * lever);
         start = s;
       }
     }
@@ -170,7 +192,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
         s.v = row.v_ned;
         s.rpy_deg = row.rpy_deg;
         // KF-GINS's IMU sits at the lever arm from the body origin.
-        ins::geodetic_add_ned(s.lat, s.lon, s.h, ins::dcm_from_rpy(row.rpy_deg * kDeg) * lever);
+        move_deg(s.lat, s.lon, s.h, ins::dcm_from_rpy(row.rpy_deg * kDeg) * lever);
         const double sp = std::isfinite(row.sigma_pos_m) ? row.sigma_pos_m : 0.1;
         const double sv = std::isfinite(row.sigma_vel_m_s) ? row.sigma_vel_m_s : 0.02;
         const double sa = std::isfinite(row.sigma_att_deg) ? row.sigma_att_deg : 0.01;
@@ -192,6 +214,23 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
   // The data-sheet class the filter uses for raw data (noise_spec.hpp, priors.hpp), in KF-GINS units.
   const NoiseSpec n = adis16488a_noise();
   const inmotion::ParameterPriors pri = inmotion::datasheet_priors();
+  Vec3 bg_sigma = pri.gyro_bias / kDegPerHour;
+  if (a.standstill_s > 0) {
+    if (still_n < 10 || still_t < 0.5 * a.standstill_s)
+      throw InputError("--standstill", 0, "", "the recording has too few IMU samples in the " + std::to_string(a.standstill_s) + " s after the start");
+    // A vehicle that moves shows it in the specific force; standing, its spread is the sensor noise.
+    const Vec3 mean = still_f_sum / still_n;
+    const Vec3 sd = (still_f_sq / still_n - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt();
+    if (sd.maxCoeff() > 0.2)
+      throw InputError("--standstill", 0, "", "not a standstill: the specific force varies by " + std::to_string(sd.maxCoeff()) +
+                                                  " m/s² (1σ) over the window (more than 0.2)");
+    const Mat3 C_nb = ins::dcm_from_rpy(start->rpy_deg * kDeg);
+    const Vec3 w_ie_b = C_nb.transpose() * ins::earth_rate_ned_at(start->lat * kDeg);
+    sum.gyro_bias_dph = (still_dtheta / still_t - w_ie_b) / kDegPerHour;
+    const double s = std::hypot(n.gyro.white_density / std::sqrt(still_t), n.gyro.drift_sigma) / kDegPerHour;
+    bg_sigma.setConstant(s);
+  }
+
   const inmotion::StabilityAllowance* allow = inmotion::stability_allowance("ADIS16488A");
   const double mgal = 1e-5;  // m/s² per mGal
   const double tau_h = n.gyro.drift_tau_s / 3600.0;
@@ -217,12 +256,14 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
     << "initpos: " << yaml_vec(Vec3(start->lat, start->lon, start->h)) << "\n"
     << "initvel: " << yaml_vec(start->v) << "\n"
     << "initatt: " << yaml_vec(start->rpy_deg) << "\n"
-    << "initgyrbias: [0, 0, 0]\ninitaccbias: [0, 0, 0]\ninitgyrscale: [0, 0, 0]\ninitaccscale: [0, 0, 0]\n"
+    << "initgyrbias: " << yaml_vec(sum.gyro_bias_dph)
+    << (a.standstill_s > 0 ? "  # mean rate over the opening standstill less the Earth rate\n" : "\n")
+    << "initaccbias: [0, 0, 0]\ninitgyrscale: [0, 0, 0]\ninitaccscale: [0, 0, 0]\n"
     << "initposstd: " << yaml_vec(start->sigma_pos) << "\n"
     << "initvelstd: " << yaml_vec(start->sigma_vel) << "\n"
     << "initattstd: " << yaml_vec(start->sigma_att_deg) << "\n"
     << "# initial sensor-error spread: calbench's raw-data priors (bias, scale = diagonal of M; KF-GINS has no skew state)\n"
-    << "initbgstd: " << yaml_vec(pri.gyro_bias / kDegPerHour) << "\n"
+    << "initbgstd: " << yaml_vec(bg_sigma) << "\n"
     << "initbastd: " << yaml_vec(pri.accel_bias / mgal) << "\n"
     << "initsgstd: " << yaml_vec(pri.gyro_M.diagonal() / kPpm) << "\n"
     << "initsastd: " << yaml_vec(pri.accel_M.diagonal() / kPpm) << "\n"

@@ -8,7 +8,7 @@
 //   gnss.pos      the fixes of gnss.csv (antenna), σ north = σ east = sigma_h_m, σ down = sigma_v_m
 //   truth.nav     reference.csv as it is (reference body origin; attitude of the body frame), week 0
 //   kf-gins.yaml  a starter configuration: initial state at --start from the reference (else the
-//                 first fix), IMU noise and initial sensor-error spread of the data-sheet class,
+//                 first fix), initial gyro bias from an opening standstill when one is named, IMU noise and initial sensor-error spread of the data-sheet class,
 //                 antenna lever arm = −(meta.json lever arm) in the IMU frame, outputpath = FOLDER.
 // The data files carry no comment line (KF-GINS's reader takes every line as numbers).
 // Times are the recording's clock (KF-GINS takes them as seconds of week: it refuses times beyond
@@ -16,17 +16,25 @@
 #pragma once
 #include <string>
 
+#include "common/sensor_model.hpp"
+
 namespace calbench {
 
 struct ExportKfGinsArgs {
   std::string dir, out;
   double start_s = -1;  // < 0: the first reference epoch (else fix) at or after the first IMU sample
+  // > 0: the first standstill_s seconds after the start are a standstill: KF-GINS's initial gyro
+  // bias is their mean rate less the Earth rate (in the IMU frame at the initial attitude), its σ
+  // the white noise over the window combined with the in-run instability. 0: bias 0, σ the
+  // raw-data prior.
+  double standstill_s = 0;
   bool force = false;
 };
 
 struct ExportSummary {
   std::size_t imu_rows = 0, gnss_rows = 0, truth_rows = 0;
   double start_s = 0;
+  Vec3 gyro_bias_dph = Vec3::Zero();  // initial gyro bias written (standstill_s > 0)
   bool init_from_reference = false;
 };
 
