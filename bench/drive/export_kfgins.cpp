@@ -67,6 +67,17 @@ std::string yaml_string(const std::string& s) {
   return q + "\"";
 }
 
+// The rows below are written in the column order of kfgins_columns.hpp (the reader's positions).
+namespace I = kfgins::imu_col;
+namespace G = kfgins::gnss_col;
+namespace N = kfgins::nav_col;
+static_assert(I::t == 0 && I::dtheta == 1 && I::dvel == 4 && I::count == 7, "imu.txt: t, dtheta xyz, dvel xyz");
+static_assert(G::t == 0 && G::lat == 1 && G::lon == 2 && G::h == 3 && G::sigma_n == 4 && G::sigma_e == 5 && G::sigma_d == 6 &&
+                  G::count == 7,
+              "gnss.pos: t, lat, lon, h, sigma n e d");
+static_assert(N::week == 0 && N::t == 1 && N::lat == 2 && N::lon == 3 && N::h == 4 && N::vel == 5 && N::rpy == 8 && N::count == 11,
+              "truth.nav: week, t, lat, lon, h, v ned, roll pitch yaw");
+
 // A geodetic position in degrees moved by a small NED displacement (m).
 void move_deg(double& lat_deg, double& lon_deg, double& h, const Vec3& d_ned) {
   double lat = lat_deg * kDeg, lon = lon_deg * kDeg;
@@ -243,7 +254,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
     << "imupath: " << yaml_string((final_dir / "imu.txt").string()) << "\n"
     << "gnsspath: " << yaml_string((final_dir / "gnss.pos").string()) << "\n"
     << "outputpath: " << yaml_string(final_dir.string()) << "\n"
-    << "imudatalen: 7\n"
+    << "imudatalen: " << I::count << "\n"
     << "imudatarate: " << std::lround(meta.imu_rate_hz) << "\n";
   Line l;
   auto put = [&](const char* key, double v) {
