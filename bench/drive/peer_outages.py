@@ -16,8 +16,9 @@ error), at the reference epochs (50 Hz) inside each window. Truth only scores: n
 (KF-GINS's starter configuration takes its initial state from reference.csv at the start, see
 docs/validation/peer-kf-gins.md).
 
-Usage: bench/drive/peer_outages.py --kf-gins /path/to/KF-GINS [--seeds 1,2,3,4,5]
-       [--route bench/routes/rtk_town.toml] [--outages 60:90,95:125,195:225] [--work DIR]
+Usage: bench/drive/peer_outages.py --kf-gins /path/to/KF-GINS [--peer "i2Nav-WHU/KF-GINS COMMIT"]
+       [--seeds 1,2,3,4,5] [--route bench/routes/rtk_town.toml] [--outages 60:90,95:125,195:225]
+       [--standstill 25] [--work DIR]
 Environment: CALBENCH (the executable; default build/calbench).
 """
 import argparse
@@ -166,6 +167,7 @@ def main():
     ap.add_argument("--outages", default="60:90,95:125,195:225", help="outage windows T0:T1 in s (fixes removed)")
     ap.add_argument("--standstill", type=float, default=25.0,
                     help="seconds of the opening standstill for the second KF-GINS run's gyro bias (default 25; rtk_town stands 30 s)")
+    ap.add_argument("--peer", default="KF-GINS", help="how the KF-GINS build is named in the output, e.g. its commit")
     ap.add_argument("--work", help="working folder to keep (default: a temporary one, removed)")
     a = ap.parse_args()
     exe = os.environ.get("CALBENCH", "build/calbench")
@@ -212,6 +214,8 @@ def main():
     print("Route `%s`, seeds %s, `--truth random` (ADIS16488A class, raw: no coefficient set), GNSS aiding only." % (route, a.seeds))
     print("Outages: the fixes with T0 < t <= T1 removed from gnss.csv for both tools. Error: largest horizontal")
     print("distance of the antenna (reference body origin) from reference.csv during the window, m.")
+    print("KF-GINS (%s) cannot align itself: `export kf-gins` starts it from reference.csv's state at the first" % a.peer)
+    print("epoch; calbench levels itself on the opening standstill and finds its heading from the fixes.")
     print()
     names = ("calbench, pos+vel fixes", "calbench, position only", "KF-GINS, position",
              "KF-GINS, position, gyro bias from the opening %g s" % a.standstill)
