@@ -222,6 +222,10 @@ const bool registered = add_command(31, [](CLI::App& app) {
               "do not measure the white noise on the recording's standstills (default: measured, and used where it "
               "differs from the class by more than 2x)");
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
+  d->add_option("--series-every", a->series_every_s,
+                "with --series (forward pass): also a row every SECONDS of IMU data between the epochs the filter used "
+                "(the navigation solution through a GNSS outage; default 0: rows at the used epochs only)")
+      ->check(finite_positive());
   d->add_flag("--smooth", a->smooth, "Rauch-Tung-Striebel backward pass (memory ~21 kB per filter epoch)");
   d->add_option("--window", a->window, "fit only on T0:T1 seconds of the recording (either may be empty)");
   d->add_option("--prior-gyro-bias", a->prior_gyro_bias_dps,

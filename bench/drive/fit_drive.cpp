@@ -573,6 +573,15 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     if (a.sigma_vel > 0) r.sigma_vel = a.sigma_vel;
     if (a.sigma_att_deg > 0) r.sigma_att = a.sigma_att_deg * kDeg;
   };
+  // One series row of the filter's state now (reading it leaves the filter as it was).
+  auto series_row = [&](double t) {
+    Filter::Vec x, s;
+    Filter::Vec6 tx, ts;
+    f->state_si(x, s);
+    f->total_drift_si(tx, ts);
+    series->row_si(t, f->layout(), x, s, ts);
+  };
+  double next_series_t = -std::numeric_limits<double>::infinity();
   double t_first = 0, t_last = 0, t_data_end = 0;
   long n_imu = 0;
   DriveStream::Event e;
@@ -599,13 +608,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
         for (int k = 0; k < 3; ++k)
           if (used[k]) a.on_innovation(k, f->last_innovation(k));
       }
-      if (took && series) {
-        Filter::Vec x, s;
-        Filter::Vec6 tx, ts;
-        f->state_si(x, s);
-        f->total_drift_si(tx, ts);
-        series->row_si(e.t, f->layout(), x, s, ts);
-      }
+      if (took && series) series_row(e.t);
     } else if (f) {
       double dt = e.dt;
       Vec3 dth = e.dtheta, dv = e.dv;
@@ -619,6 +622,10 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
       f->imu(e.t, dth, dv, dt);
       ++n_imu;
       t_last = e.t;
+      if (series && a.series_every_s > 0 && e.t >= next_series_t - 1e-9) {
+        series_row(e.t);
+        next_series_t = std::floor(e.t / a.series_every_s + 1e-9) * a.series_every_s + a.series_every_s;
+      }
     }
   }
   if (!f) throw InputError(a.dir, 0, gnss ? "gnss.csv" : "reference.csv", gnss ? "no GNSS fix inside the fit window" : "no reference epoch inside the fit window");

@@ -30,6 +30,10 @@ struct FitDriveArgs {
   // Measure the white noise on the recording's standstills and use it where it differs from the
   // class by more than 2x (docs/in-motion.md, "White noise measured on standstills").
   bool measure_noise = true;
+  // > 0: the forward-pass series also gets a row at the first IMU sample every series_every_s
+  // seconds (the navigation solution between fixes, e.g. through a GNSS outage); 0: rows at the
+  // epochs the filter used only.
+  double series_every_s = 0;
   double obs_rate_hz = 10, cov_dt = 0.1;
   // Vehicle constraints (--obs …,nhc,zupt): at most constraint_rate_hz updates a second; their σ
   // (0: InMotionConfig's defaults, 0.1 m/s NHC, 0.01 m/s ZUPT).

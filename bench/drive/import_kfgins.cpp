@@ -8,6 +8,7 @@
 #include <fstream>
 #include <vector>
 
+#include "bench/drive/kfgins_columns.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
@@ -16,6 +17,10 @@
 
 namespace calbench {
 namespace {
+
+namespace I = kfgins::imu_col;
+namespace G = kfgins::gnss_col;
+namespace N = kfgins::nav_col;
 
 // Reads whitespace-separated numeric rows; '#' and '%' start comments; blank lines skipped.
 class TextRows {
@@ -91,13 +96,13 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   // IMU rate: given, or the median interval of the first rows.
   double rate = a.rate_hz;
   if (!(rate > 0)) {
-    TextRows r(a.imu, 7);
+    TextRows r(a.imu, I::count);
     std::vector<double> dts;
     double last = 0;
     bool first = true;
     while (dts.size() < 1000 && r.next(v)) {
-      if (!first) dts.push_back(v[0] - last);
-      check_time(r, v[0], last, first);
+      if (!first) dts.push_back(v[I::t] - last);
+      check_time(r, v[I::t], last, first);
     }
     if (dts.empty()) throw InputError(a.imu, 0, "", "needs at least two IMU rows");
     std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
@@ -132,38 +137,38 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
                      std::vector<double>& v) {
   RecordingWriter w(out, meta, ImuForm::increments, false, false, !a.gnss.empty());
   {
-    TextRows r(a.imu, 7);
+    TextRows r(a.imu, I::count);
     double last = 0;
     bool first = true;
     while (r.next(v)) {
-      check_time(r, v[0], last, first);
-      for (std::size_t k = 1; k < 7; ++k) check_range(r, k, v[k], -1e6, 1e6, "increment");
+      check_time(r, v[I::t], last, first);
+      for (std::size_t k = I::dtheta; k < I::count; ++k) check_range(r, k, v[k], -1e6, 1e6, "increment");
       ImuRecord rec;
-      rec.t = v[0];
-      rec.gyro = Vec3(v[1], v[2], v[3]);
-      rec.accel = Vec3(v[4], v[5], v[6]);
+      rec.t = v[I::t];
+      rec.gyro = Vec3(v[I::dtheta], v[I::dtheta + 1], v[I::dtheta + 2]);
+      rec.accel = Vec3(v[I::dvel], v[I::dvel + 1], v[I::dvel + 2]);
       w.imu(rec);
       ++sum.imu_rows;
     }
   }
   {
-    TextRows r(a.truth, 11);
+    TextRows r(a.truth, N::count);
     double last = 0;
     bool first = true;
     while (r.next(v)) {
-      check_time(r, v[1], last, first);
-      check_range(r, 2, v[2], -90, 90, "latitude (deg)");
-      check_range(r, 3, v[3], -360, 360, "longitude (deg)");
-      check_range(r, 4, v[4], -1e5, 1e7, "height (m)");
-      for (std::size_t k = 5; k < 8; ++k) check_range(r, k, v[k], -1e4, 1e4, "velocity (m/s)");
-      for (std::size_t k = 8; k < 11; ++k) check_range(r, k, v[k], -720, 720, "attitude angle (deg)");
+      check_time(r, v[N::t], last, first);
+      check_range(r, N::lat, v[N::lat], -90, 90, "latitude (deg)");
+      check_range(r, N::lon, v[N::lon], -360, 360, "longitude (deg)");
+      check_range(r, N::h, v[N::h], -1e5, 1e7, "height (m)");
+      for (std::size_t k = N::vel; k < N::vel + 3; ++k) check_range(r, k, v[k], -1e4, 1e4, "velocity (m/s)");
+      for (std::size_t k = N::rpy; k < N::rpy + 3; ++k) check_range(r, k, v[k], -720, 720, "attitude angle (deg)");
       DriveRefRow row;
-      row.t = v[1];
-      row.lat_deg = v[2];
-      row.lon_deg = v[3];
-      row.h_m = v[4];
-      row.v_ned = Vec3(v[5], v[6], v[7]);
-      row.rpy_deg = Vec3(v[8], v[9], v[10]);
+      row.t = v[N::t];
+      row.lat_deg = v[N::lat];
+      row.lon_deg = v[N::lon];
+      row.h_m = v[N::h];
+      row.v_ned = Vec3(v[N::vel], v[N::vel + 1], v[N::vel + 2]);
+      row.rpy_deg = Vec3(v[N::rpy], v[N::rpy + 1], v[N::rpy + 2]);
       row.sigma_pos_m = a.ref_sigma_pos_m;
       row.sigma_vel_m_s = a.ref_sigma_vel_m_s;
       row.sigma_att_deg = a.ref_sigma_att_deg;
@@ -176,22 +181,24 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
   // A file without data rows would give a recording calbench's readers refuse ("no data rows").
   if (sum.imu_rows == 0) throw InputError(a.imu, 0, "", "no data rows (IMU increments: t, dθ x/y/z, dv x/y/z)");
   if (!a.gnss.empty()) {
-    TextRows r(a.gnss, 7);
+    TextRows r(a.gnss, G::count);
     double last = 0;
     bool first = true;
     while (r.next(v)) {
-      check_time(r, v[0], last, first);
-      check_range(r, 1, v[1], -90, 90, "latitude (deg)");
-      check_range(r, 2, v[2], -360, 360, "longitude (deg)");
-      check_range(r, 3, v[3], -1e5, 1e7, "height (m)");
-      for (std::size_t k = 4; k < 7; ++k) check_range(r, k, v[k], 0, 1e6, "standard deviation (m)");
+      check_time(r, v[G::t], last, first);
+      check_range(r, G::lat, v[G::lat], -90, 90, "latitude (deg)");
+      check_range(r, G::lon, v[G::lon], -360, 360, "longitude (deg)");
+      check_range(r, G::h, v[G::h], -1e5, 1e7, "height (m)");
+      for (std::size_t k = G::sigma_n; k <= G::sigma_d; ++k) check_range(r, k, v[k], 0, 1e6, "standard deviation (m)");
       GnssRow g;
-      g.t = v[0];
-      g.lat_deg = v[1];
-      g.lon_deg = v[2];
-      g.h_m = v[3];
-      g.sigma_h_m = std::hypot(v[4], v[5]) / std::sqrt(2.0);
-      g.sigma_v_m = v[6];
+      g.t = v[G::t];
+      g.lat_deg = v[G::lat];
+      g.lon_deg = v[G::lon];
+      g.h_m = v[G::h];
+      // The horizontal σ per axis (RMS of north and east); equal σ taken as they are, so that an
+      // exported .pos file reads back to the values written (hypot/√2 is off by an ulp).
+      g.sigma_h_m = v[G::sigma_n] == v[G::sigma_e] ? v[G::sigma_n] : std::hypot(v[G::sigma_n], v[G::sigma_e]) / std::sqrt(2.0);
+      g.sigma_v_m = v[G::sigma_d];
       // .pos files carry no velocity; RecordingWriter always writes the velocity columns, so it
       // is written as 0 with sigma_vel_m_s = 1e6 (unknown).
       g.sigma_vel_m_s = 1e6;

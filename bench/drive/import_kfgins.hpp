@@ -2,7 +2,8 @@
 // recording interchange format (kind "drive"):
 //   IMU file:  t_s, Δθx, Δθy, Δθz (rad), Δvx, Δvy, Δvz (m/s)  — increments, IMU = body axes
 //   truth.nav: week, t_s, lat_deg, lon_deg, h_m, vn, ve, vd (m/s), roll, pitch, yaw (deg)
-//   GNSS .pos: t_s, lat_deg, lon_deg, h_m, σn, σe, σu (m)
+//   GNSS .pos: t_s, lat_deg, lon_deg, h_m, σn, σe, σd (m)
+// Column positions: kfgins_columns.hpp (shared with the writer, export_kfgins.hpp).
 // Extra columns are ignored. Every defect is an InputError with file, line and column.
 #pragma once
 #include <string>

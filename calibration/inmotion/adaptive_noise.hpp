@@ -31,7 +31,9 @@
 namespace calbench::inmotion {
 
 struct AdaptiveNoiseConfig {
-  bool enabled = true;
+  // Off unless asked: `fit drive --adaptive auto` turns it on with GNSS aiding; in-memory users of
+  // the filter (tests, benchmarks, diagnose) get the non-adaptive filter.
+  bool enabled = false;
   int min_epochs = 5;        // a block is tested when it holds this many innovations
   double window_s = 10;      // and spans this long (blocks do not overlap)
   double z_trigger = 4.264891;  // standard normal quantile of the χ² test at a block's end (p = 1e-5)

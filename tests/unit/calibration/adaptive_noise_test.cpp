@@ -12,6 +12,12 @@ namespace {
 
 // Innovations of 3 components at 10 Hz with tr R = 3·r, tr(HPHᵀ) = 3·p and actual covariance
 // (k·p + r)·I: k = 1 is a consistent filter, k > 1 one whose process noise is too small.
+AdaptiveNoiseConfig on() {
+  AdaptiveNoiseConfig c;
+  c.enabled = true;
+  return c;
+}
+
 struct Stream {
   std::mt19937_64 rng;
   double t = 0, r = 0.5, p = 0.5;
@@ -37,7 +43,7 @@ struct Stream {
 TEST(AdaptiveNoise, ConsistentInnovationsLeaveTheNoiseAlone) {
   // 1000 blocks of 10 s (about 28 h at 10 Hz) drawn from the model itself: q stays 1.
   for (unsigned seed : {1u, 2u, 3u}) {
-    AdaptiveNoise a;
+    AdaptiveNoise a(on());
     Stream s(seed);
     for (int i = 0; i < 100000; ++i) a.add(0, s.next(1.0));
     EXPECT_EQ(a.scale(), 1.0) << "seed " << seed;
@@ -48,7 +54,7 @@ TEST(AdaptiveNoise, ConsistentInnovationsLeaveTheNoiseAlone) {
 TEST(AdaptiveNoise, TooLittleProcessNoiseIsMatched) {
   // The actual HPHᵀ part is 4x the predicted: the first increase is the covariance-matching
   // estimate of that factor (a block of 100 epochs: within 25 %), and it happens in the first block.
-  AdaptiveNoise a;
+  AdaptiveNoise a(on());
   Stream s(7);
   double first = 0;
   int at = -1;
@@ -64,7 +70,7 @@ TEST(AdaptiveNoise, TooLittleProcessNoiseIsMatched) {
 
 TEST(AdaptiveNoise, OneOutlierMovesNothingARunOfRejectionsDoes) {
   const double gate = 50;
-  AdaptiveNoise a;
+  AdaptiveNoise a(on());
   Stream s(11);
   for (int i = 0; i < 300; ++i) a.add(0, s.next(1.0, gate));
   // One wild innovation (NIS 1e6, capped at the gate as the filter passes rejected ones).
@@ -83,7 +89,7 @@ TEST(AdaptiveNoise, OneOutlierMovesNothingARunOfRejectionsDoes) {
 }
 
 TEST(AdaptiveNoise, RelaxesOnceConsistentAndTypesAreTestedApart) {
-  AdaptiveNoise a;
+  AdaptiveNoise a(on());
   Stream s(5), v(6);
   for (int i = 0; i < 200; ++i) a.add(0, s.next(9.0));
   const double raised = a.scale();
