@@ -5,9 +5,11 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "bench/drive/kfgins_columns.hpp"
 #include "bench/io/hdf5_recording.hpp"
+#include "bench/io/imu_class_toml.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"
@@ -223,8 +225,17 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
   sum.init_from_reference = has_ref;
 
   // The data-sheet class the filter uses for raw data (noise_spec.hpp, priors.hpp), in KF-GINS units.
-  const NoiseSpec n = adis16488a_noise();
-  const inmotion::ParameterPriors pri = inmotion::datasheet_priors();
+  // The recording's device class (meta.json device.model), or the ADIS16488A class where the model
+  // is none of the built-in classes (the export does not refuse a recording the fit would: the
+  // YAML says which class its noise figures are of).
+  const ImuClass* cls = nullptr;
+  try {
+    cls = &builtin_imu_class(meta.device.model);
+  } catch (const std::out_of_range&) {
+    cls = &builtin_imu_class("ADIS16488A");
+  }
+  const NoiseSpec n = cls->noise;
+  const inmotion::ParameterPriors pri = cls->priors;
   Vec3 bg_sigma = pri.gyro_bias / kDegPerHour;
   if (a.standstill_s > 0) {
     if (still_n < 10 || still_t < 0.5 * a.standstill_s)
@@ -242,7 +253,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
     bg_sigma.setConstant(s);
   }
 
-  const inmotion::StabilityAllowance* allow = inmotion::stability_allowance("ADIS16488A");
+  const inmotion::StabilityAllowance* allow = &cls->allowance;
   const double mgal = 1e-5;  // m/s² per mGal
   const double tau_h = n.gyro.drift_tau_s / 3600.0;
   std::ostringstream y;
@@ -250,7 +261,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
     << "# IMU frame = calbench's reference body frame (forward-right-down) through the nominal mounting\n"
     << "# rpy " << yaml_vec(meta.mounting->rpy_deg) << " deg of meta.json; initial state "
     << (has_ref ? "from reference.csv (position moved to the IMU by the lever arm)" : "from the first fix (level; heading from its velocity)")
-    << "\n# IMU noise: ADIS16488A data-sheet class (the class calbench uses for raw data)\n"
+    << "\n# IMU noise: " << cls->name << " data-sheet class (" << cls->file << ")\n"
     << "imupath: " << yaml_string((final_dir / "imu.txt").string()) << "\n"
     << "gnsspath: " << yaml_string((final_dir / "gnss.pos").string()) << "\n"
     << "outputpath: " << yaml_string(final_dir.string()) << "\n"
