@@ -45,6 +45,20 @@ void print_summary(const nlohmann::json& j) {
             << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
+  if (j.contains("lever_arm_m")) {
+    const auto& l = j["lever_arm_m"];
+    std::cout << "  lever arm        " << vec(l["value"], l["sigma"], 1.0, "m") << " (nominal " << l["nominal"][0].get<double>() << ", "
+              << l["nominal"][1].get<double>() << ", " << l["nominal"][2].get<double>() << "; prior sigma " << l["prior"].get<double>()
+              << " m; observable xyz " << (l["observable"][0].get<bool>() ? "y" : "n") << (l["observable"][1].get<bool>() ? "y" : "n")
+              << (l["observable"][2].get<bool>() ? "y" : "n") << ")\n";
+  }
+  if (j.contains("time_offset_s")) {
+    const auto& t = j["time_offset_s"];
+    std::cout << "  time offset      " << std::fixed << std::setprecision(2) << t["value"].get<double>() * 1e3 << " ± "
+              << t["sigma"].get<double>() * 1e3 << std::defaultfloat << std::setprecision(6) << " ms (prior sigma "
+              << t["prior"].get<double>() * 1e3 << " ms; " << (t["observable"].get<bool>() ? "observable" : "not observable: sigma above half the prior")
+              << ")\n";
+  }
   if (j.contains("device_class")) {
     const auto& dc = j["device_class"];
     std::cout << "  device class     " << dc["name"].get<std::string>() << " (" << dc["grade"].get<std::string>() << "; "
@@ -245,6 +259,16 @@ const bool registered = add_command(31, [](CLI::App& app) {
                       def.device_class + " " + fmt_default(def.*al.field / al.unit) + ")")
         ->check(finite_nonneg)
         ->group("Priors with --coeffs (prior = hypot(set sigma, allowance))");
+  d->add_option("--estimate", a->estimate,
+                 "optional blocks to estimate, comma list: lever (the GNSS antenna lever arm, 3 states: meta.json "
+                 "mounting.lever_arm_m plus a correction with prior sigma --lever-arm-sigma) and time (the IMU-GNSS time "
+                 "offset, 1 state, prior sigma --time-offset-sigma); default none (the nominal lever arm and the time "
+                 "stamps are exact). RESULT.json lever_arm_m and time_offset_s (docs/in-motion.md, \"Lever arm and time offset\")")
+      ->option_text("lever,time");
+  d->add_option("--lever-arm-sigma", a->lever_arm_sigma, "with --estimate lever: prior 1-sigma of the lever-arm correction per axis, m (default 0.1)")
+      ->check(finite_pos);
+  d->add_option("--time-offset-sigma", a->time_offset_sigma, "with --estimate time: prior 1-sigma of the time offset, s (default 0.02)")
+      ->check(finite_pos);
   d->add_option("--obs-rate", a->obs_rate_hz, "reference epochs used per second (default 10)")->check(finite_pos);
   d->add_option("--constraint-rate", a->constraint_rate_hz,
                 "with --obs ...,nhc and/or zupt: at most this many constraint updates per second, taken from the IMU "

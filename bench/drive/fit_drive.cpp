@@ -501,6 +501,19 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
   else if (a.covariance != "structured")
     throw InputError("--covariance", 0, "", "expected structured, joseph or dense, got '" + a.covariance + "'");
   cfg.store_for_smoother = a.smooth;
+  {  // the antenna blocks (--estimate)
+    std::stringstream ss(a.estimate);
+    std::string tok;
+    while (std::getline(ss, tok, ',')) {
+      if (tok == "lever") cfg.estimate_lever_arm = true;
+      else if (tok == "time") cfg.estimate_time_offset = true;
+      else throw InputError("--estimate", 0, "", "unknown block '" + tok + "' (lever, time)");
+    }
+    for (const auto& [opt, v] : {std::pair{"--lever-arm-sigma", a.lever_arm_sigma}, std::pair{"--time-offset-sigma", a.time_offset_sigma}})
+      if (!(v > 0) || !std::isfinite(v)) throw InputError(opt, 0, "", "expected a finite sigma > 0");
+    cfg.lever_arm_sigma = a.lever_arm_sigma;
+    cfg.time_offset_sigma = a.time_offset_sigma;
+  }
   if (a.adaptive != "auto" && a.adaptive != "on" && a.adaptive != "off")
     throw InputError("--adaptive", 0, "", "expected auto, on or off, got '" + a.adaptive + "'");
   cfg.adaptive.enabled = a.adaptive == "on" || (a.adaptive == "auto" && gnss);
@@ -754,6 +767,24 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   f->mounting_rpy(mr, ms);
   j["mounting_rpy_deg"] = {{"value", to_json(Vec3(mr / kDeg))}, {"sigma", to_json(Vec3(ms / kDeg))},
                            {"nominal", to_json(meta.mounting->rpy_deg)}, {"lever_arm_m", to_json(meta.mounting->lever_arm_m)}};
+  // The antenna blocks (--estimate): estimate with σ and prior; observable when σ < prior / 2.
+  {
+    Eigen::VectorXd x, sg;
+    f->state_si(x, sg);
+    if (const int o = f->layout().L.offset(static_cast<int>(inmotion::kLeverArmBlock)); o >= 0) {
+      const Vec3 d = x.segment<3>(o), s3 = sg.segment<3>(o);
+      nlohmann::json obs = nlohmann::json::array();
+      for (int i = 0; i < 3; ++i) obs.push_back(s3(i) < 0.5 * cfg.lever_arm_sigma);
+      j["lever_arm_m"] = {{"value", to_json(Vec3(meta.mounting->lever_arm_m + d))}, {"sigma", to_json(s3)},
+                          {"prior", cfg.lever_arm_sigma}, {"nominal", to_json(meta.mounting->lever_arm_m)},
+                          {"correction", to_json(d)}, {"observable", obs},
+                          {"how", "MEMS origin relative to the reference body origin (the GNSS antenna), reference body axes, "
+                                  "as meta.json mounting.lever_arm_m; observable: sigma below half the prior"}};
+    }
+    if (const int o = f->layout().L.offset(static_cast<int>(inmotion::kTimeOffsetBlock)); o >= 0)
+      j["time_offset_s"] = {{"value", x(o)}, {"sigma", sg(o)}, {"prior", cfg.time_offset_sigma}, {"observable", sg(o) < 0.5 * cfg.time_offset_sigma},
+                            {"how", "aiding time stamp minus the true time of the fix (the fix stamped t describes the antenna at t - value)"}};
+  }
   // The in-run drift at the end of the window (shaping-filter states), and the σ of the total
   // gyro drift (constant + in-run), which is what the drive determines best.
   j["in_run_drift_end"] = {{"gyro_rad_s", to_json(f->gyro_drift())}, {"accel_m_s2", to_json(f->accel_drift())},

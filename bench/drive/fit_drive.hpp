@@ -43,6 +43,11 @@ struct FitDriveArgs {
   // with GNSS aiding, off against a reference INS (whose inconsistencies are findings for diagnose).
   std::string adaptive = "auto";
   double prior_gyro_bias_dps = 0, prior_accel_bias_mg = 0;  // > 0: override the bias priors
+  // Antenna blocks (--estimate lever,time; docs/in-motion.md "Lever arm and time offset"): "" none,
+  // else a comma list of lever (the lever arm, prior σ lever_arm_sigma m per axis) and time (the
+  // IMU–GNSS time offset, prior σ time_offset_sigma s).
+  std::string estimate;
+  double lever_arm_sigma = 0.1, time_offset_sigma = 0.02;
   // Stability allowances (how far a parameter may move between the input set's calibration and
   // the drive, 1σ; calibration/inmotion/priors.hpp); NaN: the device class's default.
   struct Allowances {

@@ -201,6 +201,7 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
                      first.sigma_att > 0 ? first.sigma_att : cfg_.ref_sigma_att};
   for (const BlockSpec* b : layout_.specs)
     if (b->init) b->init(in, layout_.L, layout_.L.offset(static_cast<int>(b->id)), P_);
+  if (first.has_att) position_offset_blocks(C_nb, first.v_ned);  // ℓ̂ = 0, δt̂ = 0: the covariance only
   if (!first.has_att) {
     // A GNSS fix: no attitude. The MEMS is levelled from its own specific force over the first
     // align_level_s; the heading is re-initialised by the course over ground.
@@ -238,8 +239,10 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
     return;
   }
   const Mat3 C0 = nav_.state().C_nb();
+  const Vec3 v0 = nav_.state().v;
   nav_.update(dth, dv, dt);
   w_last_ = dth / dt;
+  a_last_ = (nav_.state().v - v0) / dt;
   acc_.add(C0, Ag_, Aa_, w_last_, dv / dt, dt);
   nav_.state().t = t;
   if (acc_.T >= cfg_.cov_dt) {
@@ -412,6 +415,7 @@ ObsContext InMotionFilter::obs_context() const {
   c.gyro_M = off(Block::Mg);
   const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
   c.w_eb_b = n_.C_mb * w_last_ - w_ie_b;
+  c.a_ned = a_last_;
   return c;
 }
 
@@ -490,8 +494,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     Eigen::Matrix<double, 3, Eigen::Dynamic> H = o.H;
     Vec3 z = o.z;
     // Blocks with an observation part of their own (declared outside eqs 13–15).
-    for (const BlockSpec* b : layout_.specs)
-      if (b->observe) b->observe(BlockObsInput{c, r}, n_, type, layout_.L.offset(static_cast<int>(b->id)), H, z);
+    observe_blocks(layout_, BlockObsInput{c, r}, n_, type, H, z);
     const Vec3 nu = z - H * dx;
     Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = pht<3>(H);
     Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
@@ -608,6 +611,29 @@ void InMotionFilter::finish_levelling(const RefObs& r) {
   align_.level_gyro_mean = (lvl_dth_ / lvl_T_).norm();
   lvl_snap_ = Snapshot{P_, n_};
   phase_ = Phase::heading_unknown;
+}
+
+Vec3 InMotionFilter::position_offset_blocks(const Mat3& C_nb, const Vec3& v) {
+  Vec3 d = Vec3::Zero();
+  Mat G;
+  for (const BlockSpec* b : layout_.specs) {
+    if (!b->position_offset) continue;
+    const int o = layout_.L.offset(static_cast<int>(b->id));
+    Mat A;
+    b->position_offset(n_, C_nb, v, o, A);
+    if (G.size() == 0) G = Mat::Zero(3, N_);
+    G.middleCols(o, b->size) = A;
+    d += A * n_.extra.segment(o, b->size);
+  }
+  if (G.size() == 0) return d;
+  // r = r₀ + G·x: Cov(r, x) = G·P(·, x) (P(blocks, r) = 0 before), Cov(r, r) = P₀ + G·P·Gᵀ.
+  const Mat3 Prr = P_.block<3, 3>(kPos, kPos) + G * P_ * G.transpose();
+  const Mat rows = G * P_;
+  P_.middleRows<3>(kPos) += rows;
+  P_.middleCols<3>(kPos) = P_.middleRows<3>(kPos).transpose();
+  P_.block<3, 3>(kPos, kPos) = Prr;
+  p_symmetric_ = false;
+  return d;
 }
 
 bool InMotionFilter::moving() const {
@@ -780,6 +806,7 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
     P_.col(kVel + i).setZero();
     P_(kVel + i, kVel + i) = i < 2 ? sv * sv : (fix_vel ? sv * sv : 0.3 * 0.3);
   }
+  ins::geodetic_add_ned(s.lat, s.lon, s.h, position_offset_blocks(C_nb, s.v));
   for (ConsistencyStats& st : stats_) st.rejected_since = -1;
   last_realign_t_ = r.t;
   recoveries_.push_back({r.t, reason,

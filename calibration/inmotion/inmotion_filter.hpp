@@ -126,6 +126,12 @@ struct InMotionConfig {
   // taken as exact), and blocks declared outside the filter's files, appended to the layout.
   bool mounting = true;
   std::vector<BlockSpec> extra_blocks;
+  // The antenna blocks (antenna_blocks.cpp; docs/in-motion.md, "Lever arm and time offset"): the
+  // GNSS antenna's lever-arm correction (3 states, prior σ lever_arm_sigma per axis, m) and the
+  // IMU–GNSS time offset (1 state, prior σ time_offset_sigma, s). Off: the nominal lever arm and
+  // time stamps are taken as exact.
+  bool estimate_lever_arm = false, estimate_time_offset = false;
+  double lever_arm_sigma = 0.1, time_offset_sigma = 0.02;
   // Covariance arithmetic (docs/in-motion.md, "Covariance arithmetic"). structured (default): the
   // propagation touches only the rows that move (the navigation and drift-shaping states; the
   // constant parameters have identity transitions and no process noise, so their block of P stays
@@ -342,6 +348,10 @@ class InMotionFilter {
   bool moving() const;
   void realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how);
   void finish_levelling(const RefObs& r);
+  // The blocks' part of a MEMS position just set from a fix (BlockSpec::position_offset): returns
+  // the NED offset to add; the position rows of P, uncorrelated with everything before the call,
+  // become those of fix error + Σ A·δx.
+  Vec3 position_offset_blocks(const Mat3& C_nb, const Vec3& v);
 
   InMotionConfig cfg_;
   StateLayout layout_;
@@ -360,6 +370,7 @@ class InMotionFilter {
   bool p_symmetric_ = false;  // P_ known to equal its transpose bit for bit (set where that is so)
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
+  Vec3 a_last_ = Vec3::Zero();  // NED acceleration of the MEMS over the last IMU interval
   double last_obs_t_ = -1e300;
   ConsistencyStats stats_[3];
   // Vehicle constraints: stats of nhc, zupt, zero rate; the standstill detector and what it found;

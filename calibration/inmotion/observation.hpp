@@ -36,6 +36,7 @@ struct ObsContext {
   Mat3 C_mb = Mat3::Identity();         // current mounting estimate
   Vec3 lever = Vec3::Zero();
   Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes
+  Vec3 a_ned = Vec3::Zero();            // acceleration (NED) over the last IMU interval (the time-offset block)
   // The filter's layout: its size and where the mounting block is (−1: not estimated).
   int n_states = kStates;
   int mount = kMount;

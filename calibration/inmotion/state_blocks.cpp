@@ -270,8 +270,13 @@ StateLayout make_layout(const InMotionConfig& cfg) {
       s.L.add(static_cast<int>(b.id), b.size);
       s.specs.push_back(&b);
     }
+  for (const BlockSpec& b : antenna_blocks())
+    if (b.active(cfg)) {
+      s.L.add(static_cast<int>(b.id), b.size);
+      s.specs.push_back(&b);
+    }
   for (const BlockSpec& b : cfg.extra_blocks) {
-    if (static_cast<int>(b.id) < static_cast<int>(Block::count))
+    if (static_cast<int>(b.id) < static_cast<int>(Block::count) + static_cast<int>(antenna_blocks().size()))
       throw std::invalid_argument(std::string("in-motion filter: the extra block '") + b.name + "' has a built-in id");
     if (!b.active || b.active(cfg)) {
       s.L.add(static_cast<int>(b.id), b.size);
@@ -279,6 +284,11 @@ StateLayout make_layout(const InMotionConfig& cfg) {
     }
   }
   return s;
+}
+
+void observe_blocks(const StateLayout& s, const BlockObsInput& o, const Nominal& n, int type, MatRef H, Eigen::Vector3d& z) {
+  for (const BlockSpec* b : s.specs)
+    if (b->observe) b->observe(o, n, type, s.L.offset(static_cast<int>(b->id)), H, z);
 }
 
 void series_display(const StateLayout& s, Eigen::VectorXd& x, Eigen::VectorXd& sigma) {

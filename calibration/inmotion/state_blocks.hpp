@@ -30,6 +30,8 @@ struct BlockDynamics;   // what a block's F and Q depend on over one propagation
 struct BlockObsInput;   // what a block's extra observation columns depend on
 using MatRef = Eigen::Ref<Eigen::MatrixXd>;
 using VecCRef = Eigen::Ref<const Eigen::VectorXd>;
+using Mat3Ref = Eigen::Ref<const Eigen::Matrix3d>;
+using Vec3Ref = Eigen::Ref<const Eigen::Vector3d>;
 
 struct BlockSpec {
   Block id;              // built-in: its Block; a block declared elsewhere: any value ≥ Block::count
@@ -59,10 +61,23 @@ struct BlockSpec {
   // the series (value shown = SI / factor per column; nullptr: si_per_display for every column).
   void (*total)(const Nominal& n, int off, double* x) = nullptr;
   const double* total_per_display = nullptr;
+  // When the filter sets the MEMS position from a reference epoch (start from a reference INS,
+  // heading re-alignment): the block's part of the MEMS position, MEMS = fix + C_nb·lever + A·x̂
+  // (A: 3 × size, NED, at attitude C_nb and velocity v), so that the position error starts as
+  // A·δx (correlated with the block), or nullptr.
+  void (*position_offset)(const Nominal& n, const Mat3Ref& C_nb, const Vec3Ref& v, int off, Eigen::MatrixXd& A) = nullptr;
 };
 
 // The built-in declarations (state_blocks.cpp); index = static_cast<int>(Block).
 const std::array<BlockSpec, static_cast<std::size_t>(Block::count)>& block_specs();
+
+// The optional antenna blocks (antenna_blocks.cpp, issue 34 item 4): the GNSS antenna's lever-arm
+// correction ℓ (3 states, m) and the IMU–GNSS time offset δt (1 state, s), active by
+// InMotionConfig::estimate_lever_arm / estimate_time_offset, after the built-in blocks and before
+// the extra ones. Their ids follow the built-in ones.
+inline constexpr Block kLeverArmBlock = static_cast<Block>(static_cast<int>(Block::count));
+inline constexpr Block kTimeOffsetBlock = static_cast<Block>(static_cast<int>(Block::count) + 1);
+const std::array<BlockSpec, 2>& antenna_blocks();
 
 // Offsets from a list of sizes (the rule of calibration/filter/block_layout.hpp).
 using filter::offsets_from_sizes;
@@ -85,6 +100,8 @@ struct StateLayout {
   int size() const { return L.size(); }
 };
 StateLayout make_layout(const InMotionConfig& cfg);
+// Every active block's observation part (BlockSpec::observe) of one observation type, in layout order.
+void observe_blocks(const StateLayout& s, const BlockObsInput& o, const Nominal& n, int type, MatRef H, Eigen::Vector3d& z);
 // Series column names of a layout's states, in state order (the blocks' declarations).
 std::vector<std::string> column_names(const StateLayout& s);
 // The one place where SI becomes series units (°/h, mg, ppm, deg; latitude and longitude in

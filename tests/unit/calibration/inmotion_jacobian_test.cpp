@@ -1,7 +1,7 @@
 // The in-motion filter's analytic Jacobians against finite differences of the nonlinear models
 // (issue 34): F of every block (error_model.cpp, state_blocks.cpp) and H of every observation
 // (obs_position/velocity/attitude/nhc/zupt.cpp), in the default 42-state layout and the 48-state
-// exp-cosine layout.
+// exp-cosine layout, and the latter with the antenna blocks (lever arm, time offset; antenna_blocks.cpp).
 //
 // Method. A nominal state x̂ (navigation, sensor model, mounting, drift shaping states, all
 // nonzero and away from any symmetry) and, for each error-state direction e_j, the two "true"
@@ -95,7 +95,7 @@ double block_scale(Block b) {
     case Block::da: return 1e-3;
     case Block::dg_aux: return 1e-6;
     case Block::da_aux: return 1e-5;
-    default: return 1.0;
+    default: return b == kLeverArmBlock ? 0.1 : b == kTimeOffsetBlock ? 0.01 : 1.0;
   }
 }
 
@@ -122,6 +122,10 @@ Vec error_of(const State& xh, const State& x, const StateLayout& L) {
   auto put = [&](Block b, const Vec3& v) { d.segment<3>(L.offset(b)) = v; };
   for (const BlockSpec* b : L.specs) {
     const int o = L.offset(b->id);
+    if (b->id == kLeverArmBlock || b->id == kTimeOffsetBlock) {  // the antenna blocks: values in Nominal::extra
+      d.segment(o, b->size) = xh.n.extra.segment(o, b->size) - x.n.extra.segment(o, b->size);
+      continue;
+    }
     switch (b->id) {
       case Block::pos: put(b->id, ins::geodetic_diff_ned(xh.nav.lat, xh.nav.lon, xh.nav.h, x.nav.lat, x.nav.lon, x.nav.h)); break;
       case Block::vel: put(b->id, xh.nav.v - x.nav.v); break;
@@ -170,8 +174,9 @@ State propagate(const State& x, const DriftModels& drift, FAccumulator* acc) {
   return y;
 }
 
-InMotionConfig config(bool augmented) {
+InMotionConfig config(bool augmented, bool antenna = false) {
   InMotionConfig cfg;
+  cfg.estimate_lever_arm = cfg.estimate_time_offset = antenna;
   if (augmented) {
     // Exp-cosine models on two gyro axes and one accelerometer axis (the others first-order).
     std::array<DriftPrior, 3> g{DriftPrior{3e-5, 200, true, 0.02}, DriftPrior{2e-5, 300, false, 0}, DriftPrior{3e-5, 150, true, 0.05}};
@@ -202,13 +207,25 @@ void expect_close(const Mat& num, const Mat& an, double abs_tol, double rel_tol,
   EXPECT_EQ(bad, 0) << what << ": " << bad << " entries beyond the tolerance";
 }
 
-void check_F(bool augmented) {
-  const InMotionConfig cfg = config(augmented);
+// A nominal state with the antenna blocks' values nonzero (where the layout has them).
+State nominal_state(const StateLayout& L) {
+  State s = nominal_state(L.size());
+  if (const int o = L.offset(kLeverArmBlock); o >= 0) s.n.extra.segment<3>(o) = Vec3(0.2, -0.15, 0.25);
+  if (const int o = L.offset(kTimeOffsetBlock); o >= 0) s.n.extra(o) = 0.012;
+  return s;
+}
+
+std::string layout_name(bool augmented, bool antenna) {
+  return std::string(augmented ? " (48 states" : " (42 states") + (antenna ? " + antenna 4)" : ")");
+}
+
+void check_F(bool augmented, bool antenna = false) {
+  const InMotionConfig cfg = config(augmented, antenna);
   const StateLayout L = make_layout(cfg);
   const int N = L.size();
-  ASSERT_EQ(N, augmented ? kStatesAug : kStates);
+  ASSERT_EQ(N, (augmented ? kStatesAug : kStates) + (antenna ? 4 : 0));
   const DriftModels drift = drift_models(cfg);
-  const State x0 = nominal_state(N);
+  const State x0 = nominal_state(L);
   const Vec s = scales(L);
 
   // The feedback and its inverse agree to first order (the inverse reads the blocks' convention).
@@ -251,19 +268,20 @@ void check_F(bool augmented) {
   const Mat Fa = Si * (Phi - I) * S / T, Fn = Si * (Phi_num - I) * S / T;
   // The test must see what it checks: the physics' entries are well above the tolerance.
   EXPECT_GT(Fa.cwiseAbs().maxCoeff(), 0.05);
-  expect_close(Fn, Fa, 2e-5, 1e-2, L, augmented ? "F (48 states)" : "F (42 states)");
+  expect_close(Fn, Fa, 2e-5, 1e-2, L, "F" + layout_name(augmented, antenna));
 }
 
 TEST(InMotionJacobian, TransitionMatchesFiniteDifferencesDefaultLayout) { check_F(false); }
 TEST(InMotionJacobian, TransitionMatchesFiniteDifferencesExpCosineLayout) { check_F(true); }
+TEST(InMotionJacobian, TransitionMatchesFiniteDifferencesAntennaBlocks) { check_F(true, true); }
 
 // Every observation's H: pos, vel, att (a reference epoch at the predicted values), NHC, ZUPT and
 // zero rate.
-void check_H(bool augmented) {
-  const InMotionConfig cfg = config(augmented);
+void check_H(bool augmented, bool antenna = false) {
+  const InMotionConfig cfg = config(augmented, antenna);
   const StateLayout L = make_layout(cfg);
   const int N = L.size();
-  const State x0 = nominal_state(N);
+  const State x0 = nominal_state(L);
   const Vec s = scales(L);
   const Vec3 lever(-0.9, 0.35, -0.6);
   const Vec3 w_eb_b(0.03, -0.04, 0.3);
@@ -273,6 +291,7 @@ void check_H(bool augmented) {
     c.C_mb = x.n.C_mb;
     c.lever = lever;
     c.w_eb_b = w_eb_b;
+    c.a_ned = Vec3(1.5, -2.0, 0.3);
     c.n_states = N;
     c.mount = L.offset(Block::mount);
     c.gyro_bias = L.offset(Block::bg);
@@ -288,24 +307,34 @@ void check_H(bool augmented) {
     r.lat = x0.nav.lat;
     r.lon = x0.nav.lon;
     r.h = x0.nav.h;
-    ins::geodetic_add_ned(r.lat, r.lon, r.h, -(C_nb * lever));
-    r.v_ned = x0.nav.v - C_nb * w_eb_b.cross(lever);
+    const Vec3 lever_all = lever + (L.offset(kLeverArmBlock) >= 0 ? Vec3(x0.n.extra.segment<3>(L.offset(kLeverArmBlock))) : Vec3::Zero());
+    ins::geodetic_add_ned(r.lat, r.lon, r.h, -(C_nb * lever_all));
+    r.v_ned = x0.nav.v - C_nb * w_eb_b.cross(lever_all);
     r.rpy = ins::rpy_from_dcm(C_nb);
     r.sigma_pos = r.sigma_vel = r.sigma_att = 1;
   }
   // A standstill's mean raw gyro rate: the Earth rate in MEMS axes through the sensor model.
   const Vec3 y_mean = (Mat3::Identity() + x0.n.Mg) * (x0.nav.C_nb().transpose() * ins::earth_rate_ned_at(x0.nav.lat)) + x0.n.bg + x0.n.dg;
 
+  // Eqs 13–14 with the blocks' own observation parts (the antenna blocks), as the filter forms them.
+  auto with_blocks = [&](const State& x, int type) {
+    const ObsContext c = context(x);
+    Observation o = type == 0 ? position_observation(c, r) : velocity_observation(c, r);
+    Mat H = o.H;
+    observe_blocks(L, BlockObsInput{c, r}, x.n, type, H, o.z);
+    o.H = H;
+    return o;
+  };
   struct Obs {
     const char* name;
     std::function<Eigen::VectorXd(const State&)> z;
     std::function<Eigen::MatrixXd(const State&)> H;
   };
   const std::vector<Obs> all = {
-      {"position (eq 13)", [&](const State& x) -> Vec { return position_observation(context(x), r).z; },
-       [&](const State& x) -> Mat { return position_observation(context(x), r).H; }},
-      {"velocity (eq 14)", [&](const State& x) -> Vec { return velocity_observation(context(x), r).z; },
-       [&](const State& x) -> Mat { return velocity_observation(context(x), r).H; }},
+      {"position (eq 13)", [&](const State& x) -> Vec { return with_blocks(x, 0).z; },
+       [&](const State& x) -> Mat { return with_blocks(x, 0).H; }},
+      {"velocity (eq 14)", [&](const State& x) -> Vec { return with_blocks(x, 1).z; },
+       [&](const State& x) -> Mat { return with_blocks(x, 1).H; }},
       {"attitude (eq 15)", [&](const State& x) -> Vec { return attitude_observation(context(x), r).z; },
        [&](const State& x) -> Mat { return attitude_observation(context(x), r).H; }},
       {"nhc", [&](const State& x) -> Vec { return nhc_observation(context(x), 0.1).z; },
@@ -332,11 +361,12 @@ void check_H(bool augmented) {
     ASSERT_GT(k, 0) << o.name;
     std::vector<std::string> rows;
     for (int i = 0; i < H.rows(); ++i) rows.push_back(std::string(o.name) + "[" + std::to_string(i) + "]");
-    expect_close(Hn * S / k, H * S / k, 1e-6, 1e-4, L, std::string("H ") + o.name + (augmented ? " (48 states)" : " (42 states)"), &rows);
+    expect_close(Hn * S / k, H * S / k, 1e-6, 1e-4, L, std::string("H ") + o.name + layout_name(augmented, antenna), &rows);
   }
 }
 
 TEST(InMotionJacobian, ObservationsMatchFiniteDifferencesDefaultLayout) { check_H(false); }
 TEST(InMotionJacobian, ObservationsMatchFiniteDifferencesExpCosineLayout) { check_H(true); }
+TEST(InMotionJacobian, ObservationsMatchFiniteDifferencesAntennaBlocks) { check_H(true, true); }
 
 }  // namespace
