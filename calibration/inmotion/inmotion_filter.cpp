@@ -497,21 +497,25 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     observe_blocks(layout_, BlockObsInput{c, r}, n_, type, H, z);
     const Vec3 nu = z - H * dx;
     Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = pht<3>(H);
-    Eigen::LDLT<Mat3> Sl(H * PHt + o.R);
+    const Mat3 HPHt = H * PHt;
+    Eigen::LDLT<Mat3> Sl(HPHt + o.R);
     const double nis = nu.dot(Sl.solve(nu));
     ConsistencyStats& st = stats_[type];
     InnovationRecord& rec = innov_[type];
     rec.t = r.t;
     rec.nu = nu;
-    rec.S = H * PHt + o.R;
+    rec.S = HPHt + o.R;
     rec.nis = nis;
     rec.status = InnovationRecord::used;
-    if (!in_bank_) {  // the adaptive process noise sees every innovation, a rejected one capped at the gate
-      // (not in a heading hypothesis: there a wrong heading would buy itself noise to explain its misfit)
+    if (in_bank_) {  // a heading hypothesis: its innovations' log-likelihood, and no adaptive noise
+      // (a wrong heading would buy itself noise to explain its misfit)
+      loglik_ -= 0.5 * (nis + std::log(rec.S.determinant()));
+    } else {  // the adaptive process noise sees every innovation, a rejected one capped at the gate
       const double cap = nis > cfg_.gate_nis ? cfg_.gate_nis / nis : 1.0;
+      // (the trace of the product expression, Eigen's diagonal-only sums, as measured: HPHt.trace()
+      // sums in another order and moves the walk's results at the last digit)
       adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace()});
     }
-    if (in_bank_) loglik_ -= 0.5 * (nis + std::log(rec.S.determinant()));
     if (!(nis <= cfg_.gate_nis)) {
       if (st.rejected_since < 0) st.rejected_since = r.t;
       if (!std::isfinite(nis) || r.t - st.rejected_since < cfg_.gate_recover_s || in_bank_) {
@@ -737,7 +741,6 @@ bool InMotionFilter::bank_reference(const RefObs& r) {
   al.heading_t = r.t;
   al.heading_hypotheses = K;
   al.heading_lead = lead;
-  al.skipped_unaligned = align_.skipped_unaligned;
   align_ = al;
   rec.push_back({r.t, "motion without a course over ground (GNSS-only start)",
                  "heading chosen among " + std::to_string(K) + " hypotheses by the fixes' likelihood over " + fmt1(T) +
