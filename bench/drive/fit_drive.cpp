@@ -268,7 +268,7 @@ DeterminedBy determined_by(const inmotion::ParameterPriors& prior, const inmotio
   return d;
 }
 
-nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
+DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss, const nlohmann::json& unit);
 
@@ -381,7 +381,7 @@ nlohmann::json vehicle_constraints_json(const inmotion::InMotionConfig& cfg, con
 
 }  // namespace
 
-nlohmann::json fit_drive(const FitDriveArgs& a) {
+DriveResult fit_drive(const FitDriveArgs& a) {
   using namespace units;
   const auto [t0, t1] = parse_window(a.window);
   if (a.write_out) check_output_path(a.out);
@@ -510,7 +510,7 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
 
 namespace {
 
-nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
+DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss, const nlohmann::json& unit) {
   using namespace units;
@@ -860,9 +860,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     qj = {{"sample", "not run"}};
   }
   r.qc = qj;
-  const nlohmann::json out = drive_result_to_json(r);
-  if (a.write_out) write_text_atomic(a.out, out.dump(2) + "\n");
-  return out;
+  if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
+  return r;
 }
 
 }  // namespace
