@@ -9,27 +9,12 @@
 #include "common/coefficients_codec.hpp"
 #include "common/drive_result.hpp"
 #include "common/input_error.hpp"
+#include "common/json_fields.hpp"
 #include "common/json_parse.hpp"
 
 namespace calbench::db {
 namespace {
 using nlohmann::json;
-
-std::string req_string(const json& o, const char* k, const std::string& f, const std::string& prefix) {
-  const std::string key = prefix.empty() ? std::string(k) : prefix + "." + k;
-  if (!o.is_object()) throw InputError(f, 0, prefix, "expected an object");
-  auto it = o.find(k);
-  if (it == o.end()) throw InputError(f, 0, key, "missing key");
-  if (!it->is_string()) throw InputError(f, 0, key, std::string("expected a string, got ") + it->type_name());
-  return it->get<std::string>();
-}
-
-double finite(const json& v, const std::string& f, const std::string& key) {
-  if (!v.is_number()) throw InputError(f, 0, key, std::string("expected a number, got ") + v.type_name());
-  const double d = v.get<double>();
-  if (!std::isfinite(d)) throw InputError(f, 0, key, "NaN or infinity is not allowed");
-  return d;
-}
 
 // A coefficient block of the result as the store keeps it: the codec's set (its device already
 // checked against the result's), re-serialised with its extra keys; the store's own rule on top: a
@@ -59,9 +44,9 @@ QcResult metric_from_object(const std::string& name, const json& o, const std::s
                             const std::string& sample) {
   QcResult q;
   q.metric = name;
-  q.value = finite(o["value"], f, key + ".value");
+  q.value = jnum(o["value"], f, key + ".value");
   q.sample = sample_of(o, f, key, sample);
-  if (o.contains("threshold") && !o["threshold"].is_null()) q.threshold = finite(o["threshold"], f, key + ".threshold");
+  if (o.contains("threshold") && !o["threshold"].is_null()) q.threshold = jnum(o["threshold"], f, key + ".threshold");
   const char* pk = o.contains("pass") ? "pass" : o.contains("passed") ? "passed" : nullptr;
   if (pk) {
     if (!o[pk].is_boolean()) throw InputError(f, 0, key + "." + pk, "expected true or false");
@@ -115,25 +100,25 @@ void outage_metrics(const json& o, const std::string& f, const std::string& qc_s
   for (std::size_t i = 0; i < o["sets"].size(); ++i) {
     const json& s = o["sets"][i];
     const std::string sk = key + ".sets[" + std::to_string(i) + "]";
-    const std::string name = req_string(s, "name", f, sk);
+    const std::string name = jstr(jreq(s, "name", f, sk), f, sk + ".name");
     if (!s.contains("per_length") || !s["per_length"].is_array()) throw InputError(f, 0, sk + ".per_length", "expected an array");
     for (std::size_t k = 0; k < s["per_length"].size(); ++k) {
       const json& p = s["per_length"][k];
       const std::string pk = sk + ".per_length[" + std::to_string(k) + "]";
       if (!p.is_object() || !p.contains("length_s")) throw InputError(f, 0, pk, "expected an object with length_s");
-      const double L = finite(p["length_s"], f, pk + ".length_s");
+      const double L = jnum(p["length_s"], f, pk + ".length_s");
       const std::string len = outage_metric("", L, "");
       for (const char* fk : {"median_max_m", "max_max_m", "median_end_m", "max_end_m"}) {
         if (!p.contains(fk)) continue;
         if (std::string(fk) == "median_max_m") median_at[len][name] = out.size();
-        out.push_back(QcResult{outage_metric(name, L, fk), finite(p[fk], f, pk + "." + fk), std::nullopt, true, "m", sample, ""});
+        out.push_back(QcResult{outage_metric(name, L, fk), jnum(p[fk], f, pk + "." + fk), std::nullopt, true, "m", sample, ""});
       }
     }
   }
   // The errors are measured against the fixes: a difference within their noise (3σ of the stated
   // horizontal σ, fix_sigma_h_m) is not a worse set.
   double noise = 0;
-  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * finite(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
+  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * jnum(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
   for (auto& [len, by_set] : median_at) {
     auto r = by_set.find(kQcResultSet);
     if (r == by_set.end()) continue;
@@ -173,7 +158,7 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
           if (!it->is_number()) continue;
           const std::string& fk = it.key();
           const bool metres = fk.size() > 2 && fk.compare(fk.size() - 2, 2, "_m") == 0;
-          out.push_back(QcResult{prefix + name + "." + fk, finite(*it, f, k + "." + fk), std::nullopt, true,
+          out.push_back(QcResult{prefix + name + "." + fk, jnum(*it, f, k + "." + fk), std::nullopt, true,
                                  metres ? "m" : "", set_sample, ""});
         }
       }
@@ -193,7 +178,7 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
       continue;
     }
     if (it->is_number()) {
-      out.push_back(QcResult{it.key(), finite(*it, f, key), std::nullopt, true, "", sample, ""});
+      out.push_back(QcResult{it.key(), jnum(*it, f, key), std::nullopt, true, "", sample, ""});
     } else if (it->is_boolean()) {
       out.push_back(QcResult{it.key(), it->get<bool>() ? 1.0 : 0.0, std::nullopt, it->get<bool>(), "", sample,
                              "pass as stated in the result"});

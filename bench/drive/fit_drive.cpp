@@ -134,7 +134,11 @@ InputSet read_input_set(const std::string& file) {
   DriveResult r = drive_result_from_json(j, file);
   in.set = std::move(r.coefficients);
   in.recording_sha256 = r.recording.sha256;
-  if (r.mounting) in.mounting_deg = std::make_pair(r.mounting->value_deg, r.mounting->sigma_deg);
+  if (r.mounting) {  // it starts this fit's mounting, its σ the prior: a mounting without σ is no start
+    if (!r.mounting->sigma_deg.array().isFinite().any())
+      throw InputError(file, 0, "mounting_rpy_deg.sigma", "missing: the mounting of a RESULT.json input needs its sigma");
+    in.mounting_deg = std::make_pair(r.mounting->value_deg, r.mounting->sigma_deg);
+  }
   return in;
 }
 
