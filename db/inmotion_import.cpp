@@ -6,68 +6,26 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "common/coefficients_codec.hpp"
+#include "common/drive_result.hpp"
 #include "common/input_error.hpp"
+#include "common/json_fields.hpp"
 #include "common/json_parse.hpp"
 
 namespace calbench::db {
 namespace {
 using nlohmann::json;
 
-std::string req_string(const json& o, const char* k, const std::string& f, const std::string& prefix) {
-  const std::string key = prefix.empty() ? std::string(k) : prefix + "." + k;
-  if (!o.is_object()) throw InputError(f, 0, prefix, "expected an object");
-  auto it = o.find(k);
-  if (it == o.end()) throw InputError(f, 0, key, "missing key");
-  if (!it->is_string()) throw InputError(f, 0, key, std::string("expected a string, got ") + it->type_name());
-  return it->get<std::string>();
-}
-
-double finite(const json& v, const std::string& f, const std::string& key) {
-  if (!v.is_number()) throw InputError(f, 0, key, std::string("expected a number, got ") + v.type_name());
-  const double d = v.get<double>();
-  if (!std::isfinite(d)) throw InputError(f, 0, key, "NaN or infinity is not allowed");
-  return d;
-}
-
-std::array<double, 3> triple(const json& v, const std::string& f, const std::string& key, bool sigma) {
-  if (!v.is_array() || v.size() != 3) throw InputError(f, 0, key, "expected an array of 3 numbers");
-  std::array<double, 3> out{};
-  for (std::size_t i = 0; i < 3; ++i) {
-    if (sigma && v[i].is_null()) {
-      out[i] = kUnknownSigma;
-      continue;
-    }
-    out[i] = finite(v[i], f, key + "[" + std::to_string(i) + "]");
-    if (sigma && out[i] < 0) throw InputError(f, 0, key, "a σ cannot be negative");
-  }
-  return out;
-}
-
-// A coefficient block of RESULT.json: spec schema; "format"/"device" may be omitted (then they are
-// those of the result), and when present must agree with it.
-ParsedCoefficients coeff_block(const json& j, const DeviceInfo& dev, const std::string& f, const std::string& name) {
-  if (!j.is_object()) throw InputError(f, 0, name, "expected an object in the coefficients.json form");
-  json c = j;
-  if (!c.contains("format")) c["format"] = "calbench-coefficients/1";
-  if (!c.contains("device")) c["device"] = {{"model", dev.model}, {"serial", dev.serial}};
+// A coefficient block of the result as the store keeps it: the codec's set (its device already
+// checked against the result's), re-serialised with its extra keys; the store's own rule on top: a
+// set names its model.
+ParsedCoefficients stored_block(const CoefficientSet& c, const std::string& f, const std::string& name) {
+  if (c.device.model.empty()) throw InputError(f, 0, name + ".device.model", "expected a non-empty string");
   ParsedCoefficients p;
-  try {
-    p = parse_coefficients(c.dump(), f, "");
-  } catch (const InputError& e) {
-    // Re-anchor the key under the block name.
-    // what() = file[:line]: ['field': ]message — keep only the message.
-    const std::string w = e.what();
-    std::size_t skip = e.file().size() + (e.line() ? 1 + std::to_string(e.line()).size() : 0) + 2;
-    if (!e.field().empty()) skip += e.field().size() + 4;
-    throw InputError(f, e.line(), e.field().empty() ? name : name + "." + e.field(),
-                     skip <= w.size() ? w.substr(skip) : w);
-  }
-  if (p.device.serial != dev.serial)
-    throw InputError(f, 0, name + ".device.serial",
-                     "serial '" + p.device.serial + "' does not match the result's device '" + dev.serial + "'");
-  if (p.device.model != dev.model)
-    throw InputError(f, 0, name + ".device.model",
-                     "model '" + p.device.model + "' does not match the result's device '" + dev.model + "'");
+  p.device.model = c.device.model;
+  p.device.serial = c.device.serial;
+  p.errors = c.errors;
+  p.canonical_json = coefficients_to_json(c).dump(2);
   return p;
 }
 
@@ -86,9 +44,9 @@ QcResult metric_from_object(const std::string& name, const json& o, const std::s
                             const std::string& sample) {
   QcResult q;
   q.metric = name;
-  q.value = finite(o["value"], f, key + ".value");
+  q.value = jnum(o["value"], f, key + ".value");
   q.sample = sample_of(o, f, key, sample);
-  if (o.contains("threshold") && !o["threshold"].is_null()) q.threshold = finite(o["threshold"], f, key + ".threshold");
+  if (o.contains("threshold") && !o["threshold"].is_null()) q.threshold = jnum(o["threshold"], f, key + ".threshold");
   const char* pk = o.contains("pass") ? "pass" : o.contains("passed") ? "passed" : nullptr;
   if (pk) {
     if (!o[pk].is_boolean()) throw InputError(f, 0, key + "." + pk, "expected true or false");
@@ -142,25 +100,25 @@ void outage_metrics(const json& o, const std::string& f, const std::string& qc_s
   for (std::size_t i = 0; i < o["sets"].size(); ++i) {
     const json& s = o["sets"][i];
     const std::string sk = key + ".sets[" + std::to_string(i) + "]";
-    const std::string name = req_string(s, "name", f, sk);
+    const std::string name = jstr(jreq(s, "name", f, sk), f, sk + ".name");
     if (!s.contains("per_length") || !s["per_length"].is_array()) throw InputError(f, 0, sk + ".per_length", "expected an array");
     for (std::size_t k = 0; k < s["per_length"].size(); ++k) {
       const json& p = s["per_length"][k];
       const std::string pk = sk + ".per_length[" + std::to_string(k) + "]";
       if (!p.is_object() || !p.contains("length_s")) throw InputError(f, 0, pk, "expected an object with length_s");
-      const double L = finite(p["length_s"], f, pk + ".length_s");
+      const double L = jnum(p["length_s"], f, pk + ".length_s");
       const std::string len = outage_metric("", L, "");
       for (const char* fk : {"median_max_m", "max_max_m", "median_end_m", "max_end_m"}) {
         if (!p.contains(fk)) continue;
         if (std::string(fk) == "median_max_m") median_at[len][name] = out.size();
-        out.push_back(QcResult{outage_metric(name, L, fk), finite(p[fk], f, pk + "." + fk), std::nullopt, true, "m", sample, ""});
+        out.push_back(QcResult{outage_metric(name, L, fk), jnum(p[fk], f, pk + "." + fk), std::nullopt, true, "m", sample, ""});
       }
     }
   }
   // The errors are measured against the fixes: a difference within their noise (3σ of the stated
   // horizontal σ, fix_sigma_h_m) is not a worse set.
   double noise = 0;
-  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * finite(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
+  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * jnum(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
   for (auto& [len, by_set] : median_at) {
     auto r = by_set.find(kQcResultSet);
     if (r == by_set.end()) continue;
@@ -200,7 +158,7 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
           if (!it->is_number()) continue;
           const std::string& fk = it.key();
           const bool metres = fk.size() > 2 && fk.compare(fk.size() - 2, 2, "_m") == 0;
-          out.push_back(QcResult{prefix + name + "." + fk, finite(*it, f, k + "." + fk), std::nullopt, true,
+          out.push_back(QcResult{prefix + name + "." + fk, jnum(*it, f, k + "." + fk), std::nullopt, true,
                                  metres ? "m" : "", set_sample, ""});
         }
       }
@@ -220,7 +178,7 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
       continue;
     }
     if (it->is_number()) {
-      out.push_back(QcResult{it.key(), finite(*it, f, key), std::nullopt, true, "", sample, ""});
+      out.push_back(QcResult{it.key(), jnum(*it, f, key), std::nullopt, true, "", sample, ""});
     } else if (it->is_boolean()) {
       out.push_back(QcResult{it.key(), it->get<bool>() ? 1.0 : 0.0, std::nullopt, it->get<bool>(), "", sample,
                              "pass as stated in the result"});
@@ -233,63 +191,6 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
   return out;
 }
 
-std::optional<double> opt_number(const json& o, const char* k, const std::string& f, const std::string& key) {
-  if (!o.contains(k) || o[k].is_null()) return std::nullopt;
-  const double v = finite(o[k], f, key + "." + k);
-  if (v < 0) throw InputError(f, 0, key + "." + k, "cannot be negative");
-  return v;
-}
-
-std::optional<DeterminedBy> determined_by_of(const json& j, const std::string& f) {
-  if (!j.is_object() || !j.contains("determined_by") || j["determined_by"].is_null()) return std::nullopt;
-  const json& d = j["determined_by"];
-  if (!d.is_object()) throw InputError(f, 0, "determined_by", "expected an object {\"rule\", \"coefficients\"}");
-  DeterminedBy out;
-  if (d.contains("rule")) {
-    if (!d["rule"].is_string()) throw InputError(f, 0, "determined_by.rule", "expected a string");
-    out.rule = d["rule"].get<std::string>();
-  }
-  if (!d.contains("coefficients") || !d["coefficients"].is_object())
-    throw InputError(f, 0, "determined_by.coefficients", "expected an object keyed by coefficient name");
-  const auto& names = coefficient_names();
-  for (auto it = d["coefficients"].begin(); it != d["coefficients"].end(); ++it) {
-    const std::string key = "determined_by.coefficients." + it.key();
-    if (std::find(names.begin(), names.end(), it.key()) == names.end())
-      throw InputError(f, 0, key, "unknown coefficient (expected gyro.bias.x … accel.M.zz)");
-    const json& c = *it;
-    if (!c.is_object()) throw InputError(f, 0, key, "expected an object");
-    CoefficientStage st;
-    if (!c.contains("stage") || !c["stage"].is_string()) throw InputError(f, 0, key + ".stage", "expected a string");
-    st.stage = c["stage"].get<std::string>();
-    if (st.stage != "bench" && st.stage != "drive" && st.stage != "both" && st.stage != "prior")
-      throw InputError(f, 0, key + ".stage", "'" + st.stage + "' is not bench, drive, both or prior");
-    st.parent_sigma = opt_number(c, "parent_sigma", f, key);
-    st.prior_sigma = opt_number(c, "prior_sigma", f, key);
-    st.posterior_sigma = opt_number(c, "posterior_sigma", f, key);
-    st.ratio = opt_number(c, "ratio", f, key);
-    st.drive_share = opt_number(c, "drive_share", f, key);
-    if (st.drive_share && (*st.drive_share > 1 + 1e-9 || *st.drive_share < -1e-9))
-      throw InputError(f, 0, key + ".drive_share", "expected 0 … 1");
-    // The figures must agree with each other and with the stage (the rule fit drive applies): a
-    // hand-edited stage or σ would otherwise reach the report as the drive's finding.
-    if (st.prior_sigma && st.posterior_sigma) {
-      if (*st.posterior_sigma > *st.prior_sigma * (1 + 1e-3))
-        throw InputError(f, 0, key + ".posterior_sigma", "larger than prior_sigma: a Kalman update cannot widen a constant");
-      if (st.drive_share && *st.prior_sigma > 0) {
-        const double q = *st.posterior_sigma / *st.prior_sigma, share = 1 - q * q;
-        if (std::abs(share - *st.drive_share) > 1e-3)
-          throw InputError(f, 0, key + ".drive_share", "does not equal 1 - (posterior_sigma/prior_sigma)^2");
-      }
-    }
-    if (st.drive_share) {
-      const double sh = *st.drive_share;
-      const bool ok = st.stage == "drive" ? sh > 0.8 - 1e-9 : st.stage == "both" ? sh >= 0.2 - 1e-9 && sh <= 0.8 + 1e-9 : sh < 0.2 + 1e-9;
-      if (!ok) throw InputError(f, 0, key + ".stage", "'" + st.stage + "' does not follow from drive_share " + std::to_string(sh));
-    }
-    out.coefficients[it.key()] = st;
-  }
-  return out;
-}
 }  // namespace
 
 std::string outage_metric(const std::string& set, double length_s, const std::string& field) {
@@ -300,84 +201,35 @@ std::string outage_metric(const std::string& set, double length_s, const std::st
 
 InMotionResult parse_inmotion_result(const std::string& text, const std::string& f) {
   const json j = parse_json_text(text, f);
-  if (!j.is_object()) throw InputError(f, 1, "", "expected a JSON object");
+  const DriveResult d = drive_result_from_json(j, f);  // the one codec: every key checked there
   InMotionResult r;
-  // device
-  if (!j.contains("device")) throw InputError(f, 0, "device", "missing key");
-  const json& dev = j["device"];
-  if (dev.is_string()) {
-    r.device.serial = dev.get<std::string>();
-  } else if (dev.is_object()) {
-    r.device.serial = req_string(dev, "serial", f, "device");
-    if (dev.contains("model")) r.device.model = req_string(dev, "model", f, "device");
-  } else {
-    throw InputError(f, 0, "device", std::string("expected an object {model, serial}, got ") + dev.type_name());
-  }
-  if (r.device.serial.empty()) throw InputError(f, 0, "device.serial", "empty serial number");
-  // recording
-  if (!j.contains("recording")) throw InputError(f, 0, "recording", "missing key");
-  r.recording_path = req_string(j["recording"], "path", f, "recording");
-  r.recording_sha256 = req_string(j["recording"], "sha256", f, "recording");
-  // The unit that drove (fit drive writes it since issue 17): a result of another unit's drive is
-  // never filed under this one.
-  if (j["recording"].contains("device") && j["recording"]["device"].is_object()) {
-    const std::string rs = req_string(j["recording"]["device"], "serial", f, "recording.device");
-    if (!rs.empty() && rs != r.device.serial)
-      throw InputError(f, 0, "recording.device.serial",
-                       "the drive was recorded by unit '" + rs + "', the result is filed under unit '" + r.device.serial + "'");
-  }
-  if (r.recording_sha256.size() != 64 ||
-      r.recording_sha256.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
-    throw InputError(f, 0, "recording.sha256", "expected 64 hexadecimal digits");
-  for (const char* k : {"reference_system", "reference"}) {
-    if (j.contains(k) && r.reference_system.empty())
-      r.reference_system = j[k].is_string() ? j[k].get<std::string>() : j[k].dump();
-  }
-  if (r.reference_system.empty() && j["recording"].contains("reference")) {
-    const json& ref = j["recording"]["reference"];
-    r.reference_system = ref.is_string() ? ref.get<std::string>() : ref.dump();
-  }
-  // coefficients, correction
-  if (!j.contains("coefficients")) throw InputError(f, 0, "coefficients", "missing key");
-  r.coefficients = coeff_block(j["coefficients"], r.device, f, "coefficients");
-  if (j.contains("correction") && !j["correction"].is_null())
-    r.correction = coeff_block(j["correction"], r.device, f, "correction");
-  // mounting
+  r.device.serial = d.device.serial;
+  r.device.model = d.device.model;
+  r.recording_path = d.recording.path;
+  r.recording_sha256 = d.recording.sha256;
+  r.reference_system = d.reference_system;
+  r.coefficients = stored_block(d.coefficients, f, "coefficients");
+  if (d.correction) r.correction = stored_block(*d.correction, f, "correction");
   r.mounting_sigma_deg = {kUnknownSigma, kUnknownSigma, kUnknownSigma};
-  if (j.contains("mounting_rpy_deg") && !j["mounting_rpy_deg"].is_null()) {
-    const json& m = j["mounting_rpy_deg"];
+  if (d.mounting) {
     r.has_mounting = true;
-    if (m.is_array()) {
-      r.mounting_rpy_deg = triple(m, f, "mounting_rpy_deg", false);
-    } else if (m.is_object()) {
-      const char* vk = m.contains("value") ? "value" : m.contains("rpy") ? "rpy" : "value";
-      if (!m.contains(vk)) throw InputError(f, 0, "mounting_rpy_deg.value", "missing key");
-      r.mounting_rpy_deg = triple(m[vk], f, std::string("mounting_rpy_deg.") + vk, false);
-      if (m.contains("sigma")) r.mounting_sigma_deg = triple(m["sigma"], f, "mounting_rpy_deg.sigma", true);
-    } else {
-      throw InputError(f, 0, "mounting_rpy_deg", "expected [roll, pitch, yaw] or {\"value\": [...], \"sigma\": [...]}");
+    for (int i = 0; i < 3; ++i) {
+      r.mounting_rpy_deg[static_cast<std::size_t>(i)] = d.mounting->value_deg(i);
+      r.mounting_sigma_deg[static_cast<std::size_t>(i)] = d.mounting->sigma_deg(i);
     }
-    for (const char* k : {"mounting_rpy_sigma_deg", "sigma_mounting_rpy_deg"})
-      if (j.contains(k)) r.mounting_sigma_deg = triple(j[k], f, k, true);
   }
-  if (j.contains("consistency")) {
-    if (!j["consistency"].is_object() && !j["consistency"].is_array())
-      throw InputError(f, 0, "consistency", "expected an object");
-    r.consistency_json = j["consistency"].dump();
+  if (!d.consistency.is_null()) r.consistency_json = d.consistency.dump();
+  if (!d.qc.is_null()) {
+    r.qc = qc_metrics(d.qc, f);
+    r.qc_json = d.qc.dump();
   }
-  if (j.contains("qc") && !j["qc"].is_null()) {
-    r.qc = qc_metrics(j["qc"], f);
-    r.qc_json = j["qc"].dump();
-  }
-  r.determined_by = determined_by_of(j, f);
-  if (j.contains("priors") && !j["priors"].is_null() && !j["priors"].is_object())
-    throw InputError(f, 0, "priors", "expected an object");
-  r.result_json = j.dump();
+  r.determined_by = d.determined_by;
+  r.result_json = j.dump();  // as given
   return r;
 }
 
 std::optional<DeterminedBy> parse_determined_by(const std::string& result_json, const std::string& file) {
-  return determined_by_of(parse_json_text(result_json, file), file);
+  return determined_by_from_json(parse_json_text(result_json, file), file);
 }
 
 double max_difference(const SensorErrors& a, const SensorErrors& b) {

@@ -1,10 +1,7 @@
-// Import of an in-motion calibration result (RESULT.json of `calbench fit drive`, issue 5):
-//   {"device": {"model", "serial"}, "recording": {"path", "sha256"},
-//    "coefficients": {spec schema with σ: total errors relative to the raw sensor output},
-//    "correction":   {spec schema: the in-motion estimate relative to the input set} (optional),
-//    "mounting_rpy_deg": [r, p, y] or {"value": [...], "sigma": [...]}  (+ "mounting_rpy_sigma_deg"),
-//    "consistency": {...}, "qc": {...}, "reference_system"/"reference": "..." (optional),
-//    "determined_by": {...} (optional, below), "priors": {...} (optional, kept in result_json)}
+// Import of an in-motion calibration result (RESULT.json of `calbench fit drive`, issue 5), read
+// through its one codec (common/drive_result.hpp: the keys, their types and the older forms the
+// store has always taken are checked there): device, recording, the coefficient sets, the
+// mounting, "consistency", "qc", "determined_by"; the whole text kept as result_json.
 // QC metrics from "qc": numbers, {"value", "threshold", "pass"} objects, and the numeric figures of
 // "sets" entries (sets.NAME.final_cpe_m, unit m), each marked with qc.sample (in-/out-of-sample).
 // The figures are informative (no threshold) except the result set's final ΔS ("in-motion"), which
@@ -23,23 +20,13 @@
 #include <optional>
 #include <string>
 
+#include "common/drive_result.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
 
 // RESULT.json "determined_by" (fit drive, issue 16): which calibration stage determined each of the
-// 24 coefficients, from the drive's share of the information 1 − (σ_post/σ_prior)².
-//   {"rule": "...", "coefficients": {"gyro.bias.x": {"parent_sigma", "prior_sigma", "posterior_sigma",
-//                                                    "ratio", "drive_share", "stage"}, ...}}
-// σ in SI (rad/s, m/s², dimensionless M); null = not stated (e.g. parent_sigma without a parent set).
-struct CoefficientStage {
-  std::string stage;  // "bench" | "drive" | "both" | "prior"
-  std::optional<double> parent_sigma, prior_sigma, posterior_sigma, ratio, drive_share;
-};
-struct DeterminedBy {
-  std::string rule;
-  std::map<std::string, CoefficientStage> coefficients;  // names of coefficient_names(); may be partial
-};
+// 24 coefficients (DeterminedBy, CoefficientStage of common/drive_result.hpp, read by its codec).
 // nullopt when the result has no "determined_by" (results before issue 16); InputError naming the
 // key when it is malformed.
 std::optional<DeterminedBy> parse_determined_by(const std::string& result_json, const std::string& file);

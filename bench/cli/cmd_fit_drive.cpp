@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <map>
 
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/outage_options.hpp"
@@ -13,13 +14,18 @@
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "calibration/inmotion/priors.hpp"
+#include "common/drive_result.hpp"
 #include "common/input_error.hpp"
+#include "common/json_fields.hpp"
 #include "common/units.hpp"
 
 namespace calbench::cli {
 namespace {
 
-void print_summary(const nlohmann::json& j) {
+// The console summary of a RESULT.json (common/drive_result.hpp): the typed parts from r, the
+// free-form sections of the writer from r.extra.
+void print_summary(const DriveResult& r) {
+  const nlohmann::json& j = r.extra;
   using namespace units;
   // value ± σ: σ to two significant digits and the value to the same decimal place (six digits of σ
   // were noise); a null σ is unknown, not 0 (the value then with five significant digits).
@@ -39,12 +45,12 @@ void print_summary(const nlohmann::json& j) {
     o << std::setprecision(6) << ' ' << unit;
     return o.str();
   };
-  const auto& c = j["coefficients"];
-  std::cout << "in-motion fit of " << j["recording"]["path"].get<std::string>() << " (window " << j["window_s"][0].get<double>() << " – "
-            << j["window_s"][1].get<double>() << " s, observations " << j["observations"].get<std::string>() << ")\n"
-            << "  gyro drift       " << vec(c["gyro"]["bias"], c["gyro"]["sigma_bias"], kDegPerHour, "°/h") << "\n"
-            << "  accel bias       " << vec(c["accel"]["bias"], c["accel"]["sigma_bias"], kMilliG, "mg") << "\n"
-            << "  mounting rpy     " << vec(j["mounting_rpy_deg"]["value"], j["mounting_rpy_deg"]["sigma"], 1.0, "°") << "\n";
+  const SensorErrors& c = r.coefficients.errors;
+  std::cout << "in-motion fit of " << r.recording.path << " (window " << r.window_s.value().first << " – "
+            << r.window_s.value().second << " s, observations " << r.observations.value() << ")\n"
+            << "  gyro drift       " << vec(to_json(c.gyro.bias), sigma_json(c.gyro.sigma_bias), kDegPerHour, "°/h") << "\n"
+            << "  accel bias       " << vec(to_json(c.accel.bias), sigma_json(c.accel.sigma_bias), kMilliG, "mg") << "\n"
+            << "  mounting rpy     " << vec(to_json(r.mounting.value().value_deg), sigma_json(r.mounting.value().sigma_deg), 1.0, "°") << "\n";
   if (j.contains("lever_arm_m")) {
     const auto& l = j["lever_arm_m"];
     std::cout << "  lever arm        " << vec(l["value"], l["sigma"], 1.0, "m") << " (nominal " << l["nominal"][0].get<double>() << ", "
@@ -88,20 +94,21 @@ void print_summary(const nlohmann::json& j) {
                     << "measured " << w["used"][s]["value"].get<double>() << " " << w["used"][s]["unit"].get<std::string>() << "\n";
     }
   }
-  if (j.contains("priors")) {
-    const auto& p = j["priors"];
+  if (!r.priors.is_null()) {
+    const auto& p = r.priors;
     if (p["mode"] == "input set")
       std::cout << "  priors           the input set's sigma combined with the " << p["device_class"].get<std::string>()
                 << " stability allowance (gyro scale " << p["allowance"]["gyro_scale_ppm"].get<double>() << " ppm, skew "
                 << p["allowance"]["gyro_skew_ppm"].get<double>() << " ppm, ...; RESULT.json priors)\n";
     else
       std::cout << "  priors           data-sheet class (raw data)\n";
-    const auto& c = j["determined_by"]["count"];
+    std::map<std::string, int> count;
+    for (const auto& [name, st] : r.determined_by.value().coefficients) ++count[st.stage];
     std::cout << "  determined by    ";
     bool first = true;
     for (const char* k : {"drive", "both", "bench", "prior"})
-      if (c[k].get<int>() > 0) {
-        std::cout << (first ? "" : ", ") << k << " " << c[k].get<int>();
+      if (count[k] > 0) {
+        std::cout << (first ? "" : ", ") << k << " " << count[k];
         first = false;
       }
     std::cout << " of 24 coefficients (drive share of the information: > 80 % drive, < 20 % "
@@ -147,15 +154,15 @@ void print_summary(const nlohmann::json& j) {
     }
     std::cout << "; " << al["realignments"] << " heading re-alignment(s), " << al["covariance_widenings"]
               << " forced covariance widening(s), " << al["course_updates"]["used"] << " course update(s)\n";
-    for (const auto& r : j["recoveries"])
-      std::cout << "    t " << r["t_s"].get<double>() << " s: " << r["reason"].get<std::string>() << " -> "
-                << r["action"].get<std::string>() << "\n";
+    for (const auto& rec : j["recoveries"])
+      std::cout << "    t " << rec["t_s"].get<double>() << " s: " << rec["reason"].get<std::string>() << " -> "
+                << rec["action"].get<std::string>() << "\n";
   }
   if (j.contains("adaptive_noise") && j["adaptive_noise"]["scale_max"].get<double>() > 1)
     std::cout << "  adaptive noise   navigation noise variance scaled up " << j["adaptive_noise"]["increases"]
               << " time(s), at most x" << std::setprecision(3) << j["adaptive_noise"]["scale_max"].get<double>() << ", x"
               << j["adaptive_noise"]["scale_end"].get<double>() << std::setprecision(6) << " at the end\n";
-  for (const auto& [k, v] : j["consistency"].items()) {
+  for (const auto& [k, v] : r.consistency.items()) {
     std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
               << " (expected " << v["expected_nis"].get<double>() << "), " << v["rejected"] << " rejected";
     if (j.contains("vehicle_constraints") && (k == "nhc" || k == "zupt" || k == "zero_rate"))
@@ -179,12 +186,13 @@ void print_summary(const nlohmann::json& j) {
       std::cout << "\n";
     }
   }
-  if (j["qc"].contains("sets"))
-    for (const auto& s : j["qc"]["sets"])
-      std::cout << "  QC " << j["qc"]["sample"].get<std::string>() << " from " << j["qc"]["from_s"].get<double>() << " s over "
-                << j["qc"]["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
+  const nlohmann::json& qc = r.qc;
+  if (qc.contains("sets"))
+    for (const auto& s : qc["sets"])
+      std::cout << "  QC " << qc["sample"].get<std::string>() << " from " << qc["from_s"].get<double>() << " s over "
+                << qc["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
                 << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
-  if (j["qc"].contains("outages")) print_outage_summary(j["qc"]["outages"], std::cout);
+  if (qc.contains("outages")) print_outage_summary(qc["outages"], std::cout);
   std::cout << std::flush;
 }
 
@@ -319,7 +327,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
           std::cerr << "calbench: unit " << f.slot << ": " << f.error << std::endl;
           continue;
         }
-        if (*json) all["units"][k]["RESULT"] = f.result;
+        if (*json) all["units"][k]["RESULT"] = drive_result_to_json(f.result);
         else {
           std::cout << "unit " << f.slot << " (" << f.out.string() << "): ";
           print_summary(f.result);
@@ -338,9 +346,9 @@ const bool registered = add_command(31, [](CLI::App& app) {
       throw InputError(a->coeffs, 0, "",
                        "is a folder: --coeffs FOLDER is for a multi-unit drive (units.json); give the set's file "
                        "(coefficients.json or RESULT.json)");
-    const nlohmann::json j = fit_drive(*a);
-    if (*json) print_json(j.dump(2));
-    else print_summary(j);
+    const DriveResult r = fit_drive(*a);
+    if (*json) print_json(drive_result_to_json(r).dump(2));
+    else print_summary(r);
   });
 });
 

@@ -13,6 +13,7 @@
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_sim.hpp"
 #include "calibration/effects/effect_registry.hpp"
+#include "common/drive_result.hpp"
 #include "common/imu_error_sim.hpp"
 #include "calibration/ins/strapdown.hpp"
 #include "common/units.hpp"
@@ -155,9 +156,9 @@ DriveCoeffs read_drive_coeffs(const std::string& file) {
   const QcSet q = load_qc_set(file);
   c.mounting_rpy_deg = q.mounting_rpy_deg;
   const nlohmann::json j = read_json_file(file);
-  const nlohmann::json& cj = (j.is_object() && j.contains("coefficients")) ? j["coefficients"] : j;
-  c.set = coefficients_from_json(cj, file);
-  c.carried = effects_from_json(cj, file);
+  // A RESULT.json (through its codec, common/drive_result.hpp) or a coefficients.json.
+  c.set = is_drive_result(j) ? drive_result_from_json(j, file).coefficients : coefficients_from_json(j, file);
+  c.carried = effects_from_json(c.set.extra, file);
   return c;
 }
 

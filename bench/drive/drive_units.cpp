@@ -147,7 +147,7 @@ std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nl
     nlohmann::json u = {{"slot", r.slot}, {"ok", r.error.empty()}};
     if (r.error.empty()) {
       u["result"] = fs::path(r.out).lexically_relative(out).string();
-      u["serial"] = r.result["device"].value("serial", "");
+      u["serial"] = r.result.device.serial;
     } else {
       u["error"] = r.error;
     }

@@ -34,7 +34,7 @@ DriveUnits load_drive_units(const std::filesystem::path& dir);
 struct UnitFit {
   std::string slot;
   std::filesystem::path out;   // its RESULT.json
-  nlohmann::json result;       // RESULT.json, or null when it failed
+  DriveResult result;          // RESULT.json (when error is empty)
   std::string error;           // why it failed
   bool bad_input = false;      // the failure was bad input (exit 2)
 };

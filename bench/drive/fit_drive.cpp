@@ -14,6 +14,7 @@
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/drift_models_json.hpp"
 #include "calibration/effects/effect_registry.hpp"
+#include "common/drive_result.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/input_warning.hpp"
 #include "bench/io/hdf5_recording.hpp"
@@ -62,13 +63,6 @@ std::pair<double, double> parse_window(const std::string& w) {
   if (c + 1 < w.size()) bound(c + 1, w.size(), t1);
   if (!(t1 > t0)) throw InputError("--window", 0, "", "T1 must be after T0");
   return {t0, t1};
-}
-
-nlohmann::json set_json(const DeviceId& d, const SensorErrors& e) {
-  CoefficientSet c;
-  c.device = d;
-  c.errors = e;
-  return coefficients_to_json(c);
 }
 
 // Identified drift models (--drift-models) into the filter's configuration; the JSON says which
@@ -133,29 +127,17 @@ struct InputSet {
 InputSet read_input_set(const std::string& file) {
   const nlohmann::json j = read_json_file(file);
   InputSet in;
-  const bool result = j.is_object() && j.contains("format") && j["format"].is_string() &&
-                      j["format"].get<std::string>().rfind("calbench-inmotion-result/", 0) == 0;
-  if (!result) {
+  if (!is_drive_result(j)) {
     in.set = coefficients_from_json(j, file);
     return in;
   }
-  if (j["format"] != "calbench-inmotion-result/1")
-    throw InputError(file, 0, "format",
-                     "unsupported RESULT.json format '" + j["format"].get<std::string>() + "' (expected calbench-inmotion-result/1)");
-  const nlohmann::json& c = jreq(j, "coefficients", file, "");
-  try {
-    in.set = coefficients_from_json(c, file);
-  } catch (const InputError& e) {
-    throw InputError(file, e.line(), e.field().empty() ? "coefficients" : "coefficients." + e.field(), e.message());
-  }
-  if (j.contains("recording") && j["recording"].is_object() && j["recording"].contains("sha256") &&
-      j["recording"]["sha256"].is_string())
-    in.recording_sha256 = j["recording"]["sha256"].get<std::string>();
-  if (j.contains("mounting_rpy_deg") && !j["mounting_rpy_deg"].is_null()) {
-    const auto& m = j["mounting_rpy_deg"];
-    const Vec3 v = jvec3(jreq(m, "value", file, "mounting_rpy_deg"), file, "mounting_rpy_deg.value");
-    const Vec3 sg = jsigma3(jreq(m, "sigma", file, "mounting_rpy_deg"), file, "mounting_rpy_deg.sigma");
-    in.mounting_deg = std::make_pair(v, sg);
+  DriveResult r = drive_result_from_json(j, file);
+  in.set = std::move(r.coefficients);
+  in.recording_sha256 = r.recording.sha256;
+  if (r.mounting) {  // it starts this fit's mounting, its σ the prior: a mounting without σ is no start
+    if (!r.mounting->sigma_deg.array().isFinite().any())
+      throw InputError(file, 0, "mounting_rpy_deg.sigma", "missing: the mounting of a RESULT.json input needs its sigma");
+    in.mounting_deg = std::make_pair(r.mounting->value_deg, r.mounting->sigma_deg);
   }
   return in;
 }
@@ -272,33 +254,25 @@ PriorChoice choose_priors(const FitDriveArgs& a, const std::optional<Coefficient
 
 // Which stage determined each coefficient of the result: the drive's share of the information
 // about it, 1 − (σ_posterior/σ_prior)², in the frame of the data the filter saw.
-nlohmann::json determined_by(const inmotion::ParameterPriors& prior, const inmotion::ParameterPriors& post,
-                             const std::optional<CoefficientSet>& bench) {
-  nlohmann::json c = nlohmann::json::object(), m = nlohmann::json::object();
+DeterminedBy determined_by(const inmotion::ParameterPriors& prior, const inmotion::ParameterPriors& post,
+                           const std::optional<CoefficientSet>& bench) {
+  DeterminedBy d;
+  d.rule = "drive share of the information 1-(sigma_post/sigma_prior)^2: < 0.2 bench (prior when there is no "
+           "input set), > 0.8 drive, else both";
   const auto& names = inmotion::prior_parameter_names();
   const inmotion::ParameterPriors parent = bench ? inmotion::sigma_of(bench->errors) : inmotion::ParameterPriors{};
-  nlohmann::json count = {{"bench", 0}, {"drive", 0}, {"both", 0}, {"prior", 0}};
   for (std::size_t k = 0; k < names.size(); ++k) {
     const double p = inmotion::prior_value(prior, k), q = inmotion::prior_value(post, k);
     const double ratio = q / p, share = std::clamp(1.0 - ratio * ratio, 0.0, 1.0);
     const char* stage = share > 0.8 ? "drive" : share >= 0.2 ? "both" : bench ? "bench" : "prior";
     const double ps = bench && k < 24 ? inmotion::prior_value(parent, k) : kUnknownSigma;
-    (k < 24 ? c : m)[names[k]] = {{"parent_sigma", std::isfinite(ps) ? nlohmann::json(ps) : nlohmann::json(nullptr)},
-                   {"prior_sigma", p},
-                   {"posterior_sigma", q},
-                   {"ratio", ratio},
-                   {"drive_share", share},
-                   {"stage", stage}};
-    if (k < 24) count[stage] = count[stage].get<int>() + 1;
+    (k < 24 ? d.coefficients : d.mounting)[names[k]] =
+        CoefficientStage{stage, std::isfinite(ps) ? std::optional<double>(ps) : std::nullopt, p, q, ratio, share};
   }
-  return {{"rule", "drive share of the information 1-(sigma_post/sigma_prior)^2: < 0.2 bench (prior when there is no "
-                   "input set), > 0.8 drive, else both"},
-          {"count", count},
-          {"coefficients", c},
-          {"mounting", m}};
+  return d;
 }
 
-nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
+DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss, const nlohmann::json& unit);
 
@@ -411,7 +385,7 @@ nlohmann::json vehicle_constraints_json(const inmotion::InMotionConfig& cfg, con
 
 }  // namespace
 
-nlohmann::json fit_drive(const FitDriveArgs& a) {
+DriveResult fit_drive(const FitDriveArgs& a) {
   using namespace units;
   const auto [t0, t1] = parse_window(a.window);
   if (a.write_out) check_output_path(a.out);
@@ -540,7 +514,7 @@ nlohmann::json fit_drive(const FitDriveArgs& a) {
 
 namespace {
 
-nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
+DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss, const nlohmann::json& unit) {
   using namespace units;
@@ -669,9 +643,12 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   DeviceId dev = bench ? bench->device : meta.device;
   if (dev.serial.empty()) dev.serial = meta.device.serial;
 
-  nlohmann::json j;
-  j["format"] = "calbench-inmotion-result/1";
-  j["device"] = {{"model", dev.model}, {"serial", dev.serial}};
+  // RESULT.json through its codec (common/drive_result.hpp): the typed parts in r, the free-form
+  // sections in j (r.extra).
+  DriveResult r;
+  nlohmann::json& j = r.extra;
+  r.format = kDriveResultFormat;
+  r.device = dev;
   const fs::path dir(a.dir);
   // Digests of the files as they were read (computed while reading; a file the stream did not
   // read to its end is hashed here).
@@ -683,19 +660,19 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   nlohmann::json ref_digest = nullptr;
   if (a.shared_reference) ref_digest = a.shared_reference->sha256;
   else if (has_ref) ref_digest = h5 ? imu_digest : gnss ? sha256_file(ref_file) : digest(st.aiding_sha256(), ref_file);
-  j["recording"] = {{"path", fs::absolute(dir).lexically_normal().string()},
-                    {"sha256", imu_digest},
-                    {"sha256_reference", ref_digest},
-                    {"sha256_meta", sha256_file(dir / "meta.json")}};
+  r.recording.path = fs::absolute(dir).lexically_normal().string();
+  r.recording.sha256 = imu_digest;
+  if (ref_digest.is_string()) r.recording.sha256_reference = ref_digest.get<std::string>();
+  r.recording.sha256_meta = sha256_file(dir / "meta.json");
   // An HDF5 recording: the digests are of recording.h5 (every table), not of CSV files.
-  if (h5) j["recording"]["format"] = "hdf5";
-  if (gnss) j["recording"]["sha256_gnss"] = h5 ? imu_digest : digest(st.aiding_sha256(), table_file(dir, "gnss"));
-  j["recording"]["device"] = {{"model", meta.device.model}, {"serial", meta.device.serial}};  // the unit that drove
+  if (h5) r.recording.format = "hdf5";
+  if (gnss) r.recording.sha256_gnss = h5 ? imu_digest : digest(st.aiding_sha256(), table_file(dir, "gnss"));
+  r.recording.device = meta.device;  // the unit that drove
   j["device_class"] = unit["device_class"];
   j["white_noise"] = unit["white_noise"];
-  j["reference_system"] = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
-  j["window_s"] = {t_first, t_last};
-  j["observations"] = a.obs;
+  r.reference_system = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
+  r.window_s = std::make_pair(t_first, t_last);
+  r.observations = a.obs;
   if (gnss) j["aiding"] = "gnss";
   // How the heading was found and kept (GNSS-only start, re-alignments, forced recoveries):
   // always with GNSS aiding, otherwise only when something happened.
@@ -730,26 +707,27 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     j["alignment"] = aj;
     j["recoveries"] = rj;
   }
-  j["smoothed"] = a.smooth;
+  r.smoothed = a.smooth;
   j["covariance"] = a.covariance;
-  j["coefficients"] = set_json(dev, total);
-  j["correction"] = set_json(dev, corr);
+  r.coefficients.device = dev;
+  r.coefficients.errors = total;
+  r.correction = CoefficientSet{dev, corr, nlohmann::json::object()};
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
   if (!a.coeffs.empty() && fs::is_regular_file(a.coeffs)) j["input_coefficients_sha256"] = sha256_file(a.coeffs);
-  j["priors"] = pc.json;
-  if (!a.coeffs_recording_sha256.empty() && a.coeffs_recording_sha256 == j["recording"]["sha256"]) {
+  r.priors = pc.json;
+  if (!a.coeffs_recording_sha256.empty() && a.coeffs_recording_sha256 == r.recording.sha256) {
     const std::string w = "the input set was fitted on this same recording (imu.csv SHA-256 equal): its information is "
                           "counted twice, and the result's sigma are too small";
     input_warning(a.coeffs, 0, w);
-    j["priors"]["warning"] = w;
+    r.priors["warning"] = w;
   }
   // In raw-data coefficients: the combined set's σ against hypot(set σ, allowance).
   const int mo = f->offset(inmotion::Block::mount);
   const Vec3 mount_sigma = mo >= 0 ? Vec3(f->P().block<3, 3>(mo, mo).diagonal().cwiseSqrt()) : Vec3::Zero();
-  j["determined_by"] = determined_by(pc.report.sigma_raw, inmotion::sigma_of(total, mount_sigma), bench);
+  r.determined_by = determined_by(pc.report.sigma_raw, inmotion::sigma_of(total, mount_sigma), bench);
   if (fx.present) {
     // The catalogue terms are part of the sensor model of the result too (qc applies them).
-    effects_to_json(fx.terms, fx.sigma, j["coefficients"]);
+    effects_to_json(fx.terms, fx.sigma, r.coefficients.extra);
     const EffectUse use = drive_effect_use(fx.terms, st.rows_with_temperature() > 0);
     nlohmann::json applied = use.applied, ignored = fx.ignored;
     for (const auto& [k, why] : use.ignored) ignored.push_back({{"key", k}, {"reason", why}});
@@ -765,8 +743,8 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   }
   Vec3 mr, ms;
   f->mounting_rpy(mr, ms);
-  j["mounting_rpy_deg"] = {{"value", to_json(Vec3(mr / kDeg))}, {"sigma", to_json(Vec3(ms / kDeg))},
-                           {"nominal", to_json(meta.mounting->rpy_deg)}, {"lever_arm_m", to_json(meta.mounting->lever_arm_m)}};
+  r.mounting = DriveMounting{Vec3(mr / kDeg), Vec3(ms / kDeg),
+                             {{"nominal", to_json(meta.mounting->rpy_deg)}, {"lever_arm_m", to_json(meta.mounting->lever_arm_m)}}};
   // The antenna blocks (--estimate): estimate with σ and prior; observable when σ < prior / 2.
   {
     Eigen::VectorXd x, sg;
@@ -813,7 +791,7 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
     }
     j["vehicle_constraints"] = vehicle_constraints_json(cfg, *f, cfg.prior.mount);
   }
-  j["consistency"] = cons;
+  r.consistency = cons;
   {
     const inmotion::AdaptiveNoise& an = f->adaptive_noise();
     j["adaptive_noise"] = {
@@ -885,9 +863,9 @@ nlohmann::json run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cf
   } else {
     qj = {{"sample", "not run"}};
   }
-  j["qc"] = qj;
-  if (a.write_out) write_text_atomic(a.out, j.dump(2) + "\n");
-  return j;
+  r.qc = qj;
+  if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
+  return r;
 }
 
 }  // namespace

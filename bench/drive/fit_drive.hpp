@@ -12,6 +12,7 @@
 #include "bench/drive/outage_qc.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
+#include "common/drive_result.hpp"
 
 namespace calbench {
 
@@ -86,10 +87,10 @@ struct AllowanceOption {
 };
 const std::array<AllowanceOption, 7>& allowance_options();
 
-// Runs the fit, writes args.out (and args.series), returns RESULT.json. Catalogue keys of the
+// Runs the fit, writes args.out (and args.series), returns RESULT.json (common/drive_result.hpp, its codec). Catalogue keys of the
 // coefficients (docs/diagnosis.md) are compensated on the IMU samples before the filter
 // (calibration/effects/effect_compensation.hpp); RESULT.json "effects" says which were applied and
 // which ignored, and its "coefficients" carry them. Without such keys nothing changes.
-nlohmann::json fit_drive(const FitDriveArgs& a);
+DriveResult fit_drive(const FitDriveArgs& a);
 
 }  // namespace calbench

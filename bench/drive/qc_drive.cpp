@@ -9,6 +9,7 @@
 #include "bench/drive/drive_stream.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "calibration/effects/effect_registry.hpp"
+#include "common/drive_result.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/qc/inertial_qc.hpp"
@@ -24,14 +25,13 @@ QcSet load_qc_set(const std::string& arg) {
   }
   s.name = fs::path(arg).stem().string();
   const nlohmann::json j = read_json_file(arg);
-  if (j.is_object() && j.contains("coefficients")) {
-    const CoefficientSet cs = coefficients_from_json(j["coefficients"], arg);
-    s.errors = cs.errors;
-    s.device = cs.device;
-    s.effects = effects_from_json(j["coefficients"], arg);
-    if (j.contains("mounting_rpy_deg")) s.mounting_rpy_deg = jvec3(jreq(j["mounting_rpy_deg"], "value", arg, "mounting_rpy_deg.value"), arg, "mounting_rpy_deg.value");
-    if (j.contains("window_s") && j["window_s"].is_array() && j["window_s"].size() == 2)
-      s.fit_window_s = std::make_pair(jnum(j["window_s"][0], arg, "window_s[0]"), jnum(j["window_s"][1], arg, "window_s[1]"));
+  if (is_drive_result(j)) {  // an in-motion RESULT.json: its coefficients, mounting and fit window
+    const DriveResult r = drive_result_from_json(j, arg);
+    s.errors = r.coefficients.errors;
+    s.device = r.coefficients.device;
+    s.effects = effects_from_json(r.coefficients.extra, arg);
+    if (r.mounting) s.mounting_rpy_deg = r.mounting->value_deg;
+    s.fit_window_s = r.window_s;
   } else {
     const CoefficientSet cs = coefficients_from_json(j, arg);
     s.errors = cs.errors;

@@ -10,6 +10,8 @@
 #include "bench/report/html_parts.hpp"
 #include "bench/report/svg_plot.hpp"
 #include "calibration/qc/nis_test.hpp"
+#include "common/drive_result.hpp"
+#include "common/json_parse.hpp"
 #include "db/inmotion_import.hpp"
 
 namespace calbench::report {
@@ -17,12 +19,21 @@ namespace {
 using nlohmann::json;
 using namespace calbench::db;
 
-json parse_or_empty(const std::string& text) {
+// The stored RESULT.json through its codec (common/drive_result.hpp). The store holds only results
+// the codec accepted on import; one it refuses now shows as "not recorded", with the reason.
+struct StoredResult {
+  DriveResult res;
+  std::string error;  // why the codec refused it; empty when read
+};
+StoredResult read_stored_result(const InMotionRun& r) {
+  StoredResult out;
+  const std::string where = "in-motion run " + std::to_string(r.id);
   try {
-    return json::parse(text);
-  } catch (...) {
-    return json::object();
+    out.res = drive_result_from_json(parse_json_text(r.result_json, where), where);
+  } catch (const std::exception& e) {
+    out.error = e.what();
   }
+  return out;
 }
 double number_or_nan(const json& o, const char* k) {
   return o.is_object() && o.contains(k) && o[k].is_number() ? o[k].get<double>() : std::nan("");
@@ -35,16 +46,12 @@ std::string row(const std::string& head, const std::string& cell) {
 }
 
 // ---- the run: recording, digests, reference, window, mounting ----
-std::string run_table(const InMotionRun& r, const json& res) {
-  const json rec = res.is_object() && res.contains("recording") ? res["recording"] : json::object();
+std::string run_table(const InMotionRun& r, const DriveResult& res) {
   std::string dig = "imu.csv " + digest(r.recording_sha256);
-  for (const auto& [k, file] : {std::pair{"sha256_reference", "reference.csv"}, std::pair{"sha256_meta", "meta.json"}})
-    if (rec.is_object() && rec.contains(k) && rec[k].is_string())
-      dig += "<br>" + std::string(file) + " " + digest(rec[k].get<std::string>());
+  for (const auto& [d, file] : {std::pair{&res.recording.sha256_reference, "reference.csv"}, std::pair{&res.recording.sha256_meta, "meta.json"}})
+    if (*d) dig += "<br>" + std::string(file) + " " + digest(**d);
   std::string window = "not recorded";
-  if (res.contains("window_s") && res["window_s"].is_array() && res["window_s"].size() == 2 && res["window_s"][0].is_number() &&
-      res["window_s"][1].is_number())
-    window = num(res["window_s"][0].get<double>()) + " – " + num(res["window_s"][1].get<double>()) + " s";
+  if (res.window_s) window = num(res.window_s->first) + " – " + num(res.window_s->second) + " s";
   std::string mount;
   for (std::size_t i = 0; i < 3; ++i)
     mount += (i ? " / " : "") + pm(r.mounting_rpy_deg[i], r.mounting_sigma_deg[i], 1.0);
@@ -55,38 +62,34 @@ std::string run_table(const InMotionRun& r, const json& res) {
                  ? "<span class=\"muted\">not recorded in this result (calbench fit drive writes \"reference_system\" "
                    "since issue 16)</span>"
                  : html_escape(r.reference_system)) +
-         row("fit window", window + " · observations " + html_escape(string_or(res, "observations", "not recorded")) +
-                               (res.contains("smoothed") && res["smoothed"] == true ? " · RTS-smoothed" : "")) +
+         row("fit window", window + " · observations " + html_escape(res.observations.value_or("not recorded")) +
+                               (res.smoothed.value_or(false) ? " · RTS-smoothed" : "")) +
          row("mounting roll / pitch / yaw [°]", mount) + "</table>\n";
 }
 
 // ---- which stage determined each coefficient ----
 std::string stage_table(const InMotionRun& r, const CoefficientSetRecord& set, const std::vector<CoefficientSetRecord>& sets,
-                        const json& res) {
+                        const StoredResult& stored) {
+  const DriveResult& res = stored.res;
   const CoefficientSetRecord* parent = nullptr;
   for (const auto& s : sets)
     if (set.parent_id && s.id == *set.parent_id) parent = &s;
-  std::optional<DeterminedBy> det;
+  const std::optional<DeterminedBy>& det = res.determined_by;
   std::string note;
-  try {
-    det = parse_determined_by(r.result_json, "in-motion run " + std::to_string(r.id));
-    if (!det)
-      note = "Stage not recorded: this in-motion result has no \"determined_by\" (results of calbench fit drive before "
-             "issue 16 do not say which stage determined each coefficient).";
-  } catch (const std::exception& e) {
-    note = std::string("Stage not shown: \"determined_by\" of this result is malformed: ") + e.what();
-  }
+  if (!stored.error.empty())
+    note = "Stage not shown: this stored result is malformed: " + stored.error;
+  else if (!det)
+    note = "Stage not recorded: this in-motion result has no \"determined_by\" (results of calbench fit drive before "
+           "issue 16 do not say which stage determined each coefficient).";
   std::ostringstream h;
   // The parent is whatever set the fit started from: a bench set, or an earlier combined set.
   const std::string parent_name = parent ? std::string(to_string(parent->source)) + " (set " + std::to_string(parent->id) + ")" : "";
   h << "<h4>Coefficients: " << (parent ? parent_name + " → " : std::string())
     << to_string(set.source) << " (set " << set.id << "), value ± 1σ, and the stage that determined each</h4>\n";
   if (det && !det->rule.empty()) h << "<p class=\"note\">Rule: " << html_escape(det->rule) << "</p>\n";
-  if (res.contains("priors") && res["priors"].is_object()) {
-    const json& pr = res["priors"];
-    h << "<p class=\"note\">Drive-filter priors: " << html_escape(string_or(pr, "mode", "mode not stated")) << ", device class "
-      << html_escape(string_or(pr, "device_class", "not stated")) << ".</p>\n";
-  }
+  if (res.priors.is_object())
+    h << "<p class=\"note\">Drive-filter priors: " << html_escape(res.priors_mode.empty() ? "mode not stated" : res.priors_mode)
+      << ", device class " << html_escape(res.priors_device_class.empty() ? "not stated" : res.priors_device_class) << ".</p>\n";
   if (!note.empty()) h << "<p class=\"note\">" << html_escape(note) << "</p>\n";
   if (!parent)
     h << "<p class=\"note\">No parent set: the fit ran on raw data (or on a set that is not in the database); the bench "
@@ -206,7 +209,7 @@ std::string cpe_marks_table(const json& qc, const InMotionRun& r) {
   return h.str();
 }
 
-std::string cpe_part(const json& qc, const json& res, const InMotionRun& r) {
+std::string cpe_part(const json& qc, const DriveResult& res, const InMotionRun& r) {
   std::ostringstream h;
   h << "<h4>Circular position error ΔS(t), inertial-only navigation (eq 39)</h4>\n";
   const double from = number_or_nan(qc, "from_s"), horizon = number_or_nan(qc, "horizon_s");
@@ -214,8 +217,7 @@ std::string cpe_part(const json& qc, const json& res, const InMotionRun& r) {
   if (std::isfinite(from)) ctx += " from T0 = " + num(from) + " s";
   if (std::isfinite(horizon)) ctx += " for " + num(horizon) + " s";
   ctx += "; data: " + string_or(qc, "sample", "not stated whether in- or out-of-sample");
-  if (res.contains("window_s") && res["window_s"].is_array() && res["window_s"].size() == 2 && res["window_s"][1].is_number())
-    ctx += "; the fit used " + num(res["window_s"][0].get<double>()) + " – " + num(res["window_s"][1].get<double>()) + " s";
+  if (res.window_s) ctx += "; the fit used " + num(res.window_s->first) + " – " + num(res.window_s->second) + " s";
   h << "<p class=\"note\">" << html_escape(ctx) << ".</p>\n";
   const CpeData d = cpe_curves(qc);
   if (d.curves.empty()) return h.str() + "<p class=\"muted\">no ΔS data in this run's QC</p>\n";
@@ -382,11 +384,14 @@ std::string consistency_table(const json& cons, const InMotionRun& r) {
 
 std::string inmotion_section(Store& store, const InMotionRun& r, const CoefficientSetRecord& set,
                              const std::vector<CoefficientSetRecord>& sets) {
-  const json res = parse_or_empty(r.result_json), qc = parse_or_empty(r.qc_json), cons = parse_or_empty(r.consistency_json);
+  const StoredResult stored = read_stored_result(r);
+  const DriveResult& res = stored.res;
+  // The free-form sections as written ("qc" of fit drive's QC and outage QC, "consistency").
+  const json qc = res.qc.is_null() ? json::object() : res.qc, cons = res.consistency.is_null() ? json::object() : res.consistency;
   std::ostringstream h;
   h << "<h3>In-motion run " << r.id << " → set " << set.id << " (" << to_string(set.source)
     << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
-    << run_table(r, res) << stage_table(r, set, sets, res) << (qc.contains("outages") && !qc.contains("sets") ? std::string() : cpe_part(qc, res, r))  // GNSS-only: outages only
+    << run_table(r, res) << stage_table(r, set, sets, stored) << (qc.contains("outages") && !qc.contains("sets") ? std::string() : cpe_part(qc, res, r))  // GNSS-only: outages only
     << outage_part(qc, r) << "<h4>QC metrics</h4>\n"
     << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(cons, r);
   return h.str();

@@ -93,4 +93,26 @@ import json
 r = json.load(open("r.json")); t = float(open("last-complete-t").read())
 assert abs(r["window_s"][1] - t) < 1e-9, (r["window_s"], t)
 PY
+# A malformed RESULT.json: every reader of it goes through the one codec (common/drive_result.cpp)
+# and refuses it the same way, exit 2 naming the file and the key (or the line of a cut file).
+python3 - <<'PY'
+import json
+r = json.load(open("r.json"))
+def bad(name, edit):
+    k = json.loads(json.dumps(r)); edit(k); json.dump(k, open(name, "w"), indent=2)
+bad("r-sha.json", lambda k: k["recording"].__setitem__("sha256", "abc"))
+bad("r-mount.json", lambda k: k.__setitem__("mounting_rpy_deg", [1, 2]))
+bad("r-bias.json", lambda k: k["coefficients"]["gyro"]["bias"].__setitem__(0, "x"))
+text = open("r.json").read(); open("r-cut.json", "w").write(text[: len(text) // 2])
+PY
+"$CALBENCH" db init --db h.db > /dev/null
+for f in sha:": 'recording.sha256': expected 64 hexadecimal digits" mount:": 'mounting_rpy_deg': expected an array of 3 numbers" \
+         bias:": 'coefficients.gyro.bias\[0\]': expected a number" cut:":[0-9]*: invalid JSON (truncated or malformed)"; do
+  file=r-${f%%:*}.json pat="${f#*:}"
+  expect2 "$file$pat" "$CALBENCH" fit drive drv --coeffs $file --out r2.json
+  [ ! -e r2.json ] || fail "fit drive wrote a result for $file"
+  expect2 "$file$pat" "$CALBENCH" qc drv --coeffs $file --horizon 5
+  expect2 "$file$pat" "$CALBENCH" diagnose drv --coeffs $file --no-innovations
+  expect2 "$file$pat" "$CALBENCH" db import-inmotion $file --db h.db
+done
 echo "parsers_hostile_input: ok"

@@ -1,0 +1,85 @@
+// The one codec of the in-motion RESULT.json (`calbench fit drive --out`; contract in
+// docs/in-motion.md "RESULT.json contract"), used by its writer (bench/drive/fit_drive.cpp) and its
+// readers: `fit drive --coeffs RESULT.json`, `qc --coeffs RESULT.json`, `diagnose --coeffs`,
+// `db import-inmotion` (db/inmotion_import.cpp) and the device report (bench/report/inmotion_section.cpp).
+//
+// Typed: what the readers use (device, recording and its digests, reference system, window,
+// observations, the coefficient sets, the mounting, which stage determined each coefficient).
+// Kept as written: the free-form sections of the writer ("consistency", "qc", "priors", and every
+// other top-level key in `extra`), so a read/write passes them through unchanged. Reading accepts
+// the older forms the store has always taken (device as a serial string, mounting as [r, p, y] or
+// with "rpy", its σ under "mounting_rpy_sigma_deg", coefficient blocks without format/device, the
+// reference under "reference" or recording.reference). File I/O is the caller's; the codec works on
+// parsed JSON and throws InputError(file, line, key, …) naming the key on anything malformed.
+#pragma once
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "common/coefficients_codec.hpp"
+#include "common/sensor_model.hpp"
+
+namespace calbench {
+
+inline constexpr const char* kDriveResultFormat = "calbench-inmotion-result/1";
+
+// "determined_by": which calibration stage determined each parameter, from the drive's share of the
+// information 1 − (σ_post/σ_prior)². σ in SI; nullopt = null (e.g. parent_sigma without a parent set).
+struct CoefficientStage {
+  std::string stage;  // "bench" | "drive" | "both" | "prior"
+  std::optional<double> parent_sigma, prior_sigma, posterior_sigma, ratio, drive_share;
+};
+struct DeterminedBy {
+  std::string rule;
+  std::map<std::string, CoefficientStage> coefficients;  // names of coefficient_names(); may be partial
+  std::map<std::string, CoefficientStage> mounting;      // mount.x, mount.y, mount.z
+  // Written: "count" of the coefficients' stages (bench, drive, both, prior), computed from them.
+};
+
+struct DriveRecording {
+  std::string path, sha256;  // sha256: of imu.csv (or recording.h5), 64 hexadecimal digits
+  std::optional<std::string> sha256_reference;  // null: no reference.csv
+  std::optional<std::string> sha256_meta, sha256_gnss;
+  std::optional<std::string> format;  // "hdf5": the digests are of recording.h5
+  std::optional<DeviceId> device;     // the unit that drove (must be the result's unit)
+  nlohmann::json extra = nlohmann::json::object();  // other keys, kept
+};
+
+struct DriveMounting {
+  Vec3 value_deg = Vec3::Zero();                      // roll, pitch, yaw
+  Vec3 sigma_deg = Vec3::Constant(kUnknownSigma);     // +inf: not stated
+  nlohmann::json extra = nlohmann::json::object();    // "nominal", "lever_arm_m", …
+};
+
+struct DriveResult {
+  std::string format;  // kDriveResultFormat; empty in older results without the key
+  DeviceId device;     // model may be empty in older results
+  DriveRecording recording;
+  std::string reference_system;                      // empty: not stated
+  std::optional<std::pair<double, double>> window_s;  // the fit window
+  std::optional<std::string> observations;
+  std::optional<bool> smoothed;
+  CoefficientSet coefficients;               // totals relative to the raw sensor output (+ catalogue keys)
+  std::optional<CoefficientSet> correction;  // relative to the input set
+  std::optional<DriveMounting> mounting;     // "mounting_rpy_deg"
+  std::optional<DeterminedBy> determined_by;
+  nlohmann::json priors;       // object or null (absent); "mode" and "device_class" read below
+  std::string priors_mode, priors_device_class;  // read from priors (empty when not stated); not written
+  nlohmann::json consistency;  // object or array, or null (absent)
+  nlohmann::json qc;           // object or array, or null (absent)
+  nlohmann::json extra = nlohmann::json::object();  // every other top-level key, as written
+};
+
+// True when a parsed file is a RESULT.json (its format says so, or it has no format and carries
+// "coefficients") rather than a coefficients.json.
+bool is_drive_result(const nlohmann::json& j);
+
+DriveResult drive_result_from_json(const nlohmann::json& j, const std::string& file);
+nlohmann::json drive_result_to_json(const DriveResult& r);
+
+// "determined_by" alone (nullopt when absent or null), as drive_result_from_json reads it.
+std::optional<DeterminedBy> determined_by_from_json(const nlohmann::json& result, const std::string& file);
+
+}  // namespace calbench

@@ -1,0 +1,192 @@
+// The one RESULT.json codec (common/drive_result.hpp): a result in the form `fit drive` writes
+// passes a read and a write unchanged, the typed parts hold what the readers use, the older forms
+// the store has always taken are read, and malformed input is refused naming the file and the key.
+#include "common/drive_result.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "common/input_error.hpp"
+#include "common/json_parse.hpp"
+
+namespace calbench {
+namespace {
+using nlohmann::json;
+
+json triad(double b) {
+  return {{"bias", {b, -b, 2 * b}},
+          {"M", {{1e-4, 2e-5, 0.0}, {0.0, -1e-4, 0.0}, {0.0, 0.0, 3e-4}}},
+          {"sigma_bias", {1e-6, 1e-6, 2e-6}},
+          {"sigma_M", {{1e-5, 1e-5, 1e-5}, {1e-5, 1e-5, 1e-5}, {1e-5, 1e-5, 1e-5}}}};
+}
+
+json stage(const char* s, double share) {
+  const double prior = 1e-3, post = prior * std::sqrt(1 - share);
+  return {{"parent_sigma", nullptr}, {"prior_sigma", prior}, {"posterior_sigma", post},
+          {"ratio", post / prior},   {"drive_share", share}, {"stage", s}};
+}
+
+// A result in the form fit drive writes (the keys it always writes, free-form sections abridged).
+json sample() {
+  json coeffs = {{"format", "calbench-coefficients/1"},
+                 {"device", {{"model", "ADIS16488A"}, {"serial", "U7"}}},
+                 {"gyro", triad(1e-5)},
+                 {"accel", triad(2e-3)},
+                 {"time_offset", {{"value", 0.002}, {"sigma", 1e-4}}}};
+  json corr = coeffs;
+  corr.erase("time_offset");
+  json c = json::object(), m = json::object();
+  for (const auto& n : coefficient_names()) c[n] = stage("drive", 0.9);
+  c["accel.M.zz"] = stage("both", 0.5);
+  for (const char* n : {"mount.x", "mount.y", "mount.z"}) m[n] = stage("prior", 0.0);
+  return {{"format", "calbench-inmotion-result/1"},
+          {"device", {{"model", "ADIS16488A"}, {"serial", "U7"}}},
+          {"recording",
+           {{"path", "/drives/d1"},
+            {"sha256", std::string(64, 'a')},
+            {"sha256_reference", nullptr},
+            {"sha256_meta", std::string(64, 'c')},
+            {"sha256_gnss", std::string(64, 'd')},
+            {"device", {{"model", "ADIS16488A"}, {"serial", "U7"}}}}},
+          {"reference_system", "GNSS fixes (gnss.csv)"},
+          {"window_s", {0.5, 135.25}},
+          {"observations", "pos,vel"},
+          {"aiding", "gnss"},
+          {"smoothed", false},
+          {"covariance", "structured"},
+          {"coefficients", coeffs},
+          {"correction", corr},
+          {"input_coefficients", nullptr},
+          {"priors", {{"mode", "data-sheet"}, {"device_class", "ADIS16488A"}, {"input", nullptr}}},
+          {"determined_by", {{"rule", "drive share"}, {"count", {{"bench", 0}, {"both", 1}, {"drive", 23}, {"prior", 0}}},
+                             {"coefficients", c}, {"mounting", m}}},
+          {"mounting_rpy_deg", {{"value", {0.1, -0.2, 90.3}}, {"sigma", {0.01, 0.02, 0.5}}, {"nominal", {0.0, 0.0, 90.0}},
+                                {"lever_arm_m", {-1.0, 0.2, -0.3}}}},
+          {"adaptive_noise", {{"enabled", true}, {"scale_max", 7.8e5}}},
+          {"consistency", {{"position", {{"epochs", 120}, {"mean_nis", 3.4}}}}},
+          {"qc", {{"sample", "in-sample (outages inside the data the fit used)"}, {"outages", {{"sets", json::array()}}}}}};
+}
+
+TEST(DriveResultCodec, AResultAsFitDriveWritesItPassesAReadAndAWriteUnchanged) {
+  const json in = sample();
+  const DriveResult r = drive_result_from_json(in, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), in);
+  EXPECT_EQ(drive_result_to_json(r).dump(2), in.dump(2));  // the bytes fit drive writes
+}
+
+TEST(DriveResultCodec, TheTypedPartsHoldWhatTheReadersUse) {
+  const DriveResult r = drive_result_from_json(sample(), "R.json");
+  EXPECT_EQ(r.format, kDriveResultFormat);
+  EXPECT_EQ(r.device.serial, "U7");
+  EXPECT_EQ(r.recording.path, "/drives/d1");
+  EXPECT_FALSE(r.recording.sha256_reference);  // null: no reference.csv
+  ASSERT_TRUE(r.recording.sha256_meta);
+  EXPECT_EQ(*r.recording.sha256_meta, std::string(64, 'c'));
+  ASSERT_TRUE(r.window_s);
+  EXPECT_DOUBLE_EQ(r.window_s->second, 135.25);
+  EXPECT_EQ(r.observations.value_or(""), "pos,vel");
+  EXPECT_DOUBLE_EQ(r.coefficients.errors.accel.bias(2), 4e-3);
+  EXPECT_TRUE(r.coefficients.extra.contains("time_offset"));  // catalogue keys stay with the set
+  ASSERT_TRUE(r.correction);
+  EXPECT_DOUBLE_EQ(r.correction->errors.gyro.M(0, 1), 2e-5);
+  ASSERT_TRUE(r.mounting);
+  EXPECT_DOUBLE_EQ(r.mounting->value_deg(2), 90.3);
+  EXPECT_DOUBLE_EQ(r.mounting->sigma_deg(1), 0.02);
+  ASSERT_TRUE(r.determined_by);
+  EXPECT_EQ(r.determined_by->coefficients.size(), 24u);
+  EXPECT_EQ(r.determined_by->coefficients.at("accel.M.zz").stage, "both");
+  EXPECT_FALSE(r.determined_by->coefficients.at("gyro.bias.x").parent_sigma);
+  EXPECT_EQ(r.determined_by->mounting.size(), 3u);
+  EXPECT_EQ(r.priors_mode, "data-sheet");
+  EXPECT_EQ(r.priors_device_class, "ADIS16488A");
+  EXPECT_EQ(r.extra.at("adaptive_noise").at("scale_max"), 7.8e5);  // free-form sections kept
+  EXPECT_FALSE(r.extra.contains("coefficients"));
+  EXPECT_TRUE(is_drive_result(sample()));
+  EXPECT_FALSE(is_drive_result(sample()["coefficients"]));
+}
+
+TEST(DriveResultCodec, ReadsTheOlderFormsTheStoreHasAlwaysTaken) {
+  json j = sample();
+  j.erase("format");
+  j["device"] = "U7";                          // the serial alone
+  j["coefficients"].erase("device");
+  j["correction"].erase("format");
+  j["correction"].erase("device");
+  j["mounting_rpy_deg"] = {1.0, 2.0, 3.0};
+  j["mounting_rpy_sigma_deg"] = {0.1, nullptr, 0.3};
+  j.erase("reference_system");
+  j["reference"] = {{"name", "FOG INS"}};
+  const DriveResult r = drive_result_from_json(j, "old.json");
+  EXPECT_TRUE(is_drive_result(j));  // no format, but coefficients
+  EXPECT_EQ(r.device.serial, "U7");
+  EXPECT_TRUE(r.device.model.empty());
+  EXPECT_EQ(r.coefficients.device.serial, "U7");
+  EXPECT_DOUBLE_EQ(r.mounting->value_deg(1), 2.0);
+  EXPECT_TRUE(std::isinf(r.mounting->sigma_deg(1)));
+  EXPECT_DOUBLE_EQ(r.mounting->sigma_deg(2), 0.3);
+  EXPECT_EQ(r.reference_system, R"({"name":"FOG INS"})");
+}
+
+// The refusal's field, checking that it names the file; "" when the input was accepted.
+std::string refused_field(const json& j) {
+  try {
+    (void)drive_result_from_json(j, "R.json");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "R.json") << e.what();
+    EXPECT_NE(std::string(e.what()).find("R.json"), std::string::npos);
+    return e.field().empty() ? "(no field)" : e.field();
+  }
+  return "";
+}
+
+TEST(DriveResultCodec, MalformedInputIsRefusedNamingTheFileAndTheKey) {
+  const auto with = [](auto edit) {
+    json j = sample();
+    edit(j);
+    return j;
+  };
+  EXPECT_EQ(refused_field(with([](json& j) { j.erase("device"); })), "device");
+  EXPECT_EQ(refused_field(with([](json& j) { j["device"] = 7; })), "device");
+  EXPECT_EQ(refused_field(with([](json& j) { j["format"] = "calbench-inmotion-result/2"; })), "format");
+  EXPECT_EQ(refused_field(with([](json& j) { j.erase("recording"); })), "recording");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["sha256"] = "abc"; })), "recording.sha256");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["path"] = 1; })), "recording.path");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["sha256_meta"] = 1; })), "recording.sha256_meta");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["device"]["serial"] = "U8"; })), "recording.device.serial");
+  EXPECT_EQ(refused_field(with([](json& j) { j.erase("coefficients"); })), "coefficients");
+  EXPECT_EQ(refused_field(with([](json& j) { j["coefficients"]["gyro"]["bias"][0] = "0.1"; })), "coefficients.gyro.bias[0]");
+  EXPECT_EQ(refused_field(with([](json& j) { j["coefficients"]["accel"].erase("M"); })), "coefficients.accel.M");
+  EXPECT_EQ(refused_field(with([](json& j) { j["correction"]["device"]["serial"] = "U8"; })), "correction.device.serial");
+  EXPECT_EQ(refused_field(with([](json& j) { j["mounting_rpy_deg"] = {1, 2}; })), "mounting_rpy_deg");
+  EXPECT_EQ(refused_field(with([](json& j) { j["mounting_rpy_deg"]["sigma"][0] = -1.0; })), "mounting_rpy_deg.sigma[0]");
+  EXPECT_EQ(refused_field(with([](json& j) { j["window_s"] = {1.0}; })), "window_s");
+  EXPECT_EQ(refused_field(with([](json& j) { j["window_s"][1] = "end"; })), "window_s[1]");
+  EXPECT_EQ(refused_field(with([](json& j) { j["smoothed"] = "yes"; })), "smoothed");
+  EXPECT_EQ(refused_field(with([](json& j) { j["observations"] = 3; })), "observations");
+  EXPECT_EQ(refused_field(with([](json& j) { j["priors"] = "data-sheet"; })), "priors");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"] = 3; })), "consistency");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"] = "fine"; })), "qc");
+  EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"] = "bench"; })), "determined_by");
+  EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"]["coefficients"]["gyro.bias.x"]["stage"] = "factory"; })),
+            "determined_by.coefficients.gyro.bias.x.stage");
+  EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"]["coefficients"]["gyro.bias.w"] = stage("drive", 0.9); })),
+            "determined_by.coefficients.gyro.bias.w");
+  EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"]["mounting"]["mount.x"]["ratio"] = "x"; })),
+            "determined_by.mounting.mount.x.ratio");
+  EXPECT_EQ(refused_field(json::array()), "(no field)");
+  EXPECT_EQ(refused_field(sample()), "");  // the sample itself is accepted
+  // A truncated file: the parser names the file and the line, the codec never sees it.
+  const std::string text = sample().dump(2);
+  try {
+    (void)drive_result_from_json(parse_json_text(text.substr(0, text.size() / 2), "R.json"), "R.json");
+    ADD_FAILURE() << "a truncated RESULT.json was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "R.json");
+    EXPECT_GT(e.line(), 1u);
+  }
+}
+
+}  // namespace
+}  // namespace calbench
