@@ -141,8 +141,10 @@ void print_summary(const DriveResult& r) {
     const auto& al = j["alignment"];
     std::cout << "  alignment        ";
     if (al["mode"] == "gnss") {
-      std::cout << "GNSS fixes, levelled " << al["level"]["t_s"][0].get<double>() << "–" << al["level"]["t_s"][1].get<double>()
-                << " s; heading ";
+      std::cout << "GNSS fixes, levelled " << al["level"]["t_s"][0].get<double>() << "–" << al["level"]["t_s"][1].get<double>() << " s"
+                << (al["level"].value("gyro_bias_observed", false) ? " (gyro bias from it)"
+                                                                   : " (not still by the IMU: no gyro bias from it)")
+                << "; heading ";
       if (al["heading"]["t_s"].is_null()) std::cout << "never found (no straight stretch, no hypothesis chosen)";
       else
         std::cout << (al["heading"]["source"].get<std::string>().rfind("hypotheses", 0) == 0 ? "chosen among heading hypotheses"

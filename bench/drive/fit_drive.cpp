@@ -684,6 +684,8 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
                      {"roll_pitch_deg", {al.level_rpy(0) / kDeg, al.level_rpy(1) / kDeg}},
                      {"accel_std_m_s2", al.level_accel_std},
                      {"gyro_mean_dps", al.level_gyro_mean / kDeg},
+                     {"quiet", al.level_quiet},
+                     {"gyro_bias_observed", al.level_gyro_bias},
                      {"assumes", "a standstill over the levelling window"}};
       aj["heading"] = al.heading_t >= 0
                           ? nlohmann::json{{"t_s", al.heading_t},

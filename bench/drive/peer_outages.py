@@ -3,7 +3,7 @@
 simulated drives with GNSS outages made by removing fixes, each tool's largest horizontal error
 against the truth during each outage, as a Markdown table on standard output.
 
-Per seed: `calbench simulate drive` (the route, --truth random) -> a copy whose gnss.csv lacks the
+Per seed: `calbench simulate drive` (the route, --truth random, --device-class) -> a copy whose gnss.csv lacks the
 fixes inside the outage windows -> (a) `calbench fit drive COPY --aiding gnss --series S
 --series-every 0.02 --outages none`, with --obs pos,vel (the default) and --obs pos (the forward
 pass's navigation solution, also between fixes) and
@@ -17,8 +17,10 @@ error), at the reference epochs (50 Hz) inside each window. Truth only scores: n
 docs/validation/peer-kf-gins.md).
 
 Usage: bench/drive/peer_outages.py --kf-gins /path/to/KF-GINS [--peer "i2Nav-WHU/KF-GINS COMMIT"]
-       [--seeds 1,2,3,4,5] [--route bench/routes/rtk_town.toml] [--outages 60:90,95:125,195:225]
-       [--standstill 25] [--work DIR]
+       [--seeds 1,2,3,4,5] [--device-class ADIS16488A] [--route bench/routes/rtk_town.toml]
+       [--outages 60:90,95:125,195:225] [--standstill 25] [--work DIR]
+The summary table's rows name the class and the seeds, so that the tables of several runs (classes,
+seed sets) can stand in one file.
 Environment: CALBENCH (the executable; default build/calbench).
 """
 import argparse
@@ -163,6 +165,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--kf-gins", required=True, help="the KF-GINS executable")
     ap.add_argument("--seeds", default="1,2,3,4,5", help="simulation seeds (default 1,2,3,4,5)")
+    ap.add_argument("--device-class", default="ADIS16488A",
+                    help="the simulated unit's IMU class (simulate drive --device-class; both filters take their noise from it "
+                         "through meta.json; default ADIS16488A)")
     ap.add_argument("--route", default="bench/routes/rtk_town.toml", help="route TOML (default rtk_town: RTK 5 Hz, 1.5 cm)")
     ap.add_argument("--outages", default="60:90,95:125,195:225", help="outage windows T0:T1 in s (fixes removed)")
     ap.add_argument("--standstill", type=float, default=25.0,
@@ -182,9 +187,10 @@ def main():
     os.makedirs(work, exist_ok=True)
     table, errs = [], {t: [] for t in TOOLS}
     for seed in seeds:
-        d = os.path.join(work, "s%d" % seed)
+        d = os.path.join(work, "%s_s%d" % (a.device_class, seed))
         if not os.path.exists(os.path.join(d, "meta.json")):
-            run([exe, "simulate", "drive", "--route", a.route, "--truth", "random", "--seed", str(seed), "--out", d], d + ".sim.log")
+            run([exe, "simulate", "drive", "--route", a.route, "--truth", "random", "--seed", str(seed), "--device-class",
+                 a.device_class, "--out", d], d + ".sim.log")
         c = d + "_outages"
         kept, removed = outage_copy(d, c, windows)
         sols = {}
@@ -211,7 +217,7 @@ def main():
                 errs[tool].append(e[tool])
             table.append((seed, w0, w1, e))
     route = os.path.basename(a.route)
-    print("Route `%s`, seeds %s, `--truth random` (ADIS16488A class, raw: no coefficient set), GNSS aiding only." % (route, a.seeds))
+    print("Route `%s`, seeds %s, `--truth random --device-class %s` (raw: no coefficient set), GNSS aiding only." % (route, a.seeds, a.device_class))
     print("Outages: the fixes with T0 < t <= T1 removed from gnss.csv for both tools. Error: largest horizontal")
     print("distance of the antenna (reference body origin) from reference.csv during the window, m.")
     print("KF-GINS (%s) cannot align itself: `export kf-gins` starts it from reference.csv's state at the first" % a.peer)
@@ -224,12 +230,13 @@ def main():
     for seed, w0, w1, e in table:
         print("| %d | %g–%g | %s |" % (seed, w0, w1, " | ".join("%.2f" % e[t] for t in TOOLS)))
     print()
-    print("| tool | median of the per-outage maxima (m) | largest (m) | outages at or below the better KF-GINS run |")
+    print("| tool (%s, seeds %s) | median of the per-outage maxima (m) | largest (m) | outages at or below the better KF-GINS run |"
+          % (a.device_class, a.seeds))
     print("|---|---:|---:|---:|")
     for tool, name in zip(TOOLS, names):
         lower = "" if tool.startswith("KF-GINS") else "%d of %d" % (
             sum(1 for r in table if r[3][tool] <= min(r[3]["KF-GINS"], r[3]["KF-GINS still"])), len(table))
-        print("| %s | %.2f | %.2f | %s |" % (name, median(errs[tool]), max(errs[tool]), lower))
+        print("| %s, %s, seeds %s | %.2f | %.2f | %s |" % (name, a.device_class, a.seeds, median(errs[tool]), max(errs[tool]), lower))
     if not a.work:
         shutil.rmtree(work)
 

@@ -184,7 +184,13 @@ const identification::DiscreteShapingFilter& DriftModels::discrete(int k, double
 }
 
 InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, const Vec3& lever, const RefObs& first)
-    : cfg_(cfg), layout_(make_layout(cfg_)), N_(layout_.size()), lever_(lever), still_(cfg_.standstill_window_s), adapt_(cfg.adaptive) {
+    : cfg_(cfg),
+      layout_(make_layout(cfg_)),
+      N_(layout_.size()),
+      lever_(lever),
+      still_(cfg_.standstill_window_s),
+      lvl_still_(cfg_.align_level_s),
+      adapt_(cfg.adaptive) {
   n_.nav = &nav_.state();
   n_.C_mb = C_mb;
   n_.extra = Vec::Zero(N_);
@@ -235,6 +241,7 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
     lvl_dv_ += dv;
     lvl_T_ += dt;
     lvl_f2_ += dv.squaredNorm() / dt;
+    lvl_still_.add(t, dth_raw / dt, dv_raw / dt, dt);
     nav_.state().t = t;
     return;
   }
@@ -510,7 +517,10 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     if (in_bank_) {  // a heading hypothesis: its innovations' log-likelihood, and no adaptive noise
       // (a wrong heading would buy itself noise to explain its misfit)
       loglik_ -= 0.5 * (nis + std::log(rec.S.determinant()));
-    } else {  // the adaptive process noise sees every innovation, a rejected one capped at the gate
+    } else if (phase_ == Phase::aligned) {
+      // The adaptive process noise sees every innovation once the heading is known, a rejected one
+      // capped at the gate. Not before: standing with a placeholder heading, the first metres of
+      // motion are seen in the wrong direction, a misfit of the heading, not of the noise (as in the bank).
       const double cap = nis > cfg_.gate_nis ? cfg_.gate_nis / nis : 1.0;
       // (the trace of the product expression, Eigen's diagonal-only sums, as measured: HPHt.trace()
       // sums in another order and moves the walk's results at the last digit)
@@ -613,6 +623,21 @@ void InMotionFilter::finish_levelling(const RefObs& r) {
   align_.level_rpy = Vec3(roll, pitch, 0.0);
   align_.level_accel_std = std::sqrt(std::max(0.0, lvl_f2_ / lvl_T_ - f.squaredNorm()));
   align_.level_gyro_mean = (lvl_dth_ / lvl_T_).norm();
+  align_.level_quiet = lvl_still_.quiet(cfg_.noise, cfg_.standstill_factor);
+  lvl_still_ = StandstillDetector(cfg_.align_level_s);  // its samples are no longer needed
+  if (cfg_.level_gyro_bias && align_.level_quiet && off(Block::bg) >= 0) {
+    // The gyro bias from the standstill, the heading unknown (InMotionConfig::level_gyro_bias).
+    const Vec3 y_mean = (Mat3::Identity() + n_.Mg) * (lvl_dth_ / lvl_T_) + n_.bg + n_.dg;
+    const Observation o =
+        zero_rate_observation(obs_context(), n_, y_mean, standstill_mean_sigma(cfg_.noise.gyro, cfg_.standstill_factor, lvl_T_), false);
+    const Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = pht<3>(o.H);
+    const Eigen::LDLT<Mat3> Sl(o.H * PHt + o.R);
+    const Eigen::Matrix<double, Eigen::Dynamic, 3> K = Sl.solve(PHt.transpose()).transpose();
+    Vec dx = Vec::Zero(N_);
+    update<3>(dx, o.H, o.R, PHt, K, o.z);
+    feedback(dx);
+    align_.level_gyro_bias = true;
+  }
   lvl_snap_ = Snapshot{P_, n_};
   phase_ = Phase::heading_unknown;
 }
@@ -679,12 +704,14 @@ bool InMotionFilter::course(double& cog, double& sigma, std::string& how) const 
   }
   // The chord from the oldest fix of a straight stretch to this one; its direction is the heading
   // at the middle of the stretch, moved to now by half the INS heading change along it.
+  const double min_chord =
+      std::clamp(std::sqrt(2.0) * n.sigma_h / cfg_.align_sideslip, cfg_.align_min_chord_m, std::max(cfg_.align_min_chord_m, cfg_.align_min_baseline_m));
   for (const Fix& f : fixes_) {
     const double turn = std::remainder(n.yaw_ins - f.yaw_ins, 2 * units::kPi);
     if (!(std::abs(turn) <= cfg_.align_max_turn)) continue;
     const Vec3 d = ins::geodetic_diff_ned(n.lat, n.lon, n.h, f.lat, f.lon, f.h);
     const double L = std::hypot(d(0), d(1));
-    if (L < cfg_.align_min_baseline_m) break;  // later fixes give shorter chords
+    if (L < min_chord) break;  // later fixes give shorter chords
     cog = std::atan2(d(1), d(0)) + 0.5 * turn;
     sigma = std::hypot(std::hypot(std::sqrt(2.0) * n.sigma_h / L, cfg_.align_sideslip), 0.1 * turn);
     how = "fix positions, " + fmt1(L) + " m chord over " + fmt1(n.t - f.t) + " s";
@@ -724,7 +751,17 @@ bool InMotionFilter::bank_reference(const RefObs& r) {
   std::vector<std::size_t> order(bank_.f.size());
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return bank_.f[a]->loglik_ > bank_.f[b]->loglik_; });
-  const double lead = bank_.f[order[0]]->loglik_ - bank_.f[order[1]]->loglik_;
+  // The lead over the most likely copy of another heading: copies that converged to the same heading
+  // (within half the spacing of their starts) are one answer, not an ambiguity; when all did, the
+  // lead is over the least likely.
+  const auto heading = [](const InMotionFilter& h) { return ins::rpy_from_dcm(h.nav_.state().C_nb() * h.n_.C_mb.transpose())(2); };
+  const double psi_best = heading(*bank_.f[order[0]]);
+  double lead = bank_.f[order[0]]->loglik_ - bank_.f[order.back()]->loglik_;
+  for (std::size_t k = 1; k < order.size(); ++k)
+    if (std::abs(std::remainder(heading(*bank_.f[order[k]]) - psi_best, 2 * units::kPi)) >= units::kPi / static_cast<double>(order.size())) {
+      lead = bank_.f[order[0]]->loglik_ - bank_.f[order[k]]->loglik_;
+      break;
+    }
   if (!(lead >= cfg_.align_bank_select) && T < cfg_.align_bank_max_s) return false;
   // The most likely hypothesis becomes the filter (its statistics include its bank epochs).
   std::unique_ptr<InMotionFilter> best = std::move(bank_.f[order[0]]);

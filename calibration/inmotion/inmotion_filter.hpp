@@ -94,7 +94,10 @@ struct InMotionConfig {
   bool realign_heading = true;
   double align_level_s = 10;                  // s of data for levelling (GNSS-only start)
   double align_min_speed = 3;                 // m/s: course from the fix velocity
-  double align_min_baseline_m = 30;           // m: course from the fix positions (chord)
+  // Course from the fix positions: a chord long enough that the fixes' noise (√2·σ_h/L) is below the
+  // sideslip σ, at least align_min_chord_m, at most align_min_baseline_m (fixes of 0.37 m and worse).
+  double align_min_baseline_m = 30;
+  double align_min_chord_m = 5;
   double align_window_s = 20;                 // s of fixes kept for the chord
   double align_max_turn = 10 * units::kDeg;   // largest heading change (INS) along the chord
   double align_sideslip = 1.0 * units::kDeg;  // 1σ of the body's course-heading difference
@@ -122,6 +125,13 @@ struct InMotionConfig {
   // levelling). With the heading unknown the filter's model of that standstill is wrong (the Earth
   // rate in the wrong axes, linearised 100°+ from the truth), so what it learnt is not information.
   bool restart_at_heading = true;
+  // GNSS-only start: the gyro bias from the levelling standstill (the zero-rate observation of
+  // obs_zupt.cpp with the heading unknown: the mean rate less the Earth rate's down component, its
+  // horizontal part as noise), where the IMU was quiet over the window by the standstill rule
+  // (standstill.hpp, standstill_factor). It is what a filter started from a known attitude gets
+  // from its opening standstill; without it the yaw-gyro bias starts at its raw prior (0.5 °/s on
+  // an ADIS16488A) and only position fixes in motion, through the heading, can tell it.
+  bool level_gyro_bias = true;
   // Optional blocks (state_blocks.hpp): the mounting misalignment (off: the nominal mounting is
   // taken as exact), and blocks declared outside the filter's files, appended to the layout.
   bool mounting = true;
@@ -150,6 +160,8 @@ struct AlignmentReport {
   Vec3 level_rpy = Vec3::Zero();   // MEMS roll, pitch (rad) from the levelling; yaw undefined
   double level_accel_std = 0;      // m/s², std of the specific-force norm over the levelling window
   double level_gyro_mean = 0;      // rad/s, |mean rate| over the window (turn-on bias + Earth rate at rest)
+  bool level_quiet = false;        // the window was a standstill by the standstill rule
+  bool level_gyro_bias = false;    // the gyro bias was observed on it (InMotionConfig::level_gyro_bias)
   double heading_t = -1;           // first heading from the course (−1: none)
   int heading_hypotheses = 0;      // > 0: the first heading chosen among this many hypotheses (not the course)
   double heading_lead = 0;         // the chosen hypothesis's log-likelihood lead over the next
@@ -393,6 +405,7 @@ class InMotionFilter {
   Snapshot lvl_snap_;  // at the end of levelling (restart_at_heading)
   Vec3 lvl_dth_ = Vec3::Zero(), lvl_dv_ = Vec3::Zero();
   double lvl_T_ = 0, lvl_f2_ = 0;  // levelling sums: time, Σ|f|²·dt
+  StandstillDetector lvl_still_;   // the levelling window's samples, for the standstill rule
   std::deque<Fix> fixes_;
   double moving_since_ = -1;  // start of the current motion without a heading (−1: standing)
   // The bank of heading hypotheses while it runs; a copy of the filter starts with an empty one.

@@ -63,8 +63,10 @@ ObservationM<2> nhc_observation(const ObsContext& c, double sigma);
 Observation zupt_observation(const ObsContext& c, double sigma);
 // Zero angular rate w.r.t. the Earth at a standstill (obs_zupt.cpp), an observation of the gyro's
 // sensor model: z = Â_g·(ȳ − b̂_g − d̂_g) − Ĉ_mn·ω_ie^n, ȳ the mean raw gyro rate of the data
-// over the interval, σ per axis (the white noise of that mean).
-Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const Vec3& y_mean, double sigma);
+// over the interval, σ per axis (the white noise of that mean). heading_known false: the heading is a
+// placeholder (GNSS-only levelling): the Earth rate's horizontal part is noise, no attitude columns.
+Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const Vec3& y_mean, double sigma,
+                                  bool heading_known = true);
 
 // The MEMS INS state at a reference epoch, transferred through the mounting C_mb and the lever
 // arm (initial alignment from the reference system, paper section III). Used to start the

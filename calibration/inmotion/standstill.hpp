@@ -12,6 +12,7 @@
 // more than that — except on a perfectly smooth straight road at constant speed, which the IMU
 // alone cannot tell from a standstill: the filter adds a speed condition (the INS's and the fixes').
 #pragma once
+#include <cmath>
 #include <deque>
 
 #include "common/noise_spec.hpp"
@@ -38,5 +39,11 @@ class StandstillDetector {
   double window_s_;
   std::deque<Sample> s_;
 };
+
+// 1σ per axis of the mean rate (or specific force) of a triad over T seconds of a standstill: the
+// white noise the rule above allows (its factor) and the quantisation of one sample.
+inline double standstill_mean_sigma(const TriadNoise& q, double factor, double T) {
+  return std::sqrt(factor * q.white_density * q.white_density / T + q.lsb * q.lsb / 12.0);
+}
 
 }  // namespace calbench::inmotion

@@ -74,10 +74,7 @@ void InMotionFilter::constrain() {
     if (!cfg_.obs_zupt) return;
     any = constraint_update<3>(dx, zupt_observation(c, cfg_.zupt_sigma), cstats_[kObsZupt - 3]) || any;
     if (cfg_.zupt_zero_rate) {
-      // σ of the interval's mean rate: the white noise the standstill rule allows (its factor),
-      // and the quantisation of one sample.
-      const TriadNoise& g = cfg_.noise.gyro;
-      const double sigma = std::sqrt(cfg_.standstill_factor * g.white_density * g.white_density / T + g.lsb * g.lsb / 12.0);
+      const double sigma = standstill_mean_sigma(cfg_.noise.gyro, cfg_.standstill_factor, T);
       any = constraint_update<3>(dx, zero_rate_observation(c, n_, y_mean, sigma), cstats_[kObsZeroRate - 3]) || any;
     }
   } else {
