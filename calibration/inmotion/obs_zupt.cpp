@@ -22,7 +22,7 @@ Observation zupt_observation(const ObsContext& c, double sigma) {
   Observation o;
   o.H.setZero(3, c.n_states);
   o.z = c.mems->v;
-  o.H.block<3, 3>(0, kVel) = Mat3::Identity();
+  o.H.block<3, 3>(0, c.vel) = Mat3::Identity();
   o.R = Mat3::Identity() * (sigma * sigma);
   return o;
 }
@@ -35,7 +35,7 @@ Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const V
   const Mat3 C_mn = c.mems->C_nb().transpose();
   const Vec3 w_ie = ins::earth_rate_ned_at(c.mems->lat);
   o.z = w_hat - C_mn * w_ie;
-  o.H.block<3, 3>(0, kAtt) = C_mn * ins::skew(w_ie);
+  o.H.block<3, 3>(0, c.att) = C_mn * ins::skew(w_ie);
   if (c.gyro_bias >= 0) o.H.block<3, 3>(0, c.gyro_bias) = -A;
   if (c.gyro_drift >= 0) o.H.block<3, 3>(0, c.gyro_drift) = -A;
   if (c.gyro_M >= 0) o.H.block<3, 9>(0, c.gyro_M) = -A * m_jacobian(w_hat);
