@@ -1,5 +1,6 @@
 // The declarations of the in-motion filter's built-in blocks (state_blocks.hpp): per block its
-// names and units, and its own code — initial covariance, feedback, F and Q, series value.
+// names and units, and its own code — initial covariance, feedback, sensor-model role (compensate,
+// accumulate), F and Q, series value.
 // Adding a block is one declaration like these (and its Jacobian in error_model.cpp when it is
 // more than a line), here or, for a block the filter does not ship, in InMotionConfig::extra_blocks.
 #include "calibration/inmotion/state_blocks.hpp"
