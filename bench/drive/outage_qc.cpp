@@ -55,7 +55,8 @@ void OutageRecorder::epoch(const inmotion::InMotionFilter& f, const inmotion::Re
     speed = ins::geodetic_diff_ned(r.lat, r.lon, r.h, prev_.lat, prev_.lon, prev_.h).head<2>().norm() / (r.t - prev_.t);
   have_prev_ = true;
   prev_ = r;
-  const double heading_sigma = std::sqrt(std::max(0.0, f.P()(inmotion::kAtt + 2, inmotion::kAtt + 2)));
+  const int yaw = f.offset(inmotion::Block::att) + 2;
+  const double heading_sigma = std::sqrt(std::max(0.0, f.P()(yaw, yaw)));
   const bool eligible = took && f.heading_known() && heading_sigma <= kOutageMaxHeadingSigmaDeg * units::kDeg &&
                         speed >= kOutageMinSpeed;
   epochs_.push_back({r.t, eligible, f.nav()});

@@ -38,7 +38,7 @@ BlockSpec lever_arm_block() {
     const Vec3 u = type == 0 ? Vec3(C_nb * l) : Vec3(C_nb * o.c.w_eb_b.cross(l));
     z -= u;
     H.block<3, 3>(0, off) = type == 0 ? Mat3(-C_nb) : Mat3(-C_nb * ins::skew(o.c.w_eb_b));
-    H.block<3, 3>(0, kAtt) -= ins::skew(u);
+    H.block<3, 3>(0, o.c.att) -= ins::skew(u);
     if (o.c.mount >= 0) H.block<3, 3>(0, o.c.mount) += ins::skew(u) * C_nb;
   };
   b.total = [](const Nominal& n, int off, double* x) { copy_extra(n, off, 3, x); };
@@ -58,7 +58,7 @@ BlockSpec time_offset_block() {
     const Vec3 rate = type == 0 ? o.c.mems->v : o.c.a_ned;  // of the reference body origin (the lever's part neglected)
     z -= rate * n.extra(off);
     H.block<3, 1>(0, off) = -rate;
-    if (type == 0) H.block<3, 3>(0, kVel) -= Mat3::Identity() * n.extra(off);  // v̂ = v + δv in −v̂·δt̂
+    if (type == 0) H.block<3, 3>(0, o.c.vel) -= Mat3::Identity() * n.extra(off);  // v̂ = v + δv in −v̂·δt̂
   };
   b.total = [](const Nominal& n, int off, double* x) { copy_extra(n, off, 1, x); };
   b.position_offset = [](const Nominal&, const Mat3Ref&, const Vec3Ref& v, int, Eigen::MatrixXd& A) { A = v; };

@@ -10,6 +10,7 @@
 // F̄ is the mean of F over the interval T.
 #pragma once
 #include "calibration/identification/shaping_filter.hpp"
+#include "calibration/inmotion/state_blocks.hpp"
 #include "calibration/inmotion/state_layout.hpp"
 #include "calibration/ins/nav_math.hpp"
 
@@ -18,16 +19,44 @@ namespace calbench::inmotion {
 // ∂(δM·x)/∂vec(δM) for row-major vec: a 3×9 matrix with xᵀ in row i at columns 3i..3i+2.
 Eigen::Matrix<double, 3, 9> m_jacobian(const Vec3& x);
 
-// Sums over IMU samples of the sensor-dependent F blocks, times dt.
+// The sensors of the sensor model: index of a sensor's entries in SensorCorrection and ImuSample.
+enum Sensor { kGyro = 0, kAccel = 1 };
+
+// The correction of the raw increments, y → ŵ (InMotionFilter::imu()), built by the sensor-error
+// blocks from their nominal values (BlockSpec::compensate, in layout order; sensor_correction() in
+// state_blocks.hpp): per sensor
+//   corrected = A·(raw − offset·dt),   offset = the sum of the additive blocks' values (b̂ + d̂),
+//   A = (I + M̂)⁻¹ (identity without an M block).
+// The offset starts at −0, the neutral element of the sum (−0 + x = x for every x, also ±0), so the
+// blocks' values are summed exactly as b̂ + d̂.
+struct SensorCorrection {
+  Vec3 offset[2] = {Vec3::Constant(-0.0), Vec3::Constant(-0.0)};
+  Mat3 A[2] = {Mat3::Identity(), Mat3::Identity()};
+  Vec3 apply(int sensor, const Vec3& raw, double dt) const { return A[sensor] * (raw - offset[sensor] * dt); }
+};
+
+// One IMU interval as the transition sees it: the attitude at its start C_nb, the corrected rate
+// w_b and specific force f_b (body), dt, and per sensor CA = C_nb·A·dt, the map of that sensor's
+// error (δb, δd, δM·x) into the navigation equations over the interval.
+struct ImuSample {
+  Mat3 C_nb;
+  Vec3 x[2];  // corrected output per sensor: w_b (gyro), f_b (accelerometer)
+  double dt;
+  Mat3 CA[2];
+};
+
+// Sums over IMU samples of the sensor-dependent F entries, times dt: the blocks' own
+// (BlockSpec::accumulate, each into its columns of `sum`, three rows: the navigation rows it feeds),
+// and the navigation block's input, the specific force in NED.
 struct FAccumulator {
   double T = 0;
-  Mat3 att_bg = Mat3::Zero();                                 // ∫ C_nb·A_g dt        (φ ← δb_g, δd_g)
-  Eigen::Matrix<double, 3, 9> att_mg = Eigen::Matrix<double, 3, 9>::Zero();  // ∫ C_nb A_g W(ω) dt
-  Mat3 vel_ba = Mat3::Zero();                                 // ∫ C_nb·A_a dt        (δv ← δb_a, δd_a)
-  Eigen::Matrix<double, 3, 9> vel_ma = Eigen::Matrix<double, 3, 9>::Zero();  // ∫ C_nb A_a W(f) dt
-  Vec3 f_n = Vec3::Zero();                                    // ∫ f^n dt
-  void add(const Mat3& C_nb, const Mat3& A_g, const Mat3& A_a, const Vec3& w_b, const Vec3& f_b, double dt);
-  void clear() { *this = FAccumulator{}; }
+  Vec3 f_n = Vec3::Zero();                 // ∫ f^n dt
+  Eigen::Matrix<double, 3, Eigen::Dynamic> sum;  // 3 × the layout's size (zero columns: a block without accumulate)
+  // Sized (and zeroed) for a layout of n states.
+  void resize(int n);
+  // One IMU interval: every active block's accumulate hook, in layout order.
+  void add(const StateLayout& L, const Mat3& C_nb, const SensorCorrection& c, const Vec3& w_b, const Vec3& f_b, double dt);
+  void clear();
 };
 
 // Navigation block (position, velocity, attitude) at the current nominal state.
@@ -37,17 +66,14 @@ struct NavBlockInputs {
   Vec3 f_n = Vec3::Zero();  // mean specific force over the interval
   ins::LocalEarth earth;
 };
-// Each writes its rows of F (any layout: the offsets of the blocks are fixed, the state may be longer).
+// Each writes its rows of F at the offsets the layout gave its blocks.
 using FRef = Eigen::Ref<Eigen::MatrixXd>;
-void nav_block(const NavBlockInputs& in, FRef F);
-// The sensor blocks' columns, each block's own (called by its declaration, state_blocks.cpp), as
-// the mean over the interval of the accumulated sums:
-//   φ̇ ∋ −C δω = +C A (δb + δd + δM ω)      (gyro bias and in-run drift at `col`, M at `col`)
-//   δv̇ ∋ C δf = −C A (δb + δd + δM f)       (accelerometer likewise)
-void gyro_bias_jacobian(const FAccumulator& acc, int col, FRef F);
-void gyro_M_jacobian(const FAccumulator& acc, int col, FRef F);
-void accel_bias_jacobian(const FAccumulator& acc, int col, FRef F);
-void accel_M_jacobian(const FAccumulator& acc, int col, FRef F);
+void nav_block(const NavBlockInputs& in, int pos, int vel, int att, FRef F);
+// A sensor-error block's columns of F (called by its declaration, state_blocks.cpp), the mean over
+// the interval of what the block accumulated:
+//   φ̇ ∋ −C δω = +C A (δb + δd + δM ω)      (gyro: attitude rows)
+//   δv̇ ∋ C δf = −C A (δb + δd + δM f)       (accelerometer: velocity rows)
+void sensor_jacobian(const FAccumulator& acc, int sensor, int rows, int col, int size, FRef F);
 // Shaping filter of a first-order in-run drift (eq 22): δḋ = −α·δd + σ√(2α)·ξ, the block at off.
 void drift_jacobian(const Vec3& alpha, int off, FRef F);
 // Exponential-cosine shaping filter of one axis (eqs 35–36, drift_expcos.cpp): the 2×2 A of

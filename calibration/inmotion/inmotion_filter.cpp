@@ -200,6 +200,7 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
   const Mat3 C_nb = ins::dcm_from_rpy(first.rpy);
   nav_.reset(mems_state_from_reference(first, n_.C_mb, lever_));
 
+  acc_.resize(N_);
   // Initial covariance: each block its own (state_blocks.cpp), in layout order.
   P_.setZero(N_, N_);
   const BlockInit in{cfg_, first, drift_, C_nb, first.sigma_pos > 0 ? first.sigma_pos : cfg_.ref_sigma_pos,
@@ -220,9 +221,13 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
   refresh_correctors();
 }
 
-void InMotionFilter::refresh_correctors() {
-  Ag_ = (Mat3::Identity() + n_.Mg).inverse();
-  Aa_ = (Mat3::Identity() + n_.Ma).inverse();
+void InMotionFilter::refresh_correctors() { corr_ = sensor_correction(layout_, n_); }
+
+void InMotionFilter::scale_navigation(Mat& P, double d) const {
+  for (const BlockSpec* b : layout_.specs)
+    if (b->navigation) P.middleRows(off(b->id), b->size) *= d;
+  for (const BlockSpec* b : layout_.specs)
+    if (b->navigation) P.middleCols(off(b->id), b->size) *= d;
 }
 
 void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, double dt) {
@@ -234,8 +239,9 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
   }
   const bool constraints = cfg_.obs_nhc || cfg_.obs_zupt;
   if (constraints) constraint_sample(t, dth_raw, dv_raw, dt);
-  const Vec3 dth = Ag_ * (dth_raw - (n_.bg + n_.dg) * dt);
-  const Vec3 dv = Aa_ * (dv_raw - (n_.ba + n_.da) * dt);
+  // The raw increments corrected by the sensor-error blocks (BlockSpec::compensate).
+  const Vec3 dth = corr_.apply(kGyro, dth_raw, dt);
+  const Vec3 dv = corr_.apply(kAccel, dv_raw, dt);
   if (phase_ == Phase::levelling) {  // standing: accumulate for the levelling, no navigation yet
     lvl_dth_ += dth;
     lvl_dv_ += dv;
@@ -250,7 +256,7 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
   nav_.update(dth, dv, dt);
   w_last_ = dth / dt;
   a_last_ = (nav_.state().v - v0) / dt;
-  acc_.add(C0, Ag_, Aa_, w_last_, dv / dt, dt);
+  acc_.add(layout_, C0, corr_, w_last_, dv / dt, dt);  // each block's part of the transition (BlockSpec::accumulate)
   nav_.state().t = t;
   if (acc_.T >= cfg_.cov_dt) {
     propagate();
@@ -363,6 +369,7 @@ void InMotionFilter::propagate() {
   }
   if (dense || cfg_.store_for_smoother) P_ = P_next;
   propagate_drift_nominal(T);
+  refresh_correctors();  // the drift estimates moved
   acc_.clear();
 }
 
@@ -415,11 +422,7 @@ ObsContext InMotionFilter::obs_context() const {
   c.mems = &nav_.state();
   c.C_mb = n_.C_mb;
   c.lever = lever_;
-  c.n_states = N_;
-  c.mount = off(Block::mount);
-  c.gyro_bias = off(Block::bg);
-  c.gyro_drift = off(Block::dg);
-  c.gyro_M = off(Block::Mg);
+  c.set_layout(layout_);
   const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
   c.w_eb_b = n_.C_mb * w_last_ - w_ie_b;
   c.a_ned = a_last_;
@@ -477,7 +480,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     } else {
       if (!mv) motion_check_ = true;  // standing: the next start of motion checks the heading
       if (mv && course(cog, sc, how)) {
-        const double sp = std::sqrt(std::max(0.0, P_(kAtt + 2, kAtt + 2)));
+        const double sp = std::sqrt(std::max(0.0, P_(off(Block::att) + 2, off(Block::att) + 2)));
         double lost = 0;  // longest current run of gate rejections
         for (const ConsistencyStats& st : stats_)
           if (st.rejected_since >= 0) lost = std::max(lost, r.t - st.rejected_since);
@@ -542,16 +545,12 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       for (int it = 0; it < 40; ++it) {  // bisection on λ (NIS falls monotonically with it)
         const double lam = std::sqrt(lo * hi);
         Mat Pl = P_;
-        const double d = std::sqrt(lam);
-        Pl.template middleRows<9>(kPos) *= d;
-        Pl.template middleCols<9>(kPos) *= d;
+        scale_navigation(Pl, std::sqrt(lam));
         const Eigen::LDLT<Mat3> Sx(H * Pl * H.transpose() + o.R);
         (nu.dot(Sx.solve(nu)) > cfg_.gate_nis ? lo : hi) = lam;
       }
-      const double d = std::sqrt(hi);
       p_symmetric_ = false;
-      P_.template middleRows<9>(kPos) *= d;
-      P_.template middleCols<9>(kPos) *= d;
+      scale_navigation(P_, std::sqrt(hi));
       static const char* tn[3] = {"position", "velocity", "attitude"};
       recoveries_.push_back({r.t, std::string("lost track: ") + tn[type] + " rejected by the gate for " +
                                       std::to_string(static_cast<int>(cfg_.gate_recover_s)) + " s",
@@ -569,7 +568,8 @@ bool InMotionFilter::reference(const RefObs& r_in) {
   }
   // The course over ground as a heading observation while the heading is poorly known.
   if (phase_ == Phase::aligned && !cfg_.obs_att && cfg_.realign_heading && !in_bank_ && cfg_.course_update_s > 0 &&
-      r.t - last_course_t_ >= cfg_.course_update_s && P_(kAtt + 2, kAtt + 2) > cfg_.course_update_sigma * cfg_.course_update_sigma &&
+      r.t - last_course_t_ >= cfg_.course_update_s &&
+      P_(off(Block::att) + 2, off(Block::att) + 2) > cfg_.course_update_sigma * cfg_.course_update_sigma &&
       moving()) {
     double cog = 0, sc = 0;
     std::string how;
@@ -578,7 +578,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       // Heading of the reference body: z = ψ_course − ψ̂ = e_Dᵀ(φ − C_nb·δμ) (the down row of eq 15).
       const Mat3 C_nb = predicted_body_attitude(c);
       Eigen::Matrix<double, 1, Eigen::Dynamic> H = Eigen::Matrix<double, 1, Eigen::Dynamic>::Zero(N_);
-      H(kAtt + 2) = 1;
+      H(off(Block::att) + 2) = 1;
       if (off(Block::mount) >= 0) H.template segment<3>(off(Block::mount)) = -C_nb.row(2);
       const double z = std::remainder(cog - ins::rpy_from_dcm(C_nb)(2), 2 * units::kPi);
       const double nu = z - (H * dx)(0);
@@ -656,11 +656,12 @@ Vec3 InMotionFilter::position_offset_blocks(const Mat3& C_nb, const Vec3& v) {
   }
   if (G.size() == 0) return d;
   // r = r₀ + G·x: Cov(r, x) = G·P(·, x) (P(blocks, r) = 0 before), Cov(r, r) = P₀ + G·P·Gᵀ.
-  const Mat3 Prr = P_.block<3, 3>(kPos, kPos) + G * P_ * G.transpose();
+  const int pos = off(Block::pos);
+  const Mat3 Prr = P_.block<3, 3>(pos, pos) + G * P_ * G.transpose();
   const Mat rows = G * P_;
-  P_.middleRows<3>(kPos) += rows;
-  P_.middleCols<3>(kPos) = P_.middleRows<3>(kPos).transpose();
-  P_.block<3, 3>(kPos, kPos) = Prr;
+  P_.middleRows<3>(pos) += rows;
+  P_.middleCols<3>(pos) = P_.middleRows<3>(pos).transpose();
+  P_.block<3, 3>(pos, pos) = Prr;
   p_symmetric_ = false;
   return d;
 }
@@ -767,7 +768,7 @@ bool InMotionFilter::bank_reference(const RefObs& r) {
   std::unique_ptr<InMotionFilter> best = std::move(bank_.f[order[0]]);
   const int K = static_cast<int>(bank_.f.size());
   const Vec3 rpy = ins::rpy_from_dcm(best->nav_.state().C_nb() * best->n_.C_mb.transpose());
-  const double sig = std::sqrt(std::max(0.0, best->P_(kAtt + 2, kAtt + 2)));
+  const double sig = std::sqrt(std::max(0.0, best->P_(best->off(Block::att) + 2, best->off(Block::att) + 2)));
   std::vector<Recovery> rec = std::move(recoveries_);
   AlignmentReport al = align_;
   *this = std::move(*best);
@@ -822,8 +823,10 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
   s.h = r.h;
   ins::geodetic_add_ned(s.lat, s.lon, s.h, C_nb * lever_);
   // The NED error blocks turn with the heading (the filter's world was rotated by the heading error).
-  for (int b : {kPos, kVel, kAtt}) P_.template middleRows<3>(b) = R * P_.template middleRows<3>(b);
-  for (int b : {kPos, kVel, kAtt}) P_.template middleCols<3>(b) = P_.template middleCols<3>(b) * R.transpose();
+  for (const BlockSpec* b : layout_.specs)
+    if (b->navigation) P_.template middleRows<3>(off(b->id)) = R * P_.template middleRows<3>(off(b->id));
+  for (const BlockSpec* b : layout_.specs)
+    if (b->navigation) P_.template middleCols<3>(off(b->id)) = P_.template middleCols<3>(off(b->id)) * R.transpose();
   // Heading error of the MEMS = course error ⊕ mounting error seen about down: φ_D = ε + c·δμ,
   // c = e_Dᵀ·C_nb, so it correlates with the mounting and with what the mounting correlates with.
   const Eigen::Matrix<double, 1, 3> c = C_nb.row(2);
@@ -831,20 +834,22 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
   const Eigen::Matrix<double, 1, Eigen::Dynamic> row =
       mo >= 0 ? Eigen::Matrix<double, 1, Eigen::Dynamic>(c * P_.middleRows<3>(mo)) : Eigen::Matrix<double, 1, Eigen::Dynamic>::Zero(N_);
   const double var = sigma * sigma + (mo >= 0 ? (c * P_.block<3, 3>(mo, mo) * c.transpose())(0, 0) : 0.0);
-  P_.row(kAtt + 2) = row;
-  P_.col(kAtt + 2) = row.transpose();
-  P_(kAtt + 2, kAtt + 2) = var;
+  const int yaw = off(Block::att) + 2;
+  P_.row(yaw) = row;
+  P_.col(yaw) = row.transpose();
+  P_(yaw, yaw) = var;
   // Position reset to the fix; velocity to the fix's, or rotated with a σ for the heading it had.
   const double sp = std::hypot(s.v(0), s.v(1));
   const double sv = fix_vel ? r.sigma_vel : std::hypot(0.5, sp * sigma);
   const Vec3 sd(r.sigma_pos, r.sigma_pos, r.sigma_pos_v > 0 ? r.sigma_pos_v : r.sigma_pos);
+  const int pos = off(Block::pos), vel = off(Block::vel);
   for (int i = 0; i < 3; ++i) {
-    P_.row(kPos + i).setZero();
-    P_.col(kPos + i).setZero();
-    P_(kPos + i, kPos + i) = sd(i) * sd(i);
-    P_.row(kVel + i).setZero();
-    P_.col(kVel + i).setZero();
-    P_(kVel + i, kVel + i) = i < 2 ? sv * sv : (fix_vel ? sv * sv : 0.3 * 0.3);
+    P_.row(pos + i).setZero();
+    P_.col(pos + i).setZero();
+    P_(pos + i, pos + i) = sd(i) * sd(i);
+    P_.row(vel + i).setZero();
+    P_.col(vel + i).setZero();
+    P_(vel + i, vel + i) = i < 2 ? sv * sv : (fix_vel ? sv * sv : 0.3 * 0.3);
   }
   ins::geodetic_add_ned(s.lat, s.lon, s.h, position_offset_blocks(C_nb, s.v));
   for (ConsistencyStats& st : stats_) st.rejected_since = -1;

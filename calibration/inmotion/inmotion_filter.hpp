@@ -25,7 +25,7 @@ namespace calbench::inmotion {
 
 // In-run drift model of one axis: first-order (eq 22; σ and correlation time) or, with
 // exp_cosine, the exponential-cosine model K(τ) = σ² e^{−|τ|/τ_s} cos βτ (eq 32) carried as two
-// augmented states (eqs 35–36, drift_expcos.cpp; needs the augmented layout kStatesAug).
+// augmented states (eqs 35–36, drift_expcos.cpp; the augmented layout, 48 states).
 struct DriftPrior {
   double sigma = 0;
   double tau_s = 300;
@@ -343,8 +343,11 @@ class InMotionFilter {
   template <int M>
   bool constraint_update(Vec& dx, const ObservationM<M>& o, ConsistencyStats& st);
   void propagate_drift_nominal(double T);
+  // The sensor correction from the blocks' nominal values, after each change of them.
   void refresh_correctors();
   int off(Block b) const { return layout_.offset(b); }
+  // P's navigation rows, then its navigation columns (BlockSpec::navigation), times d.
+  void scale_navigation(Mat& P, double d) const;
   // Heading from the course over ground (see InMotionConfig::realign_heading).
   struct Fix {
     double t, lat, lon, h, yaw_ins;  // yaw_ins: INS body yaw at the fix (its changes are what count)
@@ -371,7 +374,7 @@ class InMotionFilter {
   ins::Strapdown nav_;
   Vec3 lever_;
   Nominal n_;
-  Mat3 Ag_ = Mat3::Identity(), Aa_ = Mat3::Identity();
+  SensorCorrection corr_;  // the blocks' correction of the raw increments (refresh_correctors)
   DriftModels drift_;
   Mat P_;
   // Structured covariance: the rows of the last step that moved, and work matrices kept between

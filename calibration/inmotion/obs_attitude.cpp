@@ -12,7 +12,7 @@ Observation attitude_observation(const ObsContext& c, const RefObs& r) {
   const Mat3 C_nb = predicted_body_attitude(c);
   const Mat3 C_ref = ins::dcm_from_rpy(r.rpy);
   o.z = -ins::rotvec_from_dcm(C_nb * C_ref.transpose());
-  o.H.block<3, 3>(0, kAtt) = Mat3::Identity();
+  o.H.block<3, 3>(0, c.att) = Mat3::Identity();
   if (c.mount >= 0) o.H.block<3, 3>(0, c.mount) = -C_nb;
   o.R = Mat3::Identity() * (r.sigma_att * r.sigma_att);
   return o;

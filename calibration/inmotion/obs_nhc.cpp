@@ -26,8 +26,8 @@ ObservationM<2> nhc_observation(const ObsContext& c, double sigma) {
   const Vec3 v_b = C_bn * v_m - c.w_eb_b.cross(c.lever);
   o.z = v_b.tail<2>();
   const Mat3 Cv = C_bn * ins::skew(v_m);
-  o.H.block<2, 3>(0, kVel) = C_bn.bottomRows<2>();
-  o.H.block<2, 3>(0, kAtt) = -Cv.bottomRows<2>();
+  o.H.block<2, 3>(0, c.vel) = C_bn.bottomRows<2>();
+  o.H.block<2, 3>(0, c.att) = -Cv.bottomRows<2>();
   if (c.mount >= 0) o.H.block<2, 3>(0, c.mount) = (Cv * C_nb).bottomRows<2>();
   o.R = Eigen::Matrix2d::Identity() * (sigma * sigma);
   return o;

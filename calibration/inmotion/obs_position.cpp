@@ -15,8 +15,8 @@ Observation position_observation(const ObsContext& c, const RefObs& r) {
   double lat = c.mems->lat, lon = c.mems->lon, h = c.mems->h;
   ins::geodetic_add_ned(lat, lon, h, -Cr);
   o.z = ins::geodetic_diff_ned(lat, lon, h, r.lat, r.lon, r.h);
-  o.H.block<3, 3>(0, kPos) = Mat3::Identity();
-  o.H.block<3, 3>(0, kAtt) = -ins::skew(Cr);
+  o.H.block<3, 3>(0, c.pos) = Mat3::Identity();
+  o.H.block<3, 3>(0, c.att) = -ins::skew(Cr);
   if (c.mount >= 0) o.H.block<3, 3>(0, c.mount) = ins::skew(Cr) * C_nb;
   o.R = Mat3::Identity() * (r.sigma_pos * r.sigma_pos);
   if (r.sigma_pos_v > 0) o.R(2, 2) = r.sigma_pos_v * r.sigma_pos_v;  // GNSS: vertical σ of its own

@@ -11,8 +11,8 @@ Observation velocity_observation(const ObsContext& c, const RefObs& r) {
   const Mat3 C_nb = predicted_body_attitude(c);
   const Vec3 u = C_nb * c.w_eb_b.cross(c.lever);
   o.z = (c.mems->v - u) - r.v_ned;
-  o.H.block<3, 3>(0, kVel) = Mat3::Identity();
-  o.H.block<3, 3>(0, kAtt) = -ins::skew(u);
+  o.H.block<3, 3>(0, c.vel) = Mat3::Identity();
+  o.H.block<3, 3>(0, c.att) = -ins::skew(u);
   if (c.mount >= 0) o.H.block<3, 3>(0, c.mount) = ins::skew(u) * C_nb;
   o.R = Mat3::Identity() * (r.sigma_vel * r.sigma_vel);
   return o;

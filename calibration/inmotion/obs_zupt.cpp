@@ -31,7 +31,7 @@ Observation zupt_observation(const ObsContext& c, double sigma) {
   Observation o;
   o.H.setZero(3, c.n_states);
   o.z = c.mems->v;
-  o.H.block<3, 3>(0, kVel) = Mat3::Identity();
+  o.H.block<3, 3>(0, c.vel) = Mat3::Identity();
   o.R = Mat3::Identity() * (sigma * sigma);
   return o;
 }
@@ -46,7 +46,7 @@ Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const V
   o.R = Mat3::Identity() * (sigma * sigma);
   if (heading_known) {
     o.z = w_hat - C_mn * w_ie;
-    o.H.block<3, 3>(0, kAtt) = C_mn * ins::skew(w_ie);
+    o.H.block<3, 3>(0, c.att) = C_mn * ins::skew(w_ie);
   } else {
     o.z = w_hat - C_mn * Vec3(0, 0, w_ie(2));
     const double h2 = 0.5 * w_ie(0) * w_ie(0);

@@ -37,11 +37,22 @@ struct ObsContext {
   Vec3 lever = Vec3::Zero();
   Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes
   Vec3 a_ned = Vec3::Zero();            // acceleration (NED) over the last IMU interval (the time-offset block)
-  // The filter's layout: its size and where the mounting block is (−1: not estimated).
-  int n_states = kStates;
-  int mount = kMount;
-  // The gyro blocks (the zero-rate observation reads the gyro's sensor model): bias, in-run drift, M.
-  int gyro_bias = kBg, gyro_drift = kDg, gyro_M = kMg;
+  // The filter's layout (set_layout): its size and where the blocks the observations read are
+  // (−1: not in the layout): the navigation blocks, the mounting (−1: not estimated), and the gyro
+  // blocks (the zero-rate observation reads the gyro's sensor model): bias, in-run drift, M.
+  int n_states = 0;
+  int pos = -1, vel = -1, att = -1, mount = -1;
+  int gyro_bias = -1, gyro_drift = -1, gyro_M = -1;
+  void set_layout(const StateLayout& s) {
+    n_states = s.size();
+    pos = s.offset(Block::pos);
+    vel = s.offset(Block::vel);
+    att = s.offset(Block::att);
+    mount = s.offset(Block::mount);
+    gyro_bias = s.offset(Block::bg);
+    gyro_drift = s.offset(Block::dg);
+    gyro_M = s.offset(Block::Mg);
+  }
 };
 
 template <int M>

@@ -1,5 +1,6 @@
 // The declarations of the in-motion filter's built-in blocks (state_blocks.hpp): per block its
-// names and units, and its own code — initial covariance, feedback, F and Q, series value.
+// names and units, and its own code — initial covariance, feedback, sensor-model role (compensate,
+// accumulate), F and Q, series value.
 // Adding a block is one declaration like these (and its Jacobian in error_model.cpp when it is
 // more than a line), here or, for a block the filter does not ship, in InMotionConfig::extra_blocks.
 #include "calibration/inmotion/state_blocks.hpp"
@@ -34,8 +35,6 @@ const char* const kDaAuxCols[] = {"accel_drift_aux_x_mg_s", "accel_drift_aux_y_m
 // Series factors of blocks whose columns differ: latitude/longitude in degrees, height in metres.
 const double kPosFactors[] = {kDeg, kDeg, 1.0};
 
-constexpr int sz(Block b) { return size_of(b); }
-
 void diag(MatRef P, int off, int n, double sigma) {
   for (int i = 0; i < n; ++i) P(off + i, off + i) = sigma * sigma;
 }
@@ -54,13 +53,13 @@ void sub9(Mat3& m, const VecCRef& dx, int off) {
 // ---- navigation: position (eq 11's δr), velocity (δv), attitude (φ). Their F rows are one
 // equation family (error_model.cpp nav_block), written by the position block.
 BlockSpec pos_block() {
-  BlockSpec b{Block::pos, "position", sz(Block::pos), kPosCols, "m (NED)", "deg, deg, m", 1.0, false, false};
+  BlockSpec b{Block::pos, "position", 3, kPosCols, "m (NED)", "deg, deg, m", 1.0, false, false, true};
   b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) { diag(P, off, 3, std::hypot(in.sp, 0.05)); };
   b.feedback = [](Nominal& n, int off, const VecCRef& dx) {
     ins::geodetic_add_ned(n.nav->lat, n.nav->lon, n.nav->h, -dx.segment<3>(off));
   };
-  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
-    nav_block(d.nav, F);
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) {
+    nav_block(d.nav, off, L.offset(static_cast<int>(Block::vel)), L.offset(static_cast<int>(Block::att)), F);
     const double qa = d.cfg.noise.accel.white_density;
     for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T * d.T * d.T / 3.0 * d.q_nav;
   };
@@ -74,7 +73,7 @@ BlockSpec pos_block() {
 }
 
 BlockSpec vel_block() {
-  BlockSpec b{Block::vel, "velocity", sz(Block::vel), kVelCols, "m/s (NED)", "m/s", 1.0, false, false};
+  BlockSpec b{Block::vel, "velocity", 3, kVelCols, "m/s (NED)", "m/s", 1.0, false, false, true};
   b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
     diag(P, off, 3, std::hypot(in.sv, in.cfg.sigma_vel0));
   };
@@ -88,7 +87,7 @@ BlockSpec vel_block() {
 }
 
 BlockSpec att_block() {
-  BlockSpec b{Block::att, "attitude", sz(Block::att), kAttCols, "rad", "deg", kDeg, false, false};
+  BlockSpec b{Block::att, "attitude", 3, kAttCols, "rad", "deg", kDeg, false, false, true};
   b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
     if (in.first.has_att) {
       P.block<3, 3>(off, off) = Mat3::Identity() * (in.sa * in.sa);  // the mounting block adds its part
@@ -113,13 +112,27 @@ BlockSpec att_block() {
 }
 
 // ---- sensor model: constant parts of the drift/bias and M (identity transition, no noise).
-// S: 0 gyro, 1 accelerometer. The head of a per-sensor 3-state block in the sensor's units (gyro
+// S: the sensor (kGyro, kAccel). The head of a per-sensor 3-state block in the sensor's units (gyro
 // rad/s shown in °/h, accelerometer m/s² in mg).
 template <int S>
 BlockSpec sensor_triad(Block g, Block a, const char* gname, const char* aname, const char* const* gcols,
                        const char* const* acols) {
   return BlockSpec{S == 0 ? g : a, S == 0 ? gname : aname, 3, S == 0 ? gcols : acols, S == 0 ? "rad/s" : "m/s^2",
                    S == 0 ? "deg/h" : "mg", S == 0 ? kDegPerHour : kMilliG, true, false};
+}
+
+// The navigation rows a sensor's error feeds (error_model.hpp): gyro → attitude, accelerometer → velocity.
+int sensor_rows(const filter::BlockLayout& L, int S) { return L.offset(static_cast<int>(S == kGyro ? Block::att : Block::vel)); }
+
+// An additive error of sensor S (bias, in-run drift): its transition columns are C·A, summed over the
+// interval; its columns of F are their mean (signed by the sensor, sensor_jacobian).
+template <int S>
+void offset_accumulate(const ImuSample& s, SumRef sum) {
+  sum += s.CA[S];
+}
+template <int S>
+void offset_dynamics(const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F) {
+  sensor_jacobian(d.acc, S, sensor_rows(L, S), off, 3, F);
 }
 
 template <int S>
@@ -130,10 +143,9 @@ BlockSpec bias_block() {
     for (int i = 0; i < 3; ++i) P(off + i, off + i) = p(i) * p(i);
   };
   b.feedback = [](Nominal& n, int off, const VecCRef& dx) { (S == 0 ? n.bg : n.ba) -= dx.segment<3>(off); };
-  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
-    if (S == 0) gyro_bias_jacobian(d.acc, off, F);
-    else accel_bias_jacobian(d.acc, off, F);
-  };
+  b.compensate = [](const Nominal& n, int, SensorCorrection& c) { c.offset[S] += S == 0 ? n.bg : n.ba; };
+  b.accumulate = offset_accumulate<S>;
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef) { offset_dynamics<S>(d, L, off, F); };
   b.total = [](const Nominal& n, int, double* x) { put3(S == 0 ? n.bg : n.ba, x); };
   return b;
 }
@@ -148,9 +160,13 @@ BlockSpec m_block() {
       for (int j = 0; j < 3; ++j) P(off + 3 * i + j, off + 3 * i + j) = p(i, j) * p(i, j);
   };
   b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(S == 0 ? n.Mg : n.Ma, dx, off); };
-  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef) {
-    if (S == 0) gyro_M_jacobian(d.acc, off, F);
-    else accel_M_jacobian(d.acc, off, F);
+  b.compensate = [](const Nominal& n, int, SensorCorrection& c) { c.A[S] = (Mat3::Identity() + (S == 0 ? n.Mg : n.Ma)).inverse(); };
+  // (C A) W(x), W(x) = ∂(δM·x)/∂vec(δM): column block i is (C A)(:, i)·xᵀ.
+  b.accumulate = [](const ImuSample& s, SumRef sum) {
+    for (int i = 0; i < 3; ++i) sum.block<3, 3>(0, 3 * i) += s.CA[S].col(i) * s.x[S].transpose();
+  };
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef) {
+    sensor_jacobian(d.acc, S, sensor_rows(L, S), off, 9, F);
   };
   b.total = [](const Nominal& n, int, double* x) { put9(S == 0 ? n.Mg : n.Ma, x); };
   return b;
@@ -159,7 +175,7 @@ BlockSpec m_block() {
 // ---- mounting misalignment δμ (reference body axes): Ĉ_mb = (I − δμ×)·C_mb. Its H columns are
 // part of eqs 13–15 (obs_*.cpp).
 BlockSpec mount_block() {
-  BlockSpec b{Block::mount, "mounting", sz(Block::mount), kMountCols, "rad", "deg", kDeg, false, false};
+  BlockSpec b{Block::mount, "mounting", 3, kMountCols, "rad", "deg", kDeg, false, false};
   b.active = [](const InMotionConfig& cfg) { return cfg.mounting; };
   b.init = [](const BlockInit& in, const filter::BlockLayout& L, int off, MatRef P) {
     const ParameterPriors& pr = in.cfg.prior;
@@ -189,10 +205,11 @@ BlockSpec drift_block() {
     for (int i = 0; i < 3; ++i) P(off + i, off + i) = sig(i) * sig(i);
   };
   b.feedback = [](Nominal& n, int off, const VecCRef& dx) { (S == 0 ? n.dg : n.da) -= dx.segment<3>(off); };
-  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef F, MatRef Q) {
-    // The drift enters the sensor model as the bias does.
-    if (S == 0) gyro_bias_jacobian(d.acc, off, F);
-    else accel_bias_jacobian(d.acc, off, F);
+  // The drift enters the sensor model as the bias does.
+  b.compensate = [](const Nominal& n, int, SensorCorrection& c) { c.offset[S] += S == 0 ? n.dg : n.da; };
+  b.accumulate = offset_accumulate<S>;
+  b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) {
+    offset_dynamics<S>(d, L, off, F);
     const Vec3& alpha = S == 0 ? d.drift.alpha_g : d.drift.alpha_a;
     const Vec3& sig = S == 0 ? d.drift.sig_g : d.drift.sig_a;
     drift_jacobian(alpha, off, F);
@@ -284,6 +301,13 @@ StateLayout make_layout(const InMotionConfig& cfg) {
     }
   }
   return s;
+}
+
+SensorCorrection sensor_correction(const StateLayout& s, const Nominal& n) {
+  SensorCorrection c;
+  for (const BlockSpec* b : s.specs)
+    if (b->compensate) b->compensate(n, s.L.offset(static_cast<int>(b->id)), c);
+  return c;
 }
 
 void observe_blocks(const StateLayout& s, const BlockObsInput& o, const Nominal& n, int type, MatRef H, Eigen::Vector3d& z) {

@@ -1,11 +1,13 @@
 // Blocks of the in-motion error state, each declared once (state_blocks.cpp), as open_vins' ov_core
 // Type blocks: name, size, SI and display units, series column names, whether the smoother
-// corrects it, and its own code — initial covariance, feedback into the nominal state, transition
-// (F) and process noise (Q), extra observation columns. The filter builds its layout from the
-// blocks the configuration activates (the exp-cosine aux blocks only for an exp-cosine drift
-// model, the mounting block unless switched off, blocks declared outside the filter's files from
-// InMotionConfig::extra_blocks) and computes the offsets; it never names a block's offset itself
-// except for the navigation blocks, which lead every layout.
+// corrects it, and its own code — initial covariance, feedback into the nominal state, its role in
+// the sensor model (compensation of the raw increments, its part of the transition accumulated over
+// the IMU samples), transition (F) and process noise (Q), extra observation columns. The filter
+// builds its layout from the blocks the configuration activates (the exp-cosine aux blocks only for
+// an exp-cosine drift model, the mounting block unless switched off, blocks declared outside the
+// filter's files from InMotionConfig::extra_blocks) and computes the offsets; sizes and offsets
+// exist only there (StateLayout), and the filter's sensor correction and transition iterate the
+// blocks without naming one.
 //
 // Order of the built-in blocks = the paper's state order (section IV, eq 11); the exp-cosine aux
 // blocks (eqs 35–36) come after the default layout so that the default layout is a prefix of the
@@ -28,10 +30,13 @@ struct BlockInit;       // what a block's initial covariance depends on (inmotio
 struct Nominal;         // the filter's nominal state (inmotion_filter.hpp)
 struct BlockDynamics;   // what a block's F and Q depend on over one propagation step
 struct BlockObsInput;   // what a block's extra observation columns depend on
+struct SensorCorrection;  // the correction of the raw IMU increments (error_model.hpp)
+struct ImuSample;         // one IMU interval as the transition sees it (error_model.hpp)
 using MatRef = Eigen::Ref<Eigen::MatrixXd>;
 using VecCRef = Eigen::Ref<const Eigen::VectorXd>;
 using Mat3Ref = Eigen::Ref<const Eigen::Matrix3d>;
 using Vec3Ref = Eigen::Ref<const Eigen::Vector3d>;
+using SumRef = Eigen::Ref<Eigen::Matrix<double, 3, Eigen::Dynamic>>;
 
 struct BlockSpec {
   Block id;              // built-in: its Block; a block declared elsewhere: any value ≥ Block::count
@@ -44,6 +49,9 @@ struct BlockSpec {
   double si_per_display;
   bool sensor;  // a sensor-error block: the smoother corrects its series value (nav blocks it leaves)
   bool aux;     // only in the augmented (exp-cosine) layout
+  // A navigation block (position, velocity, attitude: NED errors): turned with the heading at a
+  // re-alignment, widened when the filter has lost track.
+  bool navigation = false;
   // Is the block in the layout for this configuration? nullptr: always.
   bool (*active)(const InMotionConfig& cfg) = nullptr;
   // Initial covariance: its rows/columns of P (P zero before; blocks are set in layout order).
@@ -51,6 +59,14 @@ struct BlockSpec {
   // Feedback of the estimated error dx (the whole state; the block reads its segment at off):
   // nominal ← nominal − dx.
   void (*feedback)(Nominal& n, int off, const VecCRef& dx) = nullptr;
+  // Its role in the sensor model, y = (I + M)·true + b + d (error_model.hpp): its part of the
+  // correction of the raw increments from its nominal value (an additive offset b̂ or d̂, or the
+  // A = (I + M̂)⁻¹ of a sensor), or nullptr.
+  void (*compensate)(const Nominal& n, int off, SensorCorrection& c) = nullptr;
+  // Its part of the transition over one IMU interval: adds to its own columns of the accumulator
+  // (3 rows: the navigation rows its error feeds, `size` columns) what dynamics reads back as the
+  // interval's mean, or nullptr.
+  void (*accumulate)(const ImuSample& s, SumRef sum) = nullptr;
   // Its entries of F (continuous time) and Q (discrete, over the step) for one propagation step.
   void (*dynamics)(const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) = nullptr;
   // Its part of an observation (type 0 position, 1 velocity, 2 attitude; eqs 13–15 in the obs_*.cpp
@@ -79,18 +95,6 @@ inline constexpr Block kLeverArmBlock = static_cast<Block>(static_cast<int>(Bloc
 inline constexpr Block kTimeOffsetBlock = static_cast<Block>(static_cast<int>(Block::count) + 1);
 const std::array<BlockSpec, 2>& antenna_blocks();
 
-// Offsets from a list of sizes (the rule of calibration/filter/block_layout.hpp).
-using filter::offsets_from_sizes;
-
-// The built-in blocks' sizes and their offsets in the full layout (every built-in block active:
-// the paper's 42 states plus the 6 exp-cosine aux states). The filter itself uses its run-time
-// layout; these name the full layout for code that reads stored series and for tests.
-inline constexpr std::array<int, static_cast<std::size_t>(Block::count)> kBlockSizes = {3, 3, 3, 3, 3, 9, 9, 3, 3, 3, 3, 3};
-inline constexpr auto kBlockOffsets = offsets_from_sizes(kBlockSizes);
-
-constexpr int offset_of(Block b) { return kBlockOffsets[static_cast<std::size_t>(b)]; }
-constexpr int size_of(Block b) { return kBlockSizes[static_cast<std::size_t>(b)]; }
-
 // The layout of a configuration: the active built-in blocks in declaration order, then the extra
 // ones; `specs` in layout order.
 struct StateLayout {
@@ -100,6 +104,9 @@ struct StateLayout {
   int size() const { return L.size(); }
 };
 StateLayout make_layout(const InMotionConfig& cfg);
+// The correction of the raw increments by the layout's blocks (BlockSpec::compensate, in layout
+// order) at the nominal state n.
+SensorCorrection sensor_correction(const StateLayout& s, const Nominal& n);
 // Every active block's observation part (BlockSpec::observe) of one observation type, in layout order.
 void observe_blocks(const StateLayout& s, const BlockObsInput& o, const Nominal& n, int type, MatRef H, Eigen::Vector3d& z);
 // Series column names of a layout's states, in state order (the blocks' declarations).

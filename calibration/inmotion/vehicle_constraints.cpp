@@ -80,7 +80,7 @@ void InMotionFilter::constrain() {
   } else {
     if (!cfg_.obs_nhc) return;
     const double speed = std::hypot(nav_.state().v(0), nav_.state().v(1));
-    const double yaw_rate = std::abs((n_.C_mb * (Ag_ * (y_mean - n_.bg - n_.dg)))(2));
+    const double yaw_rate = std::abs((n_.C_mb * corr_.apply(kGyro, y_mean, 1.0))(2));
     if (speed < cfg_.nhc_min_speed || yaw_rate > cfg_.nhc_max_turn_rate || speed * yaw_rate > cfg_.nhc_max_lateral_accel) return;
     any = constraint_update<2>(dx, nhc_observation(c, cfg_.nhc_sigma), cstats_[kObsNhc - 3]);
   }

@@ -201,12 +201,12 @@ std::vector<RunResult> run_drive(const RouteFile& rf, std::uint64_t seed, double
         const auto& in = f[k]->last_innovation(0);
         const Vec3 mrv = ins::rotvec_from_dcm(f[k]->mounting() * C_mb_true.transpose());
         std::fprintf(dump[k], "%.3f,%.3f,%.5f,%.5f,%.3f,%.3f,%.1f,%.1f,%.2f,%.2f,%.3f,%.3f,%.2f,%.5f,%.5f,%.5f,%.5f,%.5f,%.2f,%.2f,%.2f\n", g.t, tm,
-                     rv(2) / kDeg, std::sqrt(P(inmotion::kAtt + 2, inmotion::kAtt + 2)) / kDeg, (C_true * w_true)(2) / kDeg,
+                     rv(2) / kDeg, std::sqrt(P(f[k]->offset(inmotion::Block::att) + 2, f[k]->offset(inmotion::Block::att) + 2)) / kDeg, (C_true * w_true)(2) / kDeg,
                      v_true.head<2>().norm(), (est.gyro.M(2, 2) - unit.gyro.M(2, 2)) / units::kPpm,
-                     std::sqrt(P(inmotion::kMg + 8, inmotion::kMg + 8)) / units::kPpm,
+                     std::sqrt(P(f[k]->offset(inmotion::Block::Mg) + 8, f[k]->offset(inmotion::Block::Mg) + 8)) / units::kPpm,
                      (est.gyro.bias(2) + f[k]->gyro_drift()(2) - unit.gyro.bias(2)) / units::kDegPerHour,
-                     std::sqrt(P(inmotion::kBg + 2, inmotion::kBg + 2)) / units::kDegPerHour, in.nu(0), in.nu(1), in.nis,
-                     rv(0) / kDeg, rv(1) / kDeg, mrv(2) / kDeg, std::sqrt(P(inmotion::kMount + 2, inmotion::kMount + 2)) / kDeg, e_prior,
+                     std::sqrt(P(f[k]->offset(inmotion::Block::bg) + 2, f[k]->offset(inmotion::Block::bg) + 2)) / units::kDegPerHour, in.nu(0), in.nu(1), in.nis,
+                     rv(0) / kDeg, rv(1) / kDeg, mrv(2) / kDeg, std::sqrt(P(f[k]->offset(inmotion::Block::mount) + 2, f[k]->offset(inmotion::Block::mount) + 2)) / kDeg, e_prior,
                      drift_true(2) / units::kDegPerHour,
                      (est.gyro.bias(2) + f[k]->gyro_drift()(2) - unit.gyro.bias(2) - drift_true(2)) / units::kDegPerHour,
                      f[k]->gyro_total_drift_sigma()(2) / units::kDegPerHour);
@@ -214,7 +214,7 @@ std::vector<RunResult> run_drive(const RouteFile& rf, std::uint64_t seed, double
       for (int c = 0; c < 3; ++c)
         if (out[k].head_at[c] < 0 && tm >= (c == 0 ? 60 : c == 1 ? 120 : 300)) out[k].head_at[c] = e;
       if (tm >= 300) {
-        const double z = rv(2) / std::sqrt(f[k]->P()(inmotion::kAtt + 2, inmotion::kAtt + 2));
+        const double z = rv(2) / std::sqrt(f[k]->P()(f[k]->offset(inmotion::Block::att) + 2, f[k]->offset(inmotion::Block::att) + 2));
         out[k].z2_sum += z * z;
         out[k].z_max = std::max(out[k].z_max, std::abs(z));
         ++out[k].z_n;

@@ -82,7 +82,7 @@ LeverRun run_drive(const Vec3& lever_error, bool with_block) {
 TEST(InmotionExtraBlock, DeclaredOutsideTheFilterAndEstimated) {
   const Vec3 l(0.25, -0.15, 0.2);
   const LeverRun r = run_drive(l, true);
-  EXPECT_EQ(r.n_states, kStates + 3);  // appended after the default layout
+  EXPECT_EQ(r.n_states, make_layout(InMotionConfig{}).size() + 3);  // appended after the default layout
   std::printf("lever error: estimated %.3f %.3f %.3f m (truth %.3f %.3f %.3f), sigma %.3f %.3f %.3f, NIS pos %.2f\n",
               r.est(0), r.est(1), r.est(2), l(0), l(1), l(2), r.sigma(0), r.sigma(1), r.sigma(2), r.mean_nis_pos);
   for (int i = 0; i < 3; ++i) {
@@ -97,7 +97,7 @@ TEST(InmotionExtraBlock, DeclaredOutsideTheFilterAndEstimated) {
 TEST(InmotionExtraBlock, WithoutItTheDefaultLayoutAndAWorseFit) {
   const Vec3 l(0.25, -0.15, 0.2);
   const LeverRun plain = run_drive(l, false), with = run_drive(l, true);
-  EXPECT_EQ(plain.n_states, kStates);
+  EXPECT_EQ(plain.n_states, make_layout(InMotionConfig{}).size());
   // The wrong lever arm left unmodelled shows in the position innovations.
   std::printf("mean position NIS: %.2f without the block, %.2f with it\n", plain.mean_nis_pos, with.mean_nis_pos);
   EXPECT_GT(plain.mean_nis_pos, 1.15 * with.mean_nis_pos);  // measured 3.88 vs 3.02

@@ -158,16 +158,17 @@ constexpr double kDt = 0.001;
 
 // The nonlinear model over kSteps: strapdown with the state's own corrected increments, drift
 // shaping states by their filters; with acc, the filter's accumulator of the nominal's samples.
-State propagate(const State& x, const DriftModels& drift, FAccumulator* acc) {
+State propagate(const State& x, const StateLayout& L, const DriftModels& drift, FAccumulator* acc) {
   State y = x;
   ins::Strapdown sd(y.nav);
-  const Mat3 Ag = (Mat3::Identity() + y.n.Mg).inverse(), Aa = (Mat3::Identity() + y.n.Ma).inverse();
   for (int k = 0; k < kSteps; ++k) {
+    // Corrected by the blocks' own compensation (BlockSpec::compensate) of the state's values.
+    const SensorCorrection corr = sensor_correction(L, y.n);
     // The drift states move continuously (the filter's shaping filters, step by step).
-    const Vec3 dth = Ag * (kRawRate - y.n.bg - y.n.dg) * kDt, dv = Aa * (kRawForce - y.n.ba - y.n.da) * kDt;
+    const Vec3 dth = corr.apply(kGyro, kRawRate * kDt, kDt), dv = corr.apply(kAccel, kRawForce * kDt, kDt);
     const Mat3 C0 = sd.state().C_nb();
     sd.update(dth, dv, kDt);
-    if (acc) acc->add(C0, Ag, Aa, dth / kDt, dv / kDt, kDt);
+    if (acc) acc->add(L, C0, corr, dth / kDt, dv / kDt, kDt);
     propagate_drift(drift, y.n, kDt);
   }
   y.nav = sd.state();
@@ -223,7 +224,7 @@ void check_F(bool augmented, bool antenna = false) {
   const InMotionConfig cfg = config(augmented, antenna);
   const StateLayout L = make_layout(cfg);
   const int N = L.size();
-  ASSERT_EQ(N, (augmented ? kStatesAug : kStates) + (antenna ? 4 : 0));
+  ASSERT_EQ(N, (augmented ? 48 : 42) + (antenna ? 4 : 0));  // the paper's layouts (+ the antenna blocks)
   const DriftModels drift = drift_models(cfg);
   const State x0 = nominal_state(L);
   const Vec s = scales(L);
@@ -238,7 +239,8 @@ void check_F(bool augmented, bool antenna = false) {
 
   // The analytic transition over the step, as InMotionFilter::propagate() builds it.
   FAccumulator acc;
-  const State xh = propagate(x0, drift, &acc);
+  acc.resize(N);
+  const State xh = propagate(x0, L, drift, &acc);
   const double T = acc.T;
   NavBlockInputs in;
   in.lat = xh.nav.lat;
@@ -259,8 +261,8 @@ void check_F(bool augmented, bool antenna = false) {
     Vec dx = Vec::Zero(N);
     const double eps = 0.1 * s(j);
     dx(j) = eps;
-    const Vec ep = error_of(xh, propagate(with_error(x0, L, dx), drift, nullptr), L);
-    const Vec em = error_of(xh, propagate(with_error(x0, L, -dx), drift, nullptr), L);
+    const Vec ep = error_of(xh, propagate(with_error(x0, L, dx), L, drift, nullptr), L);
+    const Vec em = error_of(xh, propagate(with_error(x0, L, -dx), L, drift, nullptr), L);
     Phi_num.col(j) = (ep - em) / (2 * eps);
   }
   const Mat S = s.asDiagonal(), Si = s.cwiseInverse().asDiagonal();
@@ -292,11 +294,7 @@ void check_H(bool augmented, bool antenna = false) {
     c.lever = lever;
     c.w_eb_b = w_eb_b;
     c.a_ned = Vec3(1.5, -2.0, 0.3);
-    c.n_states = N;
-    c.mount = L.offset(Block::mount);
-    c.gyro_bias = L.offset(Block::bg);
-    c.gyro_drift = L.offset(Block::dg);
-    c.gyro_M = L.offset(Block::Mg);
+    c.set_layout(L);
     return c;
   };
   // The reference epoch the nominal predicts (z(x̂) = 0; the differences do not depend on it).

@@ -6,42 +6,54 @@
 #include <set>
 #include <string>
 
-#include "calibration/inmotion/state_layout.hpp"
+#include "calibration/inmotion/inmotion_filter.hpp"
 #include "common/units.hpp"
 
 using namespace calbench;
 using namespace calbench::inmotion;
 
+namespace {
+// Every built-in block active: the exp-cosine aux states with an exp-cosine model on one axis.
+StateLayout full_layout() {
+  InMotionConfig cfg;
+  cfg.gyro_drift = std::array<DriftPrior, 3>{DriftPrior{1e-5, 100, true, 0.01}, DriftPrior{1e-5, 100}, DriftPrior{1e-5, 100}};
+  return make_layout(cfg);
+}
+}  // namespace
+
 TEST(InMotionStateBlocks, OffsetsAreContiguousInDeclarationOrder) {
+  const StateLayout L = full_layout();
   int next = 0;
   for (const BlockSpec& b : block_specs()) {
-    EXPECT_EQ(offset_of(b.id), next) << b.name;
-    EXPECT_EQ(size_of(b.id), b.size) << b.name;
+    EXPECT_EQ(L.offset(b.id), next) << b.name;
     next += b.size;
   }
-  EXPECT_EQ(next, kStatesAug);
-  // The paper's offsets, which the Jacobian code and stored series rely on.
-  EXPECT_EQ(kMg, 15);
-  EXPECT_EQ(kMount, 33);
-  EXPECT_EQ(kDa, 39);
-  EXPECT_EQ(kStates, 42);
-  EXPECT_EQ(kDaAux, 45);
+  EXPECT_EQ(next, L.size());
+  // The paper's offsets (eq 11), which stored series rely on.
+  EXPECT_EQ(L.offset(Block::Mg), 15);
+  EXPECT_EQ(L.offset(Block::mount), 33);
+  EXPECT_EQ(L.offset(Block::da), 39);
+  EXPECT_EQ(make_layout(InMotionConfig{}).size(), 42);
+  EXPECT_EQ(L.offset(Block::da_aux), 45);
+  EXPECT_EQ(L.size(), 48);
 }
 
 TEST(InMotionStateBlocks, AuxBlocksFollowTheDefaultLayout) {
-  for (const BlockSpec& b : block_specs()) EXPECT_EQ(b.aux, offset_of(b.id) >= kStates) << b.name;
+  const StateLayout L = full_layout();
+  const int n = make_layout(InMotionConfig{}).size();
+  for (const BlockSpec& b : block_specs()) EXPECT_EQ(b.aux, L.offset(b.id) >= n) << b.name;
 }
 
 TEST(InMotionStateBlocks, ColumnNamesComeFromTheDeclarations) {
-  const auto& n = state_names();
-  EXPECT_EQ(n[kPos], "lat_deg");
-  EXPECT_EQ(n[kMg + 1], "gyro_M_xy_ppm");
-  EXPECT_EQ(n[kMount + 2], "mount_yaw_deg");
-  EXPECT_EQ(n[kDa + 2], "accel_drift_z_mg");
-  EXPECT_EQ(aux_state_names()[3], "accel_drift_aux_x_mg_s");
+  const StateLayout L = full_layout();
+  const auto n = column_names(L);
+  EXPECT_EQ(n[L.offset(Block::pos)], "lat_deg");
+  EXPECT_EQ(n[L.offset(Block::Mg) + 1], "gyro_M_xy_ppm");
+  EXPECT_EQ(n[L.offset(Block::mount) + 2], "mount_yaw_deg");
+  EXPECT_EQ(n[L.offset(Block::da) + 2], "accel_drift_z_mg");
+  EXPECT_EQ(n[L.offset(Block::da_aux)], "accel_drift_aux_x_mg_s");
   std::set<std::string> unique(n.begin(), n.end());
-  unique.insert(aux_state_names().begin(), aux_state_names().end());
-  EXPECT_EQ(static_cast<int>(unique.size()), kStatesAug);  // every column named, none twice
+  EXPECT_EQ(static_cast<int>(unique.size()), L.size());  // every column named, none twice
 }
 
 TEST(InMotionStateBlocks, DisplayFactorsAreTheSeriesUnits) {
@@ -58,8 +70,8 @@ TEST(InMotionStateBlocks, DisplayFactorsAreTheSeriesUnits) {
 // layout; a Kalman filter built on the computed offsets estimates it through its own H while the
 // other blocks keep their places.
 TEST(InMotionStateBlocks, ExtraBlockGetsComputedOffsetAndIsEstimated) {
-  constexpr std::array<int, 3> sizes = {kStatesAug, 3, 0};  // the layout, the extra block, end
-  constexpr auto off = offsets_from_sizes(sizes);
+  constexpr std::array<int, 3> sizes = {48, 3, 0};  // the layout, the extra block, end
+  constexpr auto off = filter::offsets_from_sizes(sizes);
   static_assert(off[1] == 48 && off[2] == 51 && off[3] == 51);
   constexpr int n = off[2], k = off[1];
   using Vec = Eigen::Matrix<double, n, 1>;
@@ -79,6 +91,6 @@ TEST(InMotionStateBlocks, ExtraBlockGetsComputedOffsetAndIsEstimated) {
     P = (Mat::Identity() - K * H) * P;
   }
   EXPECT_NEAR((x.segment<3>(k) - truth).norm(), 0.0, 5e-3);
-  EXPECT_EQ(x.head<kStatesAug>().norm(), 0.0);       // unobserved blocks untouched
-  EXPECT_NEAR(P(kMg, kMg), 1.0, 0.0);                // and their covariance too
+  EXPECT_EQ(x.head<48>().norm(), 0.0);       // unobserved blocks untouched
+  EXPECT_NEAR(P(15, 15), 1.0, 0.0);                // and their covariance too
 }
