@@ -10,6 +10,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/diagnose/gnss_run.hpp"
 #include "common/input_error.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 
@@ -56,6 +57,10 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
     check_same_unit(given->set.device, a.coeffs, a.dir);
   }
   if (drive_is_gnss_only(a.dir)) return run_diagnose_gnss(a, given);
+  if (!recording_has_table(a.dir, "reference"))
+    throw InputError((std::filesystem::path(a.dir) / "reference.csv").string(), 0, "",
+                     "cannot open, and there is no gnss.csv either: a drive needs a reference INS (reference.csv) or GNSS "
+                     "fixes (gnss.csv) to be diagnosed against");
   DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
   in.device_class = a.device_class;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";

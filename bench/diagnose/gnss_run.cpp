@@ -166,8 +166,25 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     const FilterRun& fr = filter(m);
     return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]);
   });
-  std::vector<int> final_model = run.search.model;
-  std::sort(final_model.begin(), final_model.end());
+  // Overdispersed innovations (not white, or NIS/dof above 1: a model error the candidates do not
+  // cover, as on the real walk): each accepted candidate's Δχ² in the final model is divided by the
+  // worse observation type's φ and must still pass, else it is withdrawn (overdispersed).
+  std::vector<int> final_model;
+  for (;;) {
+    final_model = run.search.model;
+    std::sort(final_model.begin(), final_model.end());
+    if (final_model.empty()) break;
+    const FilterRun& f = filter(final_model);
+    run.phi = std::max(innovation_overdispersion(innovation_stats(f.x[0], nullptr)),
+                       innovation_overdispersion(innovation_stats(f.x[1], nullptr)));
+    std::size_t weakest = 0;
+    for (std::size_t k = 1; k < run.search.steps.size(); ++k)
+      if (run.search.steps[k].dchi2_final < run.search.steps[weakest].dchi2_final) weakest = k;
+    if (run.search.steps[weakest].dchi2_final / run.phi >= policy.min_delta_chi2) break;
+    run.overdispersed.push_back(run.search.steps[weakest]);
+    run.search.model.erase(run.search.model.begin() + static_cast<long>(weakest));
+    run.search.steps.erase(run.search.steps.begin() + static_cast<long>(weakest));
+  }
   const FilterRun& fin = filter(final_model);
 
   // Findings: the final model's estimates, with the Δχ² that accepted each.
@@ -229,14 +246,15 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
       row.term.add_param(r.terms_sigma, p, sg[p]);
     }
   }
-  for (const HypothesisStep& w : run.search.withdrawn) {
-    DiagWithdrawn x;
-    x.term = rows[idx[w.candidate]].term;
-    x.delta_chi2_when_accepted = w.dchi2;
-    x.delta_chi2_final = w.dchi2_final;
-    x.why = WithdrawnWhy::weak;
-    r.withdrawn.push_back(x);
-  }
+  for (const auto& [list, why] : {std::pair{&run.search.withdrawn, WithdrawnWhy::weak}, std::pair{&run.overdispersed, WithdrawnWhy::overdispersed}})
+    for (const HypothesisStep& w : *list) {
+      DiagWithdrawn x;
+      x.term = rows[idx[w.candidate]].term;
+      x.delta_chi2_when_accepted = w.dchi2;
+      x.delta_chi2_final = why == WithdrawnWhy::overdispersed ? w.dchi2_final / run.phi : w.dchi2_final;
+      x.why = why;
+      r.withdrawn.push_back(x);
+    }
   run.improved.errors = r.improved;
   nlohmann::json added = nlohmann::json::array();
   for (const auto& f : r.findings) added.push_back(f.term.label());
@@ -268,7 +286,8 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
   nlohmann::json fs = nlohmann::json::array();
   for (const DiagFinding& f : r.findings) {
     nlohmann::json x = finding_head_json(f);
-    x["evidence"] = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic}, {"source", "innovations against the GNSS fixes"}};
+    x["evidence"] = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic}, {"overdispersion_phi", run.phi},
+                     {"delta_chi2_over_phi", f.delta_chi2 / run.phi}, {"source", "innovations against the GNSS fixes"}};
     x["sentence"] = gnss_finding_sentence(f);
     fs.push_back(x);
   }
@@ -287,7 +306,7 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
   }
   j["hypotheses"] = hs;
   j["search"] = {{"base_deviance", run.search.base_deviance}, {"final_deviance", run.search.final_deviance},
-                 {"filter_runs", run.search.evaluations}, {"innovation_epochs", run.epochs}, {"rows", run.rows},
+                 {"filter_runs", run.search.evaluations}, {"overdispersion_phi", run.phi}, {"innovation_epochs", run.epochs}, {"rows", run.rows},
                  {"min_delta_chi2", DriveDiagnoseOptions{}.min_delta_chi2}};
   j["coefficients_tested"] = run.coeffs_given ? "given (scale tested against them)" : "none given: the filter fits b and M on this drive";
   j["mounting"] = {{"tested_rpy_deg", to_json(run.meta.mounting->rpy_deg)},
@@ -323,6 +342,10 @@ std::string gnss_diagnosis_text(const GnssDiagRun& run) {
   o << "\n";
   if (r.findings.empty()) o << "no finding: no hypothesis explains the innovations better than the base filter by the threshold\n";
   for (const DiagFinding& f : r.findings) o << "* " << gnss_finding_sentence(f) << "\n";
+  if (run.phi > 1.5)
+    o << "! the innovations of the final model are overdispersed (φ " << fmt(run.phi)
+      << ": not white or NIS/dof above 1): the Δχ² were divided by φ before the threshold; the σ are the filter's and "
+         "do not include it (scale them by √φ ≈ " << fmt(std::sqrt(run.phi), 2) << " for a conservative figure)\n";
   for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
   o << "in-motion filter innovations (GNSS-aided; " << (run.innovations.compared ? "base → final model" : "no finding")
     << ", " << fmt(run.cpu_s, 2) << " s CPU):\n";

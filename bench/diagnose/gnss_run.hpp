@@ -35,6 +35,8 @@ struct GnssDiagRun {
   CoefficientSet current, improved;
   std::vector<GnssHypothesis> hypotheses;
   HypothesisSearchResult search;
+  double phi = 1;                           // overdispersion of the final model's innovations
+  std::vector<HypothesisStep> overdispersed;  // accepted, then withdrawn: Δχ²/φ below the threshold
   long epochs = 0, rows = 0;   // innovation epochs (position + velocity) and scalar observations
   DiagnoseResult core;         // findings, withdrawn, improved_terms (the drive's JSON schema)
   DriveInnovations innovations;  // before: the base filter; after: the final model's

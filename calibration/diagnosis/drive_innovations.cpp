@@ -129,6 +129,12 @@ InnovationStats innovation_stats(const std::vector<InnovationSample>& x, const D
   return s;
 }
 
+double innovation_overdispersion(const InnovationStats& s) {
+  double rho = 0;
+  for (double r : s.lag1_autocorr) rho = std::max(rho, std::min(r, 0.95));
+  return std::max(1.0, s.nis_per_dof) * std::max(1.0, (1 + rho) / (1 - rho));
+}
+
 double innovation_deviance(const std::vector<InnovationSample>& x) {
   double d = 0;
   for (const InnovationSample& e : x) {

@@ -78,6 +78,13 @@ struct HypothesisSearchResult {
   double base_deviance = 0, final_deviance = 0;
   int evaluations = 0;  // filter runs (distinct models)
 };
+// Overdispersion φ ≥ 1 of one observation type's innovations (quasi-likelihood, as the catalogue
+// search's WithdrawnWhy::overdispersed): NIS/dof above 1 scales every Δχ² up by it, and correlated
+// innovations carry fewer independent observations than epochs — an AR(1) sequence with lag-1
+// autocorrelation ρ has the variance of its sum inflated by (1 + ρ)/(1 − ρ). φ = max(1, NIS/dof) ·
+// max(1, (1 + ρ)/(1 − ρ)), ρ the largest component lag-1 autocorrelation (capped at 0.95).
+double innovation_overdispersion(const InnovationStats& s);
+
 // nparams: parameters per candidate; rows: scalar observations (the penalty's N); deviance(model):
 // the filter over the drive with these candidates (indices, sorted) → innovation_deviance.
 HypothesisSearchResult hypothesis_search(const std::vector<int>& nparams, long rows, const GreedyPolicy& policy,
