@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <ctime>
+#include <limits>
 #include <map>
 
 #include "bench/diagnose/diagnose_text.hpp"
@@ -38,8 +39,12 @@ struct CandidateRow {
   int nparams;
   bool needs_coeffs;
   void (*configure)(FitDriveArgs& a, bool on);
-  // Value (SI, the registry's convention) and σ per parameter.
+  // Value (SI, the registry's convention) and σ per parameter (nullptr: a profiled candidate).
   void (*read)(const nlohmann::json& result, const CoefficientSet& given, std::vector<double>& v, std::vector<double>& s);
+  // A profiled candidate (no filter state): the first `nparams` parameters of `term`, compensated on
+  // the IMU samples (the coefficients' catalogue keys), profile_quadratic with step `step`.
+  bool profiled = false;
+  double step = 0;
 };
 
 void add_estimate(FitDriveArgs& a, const char* block) { a.estimate += (a.estimate.empty() ? "" : ",") + std::string(block); }
@@ -92,6 +97,9 @@ const std::vector<CandidateRow>& candidate_rows() {
        }},
       {"scale_factor gyro", {EffectId::scale_factor, 0, -1}, 3, true, scale_configure<0>, scale_read<0>},
       {"scale_factor accel", {EffectId::scale_factor, 1, -1}, 3, true, scale_configure<1>, scale_read<1>},
+      // The gyro z g-sensitivity to the horizontal forces (a car turns and brakes; to f_z, gravity, it
+      // is a bias): compensated with the given coefficients, so with --coeffs only.
+      {"g_sensitivity gyro z", {EffectId::g_sensitivity, 0, 2}, 2, true, [](FitDriveArgs&, bool) {}, nullptr, true, 2e-5},
   };
   return rows;
 }
@@ -128,9 +136,14 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     }
     run.hypotheses.push_back(h);
   }
-  std::map<std::vector<int>, FilterRun> runs;
-  auto filter = [&](const std::vector<int>& model) -> const FilterRun& {
-    const auto it = runs.find(model);
+  int profiled = -1;  // hypothesis index of the profiled candidate
+  for (std::size_t h = 0; h < idx.size(); ++h)
+    if (rows[idx[h]].profiled) profiled = static_cast<int>(h);
+  std::map<std::pair<std::vector<int>, std::vector<double>>, FilterRun> runs;
+  std::map<std::vector<int>, ProfileFit> profiles;  // per model with the profiled candidate
+  auto run_filter = [&](const std::vector<int>& model, const std::vector<double>& theta) -> const FilterRun& {
+    const auto key = std::make_pair(model, theta);
+    const auto it = runs.find(key);
     if (it != runs.end()) return it->second;
     FitDriveArgs a;
     a.dir = dir;
@@ -143,6 +156,13 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     if (coeffs) {
       a.coeffs = coeffs->file;
       a.coeffs_set = coeffs->set;
+      if (!theta.empty()) {
+        EffectTerms e = coeffs->carried, sg;
+        for (std::size_t p = 0; p < theta.size(); ++p) rows[idx[profiled]].term.add_param(e, static_cast<int>(p), theta[p]);
+        nlohmann::json& x = a.coeffs_set->extra;
+        for (const auto& k : effect_json_keys()) x.erase(k);
+        effects_to_json(e, sg, x);
+      }
     }
     for (std::size_t h = 0; h < idx.size(); ++h) {
       const bool on = std::find(model.begin(), model.end(), static_cast<int>(h)) != model.end();
@@ -153,7 +173,26 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
       if (type < 2) fr.x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
     };
     fr.result = fit_drive(a);
-    return runs[model] = std::move(fr);
+    return runs[key] = std::move(fr);
+  };
+  auto deviance_of = [](const FilterRun& fr) { return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]); };
+  // A model's run: with the profiled candidate at its profile's θ̂ when the model holds it.
+  auto filter = [&](const std::vector<int>& model) -> const FilterRun& {
+    if (profiled < 0 || std::find(model.begin(), model.end(), profiled) == model.end()) return run_filter(model, {});
+    auto pit = profiles.find(model);
+    if (pit == profiles.end()) {
+      std::vector<int> others;
+      for (int h : model)
+        if (h != profiled) others.push_back(h);
+      const CandidateRow& row = rows[idx[profiled]];
+      const ProfileFit pf = profile_quadratic(row.nparams, row.step, [&](const Eigen::VectorXd& t) {
+        return t.isZero() ? deviance_of(run_filter(others, {})) : deviance_of(run_filter(others, std::vector<double>(t.data(), t.data() + t.size())));
+      });
+      pit = profiles.emplace(model, pf).first;
+    }
+    const ProfileFit& pf = pit->second;
+    if (!pf.ok) return run_filter(model, std::vector<double>(static_cast<std::size_t>(rows[idx[profiled]].nparams), 0.0));
+    return run_filter(model, std::vector<double>(pf.theta.data(), pf.theta.data() + pf.theta.size()));
   };
   const FilterRun& base = filter({});
   run.epochs = static_cast<long>(base.x[0].size() + base.x[1].size());
@@ -162,10 +201,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     throw InputError((std::filesystem::path(dir) / "gnss.csv").string(), 0, "", "the GNSS-aided filter took no fix: nothing to diagnose");
   DriveDiagnoseOptions opt;
   GreedyPolicy policy = diag::search_policy(opt);
-  run.search = hypothesis_search(nparams, run.rows, policy, [&](const std::vector<int>& m) {
-    const FilterRun& fr = filter(m);
-    return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]);
-  });
+  run.search = hypothesis_search(nparams, run.rows, policy, [&](const std::vector<int>& m) { return deviance_of(filter(m)); });
   // Overdispersed innovations (not white, or NIS/dof above 1: a model error the candidates do not
   // cover, as on the real walk): each accepted candidate's Δχ² in the final model is divided by the
   // worse observation type's φ and must still pass, else it is withdrawn (overdispersed).
@@ -192,12 +228,21 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
   run.improved.device = run.current.device.serial.empty() ? run.meta.device : run.current.device;
   DiagnoseResult& r = run.core;
   r.improved = run.current.errors;
+  if (coeffs) r.improved_terms = coeffs->carried;  // the filter ran with them compensated: estimates add to them
   for (std::size_t s = 0; s < run.search.model.size(); ++s) {
     const int h = run.search.model[s];
     const CandidateRow& row = rows[idx[h]];
     const HypothesisStep& step = run.search.steps[s];
     std::vector<double> v, sg;
-    row.read(fin.result, run.current, v, sg);
+    if (row.profiled) {
+      const ProfileFit& pf = profiles.at(final_model);
+      for (int p = 0; p < row.term.nparams(); ++p) {
+        v.push_back(p < row.nparams ? pf.theta(p) : 0.0);
+        sg.push_back(p < row.nparams ? pf.sigma(p) : std::numeric_limits<double>::quiet_NaN());
+      }
+    } else {
+      row.read(fin.result, run.current, v, sg);
+    }
     auto finding = [&](const Term& t, std::vector<double> value, std::vector<double> sigma) {
       DiagFinding f;
       f.term = t;
@@ -243,7 +288,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     finding(row.term, v, sg);
     for (int p = 0; p < row.term.nparams(); ++p) {
       row.term.add_param(r.improved_terms, p, v[p]);
-      row.term.add_param(r.terms_sigma, p, sg[p]);
+      if (std::isfinite(sg[p])) row.term.add_param(r.terms_sigma, p, sg[p]);
     }
   }
   for (const auto& [list, why] : {std::pair{&run.search.withdrawn, WithdrawnWhy::weak}, std::pair{&run.overdispersed, WithdrawnWhy::overdispersed}})

@@ -135,6 +135,34 @@ double innovation_overdispersion(const InnovationStats& s) {
   return std::max(1.0, s.nis_per_dof) * std::max(1.0, (1 + rho) / (1 - rho));
 }
 
+ProfileFit profile_quadratic(int p, double h, const std::function<double(const Eigen::VectorXd&)>& deviance_at) {
+  ProfileFit out;
+  auto at = [&](int i, double si, int j, double sj) {
+    Eigen::VectorXd t = Eigen::VectorXd::Zero(p);
+    if (i >= 0) t(i) += si * h;
+    if (j >= 0) t(j) += sj * h;
+    return deviance_at(t);
+  };
+  const double d0 = at(-1, 0, -1, 0);
+  Eigen::VectorXd g(p), dp(p);
+  Eigen::MatrixXd H(p, p);
+  for (int i = 0; i < p; ++i) {
+    dp(i) = at(i, 1, -1, 0);
+    const double dm = at(i, -1, -1, 0);
+    g(i) = (dp(i) - dm) / (2 * h);
+    H(i, i) = (dp(i) + dm - 2 * d0) / (h * h);
+  }
+  for (int i = 0; i < p; ++i)
+    for (int j = i + 1; j < p; ++j) H(i, j) = H(j, i) = (at(i, 1, j, 1) - dp(i) - dp(j) + d0) / (h * h);
+  const Eigen::LLT<Eigen::MatrixXd> llt(H);
+  if (llt.info() != Eigen::Success) return out;
+  out.theta = -llt.solve(g);
+  const Eigen::MatrixXd C = 2 * llt.solve(Eigen::MatrixXd::Identity(p, p));
+  out.sigma = C.diagonal().cwiseSqrt();
+  out.ok = true;
+  return out;
+}
+
 double innovation_deviance(const std::vector<InnovationSample>& x) {
   double d = 0;
   for (const InnovationSample& e : x) {

@@ -85,6 +85,18 @@ struct HypothesisSearchResult {
 // max(1, (1 + ρ)/(1 − ρ)), ρ the largest component lag-1 autocorrelation (capped at 0.95).
 double innovation_overdispersion(const InnovationStats& s);
 
+// A candidate without a filter state (an effect the estimators compensate on the IMU samples, e.g.
+// g_sensitivity): its deviance profiled over its parameters θ. The innovations are linear in θ to
+// first order, so D(θ) = D₀ + gᵀθ + ½θᵀHθ; g and H from runs at 0, ±h·e_i and h·(e_i + e_j) (i < j),
+// θ̂ = −H⁻¹g, cov θ̂ = 2H⁻¹ (D = −2 ln L). ok = false when H is not positive definite (the drive does
+// not determine θ).
+struct ProfileFit {
+  Eigen::VectorXd theta, sigma;
+  bool ok = false;
+};
+// deviance_at(θ): the filter run with the effect compensated at θ (θ = 0: the model without it).
+ProfileFit profile_quadratic(int p, double h, const std::function<double(const Eigen::VectorXd&)>& deviance_at);
+
 // nparams: parameters per candidate; rows: scalar observations (the penalty's N); deviance(model):
 // the filter over the drive with these candidates (indices, sorted) → innovation_deviance.
 HypothesisSearchResult hypothesis_search(const std::vector<int>& nparams, long rows, const GreedyPolicy& policy,
