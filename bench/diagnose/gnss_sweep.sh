@@ -5,8 +5,7 @@
 # route and concealed effect GNSS_SWEEP_SEEDS seeds (default 5, seeds 101…): clean, the IMU 8 ms late
 # (--inject time_offset), meta.json's lever arm 0.1 m off in x and −y, an accelerometer x scale
 # shift of 2000 ppm and a gyro z one of 3000 ppm (both with --coeffs = the unit's truth without the
-# shift), and a gyro z g-sensitivity to f_y of 1e-4 rad/s/(m/s²) (not a candidate here: is it named
-# as something else?). Per row: found, value within 3σ of the truth, other findings, |error|/σ.
+# shift), and a gyro z g-sensitivity to f_y of 1e-3 and 1e-4 rad/s/(m/s²) (--coeffs). Per row: found, value within 3σ of the truth, other findings, |error|/σ.
 # Writes docs/validation/diagnose-gnss-only-sweep.md (VALIDATION_NAME=OTHER.md for a partial run),
 # stamped with the commit, date and command.
 # Usage: bench/diagnose/gnss_sweep.sh [BUILD_DIR]
@@ -35,7 +34,8 @@ rows = [
     ("lever arm 0.1 m (meta.json x +0.1, y −0.1)", [], (0.1, -0.1, 0.0), False, "lever_arm", None, None, "lever"),
     ("accel x scale 2000 ppm, --coeffs", ["--inject", "scale_factor:sensor=accel,axis=x,value=2e-3"], None, True, "scale_factor", "accel", "x", 2e-3),
     ("gyro z scale 3000 ppm, --coeffs", ["--inject", "scale_factor:sensor=gyro,axis=z,value=3e-3"], None, True, "scale_factor", "gyro", "z", 3e-3),
-    ("gyro z g-sensitivity to f_y 1e-4 rad/s/(m/s²) (no candidate)", ["--inject", "g_sensitivity:axis=z,f=y,value=1e-4"], None, True, None, None, None, None),
+    ("gyro z g-sensitivity to f_y 1e-3 rad/s/(m/s²), --coeffs", ["--inject", "g_sensitivity:axis=z,f=y,value=1e-3"], None, True, "g_sensitivity", "gyro", "z", 1e-3),
+    ("gyro z g-sensitivity to f_y 1e-4 rad/s/(m/s²), --coeffs (below the limit)", ["--inject", "g_sensitivity:axis=z,f=y,value=1e-4"], None, True, "g_sensitivity", "gyro", "z", 1e-4),
 ]
 print("| route | concealed effect | runs | no finding | found | value within 3σ | runs with another finding | \\|error\\|/σ median / max | σ median |")
 print("|---|---|---|---|---|---|---|---|---|")
@@ -78,6 +78,9 @@ for rname in ("rtk_town", "short"):
                 tv = [c * b[0] + s_ * b[1], -s_ * b[0] + c * b[1], b[2]]
                 z = [abs(f["value"][i] - tv[i]) / f["sigma"][i] for i in range(2)]  # horizontal: the vertical is barely seen
                 sig = max(f["sigma"][:2])
+            elif effect == "g_sensitivity":  # the f_y component
+                z = [abs(f["value"][1] - truth) / f["sigma"][1]]
+                sig = f["sigma"][1]
             else:
                 z = [abs(f["value"] - truth) / f["sigma"]]
                 sig = f["sigma"]
