@@ -129,7 +129,9 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     GnssHypothesis h{rows[k].name, rows[k].term, rows[k].nparams, true, ""};
     if (rows[k].needs_coeffs && !coeffs) {
       h.tested = false;
-      h.why_not = "needs --coeffs: without given coefficients the filter fits the scale on the drive (nothing to differ from)";
+      h.why_not = rows[k].profiled
+                      ? "needs --coeffs: the effect is compensated on the IMU samples through the given coefficients"
+                      : "needs --coeffs: without given coefficients the filter fits the scale on the drive (nothing to differ from)";
     } else {
       idx.push_back(static_cast<int>(k));
       nparams.push_back(rows[k].nparams);

@@ -137,29 +137,38 @@ double innovation_overdispersion(const InnovationStats& s) {
 
 ProfileFit profile_quadratic(int p, double h, const std::function<double(const Eigen::VectorXd&)>& deviance_at) {
   ProfileFit out;
-  auto at = [&](int i, double si, int j, double sj) {
-    Eigen::VectorXd t = Eigen::VectorXd::Zero(p);
-    if (i >= 0) t(i) += si * h;
-    if (j >= 0) t(j) += sj * h;
-    return deviance_at(t);
-  };
-  const double d0 = at(-1, 0, -1, 0);
-  Eigen::VectorXd g(p), dp(p);
-  Eigen::MatrixXd H(p, p);
-  for (int i = 0; i < p; ++i) {
-    dp(i) = at(i, 1, -1, 0);
-    const double dm = at(i, -1, -1, 0);
-    g(i) = (dp(i) - dm) / (2 * h);
-    H(i, i) = (dp(i) + dm - 2 * d0) / (h * h);
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(p);
+  Eigen::VectorXd step = Eigen::VectorXd::Constant(p, h);
+  for (int it = 0; it < 4; ++it) {
+    auto at = [&](int i, double si, int j, double sj) {
+      Eigen::VectorXd t = c;
+      if (i >= 0) t(i) += si * step(i);
+      if (j >= 0) t(j) += sj * step(j);
+      return deviance_at(t);
+    };
+    const double d0 = at(-1, 0, -1, 0);
+    Eigen::VectorXd g(p), dp(p);
+    Eigen::MatrixXd H(p, p);
+    for (int i = 0; i < p; ++i) {
+      dp(i) = at(i, 1, -1, 0);
+      const double dm = at(i, -1, -1, 0);
+      g(i) = (dp(i) - dm) / (2 * step(i));
+      H(i, i) = (dp(i) + dm - 2 * d0) / (step(i) * step(i));
+    }
+    for (int i = 0; i < p; ++i)
+      for (int j = i + 1; j < p; ++j) H(i, j) = H(j, i) = (at(i, 1, j, 1) - dp(i) - dp(j) + d0) / (step(i) * step(j));
+    const Eigen::LLT<Eigen::MatrixXd> llt(H);
+    if (llt.info() != Eigen::Success) return out;
+    const Eigen::VectorXd move = -llt.solve(g);
+    out.sigma = (2 * llt.solve(Eigen::MatrixXd::Identity(p, p))).diagonal().cwiseSqrt();
+    out.theta = c + move;
+    out.ok = true;
+    // The filter is not exactly linear in θ (its gain and adaptive noise follow the data): Newton
+    // steps, the quadratic taken again around θ̂ with steps of its σ, until the move is below σ/10.
+    if ((move.array().abs() < 0.1 * out.sigma.array()).all()) break;
+    c = out.theta;
+    step = out.sigma.cwiseMax(Eigen::VectorXd::Constant(p, 1e-3 * h));
   }
-  for (int i = 0; i < p; ++i)
-    for (int j = i + 1; j < p; ++j) H(i, j) = H(j, i) = (at(i, 1, j, 1) - dp(i) - dp(j) + d0) / (h * h);
-  const Eigen::LLT<Eigen::MatrixXd> llt(H);
-  if (llt.info() != Eigen::Success) return out;
-  out.theta = -llt.solve(g);
-  const Eigen::MatrixXd C = 2 * llt.solve(Eigen::MatrixXd::Identity(p, p));
-  out.sigma = C.diagonal().cwiseSqrt();
-  out.ok = true;
   return out;
 }
 

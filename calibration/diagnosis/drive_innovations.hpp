@@ -88,8 +88,9 @@ double innovation_overdispersion(const InnovationStats& s);
 // A candidate without a filter state (an effect the estimators compensate on the IMU samples, e.g.
 // g_sensitivity): its deviance profiled over its parameters θ. The innovations are linear in θ to
 // first order, so D(θ) = D₀ + gᵀθ + ½θᵀHθ; g and H from runs at 0, ±h·e_i and h·(e_i + e_j) (i < j),
-// θ̂ = −H⁻¹g, cov θ̂ = 2H⁻¹ (D = −2 ln L). ok = false when H is not positive definite (the drive does
-// not determine θ).
+// θ̂ = −H⁻¹g, cov θ̂ = 2H⁻¹ (D = −2 ln L); then Newton steps (the quadratic again around θ̂, steps of
+// its σ, at most 4 rounds) until the move is below σ/10. ok = false when H is not positive definite
+// (the drive does not determine θ).
 struct ProfileFit {
   Eigen::VectorXd theta, sigma;
   bool ok = false;
