@@ -8,7 +8,9 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/diagnose/gnss_run.hpp"
 #include "common/input_error.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 
@@ -22,6 +24,29 @@ struct DiagnoseArgs {
   bool list_effects = false;
 };
 
+// GNSS-only drives (no reference.csv, gnss.csv): bench/diagnose/gnss_run.hpp, docs/diagnosis.md
+// "GNSS-only drives". The filter always runs (it is the evidence): --no-innovations does not apply.
+void run_diagnose_gnss(const DiagnoseArgs& a, const std::optional<DriveCoeffs>& given) {
+  if (a.no_innovations)
+    throw InputError("--no-innovations", 0, "", a.dir + " is a GNSS-only drive: its evidence is the in-motion filter's innovations, which cannot be skipped");
+  if (!a.report.empty())
+    throw InputError("--report", 0, "", a.dir + " is a GNSS-only drive: the HTML report needs a reference INS (reference.csv); use --json");
+  const RecordingMeta meta = read_meta(a.dir);
+  if (!meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
+  const GnssDiagRun run = run_gnss_diagnosis(a.dir, given ? &*given : nullptr, a.device_class);
+  const bool write_out = !a.out.empty() && !run.core.findings.empty();
+  if (write_out) write_coefficients(a.out, run.improved);
+  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+  if (a.json) {
+    auto j = gnss_diagnosis_json(run);
+    j["recording"] = {{"path", a.dir}, {"complete", meta.complete}};
+    print_json(j.dump(2));
+  } else {
+    std::cout << "diagnosis of " << a.dir << "\n" << gnss_diagnosis_text(run);
+    if (write_out) std::cout << "improved coefficients written to " << a.out << "\n";
+  }
+}
+
 // Drive recordings (meta.json kind "drive"): bench/diagnose/drive_run.hpp, docs/diagnosis.md "Drives".
 void run_diagnose_drive(const DiagnoseArgs& a) {
   if (!a.plan.empty())  // an option for another kind of recording is not silently ignored
@@ -31,6 +56,11 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
     given = read_drive_coeffs(a.coeffs);
     check_same_unit(given->set.device, a.coeffs, a.dir);
   }
+  if (drive_is_gnss_only(a.dir)) return run_diagnose_gnss(a, given);
+  if (!recording_has_table(a.dir, "reference"))
+    throw InputError((std::filesystem::path(a.dir) / "reference.csv").string(), 0, "",
+                     "cannot open, and there is no gnss.csv either: a drive needs a reference INS (reference.csv) or GNSS "
+                     "fixes (gnss.csv) to be diagnosed against");
   DriveDiagInput in = load_drive_diag_input(a.dir, given ? given->mounting_rpy_deg : std::nullopt);
   in.device_class = a.device_class;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
@@ -86,8 +116,10 @@ const bool registered = add_command(60, [](CLI::App& app) {
   auto a = std::make_shared<DiagnoseArgs>();
   auto* d = app.add_subcommand("diagnose",
                                "Physics discovery: locate where recording and model disagree, name the missing effect, "
-                               "model it, show the fit improve (bench and drive recordings)");
-  d->add_option("dir", a->dir, "recording folder (bench or drive; CSV or HDF5, docs/recording-hdf5.md)")->check(CLI::ExistingDirectory);
+                               "model it, show the fit improve (bench and drive recordings; a GNSS-only drive through the aided filter's "
+                               "innovations against the fixes: time offset, lever arm, scale with --coeffs)");
+  d->add_option("dir", a->dir, "recording folder (bench or drive; CSV or HDF5, docs/recording-hdf5.md); a drive without "
+                "reference.csv but with gnss.csv is diagnosed from the GNSS-aided filter's innovations (docs/diagnosis.md, GNSS-only drives)")->check(CLI::ExistingDirectory);
   d->add_flag("--list-effects", a->list_effects,
               "print the catalogue of effects (docs/diagnosis.md, generated from the effect registry) and exit; "
               "with --json as JSON");

@@ -38,6 +38,16 @@ void finding_value_json(const DiagFinding& f, nlohmann::json& value, nlohmann::j
   }
 }
 
+nlohmann::json finding_head_json(const DiagFinding& f) {
+  nlohmann::json x;
+  x["effect"] = effect_name(f.term.effect);
+  x["sensor"] = kSensor[f.term.sensor];
+  x["axis"] = f.report_axis >= 0 ? kAxis[f.report_axis] : "all";
+  finding_value_json(f, x["value"], x["sigma"]);
+  x["unit"] = f.unit;
+  return x;
+}
+
 nlohmann::json finding_evidence_json(const DiagFinding& f) {
   nlohmann::json ev = {{"delta_chi2", f.delta_chi2},
                        {"delta_bic", f.delta_bic},
@@ -138,7 +148,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
           {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
 }
 
-namespace {
+namespace diagnose_out {
 
 nlohmann::json innovation_stats_json(const InnovationStats& s) {
   nlohmann::json w = nlohmann::json::array(), c = nlohmann::json::array();
@@ -161,7 +171,7 @@ nlohmann::json innovation_stats_json(const InnovationStats& s) {
           {"correlation_blocks", s.correlation_blocks}};
 }
 
-}  // namespace
+}  // namespace diagnose_out
 
 nlohmann::json drive_innovations_json(const DriveDiagRun& run) {
   if (!run.innovations) return {{"skipped", run.innovations_skipped}};
@@ -189,12 +199,7 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
   nlohmann::json fs = nlohmann::json::array();
   for (std::size_t fi = 0; fi < r.findings.size(); ++fi) {
     const DiagFinding& f = r.findings[fi];
-    nlohmann::json x;
-    x["effect"] = effect_name(f.term.effect);
-    x["sensor"] = kSensor[f.term.sensor];
-    x["axis"] = f.report_axis >= 0 ? kAxis[f.report_axis] : "all";
-    finding_value_json(f, x["value"], x["sigma"]);
-    x["unit"] = f.unit;
+    nlohmann::json x = finding_head_json(f);
     nlohmann::json ev = finding_evidence_json(f);
     if (fi < R.rms_floor.size()) ev["rms_noise_floor"] = R.rms_floor[fi];
     if (fi < R.shown_on.size() && effect_spec(f.term.effect).shape != EffectShape::noise) ev["rms_axis"] = kAxisName[R.shown_on[fi]];

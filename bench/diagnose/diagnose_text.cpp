@@ -5,6 +5,7 @@
 #include "bench/diagnose/diagnose_text.hpp"
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/finding_text.hpp"
+#include "bench/diagnose/gnss_run.hpp"
 #include "common/units.hpp"
 
 // The text of `calbench diagnose`: the sentences of the findings and the summaries, bench and drive.
@@ -248,6 +249,19 @@ std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
   const int rs = shown_sensor >= 0 ? shown_sensor : (f.report_sensor < 2 ? f.report_sensor : 0);
   return head + ": " + what + ", " + value_text(f) + "; systematic residual " + fmt(disp(f.rms_before, rs)) + " " +
          disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs) + alternatives_text(f);
+}
+
+std::string gnss_finding_sentence(const DiagFinding& f) {
+  const Term& t = f.term;
+  std::string who = t.sensor < 2 ? std::string(kSensor[t.sensor]) : "the IMU";
+  if (t.sensor < 2 && f.report_axis >= 0) who += std::string(" ") + kAxis[f.report_axis];
+  const EffectSpec& x = effect_spec(t.effect);
+  const int k = t.sensor == 1 ? 1 : 0;
+  std::string sg;
+  for (std::size_t i = 0; i < f.sigma.size(); ++i) sg += (i ? ", " : "") + fmt(x.drive_display.value(f.sigma[i], k), 2);
+  if (f.sigma.size() > 1) sg = "(" + sg + ")";
+  return who + ": " + drive_effect_what(t) + ", " + value_text(f) + ", σ " + sg + " (innovations against the GNSS fixes: Δχ² " +
+         fmt(f.delta_chi2) + ", ΔBIC " + fmt(f.delta_bic) + ")";
 }
 
 std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& run) {

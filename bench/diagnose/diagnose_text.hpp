@@ -29,6 +29,8 @@ int finding_axis_index(const DiagFinding& f, const DiagnoseResult& r);
 
 // A finding's value and σ for the JSON: a number (σ null when not finite) or arrays.
 void finding_value_json(const DiagFinding& f, nlohmann::json& value, nlohmann::json& sigma);
+// A drive finding's effect, sensor, axis ("all" for none), value, σ and unit.
+nlohmann::json finding_head_json(const DiagFinding& f);
 // evidence: Δχ², ΔBIC, held-out Δχ², revealing condition and its correlation, the drift's τ
 // (correlated_drift) and the candidates not told apart.
 nlohmann::json finding_evidence_json(const DiagFinding& f);
@@ -46,6 +48,7 @@ void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohma
 
 namespace calbench {
 struct DriveInnovations;
+struct InnovationStats;
 }
 
 namespace calbench::diagnose_out {
@@ -53,6 +56,8 @@ namespace calbench::diagnose_out {
 // Drive: the observation types of the innovations and one sentence per type.
 extern const char* const kObsName[3];  // position, velocity, attitude
 std::string innovation_sentence(int type, const DriveInnovations& v);
+// The JSON of one observation type's innovation statistics (drive_innovations.hpp).
+nlohmann::json innovation_stats_json(const InnovationStats& s);
 
 // A before/after residual plot (columns x, before, after in `data`) through the report's gnuplot
 // runner: inline SVG (svg) or a PNG <img>; on failure a note saying why.

@@ -129,4 +129,116 @@ InnovationStats innovation_stats(const std::vector<InnovationSample>& x, const D
   return s;
 }
 
+double innovation_overdispersion(const InnovationStats& s) {
+  double rho = 0;
+  for (double r : s.lag1_autocorr) rho = std::max(rho, std::min(r, 0.95));
+  return std::max(1.0, s.nis_per_dof) * std::max(1.0, (1 + rho) / (1 - rho));
+}
+
+ProfileFit profile_quadratic(int p, double h, const std::function<double(const Eigen::VectorXd&)>& deviance_at) {
+  ProfileFit out;
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(p);
+  Eigen::VectorXd step = Eigen::VectorXd::Constant(p, h);
+  for (int it = 0; it < 4; ++it) {
+    auto at = [&](int i, double si, int j, double sj) {
+      Eigen::VectorXd t = c;
+      if (i >= 0) t(i) += si * step(i);
+      if (j >= 0) t(j) += sj * step(j);
+      return deviance_at(t);
+    };
+    const double d0 = at(-1, 0, -1, 0);
+    Eigen::VectorXd g(p), dp(p);
+    Eigen::MatrixXd H(p, p);
+    for (int i = 0; i < p; ++i) {
+      dp(i) = at(i, 1, -1, 0);
+      const double dm = at(i, -1, -1, 0);
+      g(i) = (dp(i) - dm) / (2 * step(i));
+      H(i, i) = (dp(i) + dm - 2 * d0) / (step(i) * step(i));
+    }
+    for (int i = 0; i < p; ++i)
+      for (int j = i + 1; j < p; ++j) H(i, j) = H(j, i) = (at(i, 1, j, 1) - dp(i) - dp(j) + d0) / (step(i) * step(j));
+    const Eigen::LLT<Eigen::MatrixXd> llt(H);
+    if (llt.info() != Eigen::Success) return out;
+    const Eigen::VectorXd move = -llt.solve(g);
+    out.sigma = (2 * llt.solve(Eigen::MatrixXd::Identity(p, p))).diagonal().cwiseSqrt();
+    out.theta = c + move;
+    out.ok = true;
+    // The filter is not exactly linear in θ (its gain and adaptive noise follow the data): Newton
+    // steps, the quadratic taken again around θ̂ with steps of its σ, until the move is below σ/10.
+    if ((move.array().abs() < 0.1 * out.sigma.array()).all()) break;
+    c = out.theta;
+    step = out.sigma.cwiseMax(Eigen::VectorXd::Constant(p, 1e-3 * h));
+  }
+  return out;
+}
+
+double innovation_deviance(const std::vector<InnovationSample>& x) {
+  double d = 0;
+  for (const InnovationSample& e : x) {
+    if (!std::isfinite(e.nis)) continue;
+    const double det = e.S.determinant();
+    if (!(det > 0)) continue;
+    d += e.nis + std::log(det);
+  }
+  return d;
+}
+
+HypothesisSearchResult hypothesis_search(const std::vector<int>& nparams, long rows, const GreedyPolicy& policy,
+                                         const std::function<double(const std::vector<int>&)>& deviance) {
+  HypothesisSearchResult out;
+  std::map<std::vector<int>, double> cache;
+  auto eval = [&](std::vector<int> m) {
+    std::sort(m.begin(), m.end());
+    const auto it = cache.find(m);
+    if (it != cache.end()) return it->second;
+    ++out.evaluations;
+    return cache[m] = deviance(m);
+  };
+  const int n = static_cast<int>(nparams.size());
+  auto in_model = [&](int c) { return std::find(out.model.begin(), out.model.end(), c) != out.model.end(); };
+  double cur = out.base_deviance = eval({});
+  while (static_cast<int>(out.model.size()) < std::min(n, policy.max_findings)) {
+    HypothesisStep best;
+    best.candidate = -1;
+    for (int c = 0; c < n; ++c) {
+      if (in_model(c)) continue;
+      std::vector<int> m = out.model;
+      m.push_back(c);
+      const double dchi2 = cur - eval(m);
+      if (out.model.empty()) out.first_round_dchi2.push_back(dchi2);
+      const double dbic = dchi2 - greedy_term_penalty(nparams[c], static_cast<int>(rows), policy.penalty_per_param);
+      if (dchi2 >= policy.min_delta_chi2 && dbic > 0 && (best.candidate < 0 || dchi2 > best.dchi2)) {
+        best.candidate = c;
+        best.dchi2 = dchi2;
+        best.dbic = dbic;
+      }
+    }
+    if (out.model.empty() && out.first_round_dchi2.size() < nparams.size()) out.first_round_dchi2.resize(nparams.size(), 0.0);
+    if (best.candidate < 0) break;
+    out.model.push_back(best.candidate);
+    out.steps.push_back(best);
+    cur -= best.dchi2;
+  }
+  // Backward check in the final model.
+  for (bool changed = true; changed && !out.model.empty();) {
+    changed = false;
+    for (std::size_t k = 0; k < out.model.size(); ++k) {
+      std::vector<int> without = out.model;
+      without.erase(without.begin() + static_cast<long>(k));
+      out.steps[k].dchi2_final = eval(without) - cur;
+    }
+    for (std::size_t k = 0; k < out.model.size(); ++k)
+      if (out.steps[k].dchi2_final < policy.min_delta_chi2) {
+        out.withdrawn.push_back(out.steps[k]);
+        cur += out.steps[k].dchi2_final;
+        out.model.erase(out.model.begin() + static_cast<long>(k));
+        out.steps.erase(out.steps.begin() + static_cast<long>(k));
+        changed = true;
+        break;
+      }
+  }
+  out.final_deviance = cur;
+  return out;
+}
+
 }  // namespace calbench

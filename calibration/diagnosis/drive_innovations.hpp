@@ -11,11 +11,13 @@
 //     magnitude of the signed ones (|w_x|, …).
 // Pure mathematics: the caller runs the filter and hands over its innovations.
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "calibration/diagnosis/diagnose.hpp"
 #include "calibration/diagnosis/drive_data.hpp"
+#include "calibration/diagnosis/greedy_search.hpp"
 
 namespace calbench {
 
@@ -49,5 +51,56 @@ struct InnovationStats {
 // data: the drive diagnosis blocks (conditions); nullptr → no correlations.
 InnovationStats innovation_stats(const std::vector<InnovationSample>& x, const DriveDiagData* data,
                                  double window_s = 20.0, int n_worst = 3, int n_correlations = -1);
+
+// −2 ln L of the innovations up to a constant (Gaussian, ν ~ N(0, S)): Σ νᵀS⁻¹ν + ln det S over the
+// epochs with a finite NIS, the gated ones included, so that two filter runs over the same fixes are
+// compared over the same epochs (a run that gates an epoch pays for it).
+double innovation_deviance(const std::vector<InnovationSample>& x);
+
+// The evidence of a drive without a reference INS (GNSS-only, docs/diagnosis.md "GNSS-only
+// drives"): no predicted MEMS output exists without a reference attitude, so each candidate effect
+// is a hypothesis of the aided in-motion filter (an extra state block, or a scale allowed to move),
+// judged by the innovations against the fixes. The generalised likelihood ratio of the runs with and
+// without it, Δχ² = deviance(without) − deviance(with), takes the same rules as the catalogue search
+// (greedy_search.hpp): greedy by Δχ², at least policy.min_delta_chi2 and positive ΔBIC with the
+// penalty greedy_term_penalty(k, rows); afterwards each accepted candidate is checked backwards in the
+// final model (removing it must still cost min_delta_chi2, else it is withdrawn, WithdrawnWhy::weak).
+struct HypothesisStep {
+  int candidate = 0;
+  double dchi2 = 0, dbic = 0;
+  double dchi2_final = 0;  // what removing it from the final model costs
+};
+struct HypothesisSearchResult {
+  std::vector<int> model;              // accepted candidates, in the order accepted
+  std::vector<HypothesisStep> steps;   // per accepted candidate (same order)
+  std::vector<HypothesisStep> withdrawn;
+  std::vector<double> first_round_dchi2;  // Δχ² of each candidate against the base (round 1)
+  double base_deviance = 0, final_deviance = 0;
+  int evaluations = 0;  // filter runs (distinct models)
+};
+// Overdispersion φ ≥ 1 of one observation type's innovations (quasi-likelihood, as the catalogue
+// search's WithdrawnWhy::overdispersed): NIS/dof above 1 scales every Δχ² up by it, and correlated
+// innovations carry fewer independent observations than epochs — an AR(1) sequence with lag-1
+// autocorrelation ρ has the variance of its sum inflated by (1 + ρ)/(1 − ρ). φ = max(1, NIS/dof) ·
+// max(1, (1 + ρ)/(1 − ρ)), ρ the largest component lag-1 autocorrelation (capped at 0.95).
+double innovation_overdispersion(const InnovationStats& s);
+
+// A candidate without a filter state (an effect the estimators compensate on the IMU samples, e.g.
+// g_sensitivity): its deviance profiled over its parameters θ. The innovations are linear in θ to
+// first order, so D(θ) = D₀ + gᵀθ + ½θᵀHθ; g and H from runs at 0, ±h·e_i and h·(e_i + e_j) (i < j),
+// θ̂ = −H⁻¹g, cov θ̂ = 2H⁻¹ (D = −2 ln L); then Newton steps (the quadratic again around θ̂, steps of
+// its σ, at most 4 rounds) until the move is below σ/10. ok = false when H is not positive definite
+// (the drive does not determine θ).
+struct ProfileFit {
+  Eigen::VectorXd theta, sigma;
+  bool ok = false;
+};
+// deviance_at(θ): the filter run with the effect compensated at θ (θ = 0: the model without it).
+ProfileFit profile_quadratic(int p, double h, const std::function<double(const Eigen::VectorXd&)>& deviance_at);
+
+// nparams: parameters per candidate; rows: scalar observations (the penalty's N); deviance(model):
+// the filter over the drive with these candidates (indices, sorted) → innovation_deviance.
+HypothesisSearchResult hypothesis_search(const std::vector<int>& nparams, long rows, const GreedyPolicy& policy,
+                                         const std::function<double(const std::vector<int>&)>& deviance);
 
 }  // namespace calbench
