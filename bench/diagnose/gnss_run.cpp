@@ -16,6 +16,7 @@
 #include "bench/io/recording.hpp"
 #include "calibration/diagnosis/diagnosis_engine.hpp"
 #include "calibration/ins/nav_math.hpp"
+#include "common/drive_result.hpp"
 #include "common/units.hpp"
 #include "common/input_error.hpp"
 
@@ -174,7 +175,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
       if (type < 2) fr.x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
     };
-    fr.result = fit_drive(a);
+    fr.result = drive_result_to_json(fit_drive(a));  // the result as RESULT.json holds it (common/drive_result)
     return runs[key] = std::move(fr);
   };
   auto deviance_of = [](const FilterRun& fr) { return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]); };
