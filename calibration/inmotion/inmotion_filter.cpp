@@ -871,23 +871,14 @@ void InMotionFilter::propagate_drift_nominal(double T) { propagate_drift(drift_,
 
 void propagate_drift(const DriftModels& drift, const StateLayout& s, Nominal& n, double T) {
   // Between updates the drift estimates move with their shaping filters: x̂ ← Φ·x̂, the filter's
-  // prediction (for a first-order axis d̂ ← e^{−αT}·d̂). The error state's F (δḋ = −α·δd,
-  // error_model.hpp) assumes the estimate decays with the drift; held constant instead, the real
-  // error d̂ − d would have the extra term α·d̂ the covariance does not carry, and the filter would
-  // be overconfident about the drift (before 2026-11-23 the estimates were held: with a reference
-  // INS always, GNSS-only until 3f38af4; docs/in-motion.md, "GNSS-only drives").
-  const int dg = s.offset(Block::dg), da = s.offset(Block::da);
-  for (int k = 0; k < 6; ++k) {
-    double& d = n.x(k < 3 ? dg + k : da + k - 3);
-    if (drift.expcos[k]) {
-      double& x0 = n.x(k < 3 ? s.offset(Block::dg_aux) + k : s.offset(Block::da_aux) + k - 3);
-      const Eigen::Vector2d x = drift.discrete(k, T).Phi * Eigen::Vector2d(x0, d);
-      x0 = x(0);
-      d = x(1);
-    } else {
-      d *= std::exp(-(k < 3 ? drift.alpha_g(k) : drift.alpha_a(k - 3)) * T);
-    }
-  }
+  // prediction (for a first-order axis d̂ ← e^{−αT}·d̂), each block its own (BlockSpec::predict).
+  // The error state's F (δḋ = −α·δd, error_model.hpp) assumes the estimate decays with the drift;
+  // held constant instead, the real error d̂ − d would have the extra term α·d̂ the covariance does
+  // not carry, and the filter would be overconfident about the drift (before 2026-11-23 the
+  // estimates were held: with a reference INS always, GNSS-only until 3f38af4; docs/in-motion.md,
+  // "GNSS-only drives").
+  for (const BlockSpec* b : s.specs)
+    if (b->predict) b->predict(drift, s.L, s.L.offset(static_cast<int>(b->id)), n, T);
 }
 
 

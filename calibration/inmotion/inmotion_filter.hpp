@@ -247,8 +247,8 @@ void slice_total(const Nominal& n, int off, double* x) {
   for (int i = 0; i < size; ++i) x[i] = n.x(off + i);
 }
 
-// The drift estimates between updates (x̂ ← Φ·x̂ of their shaping filters over T seconds), in the
-// drift blocks (and exp-cosine aux blocks) of layout s.
+// The nominal values between updates over T seconds: each block of layout s that moves its own
+// (BlockSpec::predict: the drifts' and exp-cosine first states' x̂ ← Φ·x̂).
 void propagate_drift(const DriftModels& drift, const StateLayout& s, Nominal& n, double T);
 
 struct BlockInit {

@@ -207,6 +207,12 @@ BlockSpec drift_block() {
     drift_jacobian(alpha, off, F);
     for (int i = 0; i < 3; ++i) Q(off + i, off + i) = sig(i) * sig(i) * (1.0 - std::exp(-2.0 * alpha(i) * d.T));
   };
+  // A first-order axis decays, d̂ ← e^{−αT}·d̂; an exp-cosine axis moves with its first state (the aux block).
+  b.predict = [](const DriftModels& drift, const filter::BlockLayout&, int off, Nominal& n, double T) {
+    const Vec3& alpha = S == 0 ? drift.alpha_g : drift.alpha_a;
+    for (int i = 0; i < 3; ++i)
+      if (!drift.expcos[3 * S + i]) n.x(off + i) *= std::exp(-alpha(i) * T);
+  };
   b.total = slice_total<3>;
   return b;
 }
@@ -235,6 +241,19 @@ void aux_dynamics(const BlockDynamics& d, const filter::BlockLayout& L, int off,
   }
 }
 
+// (x[0], x[1]) ← Φ·(x[0], x[1]) of the exp-cosine axes: this block's first states and the drift's.
+template <int S>
+void aux_predict(const DriftModels& drift, const filter::BlockLayout& L, int off, Nominal& n, double T) {
+  const int d = L.offset(static_cast<int>(S == 0 ? Block::dg : Block::da));
+  for (int i = 0; i < 3; ++i) {
+    const int k = 3 * S + i;
+    if (!drift.expcos[k]) continue;
+    const Eigen::Vector2d x = drift.discrete(k, T).Phi * Eigen::Vector2d(n.x(off + i), n.x(d + i));
+    n.x(off + i) = x(0);
+    n.x(d + i) = x(1);
+  }
+}
+
 BlockSpec aux_block(Block id) {
   const bool g = id == Block::dg_aux;
   BlockSpec b{id, g ? "gyro_drift_aux" : "accel_drift_aux", 3, g ? kDgAuxCols : kDaAuxCols, g ? "rad/s^2" : "m/s^3",
@@ -242,6 +261,7 @@ BlockSpec aux_block(Block id) {
   b.active = [](const InMotionConfig& cfg) { return needs_augmented_layout(cfg); };
   b.init = g ? aux_init<0> : aux_init<1>;
   b.dynamics = g ? aux_dynamics<0> : aux_dynamics<1>;
+  b.predict = g ? aux_predict<0> : aux_predict<1>;
   b.feedback = additive_feedback<3>;
   b.total = slice_total<3>;
   return b;
