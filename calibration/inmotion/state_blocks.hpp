@@ -1,8 +1,10 @@
 // Blocks of the in-motion error state, each declared once (state_blocks.cpp), as open_vins' ov_core
 // Type blocks: name, size, SI and display units, series column names, whether the smoother
-// corrects it, and its own code — initial covariance, feedback into the nominal state, its role in
-// the sensor model (compensation of the raw increments, its part of the transition accumulated over
-// the IMU samples), transition (F) and process noise (Q), extra observation columns. The filter
+// corrects it, and its own code — initial covariance, feedback into its nominal value (its slice of
+// Nominal::x, or for the navigation and mounting blocks the INS state and C_mb), the motion of that
+// value between updates, its role in the sensor model (compensation of the raw increments, its part
+// of the transition accumulated over the IMU samples), transition (F) and process noise (Q), extra
+// observation columns. The filter
 // builds its layout from the blocks the configuration activates (the exp-cosine aux blocks only for
 // an exp-cosine drift model, the mounting block unless switched off, blocks declared outside the
 // filter's files from InMotionConfig::extra_blocks) and computes the offsets; sizes and offsets
