@@ -20,9 +20,6 @@ namespace {
 const char* const kLeverCols[] = {"lever_arm_dx_m", "lever_arm_dy_m", "lever_arm_dz_m"};
 const char* const kTimeCols[] = {"time_offset_s"};
 
-void copy_extra(const Nominal& n, int off, int size, double* x) {
-  for (int i = 0; i < size; ++i) x[i] = n.extra(off + i);
-}
 
 BlockSpec lever_arm_block() {
   BlockSpec b{kLeverArmBlock, "lever_arm", 3, kLeverCols, "m", "m", 1.0, true, false};
@@ -30,18 +27,18 @@ BlockSpec lever_arm_block() {
   b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
     for (int i = 0; i < 3; ++i) P(off + i, off + i) = in.cfg.lever_arm_sigma * in.cfg.lever_arm_sigma;
   };
-  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.extra.segment<3>(off) -= dx.segment<3>(off); };
+  b.feedback = additive_feedback<3>;
   b.observe = [](const BlockObsInput& o, const Nominal& n, int type, int off, MatRef H, Eigen::Vector3d& z) {
     if (type != 0 && type != 1) return;
     const Mat3 C_nb = predicted_body_attitude(o.c);
-    const Vec3 l = n.extra.segment<3>(off);
+    const Vec3 l = n.x.segment<3>(off);
     const Vec3 u = type == 0 ? Vec3(C_nb * l) : Vec3(C_nb * o.c.w_eb_b.cross(l));
     z -= u;
     H.block<3, 3>(0, off) = type == 0 ? Mat3(-C_nb) : Mat3(-C_nb * ins::skew(o.c.w_eb_b));
     H.block<3, 3>(0, o.c.att) -= ins::skew(u);
     if (o.c.mount >= 0) H.block<3, 3>(0, o.c.mount) += ins::skew(u) * C_nb;
   };
-  b.total = [](const Nominal& n, int off, double* x) { copy_extra(n, off, 3, x); };
+  b.total = slice_total<3>;
   b.position_offset = [](const Nominal&, const Mat3Ref& C_nb, const Vec3Ref&, int, Eigen::MatrixXd& A) { A = C_nb; };
   return b;
 }
@@ -52,15 +49,15 @@ BlockSpec time_offset_block() {
   b.init = [](const BlockInit& in, const filter::BlockLayout&, int off, MatRef P) {
     P(off, off) = in.cfg.time_offset_sigma * in.cfg.time_offset_sigma;
   };
-  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.extra(off) -= dx(off); };
+  b.feedback = additive_feedback<1>;
   b.observe = [](const BlockObsInput& o, const Nominal& n, int type, int off, MatRef H, Eigen::Vector3d& z) {
     if (type != 0 && type != 1) return;
     const Vec3 rate = type == 0 ? o.c.mems->v : o.c.a_ned;  // of the reference body origin (the lever's part neglected)
-    z -= rate * n.extra(off);
+    z -= rate * n.x(off);
     H.block<3, 1>(0, off) = -rate;
-    if (type == 0) H.block<3, 3>(0, o.c.vel) -= Mat3::Identity() * n.extra(off);  // v̂ = v + δv in −v̂·δt̂
+    if (type == 0) H.block<3, 3>(0, o.c.vel) -= Mat3::Identity() * n.x(off);  // v̂ = v + δv in −v̂·δt̂
   };
-  b.total = [](const Nominal& n, int off, double* x) { copy_extra(n, off, 1, x); };
+  b.total = slice_total<1>;
   b.position_offset = [](const Nominal&, const Mat3Ref&, const Vec3Ref& v, int, Eigen::MatrixXd& A) { A = v; };
   return b;
 }

@@ -193,7 +193,7 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
       adapt_(cfg.adaptive) {
   n_.nav = &nav_.state();
   n_.C_mb = C_mb;
-  n_.extra = Vec::Zero(N_);
+  n_.x = Vec::Zero(N_);
   pending_dx_ = Vec::Zero(N_);
   drift_ = drift_models(cfg_);
   // Transfer the reference state to the MEMS IMU through the nominal mounting and lever arm.
@@ -627,7 +627,7 @@ void InMotionFilter::finish_levelling(const RefObs& r) {
   lvl_still_ = StandstillDetector(cfg_.align_level_s);  // its samples are no longer needed
   if (cfg_.level_gyro_bias && align_.level_quiet && off(Block::bg) >= 0) {
     // The gyro bias from the standstill, the heading unknown (InMotionConfig::level_gyro_bias).
-    const Vec3 y_mean = (Mat3::Identity() + n_.Mg) * (lvl_dth_ / lvl_T_) + n_.bg + n_.dg;
+    const Vec3 y_mean = (Mat3::Identity() + n_.mat3(off(Block::Mg))) * (lvl_dth_ / lvl_T_) + n_.vec3(off(Block::bg)) + n_.vec3(off(Block::dg));
     const Observation o =
         zero_rate_observation(obs_context(), n_, y_mean, standstill_mean_sigma(cfg_.noise.gyro, cfg_.standstill_factor, lvl_T_), false);
     const Eigen::Matrix<double, Eigen::Dynamic, 3> PHt = pht<3>(o.H);
@@ -652,7 +652,7 @@ Vec3 InMotionFilter::position_offset_blocks(const Mat3& C_nb, const Vec3& v) {
     b->position_offset(n_, C_nb, v, o, A);
     if (G.size() == 0) G = Mat::Zero(3, N_);
     G.middleCols(o, b->size) = A;
-    d += A * n_.extra.segment(o, b->size);
+    d += A * n_.x.segment(o, b->size);
   }
   if (G.size() == 0) return d;
   // r = r₀ + G·x: Cov(r, x) = G·P(·, x) (P(blocks, r) = 0 before), Cov(r, r) = P₀ + G·P·Gᵀ.
@@ -813,7 +813,7 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
     // axes, and the fixes made the gyro drift estimate take up the difference (the tilt stayed put):
     // b̂ − b = (C_nm − Ĉ_nm)ᵀ·ω_ie. With the heading known, that part is given back.
     const Vec3 w_ie = ins::earth_rate_ned_at(s.lat);
-    n_.bg -= ((R * C_nm).transpose() - C_nm.transpose()) * w_ie;
+    n_.x.segment<3>(off(Block::bg)) -= ((R * C_nm).transpose() - C_nm.transpose()) * w_ie;
     refresh_correctors();
   }
   const bool fix_vel = !fixes_.empty() && fixes_.back().has_vel;
@@ -867,26 +867,18 @@ void InMotionFilter::feedback(const Vec& dx) {
   refresh_correctors();
 }
 
-void InMotionFilter::propagate_drift_nominal(double T) { propagate_drift(drift_, n_, T); }
+void InMotionFilter::propagate_drift_nominal(double T) { propagate_drift(drift_, layout_, n_, T); }
 
-void propagate_drift(const DriftModels& drift, Nominal& n, double T) {
+void propagate_drift(const DriftModels& drift, const StateLayout& s, Nominal& n, double T) {
   // Between updates the drift estimates move with their shaping filters: x̂ ← Φ·x̂, the filter's
-  // prediction (for a first-order axis d̂ ← e^{−αT}·d̂). The error state's F (δḋ = −α·δd,
-  // error_model.hpp) assumes the estimate decays with the drift; held constant instead, the real
-  // error d̂ − d would have the extra term α·d̂ the covariance does not carry, and the filter would
-  // be overconfident about the drift (before 2026-11-23 the estimates were held: with a reference
-  // INS always, GNSS-only until 3f38af4; docs/in-motion.md, "GNSS-only drives").
-  for (int k = 0; k < 6; ++k) {
-    double& d = k < 3 ? n.dg(k) : n.da(k - 3);
-    if (drift.expcos[k]) {
-      double& x0 = k < 3 ? n.xg0(k) : n.xa0(k - 3);
-      const Eigen::Vector2d x = drift.discrete(k, T).Phi * Eigen::Vector2d(x0, d);
-      x0 = x(0);
-      d = x(1);
-    } else {
-      d *= std::exp(-(k < 3 ? drift.alpha_g(k) : drift.alpha_a(k - 3)) * T);
-    }
-  }
+  // prediction (for a first-order axis d̂ ← e^{−αT}·d̂), each block its own (BlockSpec::predict).
+  // The error state's F (δḋ = −α·δd, error_model.hpp) assumes the estimate decays with the drift;
+  // held constant instead, the real error d̂ − d would have the extra term α·d̂ the covariance does
+  // not carry, and the filter would be overconfident about the drift (before 2026-11-23 the
+  // estimates were held: with a reference INS always, GNSS-only until 3f38af4; docs/in-motion.md,
+  // "GNSS-only drives").
+  for (const BlockSpec* b : s.specs)
+    if (b->predict) b->predict(drift, s.L, s.L.offset(static_cast<int>(b->id)), n, T);
 }
 
 

@@ -222,15 +222,34 @@ DriftModels drift_models(const InMotionConfig& cfg);
 // The nominal state the error state is relative to: the MEMS INS, the sensor model, the mounting,
 // the drift shaping states, and the values of blocks declared outside (at their layout offsets).
 struct Nominal {
+  // The navigation blocks' nominal values: the MEMS INS state (position, velocity, attitude).
   ins::NavState* nav = nullptr;
-  Vec3 bg = Vec3::Zero(), ba = Vec3::Zero(), dg = Vec3::Zero(), da = Vec3::Zero();
-  Vec3 xg0 = Vec3::Zero(), xa0 = Vec3::Zero();  // exp-cosine first states (the drift x[1] is dg/da)
-  Mat3 Mg = Mat3::Zero(), Ma = Mat3::Zero(), C_mb = Mat3::Identity();
-  Eigen::VectorXd extra;
+  // The mounting block's: a rotation (3 error states, 9 values), C_mb.
+  Mat3 C_mb = Mat3::Identity();
+  // Every other block's nominal value (sensor bias, drift, M row by row, exp-cosine first states,
+  // antenna, extra blocks), laid out like the error state: the block's slice at its offset (the
+  // filter sizes it by its layout, zero at the start). Blocks read their slice through the typed
+  // views and write it by feedback (nominal ← nominal − dx, additive_feedback).
+  Eigen::VectorXd x;
+  Vec3 vec3(int off) const { return x.segment<3>(off); }
+  Mat3 mat3(int off) const { return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(x.data() + off); }
 };
 
-// The drift estimates between updates (x̂ ← Φ·x̂ of their shaping filters over T seconds).
-void propagate_drift(const DriftModels& drift, Nominal& n, double T);
+// The feedback of an additive block of `size` states whose nominal value is its slice of
+// Nominal::x: nominal ← nominal − dx (BlockSpec::feedback).
+template <int size>
+void additive_feedback(Nominal& n, int off, const VecCRef& dx) {
+  n.x.segment<size>(off) -= dx.segment<size>(off);
+}
+// The series value (BlockSpec::total) of such a block: its slice.
+template <int size>
+void slice_total(const Nominal& n, int off, double* x) {
+  for (int i = 0; i < size; ++i) x[i] = n.x(off + i);
+}
+
+// The nominal values between updates over T seconds: each block of layout s that moves its own
+// (BlockSpec::predict: the drifts' and exp-cosine first states' x̂ ← Φ·x̂).
+void propagate_drift(const DriftModels& drift, const StateLayout& s, Nominal& n, double T);
 
 struct BlockInit {
   const InMotionConfig& cfg;
@@ -278,14 +297,14 @@ class InMotionFilter {
   const StateLayout& layout() const { return layout_; }
   int offset(Block b) const { return layout_.offset(b); }  // −1: not in this layout
   // The nominal value of the extra blocks' states (at their layout offsets).
-  const Eigen::VectorXd& extra_values() const { return n_.extra; }
+  const Eigen::VectorXd& extra_values() const { return n_.x; }
   // Current estimates of the sensor model of the data the filter saw (constant part) with σ.
   SensorErrors estimate() const;
   // 1σ of the total gyro drift b + d (constant plus in-run part) now, rad/s; the two parts are
   // separable only over many correlation times, their sum is what navigation needs.
   Vec3 gyro_total_drift_sigma() const;
-  Vec3 gyro_drift() const { return n_.dg; }
-  Vec3 accel_drift() const { return n_.da; }
+  Vec3 gyro_drift() const { return n_.vec3(off(Block::dg)); }
+  Vec3 accel_drift() const { return n_.vec3(off(Block::da)); }
   const Mat3& mounting() const { return n_.C_mb; }
   // Mounting as roll, pitch, yaw (rad) and their 1σ (through the Jacobian of the angles).
   void mounting_rpy(Vec3& rpy, Vec3& sigma) const;

@@ -12,11 +12,11 @@ namespace calbench::inmotion {
 
 SensorErrors InMotionFilter::estimate() const {
   SensorErrors e;
-  e.gyro.bias = n_.bg;
-  e.accel.bias = n_.ba;
-  e.gyro.M = n_.Mg;
-  e.accel.M = n_.Ma;
   const int bg = off(Block::bg), ba = off(Block::ba), mg = off(Block::Mg), ma = off(Block::Ma);
+  e.gyro.bias = n_.vec3(bg);
+  e.accel.bias = n_.vec3(ba);
+  e.gyro.M = n_.mat3(mg);
+  e.accel.M = n_.mat3(ma);
   for (int i = 0; i < 3; ++i) {
     e.gyro.sigma_bias(i) = std::sqrt(P_(bg + i, bg + i));
     e.accel.sigma_bias(i) = std::sqrt(P_(ba + i, ba + i));
@@ -79,7 +79,7 @@ Eigen::Matrix<double, 6, 1> total_drift_sigma(const M& P, int bg, int ba, int dg
 }  // namespace
 
 void InMotionFilter::total_drift_si(Vec6& x, Vec6& sigma) const {
-  x << n_.bg + n_.dg, n_.ba + n_.da;
+  x << n_.vec3(off(Block::bg)) + n_.vec3(off(Block::dg)), n_.vec3(off(Block::ba)) + n_.vec3(off(Block::da));
   sigma = total_drift_sigma(P_, off(Block::bg), off(Block::ba), off(Block::dg), off(Block::da));
 }
 

@@ -39,8 +39,8 @@ Observation zupt_observation(const ObsContext& c, double sigma) {
 Observation zero_rate_observation(const ObsContext& c, const Nominal& n, const Vec3& y_mean, double sigma, bool heading_known) {
   Observation o;
   o.H.setZero(3, c.n_states);
-  const Mat3 A = (Mat3::Identity() + n.Mg).inverse();
-  const Vec3 w_hat = A * (y_mean - n.bg - n.dg);
+  const Mat3 A = (Mat3::Identity() + n.mat3(c.gyro_M)).inverse();
+  const Vec3 w_hat = A * (y_mean - n.vec3(c.gyro_bias) - n.vec3(c.gyro_drift));
   const Mat3 C_mn = c.mems->C_nb().transpose();
   const Vec3 w_ie = ins::earth_rate_ned_at(c.mems->lat);
   o.R = Mat3::Identity() * (sigma * sigma);

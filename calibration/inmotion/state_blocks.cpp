@@ -41,14 +41,6 @@ void diag(MatRef P, int off, int n, double sigma) {
 void put3(const Vec3& v, double* x) {
   for (int i = 0; i < 3; ++i) x[i] = v(i);
 }
-void put9(const Mat3& m, double* x) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) x[3 * i + j] = m(i, j);
-}
-void sub9(Mat3& m, const VecCRef& dx, int off) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) m(i, j) -= dx(off + 3 * i + j);
-}
 
 // ---- navigation: position (eq 11's δr), velocity (δv), attitude (φ). Their F rows are one
 // equation family (error_model.cpp nav_block), written by the position block.
@@ -142,11 +134,11 @@ BlockSpec bias_block() {
     const Vec3& p = S == 0 ? in.cfg.prior.gyro_bias : in.cfg.prior.accel_bias;
     for (int i = 0; i < 3; ++i) P(off + i, off + i) = p(i) * p(i);
   };
-  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { (S == 0 ? n.bg : n.ba) -= dx.segment<3>(off); };
-  b.compensate = [](const Nominal& n, int, SensorCorrection& c) { c.offset[S] += S == 0 ? n.bg : n.ba; };
+  b.feedback = additive_feedback<3>;
+  b.compensate = [](const Nominal& n, int off, SensorCorrection& c) { c.offset[S] += n.vec3(off); };
   b.accumulate = offset_accumulate<S>;
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef) { offset_dynamics<S>(d, L, off, F); };
-  b.total = [](const Nominal& n, int, double* x) { put3(S == 0 ? n.bg : n.ba, x); };
+  b.total = slice_total<3>;
   return b;
 }
 
@@ -159,8 +151,8 @@ BlockSpec m_block() {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) P(off + 3 * i + j, off + 3 * i + j) = p(i, j) * p(i, j);
   };
-  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { sub9(S == 0 ? n.Mg : n.Ma, dx, off); };
-  b.compensate = [](const Nominal& n, int, SensorCorrection& c) { c.A[S] = (Mat3::Identity() + (S == 0 ? n.Mg : n.Ma)).inverse(); };
+  b.feedback = additive_feedback<9>;  // M row by row
+  b.compensate = [](const Nominal& n, int off, SensorCorrection& c) { c.A[S] = (Mat3::Identity() + n.mat3(off)).inverse(); };
   // (C A) W(x), W(x) = ∂(δM·x)/∂vec(δM): column block i is (C A)(:, i)·xᵀ.
   b.accumulate = [](const ImuSample& s, SumRef sum) {
     for (int i = 0; i < 3; ++i) sum.block<3, 3>(0, 3 * i) += s.CA[S].col(i) * s.x[S].transpose();
@@ -168,7 +160,7 @@ BlockSpec m_block() {
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef) {
     sensor_jacobian(d.acc, S, sensor_rows(L, S), off, 9, F);
   };
-  b.total = [](const Nominal& n, int, double* x) { put9(S == 0 ? n.Mg : n.Ma, x); };
+  b.total = slice_total<9>;
   return b;
 }
 
@@ -204,9 +196,9 @@ BlockSpec drift_block() {
     const Vec3& sig = S == 0 ? in.drift.sig_g : in.drift.sig_a;
     for (int i = 0; i < 3; ++i) P(off + i, off + i) = sig(i) * sig(i);
   };
-  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { (S == 0 ? n.dg : n.da) -= dx.segment<3>(off); };
+  b.feedback = additive_feedback<3>;
   // The drift enters the sensor model as the bias does.
-  b.compensate = [](const Nominal& n, int, SensorCorrection& c) { c.offset[S] += S == 0 ? n.dg : n.da; };
+  b.compensate = [](const Nominal& n, int off, SensorCorrection& c) { c.offset[S] += n.vec3(off); };
   b.accumulate = offset_accumulate<S>;
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) {
     offset_dynamics<S>(d, L, off, F);
@@ -215,7 +207,13 @@ BlockSpec drift_block() {
     drift_jacobian(alpha, off, F);
     for (int i = 0; i < 3; ++i) Q(off + i, off + i) = sig(i) * sig(i) * (1.0 - std::exp(-2.0 * alpha(i) * d.T));
   };
-  b.total = [](const Nominal& n, int, double* x) { put3(S == 0 ? n.dg : n.da, x); };
+  // A first-order axis decays, d̂ ← e^{−αT}·d̂; an exp-cosine axis moves with its first state (the aux block).
+  b.predict = [](const DriftModels& drift, const filter::BlockLayout&, int off, Nominal& n, double T) {
+    const Vec3& alpha = S == 0 ? drift.alpha_g : drift.alpha_a;
+    for (int i = 0; i < 3; ++i)
+      if (!drift.expcos[3 * S + i]) n.x(off + i) *= std::exp(-alpha(i) * T);
+  };
+  b.total = slice_total<3>;
   return b;
 }
 
@@ -243,6 +241,19 @@ void aux_dynamics(const BlockDynamics& d, const filter::BlockLayout& L, int off,
   }
 }
 
+// (x[0], x[1]) ← Φ·(x[0], x[1]) of the exp-cosine axes: this block's first states and the drift's.
+template <int S>
+void aux_predict(const DriftModels& drift, const filter::BlockLayout& L, int off, Nominal& n, double T) {
+  const int d = L.offset(static_cast<int>(S == 0 ? Block::dg : Block::da));
+  for (int i = 0; i < 3; ++i) {
+    const int k = 3 * S + i;
+    if (!drift.expcos[k]) continue;
+    const Eigen::Vector2d x = drift.discrete(k, T).Phi * Eigen::Vector2d(n.x(off + i), n.x(d + i));
+    n.x(off + i) = x(0);
+    n.x(d + i) = x(1);
+  }
+}
+
 BlockSpec aux_block(Block id) {
   const bool g = id == Block::dg_aux;
   BlockSpec b{id, g ? "gyro_drift_aux" : "accel_drift_aux", 3, g ? kDgAuxCols : kDaAuxCols, g ? "rad/s^2" : "m/s^3",
@@ -250,13 +261,9 @@ BlockSpec aux_block(Block id) {
   b.active = [](const InMotionConfig& cfg) { return needs_augmented_layout(cfg); };
   b.init = g ? aux_init<0> : aux_init<1>;
   b.dynamics = g ? aux_dynamics<0> : aux_dynamics<1>;
-  if (g) {
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.xg0 -= dx.segment<3>(off); };
-    b.total = [](const Nominal& n, int, double* x) { put3(n.xg0, x); };
-  } else {
-    b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.xa0 -= dx.segment<3>(off); };
-    b.total = [](const Nominal& n, int, double* x) { put3(n.xa0, x); };
-  }
+  b.predict = g ? aux_predict<0> : aux_predict<1>;
+  b.feedback = additive_feedback<3>;
+  b.total = slice_total<3>;
   return b;
 }
 

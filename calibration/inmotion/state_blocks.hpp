@@ -1,8 +1,10 @@
 // Blocks of the in-motion error state, each declared once (state_blocks.cpp), as open_vins' ov_core
 // Type blocks: name, size, SI and display units, series column names, whether the smoother
-// corrects it, and its own code — initial covariance, feedback into the nominal state, its role in
-// the sensor model (compensation of the raw increments, its part of the transition accumulated over
-// the IMU samples), transition (F) and process noise (Q), extra observation columns. The filter
+// corrects it, and its own code — initial covariance, feedback into its nominal value (its slice of
+// Nominal::x, or for the navigation and mounting blocks the INS state and C_mb), the motion of that
+// value between updates, its role in the sensor model (compensation of the raw increments, its part
+// of the transition accumulated over the IMU samples), transition (F) and process noise (Q), extra
+// observation columns. The filter
 // builds its layout from the blocks the configuration activates (the exp-cosine aux blocks only for
 // an exp-cosine drift model, the mounting block unless switched off, blocks declared outside the
 // filter's files from InMotionConfig::extra_blocks) and computes the offsets; sizes and offsets
@@ -32,6 +34,7 @@ struct BlockDynamics;   // what a block's F and Q depend on over one propagation
 struct BlockObsInput;   // what a block's extra observation columns depend on
 struct SensorCorrection;  // the correction of the raw IMU increments (error_model.hpp)
 struct ImuSample;         // one IMU interval as the transition sees it (error_model.hpp)
+struct DriftModels;       // the in-run drift shaping filters (inmotion_filter.hpp)
 using MatRef = Eigen::Ref<Eigen::MatrixXd>;
 using VecCRef = Eigen::Ref<const Eigen::VectorXd>;
 using Mat3Ref = Eigen::Ref<const Eigen::Matrix3d>;
@@ -59,6 +62,9 @@ struct BlockSpec {
   // Feedback of the estimated error dx (the whole state; the block reads its segment at off):
   // nominal ← nominal − dx.
   void (*feedback)(Nominal& n, int off, const VecCRef& dx) = nullptr;
+  // The motion of its nominal value between updates over T seconds (x̂ ← Φ·x̂ of its shaping
+  // filter: the in-run drifts and the exp-cosine first states), or nullptr (held).
+  void (*predict)(const DriftModels& drift, const filter::BlockLayout& L, int off, Nominal& n, double T) = nullptr;
   // Its role in the sensor model, y = (I + M)·true + b + d (error_model.hpp): its part of the
   // correction of the raw increments from its nominal value (an additive offset b̂ or d̂, or the
   // A = (I + M̂)⁻¹ of a sensor), or nullptr.

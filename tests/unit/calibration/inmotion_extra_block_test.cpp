@@ -30,10 +30,10 @@ BlockSpec lever_error_block() {
   b.init = [](const BlockInit&, const filter::BlockLayout&, int off, MatRef P) {
     for (int i = 0; i < 3; ++i) P(off + i, off + i) = kLeverSigma0 * kLeverSigma0;
   };
-  b.feedback = [](Nominal& n, int off, const VecCRef& dx) { n.extra.segment<3>(off) -= dx.segment<3>(off); };
+  b.feedback = additive_feedback<3>;
   b.observe = [](const BlockObsInput& o, const Nominal& n, int type, int off, MatRef H, Eigen::Vector3d& z) {
     const Mat3 C_nb = predicted_body_attitude(o.c);
-    const Vec3 l = n.extra.segment<3>(off);
+    const Vec3 l = n.x.segment<3>(off);
     if (type == 0) {
       z -= C_nb * l;
       H.block<3, 3>(0, off) = -C_nb;
@@ -42,9 +42,7 @@ BlockSpec lever_error_block() {
       H.block<3, 3>(0, off) = -C_nb * ins::skew(o.c.w_eb_b);
     }
   };
-  b.total = [](const Nominal& n, int off, double* x) {
-    for (int i = 0; i < 3; ++i) x[i] = n.extra(off + i);
-  };
+  b.total = slice_total<3>;
   return b;
 }
 

@@ -60,23 +60,34 @@ struct State {
   }
 };
 
-State nominal_state(int N) {
+// The nominal values in layout L (each block's slice of Nominal::x; the aux and antenna blocks only
+// where L has them, the antenna blocks' values nonzero).
+State nominal_values(const StateLayout& L) {
   State s;
+  s.n.x = Vec::Zero(L.size());
+  auto set3 = [&](Block b, const Vec3& v) {
+    if (L.offset(b) >= 0) s.n.x.segment<3>(L.offset(b)) = v;
+  };
+  auto set9 = [&](Block b, std::initializer_list<double> m) {  // row by row
+    int i = 0;
+    for (double v : m) s.n.x(L.offset(b) + i++) = v;
+  };
   s.nav.lat = 0.84;
   s.nav.lon = 0.2;
   s.nav.h = 480;
   s.nav.v = Vec3(11.0, -6.0, 0.4);
   s.nav.q_nb = ins::Quat(ins::dcm_from_rpy(Vec3(0.06, -0.11, 2.2)));
-  s.n.bg = Vec3(2e-4, -1e-4, 3e-4);
-  s.n.ba = Vec3(0.02, -0.03, 0.01);
-  s.n.dg = Vec3(-5e-5, 4e-5, 2e-5);
-  s.n.da = Vec3(1e-3, -2e-3, 5e-4);
-  s.n.xg0 = Vec3(1e-6, -2e-6, 3e-6);
-  s.n.xa0 = Vec3(-2e-5, 1e-5, 3e-5);
-  s.n.Mg << 2e-3, 1e-3, -5e-4, -7e-4, -1e-3, 8e-4, 3e-4, -2e-4, 1.5e-3;
-  s.n.Ma << -1e-3, 6e-4, 2e-4, -3e-4, 2e-3, -8e-4, 5e-4, 1e-4, -1.2e-3;
+  set3(Block::bg, Vec3(2e-4, -1e-4, 3e-4));
+  set3(Block::ba, Vec3(0.02, -0.03, 0.01));
+  set3(Block::dg, Vec3(-5e-5, 4e-5, 2e-5));
+  set3(Block::da, Vec3(1e-3, -2e-3, 5e-4));
+  set3(Block::dg_aux, Vec3(1e-6, -2e-6, 3e-6));
+  set3(Block::da_aux, Vec3(-2e-5, 1e-5, 3e-5));
+  set9(Block::Mg, {2e-3, 1e-3, -5e-4, -7e-4, -1e-3, 8e-4, 3e-4, -2e-4, 1.5e-3});
+  set9(Block::Ma, {-1e-3, 6e-4, 2e-4, -3e-4, 2e-3, -8e-4, 5e-4, 1e-4, -1.2e-3});
   s.n.C_mb = ins::dcm_from_rpy(Vec3(0.03, -0.02, units::kPi / 2 + 0.04));
-  s.n.extra = Vec::Zero(N);
+  set3(kLeverArmBlock, Vec3(0.2, -0.15, 0.25));
+  if (const int o = L.offset(kTimeOffsetBlock); o >= 0) s.n.x(o) = 0.012;
   return s;
 }
 
@@ -115,36 +126,19 @@ State with_error(const State& x, const StateLayout& L, const Vec& dx) {
 }
 
 // δx = x̂ ⊖ x, the inverse of the feedback conventions (state_blocks.cpp): position
-// geodetic_add_ned(x̂, −δr) = x, velocity and sensor states x̂ − x, attitude and mounting
-// C = exp(δ×)·Ĉ.
+// geodetic_add_ned(x̂, −δr) = x, velocity x̂ − x, attitude and mounting C = exp(δ×)·Ĉ, the other
+// blocks (values in Nominal::x) x̂ − x.
 Vec error_of(const State& xh, const State& x, const StateLayout& L) {
   Vec d = Vec::Zero(L.size());
   auto put = [&](Block b, const Vec3& v) { d.segment<3>(L.offset(b)) = v; };
   for (const BlockSpec* b : L.specs) {
     const int o = L.offset(b->id);
-    if (b->id == kLeverArmBlock || b->id == kTimeOffsetBlock) {  // the antenna blocks: values in Nominal::extra
-      d.segment(o, b->size) = xh.n.extra.segment(o, b->size) - x.n.extra.segment(o, b->size);
-      continue;
-    }
     switch (b->id) {
       case Block::pos: put(b->id, ins::geodetic_diff_ned(xh.nav.lat, xh.nav.lon, xh.nav.h, x.nav.lat, x.nav.lon, x.nav.h)); break;
       case Block::vel: put(b->id, xh.nav.v - x.nav.v); break;
       case Block::att: put(b->id, ins::rotvec_from_dcm(x.nav.C_nb() * xh.nav.C_nb().transpose())); break;
-      case Block::bg: put(b->id, xh.n.bg - x.n.bg); break;
-      case Block::ba: put(b->id, xh.n.ba - x.n.ba); break;
-      case Block::dg: put(b->id, xh.n.dg - x.n.dg); break;
-      case Block::da: put(b->id, xh.n.da - x.n.da); break;
-      case Block::dg_aux: put(b->id, xh.n.xg0 - x.n.xg0); break;
-      case Block::da_aux: put(b->id, xh.n.xa0 - x.n.xa0); break;
       case Block::mount: put(b->id, ins::rotvec_from_dcm(x.n.C_mb * xh.n.C_mb.transpose())); break;
-      case Block::Mg:
-      case Block::Ma: {
-        const Mat3 m = b->id == Block::Mg ? Mat3(xh.n.Mg - x.n.Mg) : Mat3(xh.n.Ma - x.n.Ma);
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) d(o + 3 * i + j) = m(i, j);
-        break;
-      }
-      default: ADD_FAILURE() << "no inverse feedback for block " << b->name;
+      default: d.segment(o, b->size) = xh.n.x.segment(o, b->size) - x.n.x.segment(o, b->size);
     }
   }
   return d;
@@ -169,7 +163,7 @@ State propagate(const State& x, const StateLayout& L, const DriftModels& drift, 
     const Mat3 C0 = sd.state().C_nb();
     sd.update(dth, dv, kDt);
     if (acc) acc->add(L, C0, corr, dth / kDt, dv / kDt, kDt);
-    propagate_drift(drift, y.n, kDt);
+    propagate_drift(drift, L, y.n, kDt);
   }
   y.nav = sd.state();
   return y;
@@ -208,13 +202,6 @@ void expect_close(const Mat& num, const Mat& an, double abs_tol, double rel_tol,
   EXPECT_EQ(bad, 0) << what << ": " << bad << " entries beyond the tolerance";
 }
 
-// A nominal state with the antenna blocks' values nonzero (where the layout has them).
-State nominal_state(const StateLayout& L) {
-  State s = nominal_state(L.size());
-  if (const int o = L.offset(kLeverArmBlock); o >= 0) s.n.extra.segment<3>(o) = Vec3(0.2, -0.15, 0.25);
-  if (const int o = L.offset(kTimeOffsetBlock); o >= 0) s.n.extra(o) = 0.012;
-  return s;
-}
 
 std::string layout_name(bool augmented, bool antenna) {
   return std::string(augmented ? " (48 states" : " (42 states") + (antenna ? " + antenna 4)" : ")");
@@ -226,7 +213,7 @@ void check_F(bool augmented, bool antenna = false) {
   const int N = L.size();
   ASSERT_EQ(N, (augmented ? 48 : 42) + (antenna ? 4 : 0));  // the paper's layouts (+ the antenna blocks)
   const DriftModels drift = drift_models(cfg);
-  const State x0 = nominal_state(L);
+  const State x0 = nominal_values(L);
   const Vec s = scales(L);
 
   // The feedback and its inverse agree to first order (the inverse reads the blocks' convention).
@@ -283,7 +270,7 @@ void check_H(bool augmented, bool antenna = false) {
   const InMotionConfig cfg = config(augmented, antenna);
   const StateLayout L = make_layout(cfg);
   const int N = L.size();
-  const State x0 = nominal_state(L);
+  const State x0 = nominal_values(L);
   const Vec s = scales(L);
   const Vec3 lever(-0.9, 0.35, -0.6);
   const Vec3 w_eb_b(0.03, -0.04, 0.3);
@@ -305,14 +292,15 @@ void check_H(bool augmented, bool antenna = false) {
     r.lat = x0.nav.lat;
     r.lon = x0.nav.lon;
     r.h = x0.nav.h;
-    const Vec3 lever_all = lever + (L.offset(kLeverArmBlock) >= 0 ? Vec3(x0.n.extra.segment<3>(L.offset(kLeverArmBlock))) : Vec3::Zero());
+    const Vec3 lever_all = lever + (L.offset(kLeverArmBlock) >= 0 ? Vec3(x0.n.x.segment<3>(L.offset(kLeverArmBlock))) : Vec3::Zero());
     ins::geodetic_add_ned(r.lat, r.lon, r.h, -(C_nb * lever_all));
     r.v_ned = x0.nav.v - C_nb * w_eb_b.cross(lever_all);
     r.rpy = ins::rpy_from_dcm(C_nb);
     r.sigma_pos = r.sigma_vel = r.sigma_att = 1;
   }
   // A standstill's mean raw gyro rate: the Earth rate in MEMS axes through the sensor model.
-  const Vec3 y_mean = (Mat3::Identity() + x0.n.Mg) * (x0.nav.C_nb().transpose() * ins::earth_rate_ned_at(x0.nav.lat)) + x0.n.bg + x0.n.dg;
+  const Vec3 y_mean = (Mat3::Identity() + x0.n.mat3(L.offset(Block::Mg))) * (x0.nav.C_nb().transpose() * ins::earth_rate_ned_at(x0.nav.lat)) +
+                       x0.n.vec3(L.offset(Block::bg)) + x0.n.vec3(L.offset(Block::dg));
 
   // Eqs 13–14 with the blocks' own observation parts (the antenna blocks), as the filter forms them.
   auto with_blocks = [&](const State& x, int type) {
