@@ -37,6 +37,35 @@ DeviceId device_of(const json& d, const std::string& f, const std::string& key, 
   return id;
 }
 
+std::optional<double> opt_number(const json& o, const char* k, const std::string& f, const std::string& key) {
+  const auto it = o.find(k);
+  if (it == o.end() || it->is_null()) return std::nullopt;
+  return jnum(*it, f, key + "." + k);
+}
+
+std::optional<long> opt_count(const json& o, const char* k, const std::string& f, const std::string& key) {
+  const auto v = opt_number(o, k, f, key);
+  if (v && (*v < 0 || *v != std::floor(*v) || *v > 1e15))
+    throw InputError(f, 0, key + "." + k, "expected a whole number of epochs >= 0");
+  return v ? std::optional<long>(static_cast<long>(*v)) : std::nullopt;
+}
+
+std::map<std::string, double> numbers_by_name(const json& o, const std::string& f, const std::string& key) {
+  std::map<std::string, double> out;
+  if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
+  for (auto it = o.begin(); it != o.end(); ++it)
+    if (!it->is_null()) out[it.key()] = jnum(*it, f, key + "." + it.key());
+  return out;
+}
+
+const json& array_at(const json& o, const char* k, const std::string& f, const std::string& key) {
+  static const json empty = json::array();
+  const auto it = o.find(k);
+  if (it == o.end()) return empty;
+  if (!it->is_array()) throw InputError(f, 0, key + "." + k, "expected an array");
+  return *it;
+}
+
 // A coefficient block: the spec schema; "format"/"device" may be omitted (then they are those of
 // the result) and, when present, must agree with it. Errors name the key under the block.
 CoefficientSet coefficient_block(const json& j, const DeviceId& dev, const std::string& f, const std::string& name) {
@@ -141,6 +170,79 @@ json determined_by_json(const DeterminedBy& d) {
 
 }  // namespace
 
+// "consistency" (object form: observation → figures); the older array form carries no figures read.
+std::map<std::string, NisConsistency> nis_consistency_from_json(const json& c, const std::string& f) {
+  std::map<std::string, NisConsistency> out;
+  if (!c.is_object()) return out;
+  for (auto it = c.begin(); it != c.end(); ++it) {
+    const std::string key = "consistency." + it.key();
+    if (!it->is_object()) throw InputError(f, 0, key, "expected an object");
+    NisConsistency n;
+    n.equation = opt_string(*it, "equation", f, key);
+    n.epochs = opt_count(*it, "epochs", f, key);
+    n.rejected = opt_count(*it, "rejected", f, key);
+    n.forced = opt_count(*it, "forced", f, key);
+    n.mean_nis = opt_number(*it, "mean_nis", f, key);
+    n.expected_nis = opt_number(*it, "expected_nis", f, key);
+    n.fraction_within_95pct = opt_number(*it, "fraction_within_95pct", f, key);
+    out[it.key()] = n;
+  }
+  return out;
+}
+
+OutageQc outage_qc_from_json(const json& o, const std::string& f) {
+  const std::string key = "qc.outages";
+  if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
+  OutageQc q;
+  q.sample = opt_string(o, "sample", f, key);
+  q.aided_by = opt_string(o, "aided_by", f, key);
+  q.error = opt_string(o, "error", f, key);
+  q.fix_sigma_h_m = opt_number(o, "fix_sigma_h_m", f, key);
+  const json& np = array_at(o, "not_placed", f, key);
+  for (std::size_t i = 0; i < np.size(); ++i) {
+    const std::string k = key + ".not_placed[" + std::to_string(i) + "]";
+    if (!np[i].is_object()) throw InputError(f, 0, k, "expected an object");
+    q.not_placed.push_back(opt_string(np[i], "reason", f, k).value_or(""));
+  }
+  const json& sets = array_at(o, "sets", f, key);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const std::string sk = key + ".sets[" + std::to_string(i) + "]";
+    if (!sets[i].is_object()) throw InputError(f, 0, sk, "expected an object");
+    OutageSetFigures s;
+    s.name = jstr(jreq(sets[i], "name", f, sk), f, sk + ".name");
+    if (!sets[i].contains("per_length") || !sets[i]["per_length"].is_array())
+      throw InputError(f, 0, sk + ".per_length", "expected an array");
+    const json& pl = sets[i]["per_length"];
+    for (std::size_t k = 0; k < pl.size(); ++k) {
+      const std::string pk = sk + ".per_length[" + std::to_string(k) + "]";
+      if (!pl[k].is_object() || !pl[k].contains("length_s")) throw InputError(f, 0, pk, "expected an object with length_s");
+      OutageLengthFigures l;
+      l.length_s = jnum(pl[k]["length_s"], f, pk + ".length_s");
+      l.count = opt_number(pl[k], "count", f, pk);
+      l.median_max_m = opt_number(pl[k], "median_max_m", f, pk);
+      l.max_max_m = opt_number(pl[k], "max_max_m", f, pk);
+      l.median_end_m = opt_number(pl[k], "median_end_m", f, pk);
+      l.max_end_m = opt_number(pl[k], "max_end_m", f, pk);
+      s.per_length.push_back(l);
+    }
+    q.sets.push_back(std::move(s));
+  }
+  const json& list = array_at(o, "outages", f, key);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string ok = key + ".outages[" + std::to_string(i) + "]";
+    if (!list[i].is_object()) throw InputError(f, 0, ok, "expected an object");
+    OutageRunFigures e;
+    e.start_s = opt_number(list[i], "start_s", f, ok);
+    e.length_s = opt_number(list[i], "length_s", f, ok);
+    e.fixes = opt_number(list[i], "fixes", f, ok);
+    if (list[i].contains("max_m")) e.max_m = numbers_by_name(list[i]["max_m"], f, ok + ".max_m");
+    if (list[i].contains("end_m")) e.end_m = numbers_by_name(list[i]["end_m"], f, ok + ".end_m");
+    q.outages.push_back(std::move(e));
+  }
+  return q;
+}
+
+
 bool is_drive_result(const json& j) {
   if (!j.is_object()) return false;
   const auto f = j.find("format");
@@ -237,10 +339,12 @@ DriveResult drive_result_from_json(const json& j, const std::string& f) {
     if (!j["consistency"].is_object() && !j["consistency"].is_array())
       throw InputError(f, 0, "consistency", "expected an object");
     r.consistency = j["consistency"];
+    r.nis = nis_consistency_from_json(r.consistency, f);
   }
   if (j.contains("qc") && !j["qc"].is_null()) {
     if (!j["qc"].is_object() && !j["qc"].is_array()) throw InputError(f, 0, "qc", "expected an object or an array");
     r.qc = j["qc"];
+    if (r.qc.is_object() && r.qc.contains("outages")) r.outages = outage_qc_from_json(r.qc["outages"], f);
   }
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!one_of(it.key(), kTyped)) r.extra[it.key()] = it.value();

@@ -4,9 +4,10 @@
 // `db import-inmotion` (db/inmotion_import.cpp) and the device report (bench/report/inmotion_section.cpp).
 //
 // Typed: what the readers use (device, recording and its digests, reference system, window,
-// observations, the coefficient sets, the mounting, which stage determined each coefficient).
-// Kept as written: the free-form sections of the writer ("consistency", "qc", "priors", and every
-// other top-level key in `extra`), so a read/write passes them through unchanged. Reading accepts
+// observations, the coefficient sets, the mounting, which stage determined each coefficient, the
+// innovation consistency by observation, the outage QC). Kept as written: the free-form sections of
+// the writer ("consistency" and "qc" are written as given, their typed reading beside them;
+// "priors", and every other top-level key in `extra`), so a read/write passes them through unchanged. Reading accepts
 // the older forms the store has always taken (device as a serial string, mounting as [r, p, y] or
 // with "rpy", its σ under "mounting_rpy_sigma_deg", coefficient blocks without format/device, the
 // reference under "reference" or recording.reference). File I/O is the caller's; the codec works on
@@ -17,6 +18,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "common/coefficients_codec.hpp"
 #include "common/sensor_model.hpp"
@@ -53,6 +55,37 @@ struct DriveMounting {
   nlohmann::json extra = nlohmann::json::object();    // "nominal", "lever_arm_m", …
 };
 
+// One observation's innovation consistency in "consistency" (fit drive: position, velocity, attitude,
+// nhc, zupt, zero_rate): the counts and the time-average NIS. Absent figures: nullopt.
+struct NisConsistency {
+  std::optional<std::string> equation;                 // where the observation's equation is
+  std::optional<long> epochs, rejected, forced;        // epochs used, rejected by the gate, forced
+  std::optional<double> mean_nis, expected_nis;        // expected: the observation's degrees of freedom
+  std::optional<double> fraction_within_95pct;         // of the used epochs, NIS under the 95 % bound
+};
+
+// "qc.outages" (fit drive on a GNSS-only drive, docs/in-motion.md "Outage QC"): simulated GNSS
+// outages navigated inertial-only with each set; errors in m against the fixes.
+struct OutageLengthFigures {  // one set at one outage length
+  double length_s = 0;
+  std::optional<double> count, median_max_m, max_max_m, median_end_m, max_end_m;
+};
+struct OutageSetFigures {
+  std::string name;
+  std::vector<OutageLengthFigures> per_length;
+};
+struct OutageRunFigures {  // one outage
+  std::optional<double> start_s, length_s, fixes;
+  std::map<std::string, double> max_m, end_m;  // by set name
+};
+struct OutageQc {
+  std::optional<std::string> sample, aided_by, error;
+  std::optional<double> fix_sigma_h_m;        // the fixes' median stated horizontal σ
+  std::vector<std::string> not_placed;        // the reason of each requested outage not placed ("" not stated)
+  std::vector<OutageSetFigures> sets;
+  std::vector<OutageRunFigures> outages;
+};
+
 struct DriveResult {
   std::string format;  // kDriveResultFormat; empty in older results without the key
   DeviceId device;     // model may be empty in older results
@@ -67,8 +100,10 @@ struct DriveResult {
   std::optional<DeterminedBy> determined_by;
   nlohmann::json priors;       // object or null (absent); "mode" and "device_class" read below
   std::string priors_mode, priors_device_class;  // read from priors (empty when not stated); not written
-  nlohmann::json consistency;  // object or array, or null (absent)
-  nlohmann::json qc;           // object or array, or null (absent)
+  nlohmann::json consistency;  // object or array, or null (absent); written as is
+  std::map<std::string, NisConsistency> nis;  // read from consistency (object form), by observation
+  nlohmann::json qc;           // object or array, or null (absent); written as is
+  std::optional<OutageQc> outages;  // read from qc.outages
   nlohmann::json extra = nlohmann::json::object();  // every other top-level key, as written
 };
 
@@ -78,6 +113,11 @@ bool is_drive_result(const nlohmann::json& j);
 
 DriveResult drive_result_from_json(const nlohmann::json& j, const std::string& file);
 nlohmann::json drive_result_to_json(const DriveResult& r);
+
+// "consistency" and "qc.outages" alone, as drive_result_from_json reads them (the writer fills
+// DriveResult::nis and ::outages from the sections it writes).
+std::map<std::string, NisConsistency> nis_consistency_from_json(const nlohmann::json& consistency, const std::string& file);
+OutageQc outage_qc_from_json(const nlohmann::json& outages, const std::string& file);
 
 // "determined_by" alone (nullopt when absent or null), as drive_result_from_json reads it.
 std::optional<DeterminedBy> determined_by_from_json(const nlohmann::json& result, const std::string& file);

@@ -164,12 +164,12 @@ void print_summary(const DriveResult& r) {
     std::cout << "  adaptive noise   navigation noise variance scaled up " << j["adaptive_noise"]["increases"]
               << " time(s), at most x" << std::setprecision(3) << j["adaptive_noise"]["scale_max"].get<double>() << ", x"
               << j["adaptive_noise"]["scale_end"].get<double>() << std::setprecision(6) << " at the end\n";
-  for (const auto& [k, v] : r.consistency.items()) {
-    std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
-              << " (expected " << v["expected_nis"].get<double>() << "), " << v["rejected"] << " rejected";
+  for (const auto& [k, v] : r.nis) {
+    std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v.mean_nis.value_or(std::nan("")) << std::setprecision(6)
+              << " (expected " << v.expected_nis.value_or(std::nan("")) << "), " << v.rejected.value_or(0) << " rejected";
     if (j.contains("vehicle_constraints") && (k == "nhc" || k == "zupt" || k == "zero_rate"))
-      std::cout << ", " << v["epochs"] << " used";
-    if (v["forced"].get<long>() > 0) std::cout << ", " << v["forced"] << " forced after a run of rejections";
+      std::cout << ", " << v.epochs.value_or(0) << " used";
+    if (v.forced.value_or(0) > 0) std::cout << ", " << *v.forced << " forced after a run of rejections";
     std::cout << "\n";
   }
   if (j.contains("vehicle_constraints")) {

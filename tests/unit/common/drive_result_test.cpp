@@ -65,8 +65,16 @@ json sample() {
           {"mounting_rpy_deg", {{"value", {0.1, -0.2, 90.3}}, {"sigma", {0.01, 0.02, 0.5}}, {"nominal", {0.0, 0.0, 90.0}},
                                 {"lever_arm_m", {-1.0, 0.2, -0.3}}}},
           {"adaptive_noise", {{"enabled", true}, {"scale_max", 7.8e5}}},
-          {"consistency", {{"position", {{"epochs", 120}, {"mean_nis", 3.4}}}}},
-          {"qc", {{"sample", "in-sample (outages inside the data the fit used)"}, {"outages", {{"sets", json::array()}}}}}};
+          {"consistency", {{"position", {{"epochs", 120}, {"mean_nis", 3.4}}},
+                           {"nhc", {{"equation", "obs_nhc.cpp"}, {"epochs", 900}, {"rejected", 4}, {"forced", 0},
+                                    {"mean_nis", 1.9}, {"expected_nis", 2.0}, {"fraction_within_95pct", 0.96}}}}},
+          {"qc", json::parse(R"J({"sample": "in-sample (outages inside the data the fit used)",
+                  "outages": {"sample": "in-sample (outages inside the data the fit used)", "fix_sigma_h_m": 0.02,
+                              "not_placed": [{"length_s": 60.0, "reason": "too short"}],
+                              "sets": [{"name": "none", "per_length": [{"length_s": 15.0, "count": 2, "median_max_m": 3.5}]},
+                                       {"name": "in-motion", "per_length": [{"length_s": 15.0, "median_max_m": 1.25}]}],
+                              "outages": [{"start_s": 40.5, "length_s": 15.0, "fixes": 15,
+                                           "max_m": {"none": 3.5, "in-motion": 1.25}, "end_m": {"none": 3.0}}]}})J")}};
 }
 
 TEST(DriveResultCodec, AResultAsFitDriveWritesItPassesAReadAndAWriteUnchanged) {
@@ -103,6 +111,23 @@ TEST(DriveResultCodec, TheTypedPartsHoldWhatTheReadersUse) {
   EXPECT_EQ(r.priors_device_class, "ADIS16488A");
   EXPECT_EQ(r.extra.at("adaptive_noise").at("scale_max"), 7.8e5);  // free-form sections kept
   EXPECT_FALSE(r.extra.contains("coefficients"));
+  ASSERT_EQ(r.nis.size(), 2u);  // consistency, by observation
+  EXPECT_EQ(r.nis.at("position").epochs.value_or(-1), 120);
+  EXPECT_FALSE(r.nis.at("position").expected_nis);
+  EXPECT_EQ(r.nis.at("nhc").equation.value_or(""), "obs_nhc.cpp");
+  EXPECT_EQ(r.nis.at("nhc").rejected.value_or(-1), 4);
+  EXPECT_DOUBLE_EQ(r.nis.at("nhc").fraction_within_95pct.value_or(0), 0.96);
+  ASSERT_TRUE(r.outages);  // qc.outages
+  EXPECT_DOUBLE_EQ(r.outages->fix_sigma_h_m.value_or(0), 0.02);
+  ASSERT_EQ(r.outages->not_placed.size(), 1u);
+  EXPECT_EQ(r.outages->not_placed[0], "too short");
+  ASSERT_EQ(r.outages->sets.size(), 2u);
+  EXPECT_EQ(r.outages->sets[1].name, "in-motion");
+  EXPECT_DOUBLE_EQ(r.outages->sets[0].per_length.at(0).median_max_m.value_or(0), 3.5);
+  EXPECT_FALSE(r.outages->sets[1].per_length.at(0).count);
+  ASSERT_EQ(r.outages->outages.size(), 1u);
+  EXPECT_DOUBLE_EQ(r.outages->outages[0].max_m.at("in-motion"), 1.25);
+  EXPECT_EQ(r.outages->outages[0].end_m.count("in-motion"), 0u);
   EXPECT_TRUE(is_drive_result(sample()));
   EXPECT_FALSE(is_drive_result(sample()["coefficients"]));
 }
@@ -168,6 +193,21 @@ TEST(DriveResultCodec, MalformedInputIsRefusedNamingTheFileAndTheKey) {
   EXPECT_EQ(refused_field(with([](json& j) { j["priors"] = "data-sheet"; })), "priors");
   EXPECT_EQ(refused_field(with([](json& j) { j["consistency"] = 3; })), "consistency");
   EXPECT_EQ(refused_field(with([](json& j) { j["qc"] = "fine"; })), "qc");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"] = 2; })), "consistency.nhc");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"]["mean_nis"] = "1.9"; })), "consistency.nhc.mean_nis");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"]["epochs"] = 9.5; })), "consistency.nhc.epochs");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"]["equation"] = 13; })), "consistency.nhc.equation");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"] = {1, 2}; })), "qc.outages");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sample"] = 1; })), "qc.outages.sample");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["fix_sigma_h_m"] = "2 cm"; })), "qc.outages.fix_sigma_h_m");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sets"][1].erase("name"); })), "qc.outages.sets[1].name");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sets"][0]["per_length"] = 3; })),
+            "qc.outages.sets[0].per_length");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sets"][0]["per_length"][0]["median_max_m"] = true; })),
+            "qc.outages.sets[0].per_length[0].median_max_m");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["outages"][0]["max_m"]["none"] = "far"; })),
+            "qc.outages.outages[0].max_m.none");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["not_placed"] = "none"; })), "qc.outages.not_placed");
   EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"] = "bench"; })), "determined_by");
   EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"]["coefficients"]["gyro.bias.x"]["stage"] = "factory"; })),
             "determined_by.coefficients.gyro.bias.x.stage");
