@@ -190,6 +190,52 @@ std::map<std::string, NisConsistency> nis_consistency_from_json(const json& c, c
   return out;
 }
 
+namespace {
+std::vector<double> numbers_or_null(const json& a, const std::string& f, const std::string& key) {
+  if (!a.is_array()) throw InputError(f, 0, key, "expected an array");
+  std::vector<double> out;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    out.push_back(a[i].is_null() ? std::nan("") : jnum(a[i], f, key + "[" + std::to_string(i) + "]"));
+  return out;
+}
+}  // namespace
+
+CpeQc cpe_qc_from_json(const json& qc, const std::string& f) {
+  CpeQc q;
+  if (!qc.is_object()) return q;
+  q.from_s = opt_number(qc, "from_s", f, "qc");
+  q.horizon_s = opt_number(qc, "horizon_s", f, "qc");
+  q.sample = opt_string(qc, "sample", f, "qc");
+  const json& sets = array_at(qc, "sets", f, "qc");
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const std::string sk = "qc.sets[" + std::to_string(i) + "]";
+    if (!sets[i].is_object()) throw InputError(f, 0, sk, "expected an object");
+    CpeSet s;
+    s.name = opt_string(sets[i], "name", f, sk);
+    s.final_cpe_m = opt_number(sets[i], "final_cpe_m", f, sk);
+    s.max_cpe_m = opt_number(sets[i], "max_cpe_m", f, sk);
+    if (const auto at = sets[i].find("cpe_m_at"); at != sets[i].end()) {
+      if (!at->is_object()) throw InputError(f, 0, sk + ".cpe_m_at", "expected an object");
+      for (auto it = at->begin(); it != at->end(); ++it)
+        s.cpe_m_at[it.key()] = it->is_null() ? std::nan("") : jnum(*it, f, sk + ".cpe_m_at." + it.key());
+    }
+    if (const auto ser = sets[i].find("cpe_series"); ser != sets[i].end()) {
+      if (!ser->is_object()) throw InputError(f, 0, sk + ".cpe_series", "expected an object");
+      if (ser->contains("t_s")) s.series_t_s = numbers_or_null((*ser)["t_s"], f, sk + ".cpe_series.t_s");
+      if (ser->contains("cpe_m")) s.series_cpe_m = numbers_or_null((*ser)["cpe_m"], f, sk + ".cpe_series.cpe_m");
+    }
+    q.sets.push_back(std::move(s));
+  }
+  if (const auto ser = qc.find("series"); ser != qc.end() && ser->is_object() && ser->contains("t_s")) {
+    for (auto it = ser->begin(); it != ser->end(); ++it) {
+      std::vector<double> v = numbers_or_null(*it, f, "qc.series." + it.key());
+      if (it.key() == "t_s") q.series_t_s = std::move(v);
+      else q.series[it.key()] = std::move(v);
+    }
+  }
+  return q;
+}
+
 OutageQc outage_qc_from_json(const json& o, const std::string& f) {
   const std::string key = "qc.outages";
   if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
@@ -344,6 +390,7 @@ DriveResult drive_result_from_json(const json& j, const std::string& f) {
   if (j.contains("qc") && !j["qc"].is_null()) {
     if (!j["qc"].is_object() && !j["qc"].is_array()) throw InputError(f, 0, "qc", "expected an object or an array");
     r.qc = j["qc"];
+    r.cpe = cpe_qc_from_json(r.qc, f);
     if (r.qc.is_object() && r.qc.contains("outages")) r.outages = outage_qc_from_json(r.qc["outages"], f);
   }
   for (auto it = j.begin(); it != j.end(); ++it)

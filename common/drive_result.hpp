@@ -86,6 +86,22 @@ struct OutageQc {
   std::vector<OutageRunFigures> outages;
 };
 
+// "qc" of fit drive's ΔS QC (docs/in-motion.md "QC"): each set navigated inertial-only from from_s
+// for horizon_s; ΔS in m. Numbers written as null read as NaN.
+struct CpeSet {
+  std::optional<std::string> name;
+  std::optional<double> final_cpe_m, max_cpe_m;
+  std::map<std::string, double> cpe_m_at;  // ΔS at the marks, by the mark as written ("10", "30", …)
+  std::vector<double> series_t_s, series_cpe_m;  // "cpe_series" (issue 16); empty when absent
+};
+struct CpeQc {
+  std::optional<double> from_s, horizon_s;
+  std::optional<std::string> sample;
+  std::vector<CpeSet> sets;
+  std::optional<std::vector<double>> series_t_s;            // older results: "series": {"t_s", NAME: […]}
+  std::map<std::string, std::vector<double>> series;        // by set name
+};
+
 struct DriveResult {
   std::string format;  // kDriveResultFormat; empty in older results without the key
   DeviceId device;     // model may be empty in older results
@@ -104,6 +120,7 @@ struct DriveResult {
   std::map<std::string, NisConsistency> nis;  // read from consistency (object form), by observation
   nlohmann::json qc;           // object or array, or null (absent); written as is
   std::optional<OutageQc> outages;  // read from qc.outages
+  CpeQc cpe;                        // read from qc (object form); empty otherwise
   nlohmann::json extra = nlohmann::json::object();  // every other top-level key, as written
 };
 
@@ -118,6 +135,7 @@ nlohmann::json drive_result_to_json(const DriveResult& r);
 // DriveResult::nis and ::outages from the sections it writes).
 std::map<std::string, NisConsistency> nis_consistency_from_json(const nlohmann::json& consistency, const std::string& file);
 OutageQc outage_qc_from_json(const nlohmann::json& outages, const std::string& file);
+CpeQc cpe_qc_from_json(const nlohmann::json& qc, const std::string& file);
 
 // "determined_by" alone (nullopt when absent or null), as drive_result_from_json reads it.
 std::optional<DeterminedBy> determined_by_from_json(const nlohmann::json& result, const std::string& file);

@@ -867,6 +867,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
     qj = {{"sample", "not run"}};
   }
   r.qc = qj;
+  r.cpe = cpe_qc_from_json(qj, "fit drive QC");
   if (outages) r.outages = outage_qc_from_json(oj, "fit drive outage QC");
   if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
   return r;

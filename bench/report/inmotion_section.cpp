@@ -35,12 +35,6 @@ StoredResult read_stored_result(const InMotionRun& r) {
   }
   return out;
 }
-double number_or_nan(const json& o, const char* k) {
-  return o.is_object() && o.contains(k) && o[k].is_number() ? o[k].get<double>() : std::nan("");
-}
-std::string string_or(const json& o, const char* k, const std::string& dflt) {
-  return o.is_object() && o.contains(k) && o[k].is_string() ? o[k].get<std::string>() : dflt;
-}
 std::string row(const std::string& head, const std::string& cell) {
   return "<tr><th class=\"l\">" + head + "</th><td class=\"l\">" + cell + "</td></tr>";
 }
@@ -132,47 +126,35 @@ struct CpeData {
   bool from_marks = false;
 };
 
-CpeData cpe_curves(const json& qc) {
+double figure(const std::optional<double>& v) { return v.value_or(std::nan("")); }
+
+CpeData cpe_curves(const CpeQc& qc) {
   CpeData d;
-  if (!qc.is_object()) return d;
-  const auto numbers = [](const json& a, std::vector<double>& out) {
-    if (!a.is_array()) return false;
-    for (const auto& v : a) out.push_back(v.is_number() ? v.get<double>() : std::nan(""));
-    return true;
-  };
-  if (qc.contains("sets") && qc["sets"].is_array()) {
-    for (const auto& s : qc["sets"]) {  // the series of issue 16
-      if (!s.is_object() || !s.contains("cpe_series") || !s["cpe_series"].is_object()) continue;
-      PlotCurve c{string_or(s, "name", "set"), {}, {}};
-      if (numbers(s["cpe_series"].value("t_s", json()), c.x) && numbers(s["cpe_series"].value("cpe_m", json()), c.y) &&
-          c.x.size() == c.y.size() && c.x.size() >= 2)
-        d.curves.push_back(std::move(c));
-    }
+  for (const auto& s : qc.sets) {  // the series of issue 16
+    PlotCurve c{s.name.value_or("set"), s.series_t_s, s.series_cpe_m};
+    if (c.x.size() == c.y.size() && c.x.size() >= 2) d.curves.push_back(std::move(c));
   }
-  if (d.curves.empty() && qc.contains("series") && qc["series"].is_object() && qc["series"].contains("t_s")) {
-    const json& ser = qc["series"];  // {"t_s": [...], NAME: [...]}
-    for (auto it = ser.begin(); it != ser.end(); ++it) {
-      PlotCurve c{it.key(), {}, {}};
-      if (it.key() == "t_s" || !numbers(ser["t_s"], c.x) || !numbers(*it, c.y) || c.x.size() != c.y.size() || c.x.size() < 2)
-        continue;
+  if (d.curves.empty() && qc.series_t_s) {  // {"t_s": [...], NAME: [...]}
+    for (const auto& [name, v] : qc.series) {
+      PlotCurve c{name, *qc.series_t_s, v};
+      if (c.x.size() != c.y.size() || c.x.size() < 2) continue;
       d.curves.push_back(std::move(c));
     }
   }
-  if (d.curves.empty() && qc.contains("sets") && qc["sets"].is_array()) {  // older results: the marks only
+  if (d.curves.empty() && !qc.sets.empty()) {  // older results: the marks only
     d.from_marks = true;
-    const double horizon = number_or_nan(qc, "horizon_s");
-    for (const auto& s : qc["sets"]) {
-      if (!s.is_object() || !s.contains("cpe_m_at") || !s["cpe_m_at"].is_object()) continue;
+    const double horizon = figure(qc.horizon_s);
+    for (const auto& s : qc.sets) {
       std::vector<std::pair<double, double>> pts;
-      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
+      for (const auto& [mark, v] : s.cpe_m_at) {
         char* end = nullptr;
-        const double t = std::strtod(it.key().c_str(), &end);
-        if (end && *end == 0 && it->is_number()) pts.emplace_back(t, it->get<double>());
+        const double t = std::strtod(mark.c_str(), &end);
+        if (end && *end == 0 && !std::isnan(v)) pts.emplace_back(t, v);
       }
-      const double fin = number_or_nan(s, "final_cpe_m");
+      const double fin = figure(s.final_cpe_m);
       if (std::isfinite(horizon) && std::isfinite(fin)) pts.emplace_back(horizon, fin);
       std::sort(pts.begin(), pts.end());
-      PlotCurve c{string_or(s, "name", "set"), {}, {}};
+      PlotCurve c{s.name.value_or("set"), {}, {}};
       for (const auto& [t, v] : pts) {
         c.x.push_back(t);
         c.y.push_back(v);
@@ -184,39 +166,39 @@ CpeData cpe_curves(const json& qc) {
 }
 
 // ΔS at the marks of each set, its final and largest value.
-std::string cpe_marks_table(const json& qc, const InMotionRun& r) {
-  if (!qc.contains("sets") || !qc["sets"].is_array() || qc["sets"].empty()) return "";
+std::string cpe_marks_table(const CpeQc& qc, const InMotionRun& r) {
+  if (qc.sets.empty()) return "";
   std::map<double, std::string> marks;  // t → key
-  for (const auto& s : qc["sets"])
-    if (s.is_object() && s.contains("cpe_m_at") && s["cpe_m_at"].is_object())
-      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
-        char* end = nullptr;
-        const double t = std::strtod(it.key().c_str(), &end);
-        if (end && *end == 0) marks[t] = it.key();
-      }
+  for (const auto& s : qc.sets)
+    for (const auto& [mark, v] : s.cpe_m_at) {
+      char* end = nullptr;
+      const double t = std::strtod(mark.c_str(), &end);
+      if (end && *end == 0) marks[t] = mark;
+    }
   std::ostringstream h;
   h << "<table class=\"cpe-marks\" id=\"cpe-marks-" << r.id << "\"><tr><th class=\"l\">set</th>";
   for (const auto& [t, key] : marks) h << "<th>ΔS at " << num(t) << " s [m]</th>";
-  h << "<th>final ΔS (at " << num(number_or_nan(qc, "horizon_s")) << " s) [m]</th><th>largest ΔS [m]</th></tr>\n";
-  for (const auto& s : qc["sets"]) {
-    if (!s.is_object()) continue;
-    h << "<tr><td class=\"l\">" << html_escape(string_or(s, "name", "set")) << "</td>";
-    for (const auto& [t, key] : marks)
-      h << "<td>" << num(s.contains("cpe_m_at") ? number_or_nan(s["cpe_m_at"], key.c_str()) : std::nan("")) << "</td>";
-    h << "<td>" << num(number_or_nan(s, "final_cpe_m")) << "</td><td>" << num(number_or_nan(s, "max_cpe_m")) << "</td></tr>\n";
+  h << "<th>final ΔS (at " << num(figure(qc.horizon_s)) << " s) [m]</th><th>largest ΔS [m]</th></tr>\n";
+  for (const auto& s : qc.sets) {
+    h << "<tr><td class=\"l\">" << html_escape(s.name.value_or("set")) << "</td>";
+    for (const auto& [t, key] : marks) {
+      const auto v = s.cpe_m_at.find(key);
+      h << "<td>" << num(v == s.cpe_m_at.end() ? std::nan("") : v->second) << "</td>";
+    }
+    h << "<td>" << num(figure(s.final_cpe_m)) << "</td><td>" << num(figure(s.max_cpe_m)) << "</td></tr>\n";
   }
   h << "</table>\n";
   return h.str();
 }
 
-std::string cpe_part(const json& qc, const DriveResult& res, const InMotionRun& r) {
+std::string cpe_part(const CpeQc& qc, const DriveResult& res, const InMotionRun& r) {
   std::ostringstream h;
   h << "<h4>Circular position error ΔS(t), inertial-only navigation (eq 39)</h4>\n";
-  const double from = number_or_nan(qc, "from_s"), horizon = number_or_nan(qc, "horizon_s");
+  const double from = figure(qc.from_s), horizon = figure(qc.horizon_s);
   std::string ctx = "Inertial-only navigation with each set";
   if (std::isfinite(from)) ctx += " from T0 = " + num(from) + " s";
   if (std::isfinite(horizon)) ctx += " for " + num(horizon) + " s";
-  ctx += "; data: " + string_or(qc, "sample", "not stated whether in- or out-of-sample");
+  ctx += "; data: " + qc.sample.value_or("not stated whether in- or out-of-sample");
   if (res.window_s) ctx += "; the fit used " + num(res.window_s->first) + " – " + num(res.window_s->second) + " s";
   h << "<p class=\"note\">" << html_escape(ctx) << ".</p>\n";
   const CpeData d = cpe_curves(qc);
@@ -242,7 +224,6 @@ std::string cpe_part(const json& qc, const DriveResult& res, const InMotionRun& 
 }
 
 // ---- simulated GNSS outages (GNSS-only drives, qc.outages) ----
-double figure(const std::optional<double>& v) { return v.value_or(std::nan("")); }
 double figure(const std::map<std::string, double>& by_set, const std::string& name) {
   const auto it = by_set.find(name);
   return it == by_set.end() ? std::nan("") : it->second;
@@ -383,12 +364,11 @@ std::string inmotion_section(Store& store, const InMotionRun& r, const Coefficie
                              const std::vector<CoefficientSetRecord>& sets) {
   const StoredResult stored = read_stored_result(r);
   const DriveResult& res = stored.res;
-  // The free-form sections as written ("qc" of fit drive's QC and outage QC, "consistency").
-  const json qc = res.qc.is_null() ? json::object() : res.qc;
+  // The typed QC sections of the codec: ΔS (res.cpe), outage QC (res.outages), consistency (res.nis).
   std::ostringstream h;
   h << "<h3>In-motion run " << r.id << " → set " << set.id << " (" << to_string(set.source)
     << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
-    << run_table(r, res) << stage_table(r, set, sets, stored) << (res.outages && !qc.contains("sets") ? std::string() : cpe_part(qc, res, r))  // GNSS-only: outages only
+    << run_table(r, res) << stage_table(r, set, sets, stored) << (res.outages && res.cpe.sets.empty() ? std::string() : cpe_part(res.cpe, res, r))  // GNSS-only: outages only
     << outage_part(res.outages, r) << "<h4>QC metrics</h4>\n"
     << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(res.nis, r);
   return h.str();

@@ -132,6 +132,50 @@ TEST(DriveResultCodec, TheTypedPartsHoldWhatTheReadersUse) {
   EXPECT_FALSE(is_drive_result(sample()["coefficients"]));
 }
 
+// qc of the ΔS QC (a drive with a reference): the sets with their marks and series, and the older
+// "series" form; a null number (NaN when written) reads as NaN.
+TEST(DriveResultCodec, TheDeltaSQcIsTyped) {
+  json j = sample();
+  j["qc"] = json::parse(R"J({"from_s": 100.0, "horizon_s": 60.0, "sample": "out-of-sample (after the fit window)",
+    "sets": [{"name": "input", "final_cpe_m": 12.5, "max_cpe_m": 14.0, "cpe_m_at": {"10": 0.5, "30": null},
+              "cpe_series": {"t_s": [0.0, 1.0, 2.0], "cpe_m": [0.0, 0.25, null]}},
+             {"name": "in-motion", "final_cpe_m": 2.5}],
+    "series": {"t_s": [0.0, 1.0], "input": [0.0, 0.5]}})J");
+  const DriveResult r = drive_result_from_json(j, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), j);  // written as given
+  EXPECT_DOUBLE_EQ(r.cpe.from_s.value_or(0), 100.0);
+  EXPECT_DOUBLE_EQ(r.cpe.horizon_s.value_or(0), 60.0);
+  EXPECT_EQ(r.cpe.sample.value_or(""), "out-of-sample (after the fit window)");
+  ASSERT_EQ(r.cpe.sets.size(), 2u);
+  EXPECT_EQ(r.cpe.sets[0].name.value_or(""), "input");
+  EXPECT_DOUBLE_EQ(r.cpe.sets[0].cpe_m_at.at("10"), 0.5);
+  EXPECT_TRUE(std::isnan(r.cpe.sets[0].cpe_m_at.at("30")));
+  ASSERT_EQ(r.cpe.sets[0].series_cpe_m.size(), 3u);
+  EXPECT_DOUBLE_EQ(r.cpe.sets[0].series_cpe_m[1], 0.25);
+  EXPECT_TRUE(std::isnan(r.cpe.sets[0].series_cpe_m[2]));
+  EXPECT_FALSE(r.cpe.sets[1].max_cpe_m);
+  EXPECT_TRUE(r.cpe.sets[1].series_t_s.empty());
+  ASSERT_TRUE(r.cpe.series_t_s);
+  EXPECT_DOUBLE_EQ(r.cpe.series.at("input").at(1), 0.5);
+  EXPECT_FALSE(r.outages);
+  const auto refused = [&](auto edit) {
+    json k = j;
+    edit(k);
+    try {
+      (void)drive_result_from_json(k, "R.json");
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return std::string();
+  };
+  EXPECT_EQ(refused([](json& k) { k["qc"]["horizon_s"] = "60"; }), "qc.horizon_s");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"] = {{"name", "input"}}; }), "qc.sets");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"][1]["final_cpe_m"] = "2.5"; }), "qc.sets[1].final_cpe_m");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"][0]["cpe_m_at"]["10"] = "x"; }), "qc.sets[0].cpe_m_at.10");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"][0]["cpe_series"]["t_s"][1] = true; }), "qc.sets[0].cpe_series.t_s[1]");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["series"]["input"] = 3; }), "qc.series.input");
+}
+
 TEST(DriveResultCodec, ReadsTheOlderFormsTheStoreHasAlwaysTaken) {
   json j = sample();
   j.erase("format");
