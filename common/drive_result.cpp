@@ -200,6 +200,55 @@ std::vector<double> numbers_or_null(const json& a, const std::string& f, const s
 }
 }  // namespace
 
+namespace {
+bool jbool(const json& v, const std::string& f, const std::string& key) {
+  if (!v.is_boolean()) throw InputError(f, 0, key, "expected true or false");
+  return v.get<bool>();
+}
+}  // namespace
+
+void read_typed_sections(DriveResult& r, const std::string& f) {
+  r.nis = nis_consistency_from_json(r.consistency, f);
+  r.cpe = cpe_qc_from_json(r.qc, f);
+  r.outages.reset();
+  if (r.qc.is_object() && r.qc.contains("outages")) r.outages = outage_qc_from_json(r.qc["outages"], f);
+  const json& x = r.extra;
+  r.lever_arm.reset();
+  if (const auto l = x.find("lever_arm_m"); l != x.end() && !l->is_null()) {
+    const std::string k = "lever_arm_m";
+    LeverArmEstimate e;
+    e.value = jvec3(jreq(*l, "value", f, k), f, k + ".value");
+    e.sigma = jvec3(jreq(*l, "sigma", f, k), f, k + ".sigma");
+    e.nominal = jvec3(jreq(*l, "nominal", f, k), f, k + ".nominal");
+    e.prior = jnum(jreq(*l, "prior", f, k), f, k + ".prior");
+    const json& o = jreq(*l, "observable", f, k);
+    if (!o.is_array() || o.size() != 3) throw InputError(f, 0, k + ".observable", "expected an array of 3 booleans");
+    for (std::size_t i = 0; i < 3; ++i) e.observable[i] = jbool(o[i], f, k + ".observable[" + std::to_string(i) + "]");
+    r.lever_arm = e;
+  }
+  r.time_offset.reset();
+  if (const auto t = x.find("time_offset_s"); t != x.end() && !t->is_null()) {
+    const std::string k = "time_offset_s";
+    TimeOffsetEstimate e;
+    e.value = jnum(jreq(*t, "value", f, k), f, k + ".value");
+    e.sigma = jnum(jreq(*t, "sigma", f, k), f, k + ".sigma");
+    e.prior = jnum(jreq(*t, "prior", f, k), f, k + ".prior");
+    e.observable = jbool(jreq(*t, "observable", f, k), f, k + ".observable");
+    r.time_offset = e;
+  }
+  r.adaptive_noise.reset();
+  if (const auto a = x.find("adaptive_noise"); a != x.end() && !a->is_null()) {
+    const std::string k = "adaptive_noise";
+    AdaptiveNoiseSummary e;  // older results may lack a figure: none scaled
+    e.scale_max = opt_number(*a, "scale_max", f, k).value_or(1);
+    e.scale_end = opt_number(*a, "scale_end", f, k).value_or(1);
+    const double n = opt_number(*a, "increases", f, k).value_or(0);
+    if (n < 0 || n != std::floor(n)) throw InputError(f, 0, k + ".increases", "expected a whole number >= 0");
+    e.increases = static_cast<long>(n);
+    r.adaptive_noise = e;
+  }
+}
+
 CpeQc cpe_qc_from_json(const json& qc, const std::string& f) {
   CpeQc q;
   if (!qc.is_object()) return q;
@@ -385,16 +434,14 @@ DriveResult drive_result_from_json(const json& j, const std::string& f) {
     if (!j["consistency"].is_object() && !j["consistency"].is_array())
       throw InputError(f, 0, "consistency", "expected an object");
     r.consistency = j["consistency"];
-    r.nis = nis_consistency_from_json(r.consistency, f);
   }
   if (j.contains("qc") && !j["qc"].is_null()) {
     if (!j["qc"].is_object() && !j["qc"].is_array()) throw InputError(f, 0, "qc", "expected an object or an array");
     r.qc = j["qc"];
-    r.cpe = cpe_qc_from_json(r.qc, f);
-    if (r.qc.is_object() && r.qc.contains("outages")) r.outages = outage_qc_from_json(r.qc["outages"], f);
   }
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!one_of(it.key(), kTyped)) r.extra[it.key()] = it.value();
+  read_typed_sections(r, f);
   return r;
 }
 

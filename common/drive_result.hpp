@@ -13,6 +13,7 @@
 // reference under "reference" or recording.reference). File I/O is the caller's; the codec works on
 // parsed JSON and throws InputError(file, line, key, …) naming the key on anything malformed.
 #pragma once
+#include <array>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -102,6 +103,23 @@ struct CpeQc {
   std::map<std::string, std::vector<double>> series;        // by set name
 };
 
+// The antenna blocks of `fit drive --estimate lever,time` ("lever_arm_m", "time_offset_s"): the
+// estimate, its σ and prior σ; observable when σ < prior / 2.
+struct LeverArmEstimate {
+  Vec3 value = Vec3::Zero(), sigma = Vec3::Zero(), nominal = Vec3::Zero();  // m, reference body axes
+  double prior = 0;
+  std::array<bool, 3> observable{};
+};
+struct TimeOffsetEstimate {
+  double value = 0, sigma = 0, prior = 0;  // s
+  bool observable = false;
+};
+// "adaptive_noise": how far the navigation noise variance was scaled up.
+struct AdaptiveNoiseSummary {
+  double scale_max = 1, scale_end = 1;
+  long increases = 0;
+};
+
 struct DriveResult {
   std::string format;  // kDriveResultFormat; empty in older results without the key
   DeviceId device;     // model may be empty in older results
@@ -121,6 +139,9 @@ struct DriveResult {
   nlohmann::json qc;           // object or array, or null (absent); written as is
   std::optional<OutageQc> outages;  // read from qc.outages
   CpeQc cpe;                        // read from qc (object form); empty otherwise
+  std::optional<LeverArmEstimate> lever_arm;          // read from extra "lever_arm_m"
+  std::optional<TimeOffsetEstimate> time_offset;      // read from extra "time_offset_s"
+  std::optional<AdaptiveNoiseSummary> adaptive_noise;  // read from extra "adaptive_noise"
   nlohmann::json extra = nlohmann::json::object();  // every other top-level key, as written
 };
 
@@ -131,8 +152,12 @@ bool is_drive_result(const nlohmann::json& j);
 DriveResult drive_result_from_json(const nlohmann::json& j, const std::string& file);
 nlohmann::json drive_result_to_json(const DriveResult& r);
 
-// "consistency" and "qc.outages" alone, as drive_result_from_json reads them (the writer fills
-// DriveResult::nis and ::outages from the sections it writes).
+// The typed readings of the sections kept as written (nis, cpe, outages, lever_arm, time_offset,
+// adaptive_noise) from r.consistency, r.qc and r.extra: drive_result_from_json calls it, and the
+// writer after building those sections.
+void read_typed_sections(DriveResult& r, const std::string& file);
+
+// "consistency" and "qc.outages" alone, as drive_result_from_json reads them.
 std::map<std::string, NisConsistency> nis_consistency_from_json(const nlohmann::json& consistency, const std::string& file);
 OutageQc outage_qc_from_json(const nlohmann::json& outages, const std::string& file);
 CpeQc cpe_qc_from_json(const nlohmann::json& qc, const std::string& file);

@@ -51,19 +51,17 @@ void print_summary(const DriveResult& r) {
             << "  gyro drift       " << vec(to_json(c.gyro.bias), sigma_json(c.gyro.sigma_bias), kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(to_json(c.accel.bias), sigma_json(c.accel.sigma_bias), kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(to_json(r.mounting.value().value_deg), sigma_json(r.mounting.value().sigma_deg), 1.0, "°") << "\n";
-  if (j.contains("lever_arm_m")) {
-    const auto& l = j["lever_arm_m"];
-    std::cout << "  lever arm        " << vec(l["value"], l["sigma"], 1.0, "m") << " (nominal " << l["nominal"][0].get<double>() << ", "
-              << l["nominal"][1].get<double>() << ", " << l["nominal"][2].get<double>() << "; prior sigma " << l["prior"].get<double>()
-              << " m; observable xyz " << (l["observable"][0].get<bool>() ? "y" : "n") << (l["observable"][1].get<bool>() ? "y" : "n")
-              << (l["observable"][2].get<bool>() ? "y" : "n") << ")\n";
+  if (r.lever_arm) {
+    const LeverArmEstimate& l = *r.lever_arm;
+    std::cout << "  lever arm        " << vec(to_json(l.value), to_json(l.sigma), 1.0, "m") << " (nominal " << l.nominal(0) << ", "
+              << l.nominal(1) << ", " << l.nominal(2) << "; prior sigma " << l.prior << " m; observable xyz "
+              << (l.observable[0] ? "y" : "n") << (l.observable[1] ? "y" : "n") << (l.observable[2] ? "y" : "n") << ")\n";
   }
-  if (j.contains("time_offset_s")) {
-    const auto& t = j["time_offset_s"];
-    std::cout << "  time offset      " << std::fixed << std::setprecision(2) << t["value"].get<double>() * 1e3 << " ± "
-              << t["sigma"].get<double>() * 1e3 << std::defaultfloat << std::setprecision(6) << " ms (prior sigma "
-              << t["prior"].get<double>() * 1e3 << " ms; " << (t["observable"].get<bool>() ? "observable" : "not observable: sigma above half the prior")
-              << ")\n";
+  if (r.time_offset) {
+    const TimeOffsetEstimate& t = *r.time_offset;
+    std::cout << "  time offset      " << std::fixed << std::setprecision(2) << t.value * 1e3 << " ± " << t.sigma * 1e3
+              << std::defaultfloat << std::setprecision(6) << " ms (prior sigma " << t.prior * 1e3 << " ms; "
+              << (t.observable ? "observable" : "not observable: sigma above half the prior") << ")\n";
   }
   if (j.contains("device_class")) {
     const auto& dc = j["device_class"];
@@ -160,10 +158,10 @@ void print_summary(const DriveResult& r) {
       std::cout << "    t " << rec["t_s"].get<double>() << " s: " << rec["reason"].get<std::string>() << " -> "
                 << rec["action"].get<std::string>() << "\n";
   }
-  if (j.contains("adaptive_noise") && j["adaptive_noise"]["scale_max"].get<double>() > 1)
-    std::cout << "  adaptive noise   navigation noise variance scaled up " << j["adaptive_noise"]["increases"]
-              << " time(s), at most x" << std::setprecision(3) << j["adaptive_noise"]["scale_max"].get<double>() << ", x"
-              << j["adaptive_noise"]["scale_end"].get<double>() << std::setprecision(6) << " at the end\n";
+  if (r.adaptive_noise && r.adaptive_noise->scale_max > 1)
+    std::cout << "  adaptive noise   navigation noise variance scaled up " << r.adaptive_noise->increases << " time(s), at most x"
+              << std::setprecision(3) << r.adaptive_noise->scale_max << ", x" << r.adaptive_noise->scale_end << std::setprecision(6)
+              << " at the end\n";
   for (const auto& [k, v] : r.nis) {
     std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v.mean_nis.value_or(std::nan("")) << std::setprecision(6)
               << " (expected " << v.expected_nis.value_or(std::nan("")) << "), " << v.rejected.value_or(0) << " rejected";

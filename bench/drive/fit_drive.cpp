@@ -794,7 +794,6 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
     j["vehicle_constraints"] = vehicle_constraints_json(cfg, *f, cfg.prior.mount);
   }
   r.consistency = cons;
-  r.nis = nis_consistency_from_json(cons, "fit drive consistency");
   {
     const inmotion::AdaptiveNoise& an = f->adaptive_noise();
     j["adaptive_noise"] = {
@@ -867,8 +866,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
     qj = {{"sample", "not run"}};
   }
   r.qc = qj;
-  r.cpe = cpe_qc_from_json(qj, "fit drive QC");
-  if (outages) r.outages = outage_qc_from_json(oj, "fit drive outage QC");
+  read_typed_sections(r, "fit drive result");
   if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
   return r;
 }

@@ -176,6 +176,44 @@ TEST(DriveResultCodec, TheDeltaSQcIsTyped) {
   EXPECT_EQ(refused([](json& k) { k["qc"]["series"]["input"] = 3; }), "qc.series.input");
 }
 
+// The antenna blocks and the adaptive noise, read from the sections kept as written.
+TEST(DriveResultCodec, TheEstimatesTheSummaryPrintsAreTyped) {
+  json j = sample();
+  j["lever_arm_m"] = {{"value", {-1.0, 0.25, -0.25}}, {"sigma", {0.05, 0.02, 0.1}}, {"prior", 0.1}, {"nominal", {-1.0, 0.2, -0.3}},
+                      {"observable", {false, true, false}}, {"how", "text"}};
+  j["time_offset_s"] = {{"value", 7e-5}, {"sigma", 3.5e-3}, {"prior", 0.02}, {"observable", true}};
+  j["adaptive_noise"] = {{"enabled", true}, {"scale_max", 6.5e5}, {"scale_end", 3.5e5}, {"increases", 6}};
+  const DriveResult r = drive_result_from_json(j, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), j);
+  ASSERT_TRUE(r.lever_arm);
+  EXPECT_DOUBLE_EQ(r.lever_arm->value(1), 0.25);
+  EXPECT_DOUBLE_EQ(r.lever_arm->nominal(2), -0.3);
+  EXPECT_TRUE(r.lever_arm->observable[1]);
+  EXPECT_FALSE(r.lever_arm->observable[2]);
+  ASSERT_TRUE(r.time_offset);
+  EXPECT_DOUBLE_EQ(r.time_offset->sigma, 3.5e-3);
+  ASSERT_TRUE(r.adaptive_noise);
+  EXPECT_EQ(r.adaptive_noise->increases, 6);
+  EXPECT_DOUBLE_EQ(r.adaptive_noise->scale_end, 3.5e5);
+  EXPECT_FALSE(drive_result_from_json(sample(), "R.json").lever_arm);  // absent: not estimated
+  const auto refused = [&](auto edit) {
+    json k = j;
+    edit(k);
+    try {
+      (void)drive_result_from_json(k, "R.json");
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return std::string();
+  };
+  EXPECT_EQ(refused([](json& k) { k["lever_arm_m"]["value"] = {1.0, 2.0}; }), "lever_arm_m.value");
+  EXPECT_EQ(refused([](json& k) { k["lever_arm_m"]["observable"][2] = "no"; }), "lever_arm_m.observable[2]");
+  EXPECT_EQ(refused([](json& k) { k["lever_arm_m"].erase("prior"); }), "lever_arm_m.prior");
+  EXPECT_EQ(refused([](json& k) { k["time_offset_s"]["sigma"] = "3 ms"; }), "time_offset_s.sigma");
+  EXPECT_EQ(refused([](json& k) { k["adaptive_noise"]["increases"] = -1; }), "adaptive_noise.increases");
+  EXPECT_EQ(refused([](json& k) { k["adaptive_noise"]["scale_max"] = "big"; }), "adaptive_noise.scale_max");
+}
+
 TEST(DriveResultCodec, ReadsTheOlderFormsTheStoreHasAlwaysTaken) {
   json j = sample();
   j.erase("format");
