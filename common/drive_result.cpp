@@ -247,6 +247,20 @@ void read_typed_sections(DriveResult& r, const std::string& f) {
     e.increases = static_cast<long>(n);
     r.adaptive_noise = e;
   }
+  r.effects.reset();
+  if (const auto fx = x.find("effects"); fx != x.end() && !fx->is_null()) {
+    const std::string k = "effects";
+    EffectsUse e;
+    const json& ap = array_at(*fx, "applied", f, k);
+    for (std::size_t i = 0; i < ap.size(); ++i) e.applied.push_back(jstr(ap[i], f, k + ".applied[" + std::to_string(i) + "]"));
+    const json& ig = array_at(*fx, "ignored", f, k);
+    for (std::size_t i = 0; i < ig.size(); ++i) {
+      const std::string ik = k + ".ignored[" + std::to_string(i) + "]";
+      e.ignored.emplace_back(jstr(jreq(ig[i], "key", f, ik), f, ik + ".key"), jstr(jreq(ig[i], "reason", f, ik), f, ik + ".reason"));
+    }
+    e.time_offset_s = opt_number(*fx, "time_offset_s", f, k);
+    r.effects = e;
+  }
 }
 
 CpeQc cpe_qc_from_json(const json& qc, const std::string& f) {

@@ -120,6 +120,14 @@ struct AdaptiveNoiseSummary {
   long increases = 0;
 };
 
+// "effects": the catalogue terms the fit applied (names of the effect catalogue), those it ignored
+// with why, and the time-stamp offset τ it applied (s; absent when none).
+struct EffectsUse {
+  std::vector<std::string> applied;
+  std::vector<std::pair<std::string, std::string>> ignored;  // key, reason
+  std::optional<double> time_offset_s;
+};
+
 struct DriveResult {
   std::string format;  // kDriveResultFormat; empty in older results without the key
   DeviceId device;     // model may be empty in older results
@@ -142,6 +150,7 @@ struct DriveResult {
   std::optional<LeverArmEstimate> lever_arm;          // read from extra "lever_arm_m"
   std::optional<TimeOffsetEstimate> time_offset;      // read from extra "time_offset_s"
   std::optional<AdaptiveNoiseSummary> adaptive_noise;  // read from extra "adaptive_noise"
+  std::optional<EffectsUse> effects;                   // read from extra "effects"
   nlohmann::json extra = nlohmann::json::object();  // every other top-level key, as written
 };
 
@@ -153,7 +162,7 @@ DriveResult drive_result_from_json(const nlohmann::json& j, const std::string& f
 nlohmann::json drive_result_to_json(const DriveResult& r);
 
 // The typed readings of the sections kept as written (nis, cpe, outages, lever_arm, time_offset,
-// adaptive_noise) from r.consistency, r.qc and r.extra: drive_result_from_json calls it, and the
+// adaptive_noise, effects) from r.consistency, r.qc and r.extra: drive_result_from_json calls it, and the
 // writer after building those sections.
 void read_typed_sections(DriveResult& r, const std::string& file);
 

@@ -120,20 +120,18 @@ void print_summary(const DriveResult& r) {
       if (m["beta_rad_s"].get<double>() > 0) std::cout << ", beta " << m["beta_rad_s"].get<double>() << " rad/s";
       std::cout << "  (" << m["source"].get<std::string>() << ")\n";
     }
-  if (j.contains("effects")) {
-    const auto& e = j["effects"];
+  if (r.effects) {
+    const EffectsUse& e = *r.effects;
     std::cout << "  catalogue terms applied:";
-    if (e["applied"].empty()) std::cout << " none";
-    for (const auto& k : e["applied"]) {
-      std::cout << ' ' << k.get<std::string>();
+    if (e.applied.empty()) std::cout << " none";
+    for (const auto& k : e.applied) {
+      std::cout << ' ' << k;
       EffectId id;
-      if (effect_from_name(k.get<std::string>(), id) && effect_spec(id).compensation == DriveCompensation::time_stamp &&
-          e.contains("time_offset_s"))
-        std::cout << " (" << e["time_offset_s"].get<double>() * 1e3 << " ms: stamps t -> t - τ)";
+      if (effect_from_name(k, id) && effect_spec(id).compensation == DriveCompensation::time_stamp && e.time_offset_s)
+        std::cout << " (" << *e.time_offset_s * 1e3 << " ms: stamps t -> t - τ)";
     }
     std::cout << "\n";
-    for (const auto& k : e["ignored"])
-      std::cout << "  catalogue term ignored: " << k["key"].get<std::string>() << " (" << k["reason"].get<std::string>() << ")\n";
+    for (const auto& [key, reason] : e.ignored) std::cout << "  catalogue term ignored: " << key << " (" << reason << ")\n";
   }
   if (j.contains("alignment")) {
     const auto& al = j["alignment"];

@@ -206,6 +206,25 @@ TEST(DriveResultCodec, TheEstimatesTheSummaryPrintsAreTyped) {
   EXPECT_EQ(refused([](json& k) { k["adaptive_noise"]["scale_max"] = "big"; }), "adaptive_noise.scale_max");
 }
 
+TEST(DriveResultCodec, TheEffectsTheFitAppliedAreTyped) {
+  json j = sample();
+  j["effects"] = {{"source", "in memory"}, {"applied", {"lever_arm", "time_offset"}},
+                  {"ignored", {{{"key", "misalignment"}, {"reason", "bench term"}}}}, {"time_offset_s", 0.004}};
+  const DriveResult r = drive_result_from_json(j, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), j);
+  ASSERT_TRUE(r.effects);
+  EXPECT_EQ(r.effects->applied, (std::vector<std::string>{"lever_arm", "time_offset"}));
+  ASSERT_EQ(r.effects->ignored.size(), 1u);
+  EXPECT_EQ(r.effects->ignored[0].second, "bench term");
+  EXPECT_DOUBLE_EQ(r.effects->time_offset_s.value_or(0), 0.004);
+  json k = j;
+  k["effects"]["applied"][1] = 3;
+  EXPECT_EQ(refused_field(k), "effects.applied[1]");
+  k = j;
+  k["effects"]["ignored"][0].erase("reason");
+  EXPECT_EQ(refused_field(k), "effects.ignored[0].reason");
+}
+
 TEST(DriveResultCodec, ReadsTheOlderFormsTheStoreHasAlwaysTaken) {
   json j = sample();
   j.erase("format");
