@@ -37,6 +37,35 @@ DeviceId device_of(const json& d, const std::string& f, const std::string& key, 
   return id;
 }
 
+std::optional<double> opt_number(const json& o, const char* k, const std::string& f, const std::string& key) {
+  const auto it = o.find(k);
+  if (it == o.end() || it->is_null()) return std::nullopt;
+  return jnum(*it, f, key + "." + k);
+}
+
+std::optional<long> opt_count(const json& o, const char* k, const std::string& f, const std::string& key) {
+  const auto v = opt_number(o, k, f, key);
+  if (v && (*v < 0 || *v != std::floor(*v) || *v > 1e15))
+    throw InputError(f, 0, key + "." + k, "expected a whole number of epochs >= 0");
+  return v ? std::optional<long>(static_cast<long>(*v)) : std::nullopt;
+}
+
+std::map<std::string, double> numbers_by_name(const json& o, const std::string& f, const std::string& key) {
+  std::map<std::string, double> out;
+  if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
+  for (auto it = o.begin(); it != o.end(); ++it)
+    if (!it->is_null()) out[it.key()] = jnum(*it, f, key + "." + it.key());
+  return out;
+}
+
+const json& array_at(const json& o, const char* k, const std::string& f, const std::string& key) {
+  static const json empty = json::array();
+  const auto it = o.find(k);
+  if (it == o.end()) return empty;
+  if (!it->is_array()) throw InputError(f, 0, key + "." + k, "expected an array");
+  return *it;
+}
+
 // A coefficient block: the spec schema; "format"/"device" may be omitted (then they are those of
 // the result) and, when present, must agree with it. Errors name the key under the block.
 CoefficientSet coefficient_block(const json& j, const DeviceId& dev, const std::string& f, const std::string& name) {
@@ -141,6 +170,188 @@ json determined_by_json(const DeterminedBy& d) {
 
 }  // namespace
 
+// "consistency" (object form: observation → figures); the older array form carries no figures read.
+std::map<std::string, NisConsistency> nis_consistency_from_json(const json& c, const std::string& f) {
+  std::map<std::string, NisConsistency> out;
+  if (!c.is_object()) return out;
+  for (auto it = c.begin(); it != c.end(); ++it) {
+    const std::string key = "consistency." + it.key();
+    if (!it->is_object()) throw InputError(f, 0, key, "expected an object");
+    NisConsistency n;
+    n.equation = opt_string(*it, "equation", f, key);
+    n.epochs = opt_count(*it, "epochs", f, key);
+    n.rejected = opt_count(*it, "rejected", f, key);
+    n.forced = opt_count(*it, "forced", f, key);
+    n.mean_nis = opt_number(*it, "mean_nis", f, key);
+    n.expected_nis = opt_number(*it, "expected_nis", f, key);
+    n.fraction_within_95pct = opt_number(*it, "fraction_within_95pct", f, key);
+    out[it.key()] = n;
+  }
+  return out;
+}
+
+namespace {
+std::vector<double> numbers_or_null(const json& a, const std::string& f, const std::string& key) {
+  if (!a.is_array()) throw InputError(f, 0, key, "expected an array");
+  std::vector<double> out;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    out.push_back(a[i].is_null() ? std::nan("") : jnum(a[i], f, key + "[" + std::to_string(i) + "]"));
+  return out;
+}
+}  // namespace
+
+namespace {
+bool jbool(const json& v, const std::string& f, const std::string& key) {
+  if (!v.is_boolean()) throw InputError(f, 0, key, "expected true or false");
+  return v.get<bool>();
+}
+}  // namespace
+
+void read_typed_sections(DriveResult& r, const std::string& f) {
+  r.nis = nis_consistency_from_json(r.consistency, f);
+  r.cpe = cpe_qc_from_json(r.qc, f);
+  r.outages.reset();
+  if (r.qc.is_object() && r.qc.contains("outages")) r.outages = outage_qc_from_json(r.qc["outages"], f);
+  const json& x = r.extra;
+  r.lever_arm.reset();
+  if (const auto l = x.find("lever_arm_m"); l != x.end() && !l->is_null()) {
+    const std::string k = "lever_arm_m";
+    LeverArmEstimate e;
+    e.value = jvec3(jreq(*l, "value", f, k), f, k + ".value");
+    e.sigma = jvec3(jreq(*l, "sigma", f, k), f, k + ".sigma");
+    e.nominal = jvec3(jreq(*l, "nominal", f, k), f, k + ".nominal");
+    e.prior = jnum(jreq(*l, "prior", f, k), f, k + ".prior");
+    const json& o = jreq(*l, "observable", f, k);
+    if (!o.is_array() || o.size() != 3) throw InputError(f, 0, k + ".observable", "expected an array of 3 booleans");
+    for (std::size_t i = 0; i < 3; ++i) e.observable[i] = jbool(o[i], f, k + ".observable[" + std::to_string(i) + "]");
+    r.lever_arm = e;
+  }
+  r.time_offset.reset();
+  if (const auto t = x.find("time_offset_s"); t != x.end() && !t->is_null()) {
+    const std::string k = "time_offset_s";
+    TimeOffsetEstimate e;
+    e.value = jnum(jreq(*t, "value", f, k), f, k + ".value");
+    e.sigma = jnum(jreq(*t, "sigma", f, k), f, k + ".sigma");
+    e.prior = jnum(jreq(*t, "prior", f, k), f, k + ".prior");
+    e.observable = jbool(jreq(*t, "observable", f, k), f, k + ".observable");
+    r.time_offset = e;
+  }
+  r.adaptive_noise.reset();
+  if (const auto a = x.find("adaptive_noise"); a != x.end() && !a->is_null()) {
+    const std::string k = "adaptive_noise";
+    AdaptiveNoiseSummary e;  // older results may lack a figure: none scaled
+    e.scale_max = opt_number(*a, "scale_max", f, k).value_or(1);
+    e.scale_end = opt_number(*a, "scale_end", f, k).value_or(1);
+    const double n = opt_number(*a, "increases", f, k).value_or(0);
+    if (n < 0 || n != std::floor(n)) throw InputError(f, 0, k + ".increases", "expected a whole number >= 0");
+    e.increases = static_cast<long>(n);
+    r.adaptive_noise = e;
+  }
+  r.effects.reset();
+  if (const auto fx = x.find("effects"); fx != x.end() && !fx->is_null()) {
+    const std::string k = "effects";
+    EffectsUse e;
+    const json& ap = array_at(*fx, "applied", f, k);
+    for (std::size_t i = 0; i < ap.size(); ++i) e.applied.push_back(jstr(ap[i], f, k + ".applied[" + std::to_string(i) + "]"));
+    const json& ig = array_at(*fx, "ignored", f, k);
+    for (std::size_t i = 0; i < ig.size(); ++i) {
+      const std::string ik = k + ".ignored[" + std::to_string(i) + "]";
+      e.ignored.emplace_back(jstr(jreq(ig[i], "key", f, ik), f, ik + ".key"), jstr(jreq(ig[i], "reason", f, ik), f, ik + ".reason"));
+    }
+    e.time_offset_s = opt_number(*fx, "time_offset_s", f, k);
+    r.effects = e;
+  }
+}
+
+CpeQc cpe_qc_from_json(const json& qc, const std::string& f) {
+  CpeQc q;
+  if (!qc.is_object()) return q;
+  q.from_s = opt_number(qc, "from_s", f, "qc");
+  q.horizon_s = opt_number(qc, "horizon_s", f, "qc");
+  q.sample = opt_string(qc, "sample", f, "qc");
+  const json& sets = array_at(qc, "sets", f, "qc");
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const std::string sk = "qc.sets[" + std::to_string(i) + "]";
+    if (!sets[i].is_object()) throw InputError(f, 0, sk, "expected an object");
+    CpeSet s;
+    s.name = opt_string(sets[i], "name", f, sk);
+    s.final_cpe_m = opt_number(sets[i], "final_cpe_m", f, sk);
+    s.max_cpe_m = opt_number(sets[i], "max_cpe_m", f, sk);
+    if (const auto at = sets[i].find("cpe_m_at"); at != sets[i].end()) {
+      if (!at->is_object()) throw InputError(f, 0, sk + ".cpe_m_at", "expected an object");
+      for (auto it = at->begin(); it != at->end(); ++it)
+        s.cpe_m_at[it.key()] = it->is_null() ? std::nan("") : jnum(*it, f, sk + ".cpe_m_at." + it.key());
+    }
+    if (const auto ser = sets[i].find("cpe_series"); ser != sets[i].end()) {
+      if (!ser->is_object()) throw InputError(f, 0, sk + ".cpe_series", "expected an object");
+      if (ser->contains("t_s")) s.series_t_s = numbers_or_null((*ser)["t_s"], f, sk + ".cpe_series.t_s");
+      if (ser->contains("cpe_m")) s.series_cpe_m = numbers_or_null((*ser)["cpe_m"], f, sk + ".cpe_series.cpe_m");
+    }
+    q.sets.push_back(std::move(s));
+  }
+  if (const auto ser = qc.find("series"); ser != qc.end() && ser->is_object() && ser->contains("t_s")) {
+    for (auto it = ser->begin(); it != ser->end(); ++it) {
+      std::vector<double> v = numbers_or_null(*it, f, "qc.series." + it.key());
+      if (it.key() == "t_s") q.series_t_s = std::move(v);
+      else q.series[it.key()] = std::move(v);
+    }
+  }
+  return q;
+}
+
+OutageQc outage_qc_from_json(const json& o, const std::string& f) {
+  const std::string key = "qc.outages";
+  if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
+  OutageQc q;
+  q.sample = opt_string(o, "sample", f, key);
+  q.aided_by = opt_string(o, "aided_by", f, key);
+  q.error = opt_string(o, "error", f, key);
+  q.fix_sigma_h_m = opt_number(o, "fix_sigma_h_m", f, key);
+  const json& np = array_at(o, "not_placed", f, key);
+  for (std::size_t i = 0; i < np.size(); ++i) {
+    const std::string k = key + ".not_placed[" + std::to_string(i) + "]";
+    if (!np[i].is_object()) throw InputError(f, 0, k, "expected an object");
+    q.not_placed.push_back(opt_string(np[i], "reason", f, k).value_or(""));
+  }
+  const json& sets = array_at(o, "sets", f, key);
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    const std::string sk = key + ".sets[" + std::to_string(i) + "]";
+    if (!sets[i].is_object()) throw InputError(f, 0, sk, "expected an object");
+    OutageSetFigures s;
+    s.name = jstr(jreq(sets[i], "name", f, sk), f, sk + ".name");
+    if (!sets[i].contains("per_length") || !sets[i]["per_length"].is_array())
+      throw InputError(f, 0, sk + ".per_length", "expected an array");
+    const json& pl = sets[i]["per_length"];
+    for (std::size_t k = 0; k < pl.size(); ++k) {
+      const std::string pk = sk + ".per_length[" + std::to_string(k) + "]";
+      if (!pl[k].is_object() || !pl[k].contains("length_s")) throw InputError(f, 0, pk, "expected an object with length_s");
+      OutageLengthFigures l;
+      l.length_s = jnum(pl[k]["length_s"], f, pk + ".length_s");
+      l.count = opt_number(pl[k], "count", f, pk);
+      l.median_max_m = opt_number(pl[k], "median_max_m", f, pk);
+      l.max_max_m = opt_number(pl[k], "max_max_m", f, pk);
+      l.median_end_m = opt_number(pl[k], "median_end_m", f, pk);
+      l.max_end_m = opt_number(pl[k], "max_end_m", f, pk);
+      s.per_length.push_back(l);
+    }
+    q.sets.push_back(std::move(s));
+  }
+  const json& list = array_at(o, "outages", f, key);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string ok = key + ".outages[" + std::to_string(i) + "]";
+    if (!list[i].is_object()) throw InputError(f, 0, ok, "expected an object");
+    OutageRunFigures e;
+    e.start_s = opt_number(list[i], "start_s", f, ok);
+    e.length_s = opt_number(list[i], "length_s", f, ok);
+    e.fixes = opt_number(list[i], "fixes", f, ok);
+    if (list[i].contains("max_m")) e.max_m = numbers_by_name(list[i]["max_m"], f, ok + ".max_m");
+    if (list[i].contains("end_m")) e.end_m = numbers_by_name(list[i]["end_m"], f, ok + ".end_m");
+    q.outages.push_back(std::move(e));
+  }
+  return q;
+}
+
+
 bool is_drive_result(const json& j) {
   if (!j.is_object()) return false;
   const auto f = j.find("format");
@@ -244,6 +455,7 @@ DriveResult drive_result_from_json(const json& j, const std::string& f) {
   }
   for (auto it = j.begin(); it != j.end(); ++it)
     if (!one_of(it.key(), kTyped)) r.extra[it.key()] = it.value();
+  read_typed_sections(r, f);
   return r;
 }
 

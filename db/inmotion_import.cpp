@@ -31,13 +31,15 @@ ParsedCoefficients stored_block(const CoefficientSet& c, const std::string& f, c
 
 // Which data the figures of a "qc" block were computed on, from its "sample" text
 // ("out-of-sample (after the fit window)", "in-sample (no data after the fit window)", "not run").
-std::string sample_of(const json& o, const std::string& f, const std::string& key, const std::string& dflt) {
-  if (!o.is_object() || !o.contains("sample")) return dflt;
-  if (!o["sample"].is_string()) throw InputError(f, 0, key + ".sample", "expected a string");
-  const std::string t = o["sample"].get<std::string>();
+std::string sample_class(const std::string& t) {
   for (const char* s : {kOutOfSample, kInSample, kSampleNotApplicable})
     if (t.rfind(s, 0) == 0) return s;
   return "";
+}
+std::string sample_of(const json& o, const std::string& f, const std::string& key, const std::string& dflt) {
+  if (!o.is_object() || !o.contains("sample")) return dflt;
+  if (!o["sample"].is_string()) throw InputError(f, 0, key + ".sample", "expected a string");
+  return sample_class(o["sample"].get<std::string>());
 }
 
 QcResult metric_from_object(const std::string& name, const json& o, const std::string& f, const std::string& key,
@@ -89,36 +91,24 @@ void never_worse_than_baseline(std::vector<QcResult>& out, std::size_t first, co
 // length the median and the largest of the per-outage maxima and end errors, as
 // outages.SET.Ls.FIELD (unit m, the outages' sample). One check: the result set's median maximum
 // error of each length is never worse than that of the set the fit started from.
-void outage_metrics(const json& o, const std::string& f, const std::string& qc_sample, std::vector<QcResult>& out) {
-  const std::string key = "qc.outages";
-  if (!o.is_object()) throw InputError(f, 0, key, "expected an object");
-  const std::string sample = sample_of(o, f, key, qc_sample);
-  if (!o.contains("sets")) return;
-  if (!o["sets"].is_array()) throw InputError(f, 0, key + ".sets", "expected an array");
+void outage_metrics(const OutageQc& o, const std::string& qc_sample, std::vector<QcResult>& out) {
+  const std::string sample = o.sample ? sample_class(*o.sample) : qc_sample;
   // length (as in the metric name) → set name → median_max_m
   std::map<std::string, std::map<std::string, std::size_t>> median_at;
-  for (std::size_t i = 0; i < o["sets"].size(); ++i) {
-    const json& s = o["sets"][i];
-    const std::string sk = key + ".sets[" + std::to_string(i) + "]";
-    const std::string name = jstr(jreq(s, "name", f, sk), f, sk + ".name");
-    if (!s.contains("per_length") || !s["per_length"].is_array()) throw InputError(f, 0, sk + ".per_length", "expected an array");
-    for (std::size_t k = 0; k < s["per_length"].size(); ++k) {
-      const json& p = s["per_length"][k];
-      const std::string pk = sk + ".per_length[" + std::to_string(k) + "]";
-      if (!p.is_object() || !p.contains("length_s")) throw InputError(f, 0, pk, "expected an object with length_s");
-      const double L = jnum(p["length_s"], f, pk + ".length_s");
-      const std::string len = outage_metric("", L, "");
-      for (const char* fk : {"median_max_m", "max_max_m", "median_end_m", "max_end_m"}) {
-        if (!p.contains(fk)) continue;
-        if (std::string(fk) == "median_max_m") median_at[len][name] = out.size();
-        out.push_back(QcResult{outage_metric(name, L, fk), jnum(p[fk], f, pk + "." + fk), std::nullopt, true, "m", sample, ""});
+  for (const OutageSetFigures& s : o.sets)
+    for (const OutageLengthFigures& p : s.per_length) {
+      const std::string len = outage_metric("", p.length_s, "");
+      const std::pair<const char*, std::optional<double>> fields[] = {
+          {"median_max_m", p.median_max_m}, {"max_max_m", p.max_max_m}, {"median_end_m", p.median_end_m}, {"max_end_m", p.max_end_m}};
+      for (const auto& [fk, v] : fields) {
+        if (!v) continue;
+        if (std::string(fk) == "median_max_m") median_at[len][s.name] = out.size();
+        out.push_back(QcResult{outage_metric(s.name, p.length_s, fk), *v, std::nullopt, true, "m", sample, ""});
       }
     }
-  }
   // The errors are measured against the fixes: a difference within their noise (3σ of the stated
   // horizontal σ, fix_sigma_h_m) is not a worse set.
-  double noise = 0;
-  if (o.contains("fix_sigma_h_m") && !o["fix_sigma_h_m"].is_null()) noise = 3 * jnum(o["fix_sigma_h_m"], f, key + ".fix_sigma_h_m");
+  const double noise = o.fix_sigma_h_m ? 3 * *o.fix_sigma_h_m : 0;
   for (auto& [len, by_set] : median_at) {
     auto r = by_set.find(kQcResultSet);
     if (r == by_set.end()) continue;
@@ -137,7 +127,7 @@ void outage_metrics(const json& o, const std::string& f, const std::string& qc_s
   }
 }
 
-std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
+std::vector<QcResult> qc_metrics(const json& qc, const std::optional<OutageQc>& outages, const std::string& f) {
   std::vector<QcResult> out;
   const std::string sample = sample_of(qc, f, "qc", "");
   auto from_array = [&](const json& arr, const std::string& key, const std::string& prefix) {
@@ -174,7 +164,7 @@ std::vector<QcResult> qc_metrics(const json& qc, const std::string& f) {
     const std::string key = "qc." + it.key();
     if (it.key() == "from_s" || it.key() == "horizon_s") continue;  // when and how long: context, not figures
     if (it.key() == "outages") {
-      outage_metrics(*it, f, sample, out);
+      outage_metrics(*outages, sample, out);
       continue;
     }
     if (it->is_number()) {
@@ -220,7 +210,7 @@ InMotionResult parse_inmotion_result(const std::string& text, const std::string&
   }
   if (!d.consistency.is_null()) r.consistency_json = d.consistency.dump();
   if (!d.qc.is_null()) {
-    r.qc = qc_metrics(d.qc, f);
+    r.qc = qc_metrics(d.qc, d.outages, f);
     r.qc_json = d.qc.dump();
   }
   r.determined_by = d.determined_by;

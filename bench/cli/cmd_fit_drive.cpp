@@ -51,19 +51,17 @@ void print_summary(const DriveResult& r) {
             << "  gyro drift       " << vec(to_json(c.gyro.bias), sigma_json(c.gyro.sigma_bias), kDegPerHour, "°/h") << "\n"
             << "  accel bias       " << vec(to_json(c.accel.bias), sigma_json(c.accel.sigma_bias), kMilliG, "mg") << "\n"
             << "  mounting rpy     " << vec(to_json(r.mounting.value().value_deg), sigma_json(r.mounting.value().sigma_deg), 1.0, "°") << "\n";
-  if (j.contains("lever_arm_m")) {
-    const auto& l = j["lever_arm_m"];
-    std::cout << "  lever arm        " << vec(l["value"], l["sigma"], 1.0, "m") << " (nominal " << l["nominal"][0].get<double>() << ", "
-              << l["nominal"][1].get<double>() << ", " << l["nominal"][2].get<double>() << "; prior sigma " << l["prior"].get<double>()
-              << " m; observable xyz " << (l["observable"][0].get<bool>() ? "y" : "n") << (l["observable"][1].get<bool>() ? "y" : "n")
-              << (l["observable"][2].get<bool>() ? "y" : "n") << ")\n";
+  if (r.lever_arm) {
+    const LeverArmEstimate& l = *r.lever_arm;
+    std::cout << "  lever arm        " << vec(to_json(l.value), to_json(l.sigma), 1.0, "m") << " (nominal " << l.nominal(0) << ", "
+              << l.nominal(1) << ", " << l.nominal(2) << "; prior sigma " << l.prior << " m; observable xyz "
+              << (l.observable[0] ? "y" : "n") << (l.observable[1] ? "y" : "n") << (l.observable[2] ? "y" : "n") << ")\n";
   }
-  if (j.contains("time_offset_s")) {
-    const auto& t = j["time_offset_s"];
-    std::cout << "  time offset      " << std::fixed << std::setprecision(2) << t["value"].get<double>() * 1e3 << " ± "
-              << t["sigma"].get<double>() * 1e3 << std::defaultfloat << std::setprecision(6) << " ms (prior sigma "
-              << t["prior"].get<double>() * 1e3 << " ms; " << (t["observable"].get<bool>() ? "observable" : "not observable: sigma above half the prior")
-              << ")\n";
+  if (r.time_offset) {
+    const TimeOffsetEstimate& t = *r.time_offset;
+    std::cout << "  time offset      " << std::fixed << std::setprecision(2) << t.value * 1e3 << " ± " << t.sigma * 1e3
+              << std::defaultfloat << std::setprecision(6) << " ms (prior sigma " << t.prior * 1e3 << " ms; "
+              << (t.observable ? "observable" : "not observable: sigma above half the prior") << ")\n";
   }
   if (j.contains("device_class")) {
     const auto& dc = j["device_class"];
@@ -122,20 +120,18 @@ void print_summary(const DriveResult& r) {
       if (m["beta_rad_s"].get<double>() > 0) std::cout << ", beta " << m["beta_rad_s"].get<double>() << " rad/s";
       std::cout << "  (" << m["source"].get<std::string>() << ")\n";
     }
-  if (j.contains("effects")) {
-    const auto& e = j["effects"];
+  if (r.effects) {
+    const EffectsUse& e = *r.effects;
     std::cout << "  catalogue terms applied:";
-    if (e["applied"].empty()) std::cout << " none";
-    for (const auto& k : e["applied"]) {
-      std::cout << ' ' << k.get<std::string>();
+    if (e.applied.empty()) std::cout << " none";
+    for (const auto& k : e.applied) {
+      std::cout << ' ' << k;
       EffectId id;
-      if (effect_from_name(k.get<std::string>(), id) && effect_spec(id).compensation == DriveCompensation::time_stamp &&
-          e.contains("time_offset_s"))
-        std::cout << " (" << e["time_offset_s"].get<double>() * 1e3 << " ms: stamps t -> t - τ)";
+      if (effect_from_name(k, id) && effect_spec(id).compensation == DriveCompensation::time_stamp && e.time_offset_s)
+        std::cout << " (" << *e.time_offset_s * 1e3 << " ms: stamps t -> t - τ)";
     }
     std::cout << "\n";
-    for (const auto& k : e["ignored"])
-      std::cout << "  catalogue term ignored: " << k["key"].get<std::string>() << " (" << k["reason"].get<std::string>() << ")\n";
+    for (const auto& [key, reason] : e.ignored) std::cout << "  catalogue term ignored: " << key << " (" << reason << ")\n";
   }
   if (j.contains("alignment")) {
     const auto& al = j["alignment"];
@@ -160,16 +156,16 @@ void print_summary(const DriveResult& r) {
       std::cout << "    t " << rec["t_s"].get<double>() << " s: " << rec["reason"].get<std::string>() << " -> "
                 << rec["action"].get<std::string>() << "\n";
   }
-  if (j.contains("adaptive_noise") && j["adaptive_noise"]["scale_max"].get<double>() > 1)
-    std::cout << "  adaptive noise   navigation noise variance scaled up " << j["adaptive_noise"]["increases"]
-              << " time(s), at most x" << std::setprecision(3) << j["adaptive_noise"]["scale_max"].get<double>() << ", x"
-              << j["adaptive_noise"]["scale_end"].get<double>() << std::setprecision(6) << " at the end\n";
-  for (const auto& [k, v] : r.consistency.items()) {
-    std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v["mean_nis"].get<double>() << std::setprecision(6)
-              << " (expected " << v["expected_nis"].get<double>() << "), " << v["rejected"] << " rejected";
+  if (r.adaptive_noise && r.adaptive_noise->scale_max > 1)
+    std::cout << "  adaptive noise   navigation noise variance scaled up " << r.adaptive_noise->increases << " time(s), at most x"
+              << std::setprecision(3) << r.adaptive_noise->scale_max << ", x" << r.adaptive_noise->scale_end << std::setprecision(6)
+              << " at the end\n";
+  for (const auto& [k, v] : r.nis) {
+    std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v.mean_nis.value_or(std::nan("")) << std::setprecision(6)
+              << " (expected " << v.expected_nis.value_or(std::nan("")) << "), " << v.rejected.value_or(0) << " rejected";
     if (j.contains("vehicle_constraints") && (k == "nhc" || k == "zupt" || k == "zero_rate"))
-      std::cout << ", " << v["epochs"] << " used";
-    if (v["forced"].get<long>() > 0) std::cout << ", " << v["forced"] << " forced after a run of rejections";
+      std::cout << ", " << v.epochs.value_or(0) << " used";
+    if (v.forced.value_or(0) > 0) std::cout << ", " << *v.forced << " forced after a run of rejections";
     std::cout << "\n";
   }
   if (j.contains("vehicle_constraints")) {

@@ -30,8 +30,7 @@ DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun&
       x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
     };
     const DriveResult r = fit_drive(a);
-    if (const auto e = r.extra.find("effects"); e != r.extra.end())  // the catalogue terms the fit applied
-      for (const auto& k : (*e)["applied"]) applied.push_back(k.get<std::string>());
+    if (r.effects) applied.insert(applied.end(), r.effects->applied.begin(), r.effects->applied.end());  // the terms applied
     for (int k = 0; k < 3; ++k) stats[k] = innovation_stats(x[k], &in.data);
   };
   // "before": the improved b and M with only the terms that were tested (those the given

@@ -866,6 +866,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
     qj = {{"sample", "not run"}};
   }
   r.qc = qj;
+  read_typed_sections(r, "fit drive result");
   if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
   return r;
 }

@@ -35,12 +35,6 @@ StoredResult read_stored_result(const InMotionRun& r) {
   }
   return out;
 }
-double number_or_nan(const json& o, const char* k) {
-  return o.is_object() && o.contains(k) && o[k].is_number() ? o[k].get<double>() : std::nan("");
-}
-std::string string_or(const json& o, const char* k, const std::string& dflt) {
-  return o.is_object() && o.contains(k) && o[k].is_string() ? o[k].get<std::string>() : dflt;
-}
 std::string row(const std::string& head, const std::string& cell) {
   return "<tr><th class=\"l\">" + head + "</th><td class=\"l\">" + cell + "</td></tr>";
 }
@@ -132,47 +126,35 @@ struct CpeData {
   bool from_marks = false;
 };
 
-CpeData cpe_curves(const json& qc) {
+double figure(const std::optional<double>& v) { return v.value_or(std::nan("")); }
+
+CpeData cpe_curves(const CpeQc& qc) {
   CpeData d;
-  if (!qc.is_object()) return d;
-  const auto numbers = [](const json& a, std::vector<double>& out) {
-    if (!a.is_array()) return false;
-    for (const auto& v : a) out.push_back(v.is_number() ? v.get<double>() : std::nan(""));
-    return true;
-  };
-  if (qc.contains("sets") && qc["sets"].is_array()) {
-    for (const auto& s : qc["sets"]) {  // the series of issue 16
-      if (!s.is_object() || !s.contains("cpe_series") || !s["cpe_series"].is_object()) continue;
-      PlotCurve c{string_or(s, "name", "set"), {}, {}};
-      if (numbers(s["cpe_series"].value("t_s", json()), c.x) && numbers(s["cpe_series"].value("cpe_m", json()), c.y) &&
-          c.x.size() == c.y.size() && c.x.size() >= 2)
-        d.curves.push_back(std::move(c));
-    }
+  for (const auto& s : qc.sets) {  // the series of issue 16
+    PlotCurve c{s.name.value_or("set"), s.series_t_s, s.series_cpe_m};
+    if (c.x.size() == c.y.size() && c.x.size() >= 2) d.curves.push_back(std::move(c));
   }
-  if (d.curves.empty() && qc.contains("series") && qc["series"].is_object() && qc["series"].contains("t_s")) {
-    const json& ser = qc["series"];  // {"t_s": [...], NAME: [...]}
-    for (auto it = ser.begin(); it != ser.end(); ++it) {
-      PlotCurve c{it.key(), {}, {}};
-      if (it.key() == "t_s" || !numbers(ser["t_s"], c.x) || !numbers(*it, c.y) || c.x.size() != c.y.size() || c.x.size() < 2)
-        continue;
+  if (d.curves.empty() && qc.series_t_s) {  // {"t_s": [...], NAME: [...]}
+    for (const auto& [name, v] : qc.series) {
+      PlotCurve c{name, *qc.series_t_s, v};
+      if (c.x.size() != c.y.size() || c.x.size() < 2) continue;
       d.curves.push_back(std::move(c));
     }
   }
-  if (d.curves.empty() && qc.contains("sets") && qc["sets"].is_array()) {  // older results: the marks only
+  if (d.curves.empty() && !qc.sets.empty()) {  // older results: the marks only
     d.from_marks = true;
-    const double horizon = number_or_nan(qc, "horizon_s");
-    for (const auto& s : qc["sets"]) {
-      if (!s.is_object() || !s.contains("cpe_m_at") || !s["cpe_m_at"].is_object()) continue;
+    const double horizon = figure(qc.horizon_s);
+    for (const auto& s : qc.sets) {
       std::vector<std::pair<double, double>> pts;
-      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
+      for (const auto& [mark, v] : s.cpe_m_at) {
         char* end = nullptr;
-        const double t = std::strtod(it.key().c_str(), &end);
-        if (end && *end == 0 && it->is_number()) pts.emplace_back(t, it->get<double>());
+        const double t = std::strtod(mark.c_str(), &end);
+        if (end && *end == 0 && !std::isnan(v)) pts.emplace_back(t, v);
       }
-      const double fin = number_or_nan(s, "final_cpe_m");
+      const double fin = figure(s.final_cpe_m);
       if (std::isfinite(horizon) && std::isfinite(fin)) pts.emplace_back(horizon, fin);
       std::sort(pts.begin(), pts.end());
-      PlotCurve c{string_or(s, "name", "set"), {}, {}};
+      PlotCurve c{s.name.value_or("set"), {}, {}};
       for (const auto& [t, v] : pts) {
         c.x.push_back(t);
         c.y.push_back(v);
@@ -184,39 +166,39 @@ CpeData cpe_curves(const json& qc) {
 }
 
 // ΔS at the marks of each set, its final and largest value.
-std::string cpe_marks_table(const json& qc, const InMotionRun& r) {
-  if (!qc.contains("sets") || !qc["sets"].is_array() || qc["sets"].empty()) return "";
+std::string cpe_marks_table(const CpeQc& qc, const InMotionRun& r) {
+  if (qc.sets.empty()) return "";
   std::map<double, std::string> marks;  // t → key
-  for (const auto& s : qc["sets"])
-    if (s.is_object() && s.contains("cpe_m_at") && s["cpe_m_at"].is_object())
-      for (auto it = s["cpe_m_at"].begin(); it != s["cpe_m_at"].end(); ++it) {
-        char* end = nullptr;
-        const double t = std::strtod(it.key().c_str(), &end);
-        if (end && *end == 0) marks[t] = it.key();
-      }
+  for (const auto& s : qc.sets)
+    for (const auto& [mark, v] : s.cpe_m_at) {
+      char* end = nullptr;
+      const double t = std::strtod(mark.c_str(), &end);
+      if (end && *end == 0) marks[t] = mark;
+    }
   std::ostringstream h;
   h << "<table class=\"cpe-marks\" id=\"cpe-marks-" << r.id << "\"><tr><th class=\"l\">set</th>";
   for (const auto& [t, key] : marks) h << "<th>ΔS at " << num(t) << " s [m]</th>";
-  h << "<th>final ΔS (at " << num(number_or_nan(qc, "horizon_s")) << " s) [m]</th><th>largest ΔS [m]</th></tr>\n";
-  for (const auto& s : qc["sets"]) {
-    if (!s.is_object()) continue;
-    h << "<tr><td class=\"l\">" << html_escape(string_or(s, "name", "set")) << "</td>";
-    for (const auto& [t, key] : marks)
-      h << "<td>" << num(s.contains("cpe_m_at") ? number_or_nan(s["cpe_m_at"], key.c_str()) : std::nan("")) << "</td>";
-    h << "<td>" << num(number_or_nan(s, "final_cpe_m")) << "</td><td>" << num(number_or_nan(s, "max_cpe_m")) << "</td></tr>\n";
+  h << "<th>final ΔS (at " << num(figure(qc.horizon_s)) << " s) [m]</th><th>largest ΔS [m]</th></tr>\n";
+  for (const auto& s : qc.sets) {
+    h << "<tr><td class=\"l\">" << html_escape(s.name.value_or("set")) << "</td>";
+    for (const auto& [t, key] : marks) {
+      const auto v = s.cpe_m_at.find(key);
+      h << "<td>" << num(v == s.cpe_m_at.end() ? std::nan("") : v->second) << "</td>";
+    }
+    h << "<td>" << num(figure(s.final_cpe_m)) << "</td><td>" << num(figure(s.max_cpe_m)) << "</td></tr>\n";
   }
   h << "</table>\n";
   return h.str();
 }
 
-std::string cpe_part(const json& qc, const DriveResult& res, const InMotionRun& r) {
+std::string cpe_part(const CpeQc& qc, const DriveResult& res, const InMotionRun& r) {
   std::ostringstream h;
   h << "<h4>Circular position error ΔS(t), inertial-only navigation (eq 39)</h4>\n";
-  const double from = number_or_nan(qc, "from_s"), horizon = number_or_nan(qc, "horizon_s");
+  const double from = figure(qc.from_s), horizon = figure(qc.horizon_s);
   std::string ctx = "Inertial-only navigation with each set";
   if (std::isfinite(from)) ctx += " from T0 = " + num(from) + " s";
   if (std::isfinite(horizon)) ctx += " for " + num(horizon) + " s";
-  ctx += "; data: " + string_or(qc, "sample", "not stated whether in- or out-of-sample");
+  ctx += "; data: " + qc.sample.value_or("not stated whether in- or out-of-sample");
   if (res.window_s) ctx += "; the fit used " + num(res.window_s->first) + " – " + num(res.window_s->second) + " s";
   h << "<p class=\"note\">" << html_escape(ctx) << ".</p>\n";
   const CpeData d = cpe_curves(qc);
@@ -242,35 +224,36 @@ std::string cpe_part(const json& qc, const DriveResult& res, const InMotionRun& 
 }
 
 // ---- simulated GNSS outages (GNSS-only drives, qc.outages) ----
-std::string outage_part(const json& qc, const InMotionRun& r) {
-  if (!qc.is_object() || !qc.contains("outages") || !qc["outages"].is_object()) return "";
-  const json& o = qc["outages"];
+double figure(const std::map<std::string, double>& by_set, const std::string& name) {
+  const auto it = by_set.find(name);
+  return it == by_set.end() ? std::nan("") : it->second;
+}
+
+std::string outage_part(const std::optional<OutageQc>& oq, const InMotionRun& r) {
+  if (!oq) return "";
+  const OutageQc& o = *oq;
   std::ostringstream h;
   h << "<h4>Simulated GNSS outages, inertial-only navigation (ΔS against the fixes)</h4>\n";
   std::string ctx = "Each outage navigated inertial-only with each set from the aided filter's state at its start (" +
-                    string_or(o, "aided_by", "aiding not stated") + "); error: " + string_or(o, "error", "not stated") +
-                    "; data: " + string_or(o, "sample", "not stated whether in- or out-of-sample");
+                    o.aided_by.value_or("aiding not stated") + "); error: " + o.error.value_or("not stated") +
+                    "; data: " + o.sample.value_or("not stated whether in- or out-of-sample");
   h << "<p class=\"note\">" << html_escape(ctx) << ".</p>\n";
-  if (o.contains("not_placed") && o["not_placed"].is_array() && !o["not_placed"].empty())
-    h << "<p class=\"note\">" << o["not_placed"].size() << " requested outage(s) not placed: "
-      << html_escape(string_or(o["not_placed"][0], "reason", "reason not stated")) << ".</p>\n";
-  const json sets = o.value("sets", json::array()), list = o.value("outages", json::array());
-  if (!sets.is_array() || sets.empty() || !list.is_array() || list.empty())
-    return h.str() + "<p class=\"muted\">no outage could be placed on this drive</p>\n";
+  if (!o.not_placed.empty())
+    h << "<p class=\"note\">" << o.not_placed.size() << " requested outage(s) not placed: "
+      << html_escape(o.not_placed[0].empty() ? "reason not stated" : o.not_placed[0]) << ".</p>\n";
+  if (o.sets.empty() || o.outages.empty()) return h.str() + "<p class=\"muted\">no outage could be placed on this drive</p>\n";
   // Median of the per-outage maxima against the outage length, and each outage's maximum against its start.
   std::vector<PlotCurve> by_length, by_start;
-  for (const auto& s : sets) {
-    if (!s.is_object()) continue;
-    const std::string name = string_or(s, "name", "set");
-    PlotCurve c{name, {}, {}}, d{name, {}, {}};
-    for (const auto& p : s.value("per_length", json::array())) {
-      c.x.push_back(number_or_nan(p, "length_s"));
-      c.y.push_back(number_or_nan(p, "median_max_m"));
+  for (const auto& s : o.sets) {
+    PlotCurve c{s.name, {}, {}}, d{s.name, {}, {}};
+    for (const auto& p : s.per_length) {
+      c.x.push_back(p.length_s);
+      c.y.push_back(figure(p.median_max_m));
     }
-    for (const auto& e : list) {
-      if (!e.is_object() || !e.contains("max_m")) continue;
-      d.x.push_back(number_or_nan(e, "start_s"));
-      d.y.push_back(number_or_nan(e["max_m"], name.c_str()));
+    for (const auto& e : o.outages) {
+      if (e.max_m.empty()) continue;
+      d.x.push_back(figure(e.start_s));
+      d.y.push_back(figure(e.max_m, s.name));
     }
     by_length.push_back(std::move(c));
     by_start.push_back(std::move(d));
@@ -289,24 +272,20 @@ std::string outage_part(const json& qc, const InMotionRun& r) {
   h << svg_line_plot(by_start, p) << "</div>\n";
   h << "<table class=\"outages\" id=\"outages-" << r.id << "\"><tr><th class=\"l\">set</th><th>length [s]</th><th>outages</th>"
        "<th>median largest [m]</th><th>largest [m]</th><th>median at the end [m]</th><th>largest at the end [m]</th></tr>\n";
-  for (const auto& s : sets)
-    for (const auto& q : s.value("per_length", json::array()))
-      h << "<tr><td class=\"l\">" << html_escape(string_or(s, "name", "set")) << "</td><td>" << num(number_or_nan(q, "length_s"))
-        << "</td><td>" << num(number_or_nan(q, "count")) << "</td><td>" << num(number_or_nan(q, "median_max_m"), 4) << "</td><td>"
-        << num(number_or_nan(q, "max_max_m"), 4) << "</td><td>" << num(number_or_nan(q, "median_end_m"), 4) << "</td><td>"
-        << num(number_or_nan(q, "max_end_m"), 4) << "</td></tr>\n";
+  for (const auto& s : o.sets)
+    for (const auto& q : s.per_length)
+      h << "<tr><td class=\"l\">" << html_escape(s.name) << "</td><td>" << num(q.length_s) << "</td><td>" << num(figure(q.count))
+        << "</td><td>" << num(figure(q.median_max_m), 4) << "</td><td>" << num(figure(q.max_max_m), 4) << "</td><td>"
+        << num(figure(q.median_end_m), 4) << "</td><td>" << num(figure(q.max_end_m), 4) << "</td></tr>\n";
   h << "</table>\n<table class=\"outage-list\" id=\"outage-list-" << r.id
     << "\"><tr><th>start [s]</th><th>length [s]</th><th>fixes</th>";
-  for (const auto& s : sets) h << "<th>" << html_escape(string_or(s, "name", "set")) << ": largest / end [m]</th>";
+  for (const auto& s : o.sets) h << "<th>" << html_escape(s.name) << ": largest / end [m]</th>";
   h << "</tr>\n";
-  for (const auto& e : list) {
-    h << "<tr><td>" << num(number_or_nan(e, "start_s")) << "</td><td>" << num(number_or_nan(e, "length_s")) << "</td><td>"
-      << num(number_or_nan(e, "fixes")) << "</td>";
-    for (const auto& s : sets) {
-      const std::string name = string_or(s, "name", "set");
-      h << "<td>" << num(e.contains("max_m") ? number_or_nan(e["max_m"], name.c_str()) : std::nan(""), 4) << " / "
-        << num(e.contains("end_m") ? number_or_nan(e["end_m"], name.c_str()) : std::nan(""), 4) << "</td>";
-    }
+  for (const auto& e : o.outages) {
+    h << "<tr><td>" << num(figure(e.start_s)) << "</td><td>" << num(figure(e.length_s)) << "</td><td>" << num(figure(e.fixes))
+      << "</td>";
+    for (const auto& s : o.sets)
+      h << "<td>" << num(figure(e.max_m, s.name), 4) << " / " << num(figure(e.end_m, s.name), 4) << "</td>";
     h << "</tr>\n";
   }
   h << "</table>\n";
@@ -333,21 +312,20 @@ NisWords nis_words(qc::NisVerdict v) {
   return {"untested", "muted", "no epochs used"};
 }
 
-std::string consistency_table(const json& cons, const InMotionRun& r) {
+std::string consistency_table(const std::map<std::string, NisConsistency>& nis, const InMotionRun& r) {
   std::ostringstream h;
   h << "<h4>Innovation consistency (normalised innovation squared, NIS)</h4>\n";
-  if (!cons.is_object() || cons.empty()) return h.str() + "<p class=\"muted\">not recorded</p>\n";
+  if (nis.empty()) return h.str() + "<p class=\"muted\">not recorded</p>\n";
   constexpr double kLevel = 0.95;
   h << "<table class=\"consistency\" id=\"consistency-" << r.id
     << "\"><tr><th class=\"l\">observation</th><th>eq</th><th>epochs used</th><th>rejected (NIS &gt; gate)</th><th>forced</th>"
        "<th>mean NIS</th><th>expected</th><th>95 % region of the mean</th><th>within the 95 % bound</th>"
        "<th>95 % region of the fraction</th><th class=\"l\">verdict (two-sided, 95 %)</th></tr>\n";
-  for (auto it = cons.begin(); it != cons.end(); ++it) {
-    const json& c = *it;
-    const double epochs = number_or_nan(c, "epochs"), mean = number_or_nan(c, "mean_nis"),
-                 frac = number_or_nan(c, "fraction_within_95pct"), rejected = number_or_nan(c, "rejected"),
-                 forced = number_or_nan(c, "forced");
-    double expected = number_or_nan(c, "expected_nis");
+  const auto nan_if_absent = [](const auto& v) { return v ? static_cast<double>(*v) : std::nan(""); };
+  for (const auto& [obs, c] : nis) {
+    const double epochs = nan_if_absent(c.epochs), mean = nan_if_absent(c.mean_nis), frac = nan_if_absent(c.fraction_within_95pct),
+                 rejected = nan_if_absent(c.rejected), forced = nan_if_absent(c.forced);
+    double expected = nan_if_absent(c.expected_nis);
     if (!std::isfinite(expected)) expected = 3;  // eqs 13–15: three components each
     const int dof = static_cast<int>(std::lround(expected));
     std::string verdict = "not testable: epochs or mean NIS not recorded", cls = "muted", tag = "untested";
@@ -365,8 +343,8 @@ std::string consistency_table(const json& cons, const InMotionRun& r) {
     if (std::isfinite(rejected) && rejected > 0) verdict += "; " + num(rejected) + " epoch(s) rejected, not in the mean";
     if (std::isfinite(forced) && forced > 0) verdict += "; the filter lost track " + num(forced) + " time(s)";
     const bool tested = t.mean != qc::NisVerdict::no_data;
-    h << "<tr data-verdict=\"" << tag << "\"><td class=\"l\">" << html_escape(it.key()) << "</td><td>"
-      << html_escape(string_or(c, "equation", "–")) << "</td><td>" << num(epochs, 6) << "</td><td>" << num(rejected, 6)
+    h << "<tr data-verdict=\"" << tag << "\"><td class=\"l\">" << html_escape(obs) << "</td><td>"
+      << html_escape(c.equation.value_or("–")) << "</td><td>" << num(epochs, 6) << "</td><td>" << num(rejected, 6)
       << "</td><td>" << num(forced, 6) << "</td><td>" << num(mean, 4) << "</td><td>" << num(expected, 3) << "</td><td>"
       << (tested ? num(t.mean_lo, 4) + " – " + num(t.mean_hi, 4) : "–") << "</td><td>" << num(frac, 4) << "</td><td>"
       << (tested ? num(t.frac_lo, 4) + " – " + num(t.frac_hi, 4) : "–") << "</td><td class=\"l " << cls << "\">"
@@ -386,14 +364,13 @@ std::string inmotion_section(Store& store, const InMotionRun& r, const Coefficie
                              const std::vector<CoefficientSetRecord>& sets) {
   const StoredResult stored = read_stored_result(r);
   const DriveResult& res = stored.res;
-  // The free-form sections as written ("qc" of fit drive's QC and outage QC, "consistency").
-  const json qc = res.qc.is_null() ? json::object() : res.qc, cons = res.consistency.is_null() ? json::object() : res.consistency;
+  // The typed QC sections of the codec: ΔS (res.cpe), outage QC (res.outages), consistency (res.nis).
   std::ostringstream h;
   h << "<h3>In-motion run " << r.id << " → set " << set.id << " (" << to_string(set.source)
     << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
-    << run_table(r, res) << stage_table(r, set, sets, stored) << (qc.contains("outages") && !qc.contains("sets") ? std::string() : cpe_part(qc, res, r))  // GNSS-only: outages only
-    << outage_part(qc, r) << "<h4>QC metrics</h4>\n"
-    << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(cons, r);
+    << run_table(r, res) << stage_table(r, set, sets, stored) << (res.outages && res.cpe.sets.empty() ? std::string() : cpe_part(res.cpe, res, r))  // GNSS-only: outages only
+    << outage_part(res.outages, r) << "<h4>QC metrics</h4>\n"
+    << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(res.nis, r);
   return h.str();
 }
 

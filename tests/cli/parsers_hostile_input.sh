@@ -103,11 +103,14 @@ def bad(name, edit):
 bad("r-sha.json", lambda k: k["recording"].__setitem__("sha256", "abc"))
 bad("r-mount.json", lambda k: k.__setitem__("mounting_rpy_deg", [1, 2]))
 bad("r-bias.json", lambda k: k["coefficients"]["gyro"]["bias"].__setitem__(0, "x"))
+bad("r-nis.json", lambda k: k.__setitem__("consistency", {"position": {"epochs": 10, "mean_nis": "x"}}))
+bad("r-outage.json", lambda k: k.__setitem__("qc", {"outages": {"sets": [{"name": "none", "per_length": [{"length_s": "15"}]}]}}))
 text = open("r.json").read(); open("r-cut.json", "w").write(text[: len(text) // 2])
 PY
 "$CALBENCH" db init --db h.db > /dev/null
 for f in sha:": 'recording.sha256': expected 64 hexadecimal digits" mount:": 'mounting_rpy_deg': expected an array of 3 numbers" \
-         bias:": 'coefficients.gyro.bias\[0\]': expected a number" cut:":[0-9]*: invalid JSON (truncated or malformed)"; do
+         bias:": 'coefficients.gyro.bias\[0\]': expected a number" nis:": 'consistency.position.mean_nis': expected a number" \
+         outage:": 'qc.outages.sets\[0\].per_length\[0\].length_s': expected a number" cut:":[0-9]*: invalid JSON (truncated or malformed)"; do
   file=r-${f%%:*}.json pat="${f#*:}"
   expect2 "$file$pat" "$CALBENCH" fit drive drv --coeffs $file --out r2.json
   [ ! -e r2.json ] || fail "fit drive wrote a result for $file"

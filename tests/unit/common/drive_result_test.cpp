@@ -65,8 +65,16 @@ json sample() {
           {"mounting_rpy_deg", {{"value", {0.1, -0.2, 90.3}}, {"sigma", {0.01, 0.02, 0.5}}, {"nominal", {0.0, 0.0, 90.0}},
                                 {"lever_arm_m", {-1.0, 0.2, -0.3}}}},
           {"adaptive_noise", {{"enabled", true}, {"scale_max", 7.8e5}}},
-          {"consistency", {{"position", {{"epochs", 120}, {"mean_nis", 3.4}}}}},
-          {"qc", {{"sample", "in-sample (outages inside the data the fit used)"}, {"outages", {{"sets", json::array()}}}}}};
+          {"consistency", {{"position", {{"epochs", 120}, {"mean_nis", 3.4}}},
+                           {"nhc", {{"equation", "obs_nhc.cpp"}, {"epochs", 900}, {"rejected", 4}, {"forced", 0},
+                                    {"mean_nis", 1.9}, {"expected_nis", 2.0}, {"fraction_within_95pct", 0.96}}}}},
+          {"qc", json::parse(R"J({"sample": "in-sample (outages inside the data the fit used)",
+                  "outages": {"sample": "in-sample (outages inside the data the fit used)", "fix_sigma_h_m": 0.02,
+                              "not_placed": [{"length_s": 60.0, "reason": "too short"}],
+                              "sets": [{"name": "none", "per_length": [{"length_s": 15.0, "count": 2, "median_max_m": 3.5}]},
+                                       {"name": "in-motion", "per_length": [{"length_s": 15.0, "median_max_m": 1.25}]}],
+                              "outages": [{"start_s": 40.5, "length_s": 15.0, "fixes": 15,
+                                           "max_m": {"none": 3.5, "in-motion": 1.25}, "end_m": {"none": 3.0}}]}})J")}};
 }
 
 TEST(DriveResultCodec, AResultAsFitDriveWritesItPassesAReadAndAWriteUnchanged) {
@@ -103,8 +111,118 @@ TEST(DriveResultCodec, TheTypedPartsHoldWhatTheReadersUse) {
   EXPECT_EQ(r.priors_device_class, "ADIS16488A");
   EXPECT_EQ(r.extra.at("adaptive_noise").at("scale_max"), 7.8e5);  // free-form sections kept
   EXPECT_FALSE(r.extra.contains("coefficients"));
+  ASSERT_EQ(r.nis.size(), 2u);  // consistency, by observation
+  EXPECT_EQ(r.nis.at("position").epochs.value_or(-1), 120);
+  EXPECT_FALSE(r.nis.at("position").expected_nis);
+  EXPECT_EQ(r.nis.at("nhc").equation.value_or(""), "obs_nhc.cpp");
+  EXPECT_EQ(r.nis.at("nhc").rejected.value_or(-1), 4);
+  EXPECT_DOUBLE_EQ(r.nis.at("nhc").fraction_within_95pct.value_or(0), 0.96);
+  ASSERT_TRUE(r.outages);  // qc.outages
+  EXPECT_DOUBLE_EQ(r.outages->fix_sigma_h_m.value_or(0), 0.02);
+  ASSERT_EQ(r.outages->not_placed.size(), 1u);
+  EXPECT_EQ(r.outages->not_placed[0], "too short");
+  ASSERT_EQ(r.outages->sets.size(), 2u);
+  EXPECT_EQ(r.outages->sets[1].name, "in-motion");
+  EXPECT_DOUBLE_EQ(r.outages->sets[0].per_length.at(0).median_max_m.value_or(0), 3.5);
+  EXPECT_FALSE(r.outages->sets[1].per_length.at(0).count);
+  ASSERT_EQ(r.outages->outages.size(), 1u);
+  EXPECT_DOUBLE_EQ(r.outages->outages[0].max_m.at("in-motion"), 1.25);
+  EXPECT_EQ(r.outages->outages[0].end_m.count("in-motion"), 0u);
   EXPECT_TRUE(is_drive_result(sample()));
   EXPECT_FALSE(is_drive_result(sample()["coefficients"]));
+}
+
+std::string refused_field(const json& j);  // below
+
+// qc of the ΔS QC (a drive with a reference): the sets with their marks and series, and the older
+// "series" form; a null number (NaN when written) reads as NaN.
+TEST(DriveResultCodec, TheDeltaSQcIsTyped) {
+  json j = sample();
+  j["qc"] = json::parse(R"J({"from_s": 100.0, "horizon_s": 60.0, "sample": "out-of-sample (after the fit window)",
+    "sets": [{"name": "input", "final_cpe_m": 12.5, "max_cpe_m": 14.0, "cpe_m_at": {"10": 0.5, "30": null},
+              "cpe_series": {"t_s": [0.0, 1.0, 2.0], "cpe_m": [0.0, 0.25, null]}},
+             {"name": "in-motion", "final_cpe_m": 2.5}],
+    "series": {"t_s": [0.0, 1.0], "input": [0.0, 0.5]}})J");
+  const DriveResult r = drive_result_from_json(j, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), j);  // written as given
+  EXPECT_DOUBLE_EQ(r.cpe.from_s.value_or(0), 100.0);
+  EXPECT_DOUBLE_EQ(r.cpe.horizon_s.value_or(0), 60.0);
+  EXPECT_EQ(r.cpe.sample.value_or(""), "out-of-sample (after the fit window)");
+  ASSERT_EQ(r.cpe.sets.size(), 2u);
+  EXPECT_EQ(r.cpe.sets[0].name.value_or(""), "input");
+  EXPECT_DOUBLE_EQ(r.cpe.sets[0].cpe_m_at.at("10"), 0.5);
+  EXPECT_TRUE(std::isnan(r.cpe.sets[0].cpe_m_at.at("30")));
+  ASSERT_EQ(r.cpe.sets[0].series_cpe_m.size(), 3u);
+  EXPECT_DOUBLE_EQ(r.cpe.sets[0].series_cpe_m[1], 0.25);
+  EXPECT_TRUE(std::isnan(r.cpe.sets[0].series_cpe_m[2]));
+  EXPECT_FALSE(r.cpe.sets[1].max_cpe_m);
+  EXPECT_TRUE(r.cpe.sets[1].series_t_s.empty());
+  ASSERT_TRUE(r.cpe.series_t_s);
+  EXPECT_DOUBLE_EQ(r.cpe.series.at("input").at(1), 0.5);
+  EXPECT_FALSE(r.outages);
+  const auto refused = [&](auto edit) {
+    json k = j;
+    edit(k);
+    return refused_field(k);
+  };
+  EXPECT_EQ(refused([](json& k) { k["qc"]["horizon_s"] = "60"; }), "qc.horizon_s");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"] = {{"name", "input"}}; }), "qc.sets");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"][1]["final_cpe_m"] = "2.5"; }), "qc.sets[1].final_cpe_m");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"][0]["cpe_m_at"]["10"] = "x"; }), "qc.sets[0].cpe_m_at.10");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["sets"][0]["cpe_series"]["t_s"][1] = true; }), "qc.sets[0].cpe_series.t_s[1]");
+  EXPECT_EQ(refused([](json& k) { k["qc"]["series"]["input"] = 3; }), "qc.series.input");
+}
+
+// The antenna blocks and the adaptive noise, read from the sections kept as written.
+TEST(DriveResultCodec, TheEstimatesTheSummaryPrintsAreTyped) {
+  json j = sample();
+  j["lever_arm_m"] = {{"value", {-1.0, 0.25, -0.25}}, {"sigma", {0.05, 0.02, 0.1}}, {"prior", 0.1}, {"nominal", {-1.0, 0.2, -0.3}},
+                      {"observable", {false, true, false}}, {"how", "text"}};
+  j["time_offset_s"] = {{"value", 7e-5}, {"sigma", 3.5e-3}, {"prior", 0.02}, {"observable", true}};
+  j["adaptive_noise"] = {{"enabled", true}, {"scale_max", 6.5e5}, {"scale_end", 3.5e5}, {"increases", 6}};
+  const DriveResult r = drive_result_from_json(j, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), j);
+  ASSERT_TRUE(r.lever_arm);
+  EXPECT_DOUBLE_EQ(r.lever_arm->value(1), 0.25);
+  EXPECT_DOUBLE_EQ(r.lever_arm->nominal(2), -0.3);
+  EXPECT_TRUE(r.lever_arm->observable[1]);
+  EXPECT_FALSE(r.lever_arm->observable[2]);
+  ASSERT_TRUE(r.time_offset);
+  EXPECT_DOUBLE_EQ(r.time_offset->sigma, 3.5e-3);
+  ASSERT_TRUE(r.adaptive_noise);
+  EXPECT_EQ(r.adaptive_noise->increases, 6);
+  EXPECT_DOUBLE_EQ(r.adaptive_noise->scale_end, 3.5e5);
+  EXPECT_FALSE(drive_result_from_json(sample(), "R.json").lever_arm);  // absent: not estimated
+  const auto refused = [&](auto edit) {
+    json k = j;
+    edit(k);
+    return refused_field(k);
+  };
+  EXPECT_EQ(refused([](json& k) { k["lever_arm_m"]["value"] = {1.0, 2.0}; }), "lever_arm_m.value");
+  EXPECT_EQ(refused([](json& k) { k["lever_arm_m"]["observable"][2] = "no"; }), "lever_arm_m.observable[2]");
+  EXPECT_EQ(refused([](json& k) { k["lever_arm_m"].erase("prior"); }), "lever_arm_m.prior");
+  EXPECT_EQ(refused([](json& k) { k["time_offset_s"]["sigma"] = "3 ms"; }), "time_offset_s.sigma");
+  EXPECT_EQ(refused([](json& k) { k["adaptive_noise"]["increases"] = -1; }), "adaptive_noise.increases");
+  EXPECT_EQ(refused([](json& k) { k["adaptive_noise"]["scale_max"] = "big"; }), "adaptive_noise.scale_max");
+}
+
+TEST(DriveResultCodec, TheEffectsTheFitAppliedAreTyped) {
+  json j = sample();
+  j["effects"] = {{"source", "in memory"}, {"applied", {"lever_arm", "time_offset"}},
+                  {"ignored", {{{"key", "misalignment"}, {"reason", "bench term"}}}}, {"time_offset_s", 0.004}};
+  const DriveResult r = drive_result_from_json(j, "R.json");
+  EXPECT_EQ(drive_result_to_json(r), j);
+  ASSERT_TRUE(r.effects);
+  EXPECT_EQ(r.effects->applied, (std::vector<std::string>{"lever_arm", "time_offset"}));
+  ASSERT_EQ(r.effects->ignored.size(), 1u);
+  EXPECT_EQ(r.effects->ignored[0].second, "bench term");
+  EXPECT_DOUBLE_EQ(r.effects->time_offset_s.value_or(0), 0.004);
+  json k = j;
+  k["effects"]["applied"][1] = 3;
+  EXPECT_EQ(refused_field(k), "effects.applied[1]");
+  k = j;
+  k["effects"]["ignored"][0].erase("reason");
+  EXPECT_EQ(refused_field(k), "effects.ignored[0].reason");
 }
 
 TEST(DriveResultCodec, ReadsTheOlderFormsTheStoreHasAlwaysTaken) {
@@ -168,6 +286,21 @@ TEST(DriveResultCodec, MalformedInputIsRefusedNamingTheFileAndTheKey) {
   EXPECT_EQ(refused_field(with([](json& j) { j["priors"] = "data-sheet"; })), "priors");
   EXPECT_EQ(refused_field(with([](json& j) { j["consistency"] = 3; })), "consistency");
   EXPECT_EQ(refused_field(with([](json& j) { j["qc"] = "fine"; })), "qc");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"] = 2; })), "consistency.nhc");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"]["mean_nis"] = "1.9"; })), "consistency.nhc.mean_nis");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"]["epochs"] = 9.5; })), "consistency.nhc.epochs");
+  EXPECT_EQ(refused_field(with([](json& j) { j["consistency"]["nhc"]["equation"] = 13; })), "consistency.nhc.equation");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"] = {1, 2}; })), "qc.outages");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sample"] = 1; })), "qc.outages.sample");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["fix_sigma_h_m"] = "2 cm"; })), "qc.outages.fix_sigma_h_m");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sets"][1].erase("name"); })), "qc.outages.sets[1].name");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sets"][0]["per_length"] = 3; })),
+            "qc.outages.sets[0].per_length");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["sets"][0]["per_length"][0]["median_max_m"] = true; })),
+            "qc.outages.sets[0].per_length[0].median_max_m");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["outages"][0]["max_m"]["none"] = "far"; })),
+            "qc.outages.outages[0].max_m.none");
+  EXPECT_EQ(refused_field(with([](json& j) { j["qc"]["outages"]["not_placed"] = "none"; })), "qc.outages.not_placed");
   EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"] = "bench"; })), "determined_by");
   EXPECT_EQ(refused_field(with([](json& j) { j["determined_by"]["coefficients"]["gyro.bias.x"]["stage"] = "factory"; })),
             "determined_by.coefficients.gyro.bias.x.stage");
