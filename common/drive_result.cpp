@@ -220,6 +220,7 @@ void read_typed_sections(DriveResult& r, const std::string& f) {
     e.value = jvec3(jreq(*l, "value", f, k), f, k + ".value");
     e.sigma = jvec3(jreq(*l, "sigma", f, k), f, k + ".sigma");
     e.nominal = jvec3(jreq(*l, "nominal", f, k), f, k + ".nominal");
+    e.correction = jvec3(jreq(*l, "correction", f, k), f, k + ".correction");
     e.prior = jnum(jreq(*l, "prior", f, k), f, k + ".prior");
     const json& o = jreq(*l, "observable", f, k);
     if (!o.is_array() || o.size() != 3) throw InputError(f, 0, k + ".observable", "expected an array of 3 booleans");

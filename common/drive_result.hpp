@@ -107,6 +107,7 @@ struct CpeQc {
 // estimate, its σ and prior σ; observable when σ < prior / 2.
 struct LeverArmEstimate {
   Vec3 value = Vec3::Zero(), sigma = Vec3::Zero(), nominal = Vec3::Zero();  // m, reference body axes
+  Vec3 correction = Vec3::Zero();  // the estimated state, value - nominal as written
   double prior = 0;
   std::array<bool, 3> observable{};
 };

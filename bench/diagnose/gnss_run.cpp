@@ -41,7 +41,7 @@ struct CandidateRow {
   bool needs_coeffs;
   void (*configure)(FitDriveArgs& a, bool on);
   // Value (SI, the registry's convention) and σ per parameter (nullptr: a profiled candidate).
-  void (*read)(const nlohmann::json& result, const CoefficientSet& given, std::vector<double>& v, std::vector<double>& s);
+  void (*read)(const DriveResult& result, const CoefficientSet& given, std::vector<double>& v, std::vector<double>& s);
   // A profiled candidate (no filter state): the first `nparams` parameters of `term`, compensated on
   // the IMU samples (the coefficients' catalogue keys), profile_quadratic with step `step`.
   bool profiled = false;
@@ -62,12 +62,12 @@ void scale_configure(FitDriveArgs& a, bool on) {
   (Sensor == 0 ? a.allowance.gyro_scale_ppm : a.allowance.accel_scale_ppm) = on ? kScaleAllowancePpm : 0.0;
 }
 template <int Sensor>
-void scale_read(const nlohmann::json& r, const CoefficientSet& given, std::vector<double>& v, std::vector<double>& s) {
-  const char* k = Sensor == 0 ? "gyro" : "accel";
+void scale_read(const DriveResult& r, const CoefficientSet& given, std::vector<double>& v, std::vector<double>& s) {
   const TriadErrors& g = Sensor == 0 ? given.errors.gyro : given.errors.accel;
+  const TriadErrors& e = Sensor == 0 ? r.coefficients.errors.gyro : r.coefficients.errors.accel;
   for (int i = 0; i < 3; ++i) {
-    v.push_back(r["coefficients"][k]["M"][i][i].get<double>() - g.M(i, i));
-    s.push_back(r["coefficients"][k]["sigma_M"][i][i].get<double>());
+    v.push_back(e.M(i, i) - g.M(i, i));
+    s.push_back(e.sigma_M(i, i));
   }
 }
 
@@ -80,9 +80,9 @@ const std::vector<CandidateRow>& candidate_rows() {
        },
        // The block's δt: the fix stamped t describes the antenna at t − δt; relative to the fixes the
        // IMU is then late by τ = −δt (the registry's time_offset: the IMU sample stamped t saw t − τ).
-       [](const nlohmann::json& r, const CoefficientSet&, std::vector<double>& v, std::vector<double>& s) {
-         v.push_back(-r["time_offset_s"]["value"].get<double>());
-         s.push_back(r["time_offset_s"]["sigma"].get<double>());
+       [](const DriveResult& r, const CoefficientSet&, std::vector<double>& v, std::vector<double>& s) {
+         v.push_back(-r.time_offset.value().value);
+         s.push_back(r.time_offset.value().sigma);
        }},
       {"lever_arm", {EffectId::lever_arm, 1, -1}, 3, false,
        [](FitDriveArgs& a, bool on) {
@@ -90,10 +90,10 @@ const std::vector<CandidateRow>& candidate_rows() {
          a.lever_arm_sigma = kLeverSigma;
        },
        // Where the MEMS sits relative to meta.json's lever arm (the antenna is the reference point).
-       [](const nlohmann::json& r, const CoefficientSet&, std::vector<double>& v, std::vector<double>& s) {
+       [](const DriveResult& r, const CoefficientSet&, std::vector<double>& v, std::vector<double>& s) {
          for (int i = 0; i < 3; ++i) {
-           v.push_back(r["lever_arm_m"]["correction"][i].get<double>());
-           s.push_back(r["lever_arm_m"]["sigma"][i].get<double>());
+           v.push_back(r.lever_arm.value().correction(i));
+           s.push_back(r.lever_arm.value().sigma(i));
          }
        }},
       {"scale_factor gyro", {EffectId::scale_factor, 0, -1}, 3, true, scale_configure<0>, scale_read<0>},
@@ -106,7 +106,7 @@ const std::vector<CandidateRow>& candidate_rows() {
 }
 
 struct FilterRun {
-  nlohmann::json result;
+  DriveResult result;
   std::vector<InnovationSample> x[2];  // position, velocity
 };
 
@@ -175,7 +175,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
       if (type < 2) fr.x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
     };
-    fr.result = drive_result_to_json(fit_drive(a));  // the result as RESULT.json holds it (common/drive_result)
+    fr.result = fit_drive(a);
     return runs[key] = std::move(fr);
   };
   auto deviance_of = [](const FilterRun& fr) { return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]); };

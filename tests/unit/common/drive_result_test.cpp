@@ -177,7 +177,7 @@ TEST(DriveResultCodec, TheDeltaSQcIsTyped) {
 TEST(DriveResultCodec, TheEstimatesTheSummaryPrintsAreTyped) {
   json j = sample();
   j["lever_arm_m"] = {{"value", {-1.0, 0.25, -0.25}}, {"sigma", {0.05, 0.02, 0.1}}, {"prior", 0.1}, {"nominal", {-1.0, 0.2, -0.3}},
-                      {"observable", {false, true, false}}, {"how", "text"}};
+                      {"correction", {0.0, 0.05, 0.05}}, {"observable", {false, true, false}}, {"how", "text"}};
   j["time_offset_s"] = {{"value", 7e-5}, {"sigma", 3.5e-3}, {"prior", 0.02}, {"observable", true}};
   j["adaptive_noise"] = {{"enabled", true}, {"scale_max", 6.5e5}, {"scale_end", 3.5e5}, {"increases", 6}};
   const DriveResult r = drive_result_from_json(j, "R.json");
