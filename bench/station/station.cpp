@@ -30,9 +30,7 @@
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"
-#include "devices/ft232h.hpp"
-#include "devices/imu_uri.hpp"
-#include "devices/mcp2210.hpp"
+#include "devices/imu_open.hpp"
 #include "devices/table_client.hpp"
 #include "devices/table_emulator.hpp"
 
@@ -44,23 +42,6 @@ constexpr int kOuter = 0, kInner = 1;
 struct Aborted : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
-
-std::unique_ptr<SpiBus> open_imu(const std::string& uri) {
-  // KIND[:SERIAL][#csN], or provision's form KIND://[SERIAL].
-  const ImuUri u = parse_imu_uri(uri);  // checked when the fixture was read
-  if (u.kind == "ft232h") {
-    if (u.cs != 0)  // the bus drives ADBUS3 only (devices/ft232h.hpp)
-      throw std::invalid_argument("'" + uri + "': the FT232H bus drives chip select cs0 (ADBUS3) only");
-    auto bus = std::make_unique<Ft232hBus>(open_libftdi(mpsse::kVid, mpsse::kPid, u.serial));
-    bus->configure();
-    return bus;
-  }
-  Mcp2210Config mc;
-  mc.cs_pin = u.cs;
-  auto bus = std::make_unique<Mcp2210Bus>(open_hidapi(mcp2210::kVid, mcp2210::kPid, u.serial), mc);
-  bus->configure();
-  return bus;
-}
 
 std::string iso_utc(std::chrono::system_clock::time_point tp) {
   const std::time_t t = std::chrono::system_clock::to_time_t(tp);
@@ -78,11 +59,9 @@ struct Unit {
   bool at_centre = true;           // identity pose at the centre: the centre's kinematics as they are
   fs::path out, rec_dir;
   std::uint64_t seed = 1;
-  ImuInjections inj;
-  bool flags_applied = false;
+  EmuFaults inj;                    // emulated: its injected faults
   std::shared_ptr<VirtualClock> clock;  // its own bus time (emulated, several units: one bridge each)
   std::unique_ptr<SpiBus> bus;
-  Adis16488aEmulator* emu = nullptr;
   std::unique_ptr<Adis16488a> imu;
   SensorErrors truth;
   std::unique_ptr<RecordingWriter> writer;
@@ -154,11 +133,6 @@ class Station {
                                      const std::string& recording) const;
   void check_stop() {
     if (stop_) throw Aborted("interrupted (Ctrl-C)");
-    if (o_.inject.table_kill_at_s >= 0 && table_emu_ && table_emu_->port() && (clock_ || wall_clock_) &&
-        now() >= o_.inject.table_kill_at_s && !killed_) {
-      killed_ = true;
-      table_emu_->stop();  // the table controller dies
-    }
   }
 
   const Options& o_;
@@ -178,7 +152,6 @@ class Station {
   int mount_ = 2;                         // the fixture's current mount
   double last_poll_ = -1e9;
   AxisStatus st_[2];
-  bool killed_ = false;
   // The step being recorded: the reference the samples get.
   double rec_outer_ = 0, rec_inner0_ = 0, rec_rate_ = 0, rec_t_poll_ = 0, rec_dwell_ = 0;
   int rec_step_ = -1, rec_mount_ = 2;
@@ -204,17 +177,8 @@ void Station::make_units() {
   if (fixture_mode_ && !o_.imu_uri.empty())
     throw std::invalid_argument("--imu: the fixture names each slot's IMU (" + (ffile.empty() ? "--units" : ffile.string()) + ")");
   if (!fixture_mode_ && !o_.emulated && o_.imu_uri.empty()) throw std::invalid_argument("--imu is required without --emulated");
-  // Bus arbitration: one bridge per unit (each reads its data-ready stream at the full output rate).
-  // Units on one bridge's chip selects would share its time: not built; refused before anything moves.
-  if (!o_.emulated) {
-    std::map<std::string, std::string> bridges;
-    for (const auto& s : fixture_.slots)
-      if (const auto [it, fresh] = bridges.emplace(s.uri.bridge(), s.name); !fresh)
-        throw InputError(fixture_.file, s.line, "imu",
-                         "slots '" + it->second + "' and '" + s.name + "' share the bridge " + s.uri.kind +
-                             (s.uri.serial.empty() ? "" : ":" + s.uri.serial) +
-                             ": time-slicing one bridge between units is not supported; give each unit its own bridge");
-  }
+  // Bus arbitration (one bridge per unit) and the slots' IMUs were checked with the fixture
+  // (bench/station/fixture.hpp), the same for an emulated and a real run.
   for (const auto& [name, _] : o_.inject.slot) {
     bool found = false;
     for (const auto& s : fixture_.slots) found = found || s.name == name;
@@ -303,6 +267,7 @@ void Station::setup() {
     TableEmulatorConfig tc;
     tc.watchdog_s = 0.5;
     tc.max_rate = std::max(tc.max_rate, plan_.table.max_rate * 1.2);
+    tc.kill_at_s = o_.inject.table_kill_at_s;  // injected: the controller dies at this emulated time
     table_emu_ = std::make_unique<TableEmulator>(tc, clock_);
     table_emu_->start();
     table_uri = table_emu_->uri();
@@ -319,6 +284,10 @@ void Station::setup() {
       Adis16488aEmulatorConfig ic;
       ic.seed = u->seed;
       ic.serial = static_cast<std::uint16_t>(1000 + u->seed % 60000);
+      // Injected faults (--inject): a wrong part, a failing self-test, or a unit that fails in service
+      // (error flags, lost samples: once it has passed its self-test).
+      ic.faults = u->inj;
+      ic.faults.after_self_test = true;
       std::shared_ptr<EmuClock> imu_clock = wall_clock_ ? std::shared_ptr<EmuClock>(wall_clock_)
                                             : u->clock  ? std::shared_ptr<EmuClock>(u->clock)
                                                         : std::shared_ptr<EmuClock>(clock_);
@@ -337,12 +306,9 @@ void Station::setup() {
             return EmuTruth{k.w_ib_b, k.f_b};
           },
           u->truth, adis16488a_noise(), ic);
-      if (u->inj.prod_id) emu->faults().prod_id = *u->inj.prod_id;
-      emu->faults().self_test_diag = u->inj.self_test_diag;
-      u->emu = emu.get();
       u->bus = std::move(emu);
     } else {
-      u->bus = open_imu(u->slot.imu);
+      u->bus = open_imu(u->slot.uri);
     }
   }
   table_ = std::make_unique<TableClient>(table_at);
@@ -492,12 +458,6 @@ void Station::pump() {
       if (!o->failed) slowest = std::min(slowest, o->bus->now());
     if (std::isfinite(slowest)) clock_->wait_until(slowest);
   }
-  // Error flags from an emulated time on (a unit failing mid-run).
-  for (auto& o : units_)
-    if (o->emu && o->inj.flags_from_s >= 0 && !o->flags_applied && now() >= o->inj.flags_from_s) {
-      o->emu->faults().sys_e_flag = o->inj.sys_e_flag;
-      o->flags_applied = true;
-    }
   if (live_units() == 0) throw Aborted("every unit failed");
 }
 
@@ -792,8 +752,6 @@ Result Station::run() {
                                       {"offset_mm", to_json(Vec3(u.slot.pose.r_f * 1e3))}});
       if (fixture_mode_ && !u.slot.imu.empty()) meta.extra["station"]["imu"] = u.slot.imu;
       u.writer = std::make_unique<RecordingWriter>(u.rec_dir, meta, ImuForm::rates, true, true);
-      if (u.emu && u.inj.skip_every) u.emu->faults().skip_every = u.inj.skip_every;
-      if (u.emu && u.inj.flags_from_s < 0) u.emu->faults().sys_e_flag = u.inj.sys_e_flag;
     }
     start_readers();
 
