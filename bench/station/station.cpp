@@ -26,6 +26,7 @@
 #include "common/imu_error_sim.hpp"
 #include "common/json_fields.hpp"
 #include "common/units.hpp"
+#include "db/access_check.hpp"
 #include "db/journal.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
@@ -223,9 +224,21 @@ void Station::setup() {
   // plan costs a table cycle); nothing is written yet: a missing database is created at the end.
   check_output_folder(o_.out_dir);
   if (!o_.db.empty()) {
-    // A central store is not contacted here: the run never waits for the network (the journal
-    // takes the run, and forwards it at the end when the server answers).
     db::check_target(o_.db);
+    // A central store: its credentials, schema version and the role's privileges are checked before
+    // anything moves (found at the end, they cost a table cycle). A server that does not answer is the
+    // offline case: the journal takes the run, said here, and forwards it at the end if it answers then.
+    if (db::is_postgres_uri(o_.db)) {
+      const db::StationAccess acc = db::check_station_access(o_.db);
+      if (acc.state == db::StationAccess::State::refused)
+        throw InputError("--db", 0, "", acc.reason);
+      if (acc.state == db::StationAccess::State::unreachable)
+        log_ << "central store not reached at start (" << acc.reason << "): the run goes to the journal "
+             << store_path() << ", forwarded at the end if the server answers then, else by `calbench db sync`\n";
+      else
+        log_ << "central store " << db::redact_uri(o_.db) << ": role " << acc.role
+             << " may store the run (schema current)\n";
+    }
     const std::string local = store_path();
     if (fs::exists(local)) db::Store check(local);  // a calbench database (named InputError otherwise)
     else check_output_path(local);
