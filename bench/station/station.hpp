@@ -56,6 +56,9 @@ struct Result {
   nlohmann::json summary;
 };
 
+// Code: this file's station.cpp (setup, fit and store, the abort path), step_runner.* (the plan's
+// steps), run_summary.* (the message and --json summary), unit.hpp (one unit), fixture.* (the slots,
+// checked); devices/imu_open.hpp opens the IMUs.
 // Runs the whole station. Never throws for device/link problems: they end in Result with exit code
 // 1 after the table was told to stop. `stop` is polled (Ctrl-C).
 Result run(const Options& opt, std::ostream& log, const std::atomic<bool>& stop);
