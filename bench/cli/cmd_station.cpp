@@ -183,7 +183,9 @@ const bool registered = add_command(20, [](CLI::App& app) {
                 "emulated clock faster than real time");
   run->add_option("--db", a->o.db,
                   "also store the bench run and its coefficient set (draft) in this database: a SQLite file or a "
-                  "postgresql:// URI (central store; written to --journal first, forwarded when the server answers)");
+                  "postgresql:// URI (central store: its login, schema version and the role's privileges are checked before "
+                  "the table moves, a refusal is exit 2; written to --journal first, forwarded when the server answers, "
+                  "which it need not at start)");
   run->add_option("--journal", a->o.journal,
                   "with a PostgreSQL --db: the station's local journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   run->add_option("--out", a->out,
