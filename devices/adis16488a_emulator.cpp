@@ -16,7 +16,7 @@ std::int64_t clamp32(double v) {
 
 Adis16488aEmulator::Adis16488aEmulator(std::shared_ptr<EmuClock> clock, EmuPhysics physics, const SensorErrors& truth,
                                        const NoiseSpec& noise, Adis16488aEmulatorConfig cfg)
-    : clock_(std::move(clock)), physics_(std::move(physics)), sim_(truth, noise, cfg.seed), cfg_(cfg) {
+    : clock_(std::move(clock)), physics_(std::move(physics)), sim_(truth, noise, cfg.seed), cfg_(cfg), faults_(cfg.faults) {
   reset_registers(false);
   for (const auto& r : adis::registers())
     if (r.flash_backed)
@@ -81,7 +81,7 @@ void Adis16488aEmulator::produce(double t) {
       static_cast<std::int16_t>(std::lround((cfg_.temperature_c - 25.0) / adis::reg("TEMP_OUT").scale)));
   ++seq_;
   ram_[index(0, 0x06)] = seq_;
-  ram_[index(0, 0x08)] = static_cast<std::uint16_t>(faults_.sys_e_flag | sticky_flags_ | (over ? adis::sys_e::over_range : 0));
+  ram_[index(0, 0x08)] = static_cast<std::uint16_t>(fault_flags(t) | sticky_flags_ | (over ? adis::sys_e::over_range : 0));
   unread_ = true;
   last_dr_ = t;
   ++produced_;
@@ -93,7 +93,7 @@ void Adis16488aEmulator::advance_to(double t) {
     const double tt = next_tick_;
     next_tick_ += period();
     if (tt < busy_until_) continue;  // no output while a command runs
-    if (faults_.skip_every > 0 && tick_ % static_cast<std::uint64_t>(faults_.skip_every) == 0) {
+    if (skip_every() > 0 && tick_ % static_cast<std::uint64_t>(skip_every()) == 0) {
       ++seq_;  // the part counted the sample but raised no data-ready
       continue;
     }
@@ -110,7 +110,7 @@ bool Adis16488aEmulator::wait_data_ready(double timeout_s) {
   const double p = period();
   for (int guard = 0; guard < 1'000'000; ++guard, ++k, te += p) {
     if (te < busy_until_) continue;
-    if (faults_.skip_every > 0 && k % static_cast<std::uint64_t>(faults_.skip_every) == 0) continue;
+    if (skip_every() > 0 && k % static_cast<std::uint64_t>(skip_every()) == 0) continue;
     break;
   }
   if (te > start + timeout_s) {
@@ -184,6 +184,11 @@ void Adis16488aEmulator::write_byte(std::uint8_t off, std::uint8_t byte) {
   }
 }
 
+std::uint16_t Adis16488aEmulator::fault_flags(double t) const {
+  if (!in_service() || (faults_.flags_from_s >= 0 && t < faults_.flags_from_s)) return 0;
+  return faults_.sys_e_flag;
+}
+
 void Adis16488aEmulator::command(std::uint8_t bits) {
   const double t = clock_->now();
   double busy = 0;
@@ -199,7 +204,8 @@ void Adis16488aEmulator::command(std::uint8_t bits) {
     ram_[index(0, 0x0A)] = faults_.self_test_diag;
     if (faults_.self_test_diag) sticky_flags_ |= adis::sys_e::self_test;
     else sticky_flags_ &= static_cast<std::uint16_t>(~adis::sys_e::self_test);
-    ram_[index(0, 0x08)] = static_cast<std::uint16_t>(faults_.sys_e_flag | sticky_flags_);
+    ram_[index(0, 0x08)] = static_cast<std::uint16_t>(fault_flags(t) | sticky_flags_);
+    self_tested_ = true;
     busy = std::max(busy, adis::glob_cmd::kSelfTestS);
   }
   if (bits & adis::glob_cmd::flash_update) {
@@ -216,7 +222,7 @@ void Adis16488aEmulator::command(std::uint8_t bits) {
       set32(2, adis::reg("FLSHCNT").offset, flash_count_);
       sticky_flags_ &= static_cast<std::uint16_t>(~adis::sys_e::flash_update);
     }
-    ram_[index(0, 0x08)] = static_cast<std::uint16_t>(faults_.sys_e_flag | sticky_flags_);
+    ram_[index(0, 0x08)] = static_cast<std::uint16_t>(fault_flags(t) | sticky_flags_);
     busy = std::max(busy, adis::glob_cmd::kFlashUpdateS);
   }
   if (busy > 0) busy_until_ = t + busy;

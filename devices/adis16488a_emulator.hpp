@@ -23,12 +23,19 @@ struct EmuTruth {
 };
 using EmuPhysics = std::function<EmuTruth(double t)>;
 
+// Injected faults (tests, demos, `station run --emulated --inject`): part of the configuration, and
+// changeable while the unit runs (faults()).
 struct EmuFaults {
   std::uint16_t prod_id = adis::kProdId;  // anything else: wrong part
   std::uint16_t sys_e_flag = 0;           // bits OR-ed into SYS_E_FLAG of every sample while set
   std::uint16_t self_test_diag = 0;       // DIAG_STS after a self-test (non-zero = failure)
   bool flash_update_fails = false;
   int skip_every = 0;                     // > 0: every n-th internal sample raises no data-ready
+  // A unit that fails in service: sys_e_flag and skip_every act only once it has run its first
+  // self-test (it is identified and self-tested as a good one), sys_e_flag moreover only from
+  // flags_from_s (emulated s) on when that is ≥ 0.
+  bool after_self_test = false;
+  double flags_from_s = -1;
 };
 
 struct Adis16488aEmulatorConfig {
@@ -36,6 +43,7 @@ struct Adis16488aEmulatorConfig {
   double sck_hz = 10e6;       // SPI clock the frames take on the emulated clock
   double temperature_c = 31.5;
   std::uint64_t seed = 1;
+  EmuFaults faults;
 };
 
 class Adis16488aEmulator : public SpiBus {
@@ -90,6 +98,10 @@ class Adis16488aEmulator : public SpiBus {
   std::uint64_t produced_ = 0, overwritten_ = 0, busy_violations_ = 0, frames_ = 0;
   std::uint32_t flash_count_ = 0;
   std::uint16_t sticky_flags_ = 0;  // SYS_E_FLAG bits latched by self-test / flash failures
+  bool self_tested_ = false;        // a self-test has run (EmuFaults::after_self_test)
+  bool in_service() const { return !faults_.after_self_test || self_tested_; }
+  std::uint16_t fault_flags(double t) const;  // EmuFaults::sys_e_flag as it acts at time t
+  int skip_every() const { return in_service() ? faults_.skip_every : 0; }
 };
 
 }  // namespace calbench::devices

@@ -131,6 +131,12 @@ void TableEmulator::run() {
       }
       modbus_set_socket(ctx, *it);
       const int rc = modbus_receive(ctx, q.data());
+      if (rc > 0 && cfg_.kill_at_s >= 0 && clock_->now() >= cfg_.kill_at_s) {  // the controller dies
+        for (int c : clients) ::close(c);
+        ::close(listen_fd_);
+        listen_fd_ = -1;
+        return;
+      }
       if (rc > 0) {
         std::lock_guard lk(mu_);
         advance_locked(clock_->now());

@@ -35,6 +35,10 @@ struct TableEmulatorConfig {
   double ripple_rel = 2e-6;             // relative rate ripple amplitude (true motion)
   double ripple_hz = 3.0;
   double step_s = 1e-3;                 // integration step of the dynamics
+  // Injected fault (tests, demos, `station run --emulated --inject table-kill-at=S`): the controller
+  // dies at this emulated time (≥ 0): the first request from then on goes unanswered, every
+  // connection is closed and no new one is accepted.
+  double kill_at_s = -1;
 };
 
 class TableEmulator {

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "bench/cli/operator_option.hpp"
@@ -15,11 +14,7 @@
 #include "common/noise_spec.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
-#include "devices/adis16488a_emulator.hpp"
-#include "devices/emu_clock.hpp"
-#include "devices/ft232h.hpp"
-#include "devices/mcp2210.hpp"
-#include "devices/usb_transport.hpp"
+#include "devices/imu_open.hpp"
 
 namespace calbench::cli {
 namespace {
@@ -32,73 +27,6 @@ struct ProvisionArgs {
   std::int64_t set = 0;
   bool json = false;
 };
-
-// IMU URIs:
-//   emu://SERIAL[?prod_id=N&flash_fails=1]  an emulated ADIS16488A with SERIAL_NUM = SERIAL (in this process)
-//   mcp2210://[USB-SERIAL]                   MCP2210 bridge (04D8:00DE) via hidapi
-//   ft232h://[USB-SERIAL]                    FT232H bridge (0403:6014) via libftdi1
-struct OpenedImu {
-  std::unique_ptr<SpiBus> bus;
-};
-
-long parse_int(const std::string& s, const std::string& what) {
-  std::size_t used = 0;
-  long v = 0;
-  try {
-    v = std::stol(s, &used, 0);
-  } catch (...) {
-    used = 0;
-  }
-  if (used != s.size() || s.empty()) throw arg_error("--to-device", what + ": '" + s + "' is not an integer");
-  return v;
-}
-
-OpenedImu open_imu(const std::string& uri) {
-  // SCHEME://REST, or the station's form SCHEME[:REST] (ft232h:SERIAL, mcp2210).
-  const auto sep = uri.find("://");
-  const auto colon = uri.find(':');
-  const std::string scheme = sep != std::string::npos ? uri.substr(0, sep) : uri.substr(0, colon);
-  if (scheme != "mcp2210" && scheme != "ft232h" && sep == std::string::npos)
-    throw arg_error("--to-device", "expected emu://SERIAL, mcp2210[:USB-SERIAL] or ft232h[:USB-SERIAL], got '" + uri + "'");
-  std::string rest = sep != std::string::npos ? uri.substr(sep + 3) : colon == std::string::npos ? "" : uri.substr(colon + 1),
-              query;
-  if (const auto q = rest.find('?'); q != std::string::npos) {
-    query = rest.substr(q + 1);
-    rest = rest.substr(0, q);
-  }
-  OpenedImu o;
-  if (scheme == "emu") {
-    Adis16488aEmulatorConfig cfg;
-    const long serial = parse_int(rest, "emulated SERIAL_NUM");
-    if (serial < 0 || serial > 0xFFFF) throw arg_error("--to-device", "SERIAL_NUM is 16-bit (0..65535)");
-    cfg.serial = static_cast<std::uint16_t>(serial);
-    EmuFaults faults;
-    std::stringstream qs(query);
-    for (std::string kv; std::getline(qs, kv, '&');) {
-      const auto eq = kv.find('=');
-      const std::string k = kv.substr(0, eq), v = eq == std::string::npos ? "" : kv.substr(eq + 1);
-      if (k == "prod_id") faults.prod_id = static_cast<std::uint16_t>(parse_int(v, "prod_id"));
-      else if (k == "flash_fails") faults.flash_update_fails = v == "1" || v == "true";
-      else if (!k.empty()) throw arg_error("--to-device", "unknown emulator option '" + k + "'");
-    }
-    auto clock = std::make_shared<VirtualClock>();
-    const EmuPhysics still = [](double) {
-      EmuTruth t;
-      t.f_b = Vec3(0, 0, -9.80665);
-      return t;
-    };
-    auto emu = std::make_unique<Adis16488aEmulator>(clock, still, SensorErrors{}, adis16488a_noise(), cfg);
-    emu->faults() = faults;
-    o.bus = std::move(emu);
-  } else if (scheme == "mcp2210") {
-    o.bus = std::make_unique<Mcp2210Bus>(open_hidapi(0x04D8, 0x00DE, rest));
-  } else if (scheme == "ft232h") {
-    o.bus = std::make_unique<Ft232hBus>(open_libftdi(0x0403, 0x6014, rest));
-  } else {
-    throw arg_error("--to-device", "unknown IMU URI scheme '" + scheme + "' (emu, mcp2210, ft232h)");
-  }
-  return o;
-}
 
 // The database serial and the unit's 16-bit SERIAL_NUM agree when the serial is that number in
 // decimal or hexadecimal (0x…), ignoring leading zeros.
@@ -147,7 +75,21 @@ CoefficientSetRecord choose_set(Store& s, const Device& d, std::int64_t set_id) 
                            (newest.status == SetStatus::draft ? " (calbench db approve " + std::to_string(newest.id) + ")" : ""));
 }
 
+// --to-device, parsed by THE IMU URI parser (devices/imu_uri.hpp): emu://SERIAL_NUM[?prod_id=N&flash_fails=1],
+// mcp2210[:USB-SERIAL][#csN], ft232h[:USB-SERIAL] (or KIND://…), opened by the station's opener.
+ImuUri imu_uri(const std::string& uri) {
+  ImuUri u;
+  try {
+    u = parse_imu_uri(uri);
+  } catch (const std::invalid_argument& e) {
+    throw arg_error("--to-device", e.what());
+  }
+  if (const std::string why = cannot_open(u); !why.empty()) throw arg_error("--to-device", why);
+  return u;
+}
+
 void run(const ProvisionArgs& a) {
+  if (!a.uri.empty()) (void)imu_uri(a.uri);  // bad input before the database is opened
   Store s(a.db.empty() ? Store::default_path() : a.db, OpenOptions{}, Actor::from_environment(a.op));
   const auto dev = s.find_device(a.serial);
   if (!dev) throw arg_error("SERIAL", "unknown device '" + a.serial + "' in " + s.connection().path());
@@ -164,10 +106,10 @@ void run(const ProvisionArgs& a) {
     return;
   }
 
-  OpenedImu imu = open_imu(a.uri);
+  const std::unique_ptr<SpiBus> bus = open_imu(imu_uri(a.uri));
   Adis16488aOptions opt;
   opt.check_prod_id = false;  // checked below, so that a refusal is recorded
-  Adis16488a drv(*imu.bus, opt);
+  Adis16488a drv(*bus, opt);
   const ImuIdentity id = drv.connect();
   json report = {{"set", set.id}, {"target", a.uri}, {"prod_id", id.prod_id}, {"serial_num", id.serial},
                  {"firmware", id.firmware()}};
@@ -223,7 +165,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   auto* sub = app.add_subcommand("provision", "write an approved coefficient set to an IMU (or export it), recorded in the database");
   sub->add_option("SERIAL", a->serial, "device serial number")->required();
   sub->add_option("--set", a->set, "coefficient set id (default: the newest approved or provisioned set)")->check(set_id());
-  auto* to = sub->add_option("--to-device", a->uri, "IMU: emu://SERIAL_NUM (emulated), mcp2210[:USB-SERIAL] or ft232h[:USB-SERIAL] (as station run --imu; mcp2210://… and ft232h://… also work)");
+  auto* to = sub->add_option("--to-device", a->uri, "IMU: emu://SERIAL_NUM[?prod_id=N&flash_fails=1] (emulated), mcp2210[:USB-SERIAL][#csN] or ft232h[:USB-SERIAL] (as station run --imu; mcp2210://… and ft232h://… also work)");
   auto* ex = sub->add_option("--export", a->out, "write the set as coefficients.json instead");
   to->excludes(ex);
   ex->excludes(to);

@@ -49,7 +49,7 @@ void apply_inject(const std::string& spec, station::Injections& in) {
   const std::string kv = colon == std::string::npos ? spec : spec.substr(colon + 1);
   const std::string k = kv.substr(0, kv.find('=')), v = kv.substr(kv.find('=') + 1);
   if (colon != std::string::npos && slot.empty()) throw InputError("--inject", 0, spec, "empty slot name before ':'");
-  station::ImuInjections& imu = slot.empty() ? in.imu : in.slot[slot];
+  devices::EmuFaults& imu = slot.empty() ? in.imu : in.slot[slot];
   auto seconds = [&] {
     double x = 0;
     const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
@@ -103,7 +103,7 @@ void run_station(StationArgs& a) {
     throw InputError(a.out, 0, "", "already holds a station run (recording/, COEFFS.json): give another --out, or --force to replace it");
   for (const auto& kv : a.inject) apply_inject(kv, a.o.inject);
   // imu-flags-from without the flags would silently inject nothing.
-  auto flags_need = [](const station::ImuInjections& i, const std::string& who) {
+  auto flags_need = [](const devices::EmuFaults& i, const std::string& who) {
     if (i.flags_from_s >= 0 && i.sys_e_flag == 0)
       throw InputError("--inject", 0, who + "imu-flags-from", "needs " + who + "imu-flags=BITS (which error flags to raise)");
   };
@@ -183,7 +183,9 @@ const bool registered = add_command(20, [](CLI::App& app) {
                 "emulated clock faster than real time");
   run->add_option("--db", a->o.db,
                   "also store the bench run and its coefficient set (draft) in this database: a SQLite file or a "
-                  "postgresql:// URI (central store; written to --journal first, forwarded when the server answers)");
+                  "postgresql:// URI (central store: its login, schema version and the role's privileges are checked before "
+                  "the table moves, a refusal is exit 2; written to --journal first, forwarded when the server answers, "
+                  "which it need not at start)");
   run->add_option("--journal", a->o.journal,
                   "with a PostgreSQL --db: the station's local journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   run->add_option("--out", a->out,

@@ -11,6 +11,7 @@
 #include "calibration/ins/nav_math.hpp"
 #include "common/input_error.hpp"
 #include "common/units.hpp"
+#include "devices/imu_open.hpp"
 
 namespace calbench::station {
 namespace {
@@ -19,6 +20,27 @@ constexpr int kMaxSlots = 16;
 
 // Slot axes → fixture axes from roll, pitch, yaw in degrees (z-y-x, as a drive's mounting).
 Mat3 rpy_rotation(const Vec3& rpy_deg) { return ins::dcm_from_rpy(rpy_deg * units::kDeg); }
+
+// What makes a slot's IMU unusable on its own ("" when none): the same for an emulated and a real run.
+std::string slot_imu_problem(const devices::ImuUri& u) {
+  if (u.emulated())
+    return std::string("'").append(u.text()).append(
+        "': a fixture slot is a unit on a bridge (the station emulates its units with --emulated)");
+  return devices::cannot_open(u);
+}
+
+// Bus arbitration, the same for an emulated and a real run: one bridge per unit (each reads its
+// data-ready stream at the full output rate). Units on one bridge's chip selects would share its
+// time: not built; refused before anything moves.
+void check_one_bridge_per_unit(const Fixture& fx) {
+  std::map<std::string, std::string> bridges;
+  for (const auto& s : fx.slots)
+    if (const auto [it, fresh] = bridges.emplace(s.uri.bridge(), s.name); !fresh)
+      throw InputError(fx.file, s.line, "imu",
+                       "slots '" + it->second + "' and '" + s.name + "' share the bridge " + s.uri.kind +
+                           (s.uri.serial.empty() ? "" : ":" + s.uri.serial) +
+                           ": time-slicing one bridge between units is not supported; give each unit its own bridge");
+}
 
 }  // namespace
 
@@ -61,6 +83,7 @@ Fixture load_fixture(const std::filesystem::path& file) {
     } catch (const std::invalid_argument& e) {
       c.fail(t->get("imu"), pre + "imu", e.what());
     }
+    if (const std::string why = slot_imu_problem(s.uri); !why.empty()) c.fail(t->get("imu"), pre + "imu", why);
     const std::string where = s.uri.bridge() + "#cs" + std::to_string(s.uri.cs);
     if (const auto [it, fresh] = chip_selects.emplace(where, pre + "imu"); !fresh)
       c.fail(t->get("imu"), pre + "imu",
@@ -80,6 +103,7 @@ Fixture load_fixture(const std::filesystem::path& file) {
     s.pose.r_f = off_mm * 1e-3;
     fx.slots.push_back(s);
   }
+  check_one_bridge_per_unit(fx);
   return fx;
 }
 
@@ -109,6 +133,7 @@ Fixture single_unit_fixture(const std::string& imu_uri) {
     } catch (const std::invalid_argument& e) {
       throw InputError("--imu", 0, "", e.what());
     }
+  if (const std::string why = imu_uri.empty() ? "" : slot_imu_problem(s.uri); !why.empty()) throw InputError("--imu", 0, "", why);
   fx.slots.push_back(s);
   return fx;
 }

@@ -28,8 +28,10 @@ struct Fixture {
 };
 
 // Reads and checks a fixture file: InputError (exit 2) naming the file, line and key for bad input
-// (duplicate slot names, two slots on one bridge and chip select, an IMU URI that does not parse, a
-// bridge without serial number among several of its kind, ...).
+// (duplicate slot names, two slots on one bridge (one bridge per unit), an IMU URI that does not
+// parse or that the opener (devices/imu_open.hpp) cannot drive, a bridge without serial number among
+// several of its kind, ...). The one place fixtures are checked: the same for an emulated and a real
+// run, before either starts.
 Fixture load_fixture(const std::filesystem::path& file);
 
 // N emulated units (`station run --emulated --units N`): slot names "1".."N", evenly round the
@@ -37,7 +39,8 @@ Fixture load_fixture(const std::filesystem::path& file);
 // own axes see every direction of the fixture), no bridges.
 Fixture emulated_fixture(int units);
 
-// The default single slot: today's station (IMU at the centre, axes of the cube).
+// The default single slot: today's station (IMU at the centre, axes of the cube); its --imu checked
+// as a fixture slot's.
 Fixture single_unit_fixture(const std::string& imu_uri);
 
 }  // namespace calbench::station

@@ -6,10 +6,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <deque>
-#include <limits>
-#include <mutex>
-#include <thread>
 #include <ostream>
 #include <vector>
 
@@ -20,47 +16,28 @@
 #include "bench/io/plan_toml.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/station/fixture.hpp"
+#include "bench/station/run_summary.hpp"
+#include "bench/station/step_runner.hpp"
+#include "bench/station/unit.hpp"
 #include "calibration/bench_fit.hpp"
 #include "calibration/bench_kinematics.hpp"
 #include "calibration/earth.hpp"
 #include "common/imu_error_sim.hpp"
 #include "common/json_fields.hpp"
 #include "common/units.hpp"
+#include "db/access_check.hpp"
 #include "db/journal.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/adis16488a_emulator.hpp"
-#include "devices/ft232h.hpp"
-#include "devices/imu_uri.hpp"
-#include "devices/mcp2210.hpp"
+#include "devices/imu_open.hpp"
 #include "devices/table_client.hpp"
 #include "devices/table_emulator.hpp"
 
 namespace calbench::station {
 namespace {
 using namespace devices;
-constexpr int kOuter = 0, kInner = 1;
-
-struct Aborted : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-std::unique_ptr<SpiBus> open_imu(const std::string& uri) {
-  // KIND[:SERIAL][#csN], or provision's form KIND://[SERIAL].
-  const ImuUri u = parse_imu_uri(uri);  // checked when the fixture was read
-  if (u.kind == "ft232h") {
-    if (u.cs != 0)  // the bus drives ADBUS3 only (devices/ft232h.hpp)
-      throw std::invalid_argument("'" + uri + "': the FT232H bus drives chip select cs0 (ADBUS3) only");
-    auto bus = std::make_unique<Ft232hBus>(open_libftdi(mpsse::kVid, mpsse::kPid, u.serial));
-    bus->configure();
-    return bus;
-  }
-  Mcp2210Config mc;
-  mc.cs_pin = u.cs;
-  auto bus = std::make_unique<Mcp2210Bus>(open_hidapi(mcp2210::kVid, mcp2210::kPid, u.serial), mc);
-  bus->configure();
-  return bus;
-}
+constexpr int kInner = 1;  // the table's inner axis
 
 std::string iso_utc(std::chrono::system_clock::time_point tp) {
   const std::time_t t = std::chrono::system_clock::to_time_t(tp);
@@ -71,80 +48,26 @@ std::string iso_utc(std::chrono::system_clock::time_point tp) {
   return b;
 }
 
-
-// One unit of the fixture: its devices, the step being recorded, its output and its fate.
-struct Unit {
-  FixtureSlot slot;
-  bool at_centre = true;           // identity pose at the centre: the centre's kinematics as they are
-  fs::path out, rec_dir;
-  std::uint64_t seed = 1;
-  ImuInjections inj;
-  bool flags_applied = false;
-  std::shared_ptr<VirtualClock> clock;  // its own bus time (emulated, several units: one bridge each)
-  std::unique_ptr<SpiBus> bus;
-  Adis16488aEmulator* emu = nullptr;
-  std::unique_ptr<Adis16488a> imu;
-  SensorErrors truth;
-  std::unique_ptr<RecordingWriter> writer;
-  // The step being recorded (rows are written once the step passes its data check).
-  bool recording = false;
-  double t0 = -1;
-  std::vector<ImuRecord> imu_rows;
-  std::vector<BenchRefRow> ref_rows;
-  std::uint64_t step_lost = 0, step_errors = 0, step_saturated = 0;
-  std::string err_text;
-  int misses = 0;                  // data-ready timeouts in a row
-  // Totals and fate.
-  std::uint64_t samples = 0, lost = 0, error_samples = 0, repeats = 0;
-  bool identified = false, failed = false;
-  std::string why;                 // failed: the reason
-  nlohmann::json steps = nlohmann::json::array(), summary = nlohmann::json::object();
-  // Reader thread (real time): samples wait here for the station's thread.
-  std::thread reader;
-  std::mutex mu;
-  std::deque<ImuSample> queue;
-  std::string reader_error;
-  std::atomic<bool> reading{false};
-
-  bool live() const { return !failed; }
-  std::string label() const { return "slot " + slot.name; }
-};
-
+// The station: setup (fixture, units, table, checks before anything moves), the plan through its step
+// runner, the fit and store of each unit, and every path out — which stops the table.
 class Station {
  public:
   Station(const Options& o, std::ostream& log, const std::atomic<bool>& stop) : o_(o), log_(log), stop_(stop) {}
-  ~Station() { stop_readers(); }
+  ~Station() {
+    if (runner_) runner_->stop_readers();
+  }
   Result run();
 
  private:
   void setup();
   void make_units();
   void connect_unit(Unit& u);
-  void poll(bool force = false);          // heartbeat + status at the heartbeat period
-  void pump();                            // take the next sample(s) of the units, keep polling
-  void take(Unit& u, const ImuSample& x); // one sample of a unit: recorded when its step records
-  void fail_unit(Unit& u, const std::string& why);
-  void start_readers();
-  void stop_readers();
-  void wait_settled(const PlanStep& s, double timeout_s);
-  void wait_for(double seconds);          // keep streaming (and polling) for this long
-  void record_step(int k, const PlanStep& s, const std::vector<Unit*>& units);
-  std::string step_check(const Unit& u) const;  // empty: the step's data passed
-  void command_step(const PlanStep& s);
-  void progress(const std::string& what, bool line = false);
   void finish_unit(Unit& u);
-  void keep_partial(Unit& u);
   void record_aborted(Unit& u, const std::string& outcome, const std::string& why, Result& res);
-  double now() const { return clock_ ? clock_->now() : units_.front()->bus->now(); }
-  std::size_t live_units() const {
-    std::size_t n = 0;
-    for (const auto& u : units_) n += u->live();
-    return n;
-  }
-  std::uint64_t total(std::uint64_t Unit::*f) const {
-    std::uint64_t n = 0;
-    for (const auto& u : units_) n += (*u).*f;
-    return n;
+  RunFacts facts() const {
+    return {fixture_, fixture_mode_, units_, o_.out_dir, plan_.steps.size(), run_id_,
+            clock_ ? clock_->now() : (wall_clock_ ? wall_clock_->now() : 0.0),
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count()};
   }
   // The store and the bench-run record of this run (the done and the aborted run share them).
   std::unique_ptr<db::Store> open_store() const;
@@ -152,14 +75,6 @@ class Station {
   void forward(db::Store& journal, nlohmann::json& summary, const std::string& uid);
   db::BenchRunInput bench_run_record(const Unit& u, const db::Store& store, const std::string& outcome,
                                      const std::string& recording) const;
-  void check_stop() {
-    if (stop_) throw Aborted("interrupted (Ctrl-C)");
-    if (o_.inject.table_kill_at_s >= 0 && table_emu_ && table_emu_->port() && (clock_ || wall_clock_) &&
-        now() >= o_.inject.table_kill_at_s && !killed_) {
-      killed_ = true;
-      table_emu_->stop();  // the table controller dies
-    }
-  }
 
   const Options& o_;
   std::ostream& log_;
@@ -167,24 +82,14 @@ class Station {
   BenchPlan plan_;
   Fixture fixture_;
   bool fixture_mode_ = false;             // a fixture (file or --units): one folder per slot
-  bool threaded_ = false;                 // real time: a reader thread per unit
   std::string run_id_ = db::new_uid();    // ties the units of one table cycle
   std::unique_ptr<SiteEarth> earth_;
   std::shared_ptr<VirtualClock> clock_;   // emulated time (the table's; several units: the slowest unit's)
   std::shared_ptr<WallClock> wall_clock_;
   std::unique_ptr<TableEmulator> table_emu_;
   std::unique_ptr<TableClient> table_;
-  std::vector<std::unique_ptr<Unit>> units_;
-  int mount_ = 2;                         // the fixture's current mount
-  double last_poll_ = -1e9;
-  AxisStatus st_[2];
-  bool killed_ = false;
-  // The step being recorded: the reference the samples get.
-  double rec_outer_ = 0, rec_inner0_ = 0, rec_rate_ = 0, rec_t_poll_ = 0, rec_dwell_ = 0;
-  int rec_step_ = -1, rec_mount_ = 2;
-  std::size_t step_index_ = 0;
-  double plan_s_ = 0, done_s_ = 0;
-  std::uint64_t pumps_ = 0;
+  Units units_;
+  std::unique_ptr<StepRunner> runner_;    // from setup on (the emulated units' physics read its mount)
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
   std::string started_ = iso_utc(std::chrono::system_clock::now());
 };
@@ -204,17 +109,8 @@ void Station::make_units() {
   if (fixture_mode_ && !o_.imu_uri.empty())
     throw std::invalid_argument("--imu: the fixture names each slot's IMU (" + (ffile.empty() ? "--units" : ffile.string()) + ")");
   if (!fixture_mode_ && !o_.emulated && o_.imu_uri.empty()) throw std::invalid_argument("--imu is required without --emulated");
-  // Bus arbitration: one bridge per unit (each reads its data-ready stream at the full output rate).
-  // Units on one bridge's chip selects would share its time: not built; refused before anything moves.
-  if (!o_.emulated) {
-    std::map<std::string, std::string> bridges;
-    for (const auto& s : fixture_.slots)
-      if (const auto [it, fresh] = bridges.emplace(s.uri.bridge(), s.name); !fresh)
-        throw InputError(fixture_.file, s.line, "imu",
-                         "slots '" + it->second + "' and '" + s.name + "' share the bridge " + s.uri.kind +
-                             (s.uri.serial.empty() ? "" : ":" + s.uri.serial) +
-                             ": time-slicing one bridge between units is not supported; give each unit its own bridge");
-  }
+  // Bus arbitration (one bridge per unit) and the slots' IMUs were checked with the fixture
+  // (bench/station/fixture.hpp), the same for an emulated and a real run.
   for (const auto& [name, _] : o_.inject.slot) {
     bool found = false;
     for (const auto& s : fixture_.slots) found = found || s.name == name;
@@ -237,9 +133,6 @@ void Station::make_units() {
     if (o_.emulated && clock_ && several) u->clock = std::make_shared<VirtualClock>(clock_->now());
     units_.push_back(std::move(u));
   }
-  // In real time the bus is read by a thread of its own: a Modbus round trip to the table (a few ms)
-  // must not hold up a data-ready stream whose samples come every 0.41 ms.
-  threaded_ = !clock_;
 }
 
 void Station::setup() {
@@ -259,15 +152,27 @@ void Station::setup() {
   // plan costs a table cycle); nothing is written yet: a missing database is created at the end.
   check_output_folder(o_.out_dir);
   if (!o_.db.empty()) {
-    // A central store is not contacted here: the run never waits for the network (the journal
-    // takes the run, and forwards it at the end when the server answers).
     db::check_target(o_.db);
+    // A central store: its credentials, schema version and the role's privileges are checked before
+    // anything moves (found at the end, they cost a table cycle). A server that does not answer is the
+    // offline case: the journal takes the run, said here, and forwards it at the end if it answers then.
+    if (db::is_postgres_uri(o_.db)) {
+      const db::StationAccess acc = db::check_station_access(o_.db);
+      if (acc.state == db::StationAccess::State::refused)
+        throw InputError("--db", 0, "", acc.reason);
+      if (acc.state == db::StationAccess::State::unreachable)
+        log_ << "central store not reached at start (" << acc.reason << "): the run goes to the journal "
+             << store_path() << ", forwarded at the end if the server answers then, else by `calbench db sync`\n";
+      else
+        log_ << "central store " << db::redact_uri(o_.db) << ": role " << acc.role
+             << " may store the run (schema current)\n";
+    }
     const std::string local = store_path();
     if (fs::exists(local)) db::Store check(local);  // a calbench database (named InputError otherwise)
     else check_output_path(local);
   }
   earth_ = std::make_unique<SiteEarth>(plan_.site);
-  plan_s_ = plan_duration_s(plan_);
+  const double plan_s = plan_duration_s(plan_);
   // What the run will write, before anything moves: imu.csv and reference.csv at 17 significant
   // digits take about 337 bytes per sample together (measured on the factory plan: 413 MB for
   // 1,225,118 samples), at the ADIS16488A's 2460 Hz, per unit. Refused when the disk cannot hold it
@@ -285,7 +190,7 @@ void Station::setup() {
     const fs::space_info sp = fs::space(probe, ec);
     char line[240];
     std::snprintf(line, sizeof line, "plan %s: %zu steps, about %.1f min, about %.0f MB to write into %s", plan_.name.c_str(),
-                  plan_.steps.size(), plan_s_ / 60.0, bytes / 1e6, o_.out_dir.string().c_str());
+                  plan_.steps.size(), plan_s / 60.0, bytes / 1e6, o_.out_dir.string().c_str());
     log_ << line;
     if (!ec) log_ << " (" << static_cast<long long>(static_cast<double>(sp.available) / 1e6) << " MB free)";
     log_ << "\n";
@@ -298,11 +203,12 @@ void Station::setup() {
                                std::to_string(static_cast<long long>(static_cast<double>(sp.available) / 1e6)) + " MB are free at " +
                                probe.string());
   }
-  mount_ = plan_.steps.front().mount;
+  runner_ = std::make_unique<StepRunner>(o_, log_, stop_, plan_, *earth_, units_, fixture_mode_, clock_, wall0_);
   if (o_.emulated && clock_) {
     TableEmulatorConfig tc;
     tc.watchdog_s = 0.5;
     tc.max_rate = std::max(tc.max_rate, plan_.table.max_rate * 1.2);
+    tc.kill_at_s = o_.inject.table_kill_at_s;  // injected: the controller dies at this emulated time
     table_emu_ = std::make_unique<TableEmulator>(tc, clock_);
     table_emu_->start();
     table_uri = table_emu_->uri();
@@ -319,6 +225,10 @@ void Station::setup() {
       Adis16488aEmulatorConfig ic;
       ic.seed = u->seed;
       ic.serial = static_cast<std::uint16_t>(1000 + u->seed % 60000);
+      // Injected faults (--inject): a wrong part, a failing self-test, or a unit that fails in service
+      // (error flags, lost samples: once it has passed its self-test).
+      ic.faults = u->inj;
+      ic.faults.after_self_test = true;
       std::shared_ptr<EmuClock> imu_clock = wall_clock_ ? std::shared_ptr<EmuClock>(wall_clock_)
                                             : u->clock  ? std::shared_ptr<EmuClock>(u->clock)
                                                         : std::shared_ptr<EmuClock>(clock_);
@@ -330,26 +240,24 @@ void Station::setup() {
             if (table_emu_) {
               s = table_emu_->axis_states(t);
             } else {
-              for (int a = 0; a < 2; ++a) s[a] = AxisState{st_[a].position + st_[a].rate * (t - last_poll_), st_[a].rate, 0};
+              for (int a = 0; a < 2; ++a) s[a] = runner_->reported(a, t);
             }
-            BenchKinematics k = bench_kinematics(*earth_, s[0], s[1], mount_);
+            BenchKinematics k = bench_kinematics(*earth_, s[0], s[1], runner_->mount());
             if (!up->at_centre) k = slot_kinematics(k, up->slot.pose);
             return EmuTruth{k.w_ib_b, k.f_b};
           },
           u->truth, adis16488a_noise(), ic);
-      if (u->inj.prod_id) emu->faults().prod_id = *u->inj.prod_id;
-      emu->faults().self_test_diag = u->inj.self_test_diag;
-      u->emu = emu.get();
       u->bus = std::move(emu);
     } else {
-      u->bus = open_imu(u->slot.imu);
+      u->bus = open_imu(u->slot.uri);
     }
   }
   table_ = std::make_unique<TableClient>(table_at);
   table_->connect();
+  runner_->attach_table(*table_);
   log_ << "table: " << table_uri << "\n";
   for (auto& u : units_) connect_unit(*u);
-  if (live_units() == 0) throw Aborted("no unit passed identification and self-test");
+  if (live_units(units_) == 0) throw Aborted("no unit passed identification and self-test");
   for (int a = 0; a < 2; ++a) {
     table_->set_limits(a, plan_.table.max_accel, a == kInner ? std::max(plan_.table.max_rate, plan_.table.slew_rate)
                                                              : plan_.table.slew_rate);
@@ -379,262 +287,8 @@ void Station::connect_unit(Unit& u) {
     log_ << who << "IMU self-test passed\n";
   } catch (const std::exception& e) {
     if (!fixture_mode_) throw;
-    fail_unit(u, e.what());
+    runner_->fail_unit(u, e.what());
   }
-}
-
-void Station::fail_unit(Unit& u, const std::string& why) {
-  if (u.failed) return;
-  u.failed = true;
-  u.why = why;
-  u.recording = false;
-  u.reading = false;
-  log_ << (o_.progress_tty ? "\n" : "") << u.label() << " failed: " << why
-       << (live_units() ? " (the other units go on)" : "") << "\n";
-}
-
-void Station::poll(bool force) {
-  check_stop();
-  const double t = now();
-  if (!force && t - last_poll_ < o_.heartbeat_s) return;
-  last_poll_ = t;
-  table_->heartbeat();
-  for (int a = 0; a < 2; ++a) {
-    st_[a] = table_->status(a);
-    if (st_[a].faulted())
-      throw Aborted("table axis " + std::to_string(a) + " fault: " + table::fault_text(st_[a].fault_code) + " (" +
-                    table::status_text(st_[a].statusword) + ")");
-  }
-}
-
-void Station::start_readers() {
-  if (!threaded_) return;
-  for (auto& up : units_) {
-    Unit& u = *up;
-    if (u.failed) continue;
-    u.reading = true;
-    u.reader = std::thread([&u] {
-      int misses = 0;
-      while (u.reading) {
-        try {
-          const auto s = u.imu->read_sample();
-          std::lock_guard lk(u.mu);
-          if (s) {
-            u.queue.push_back(*s);
-            misses = 0;
-          } else if (++misses >= 3) {
-            u.reader_error = "IMU: no data-ready for 3 × 0.1 s";
-            break;
-          }
-        } catch (const std::exception& e) {
-          std::lock_guard lk(u.mu);
-          u.reader_error = e.what();
-          break;
-        }
-      }
-    });
-  }
-}
-
-void Station::stop_readers() {
-  for (auto& u : units_) {
-    u->reading = false;
-    if (u->reader.joinable()) u->reader.join();
-  }
-}
-
-// The next samples. Emulated time: the unit whose bus is furthest behind reads next (each unit has its
-// own bridge, so their reads overlap in time); the table's clock is the slowest unit's. In real time:
-// each unit's reader thread has queued its samples; they are taken here, on this thread.
-void Station::pump() {
-  poll();
-  if (++pumps_ % 256 == 0) progress(rec_step_ >= 0 ? "recording" : "moving");
-  if (threaded_) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    for (auto& up : units_) {
-      Unit& u = *up;
-      if (u.failed) continue;
-      std::deque<ImuSample> q;
-      std::string err;
-      {
-        std::lock_guard lk(u.mu);
-        q.swap(u.queue);
-        err = u.reader_error;
-      }
-      for (const auto& x : q) take(u, x);
-      if (!err.empty()) {
-        if (!fixture_mode_) throw DeviceError(err);
-        fail_unit(u, err);
-      }
-    }
-    if (live_units() == 0) throw Aborted("every unit failed");
-    return;
-  }
-  Unit* next = nullptr;
-  for (auto& u : units_)
-    if (!u->failed && (!next || u->bus->now() < next->bus->now())) next = u.get();
-  if (!next) throw Aborted("every unit failed");
-  Unit& u = *next;
-  try {
-    if (const auto x = u.imu->read_sample()) {
-      u.misses = 0;
-      take(u, *x);
-    } else if (++u.misses >= 3) {
-      throw DeviceError("IMU: no data-ready for 3 × 0.1 s");
-    }
-  } catch (const std::exception& e) {
-    if (!fixture_mode_) throw;
-    fail_unit(u, e.what());
-  }
-  if (units_.size() > 1 && clock_) {
-    double slowest = std::numeric_limits<double>::infinity();
-    for (const auto& o : units_)
-      if (!o->failed) slowest = std::min(slowest, o->bus->now());
-    if (std::isfinite(slowest)) clock_->wait_until(slowest);
-  }
-  // Error flags from an emulated time on (a unit failing mid-run).
-  for (auto& o : units_)
-    if (o->emu && o->inj.flags_from_s >= 0 && !o->flags_applied && now() >= o->inj.flags_from_s) {
-      o->emu->faults().sys_e_flag = o->inj.sys_e_flag;
-      o->flags_applied = true;
-    }
-  if (live_units() == 0) throw Aborted("every unit failed");
-}
-
-void Station::take(Unit& u, const ImuSample& x) {
-  if (!u.recording) return;  // moving, settling, re-mounting: not recorded
-  if (u.t0 < 0) u.t0 = x.t;
-  if (x.t - u.t0 >= rec_dwell_) {
-    u.recording = false;
-    return;
-  }
-  if (!u.imu_rows.empty()) u.step_lost += x.lost_before;
-  if (x.error()) {
-    ++u.step_errors;
-    u.err_text = x.error_text();
-  }
-  if (x.saturated) ++u.step_saturated;
-  ImuRecord r;
-  r.t = x.t;
-  r.dt = 1.0 / u.imu->identity().output_rate_hz;
-  r.gyro = x.gyro;
-  r.accel = x.accel;
-  r.temp_c = x.temp_c;
-  r.seq = x.seq_cnt;
-  u.imu_rows.push_back(r);
-  // Inner angle at this sample: from the encoder reading and the commanded rate.
-  const double th = rec_inner0_ + rec_rate_ * (x.host_time - rec_t_poll_);
-  BenchKinematics kin = bench_kinematics(*earth_, AxisState{rec_outer_, 0, 0}, AxisState{th, rec_rate_, 0}, rec_mount_);
-  if (!u.at_centre) kin = slot_kinematics(kin, u.slot.pose);
-  double a = std::fmod(units::deg(th), 360.0);
-  u.ref_rows.push_back({x.t, kin.w_ib_b, kin.f_b, rec_step_, a < 0 ? a + 360.0 : a});
-}
-
-void Station::wait_for(double seconds) {
-  const double end = now() + seconds;
-  while (now() < end) pump();
-}
-
-void Station::command_step(const PlanStep& s) {
-  // Outer axis: position. Inner: position for static steps; for rate steps stop at the start angle,
-  // then rate mode. Positions go the short way round from the current (unwrapped) angle.
-  poll(true);
-  auto target = [&](int a, double ang) { return st_[a].position + std::remainder(ang - st_[a].position, 2 * M_PI); };
-  if (st_[kInner].mode == table::Mode::rate) {
-    table_->command_rate(kInner, 0.0);
-    while (std::abs(st_[kInner].rate) > 1e-6) pump(), poll();
-    table_->set_mode(kInner, table::Mode::position);
-    poll(true);
-  }
-  table_->command_position(kOuter, target(kOuter, s.outer));
-  table_->command_position(kInner, target(kInner, s.inner));
-  if (s.kind == StepKind::rate) {
-    wait_settled(s, 600);
-    table_->command_rate(kInner, s.rate);
-    table_->set_mode(kInner, table::Mode::rate);
-  }
-}
-
-void Station::wait_settled(const PlanStep& s, double timeout_s) {
-  const double end = now() + timeout_s;
-  poll(true);
-  auto near = [](double a, double b) { return std::abs(std::remainder(a - b, 2 * M_PI)) < 0.01 * units::kDeg; };
-  auto done = [&] {
-    if (!(st_[0].settled() && st_[1].settled())) return false;
-    if (!near(st_[kOuter].position, s.outer)) return false;
-    if (st_[kInner].mode == table::Mode::rate) return std::abs(st_[kInner].rate - s.rate) < 0.01 * units::kDeg;
-    return near(st_[kInner].position, s.inner);
-  };
-  while (!done()) {
-    if (now() > end)
-      throw Aborted("table did not settle for step '" + s.label + "' within " + std::to_string(int(timeout_s)) + " s");
-    pump();
-  }
-}
-
-void Station::progress(const std::string& what, bool line) {
-  const std::size_t n = plan_.steps.size();
-  const double frac = std::min(1.0, done_s_ / std::max(plan_s_, 1e-9));
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
-  const double eta = frac > 0.01 ? wall * (1 - frac) / frac : 0;
-  std::uint64_t samples = total(&Unit::samples);
-  for (const auto& u : units_) samples += u->imu_rows.size();
-  char buf[240];
-  std::snprintf(buf, sizeof buf, "[step %zu/%zu] %-22.22s %-8s outer %7.2f° inner %8.2f°/s  samples %llu  ETA %.0f s",
-                step_index_ + 1, n, plan_.steps[std::min(step_index_, n - 1)].label.c_str(), what.c_str(),
-                units::deg(st_[0].position), units::deg(st_[1].rate), static_cast<unsigned long long>(samples), eta);
-  std::string text = buf;
-  if (units_.size() > 1) text += "  units " + std::to_string(live_units()) + "/" + std::to_string(units_.size());
-  if (o_.progress_tty && !line) {
-    static double last = -1;
-    if (wall - last > 0.1) {
-      log_ << "\r" << text << std::flush;
-      last = wall;
-    }
-  } else if (line) {
-    log_ << (o_.progress_tty ? "\r" : "") << text << "\n";
-  }
-}
-
-// Records one step on the given units at once: each takes the step's dwell from its own first sample.
-void Station::record_step(int k, const PlanStep& s, const std::vector<Unit*>& units) {
-  poll(true);
-  // Reference: the plan's angles for static steps (the table's position accuracy is in the plan), the
-  // commanded rate and the encoder's inner angle at the start for rate steps.
-  rec_outer_ = s.outer;
-  rec_inner0_ = s.kind == StepKind::rate ? st_[kInner].position : s.inner;
-  rec_rate_ = s.kind == StepKind::rate ? s.rate : 0.0;
-  rec_t_poll_ = now();
-  rec_dwell_ = s.dwell_s;
-  rec_step_ = k;
-  rec_mount_ = s.mount;
-  for (Unit* u : units) {
-    u->imu_rows.clear();
-    u->ref_rows.clear();
-    u->step_lost = u->step_errors = u->step_saturated = 0;
-    u->err_text.clear();
-    u->t0 = -1;
-    u->recording = !u->failed;
-  }
-  auto busy = [&] {
-    for (const Unit* u : units)
-      if (u->recording) return true;
-    return false;
-  };
-  while (busy()) pump();
-  rec_step_ = -1;
-  for (Unit* u : units) {
-    u->samples += u->imu_rows.size();
-    u->lost += u->step_lost;
-    u->error_samples += u->step_errors;
-  }
-}
-
-std::string Station::step_check(const Unit& u) const {
-  if (u.step_lost) return std::to_string(u.step_lost) + " samples lost";
-  if (u.step_errors) return std::to_string(u.step_errors) + " samples with error flags (" + u.err_text + ")";
-  if (u.step_saturated) return std::to_string(u.step_saturated) + " saturated samples";
-  return "";
 }
 
 std::string Station::store_path() const {
@@ -726,26 +380,6 @@ void Station::finish_unit(Unit& u) {
   js["fit"] = bench_result_json(fr, cs);
 }
 
-// Nothing captured is lost: the step in progress did not pass its check (or was cut short), so its
-// samples are kept with step −1 (outside any plan step: a fit will not use them); meta.json stays
-// "incomplete".
-void Station::keep_partial(Unit& u) {
-  if (!u.writer) return;
-  try {
-    for (std::size_t i = 0; i < u.imu_rows.size() && i < u.ref_rows.size(); ++i) {
-      u.writer->imu(u.imu_rows[i]);
-      BenchRefRow r = u.ref_rows[i];
-      r.step = -1;
-      u.writer->bench_ref(r);
-    }
-    u.imu_rows.clear();
-    u.ref_rows.clear();
-    u.writer->flush();
-  } catch (const std::exception& w) {
-    log_ << "could not keep the partial step" << (fixture_mode_ ? " of " + u.label() : "") << ": " << w.what() << "\n";
-  }
-}
-
 // A run that did not give the unit coefficients is part of its history: recorded (with why) once the
 // unit is known, so `db history SERIAL` shows it. Best effort: the outcome itself is what counts.
 void Station::record_aborted(Unit& u, const std::string& outcome, const std::string& why, Result& res) {
@@ -792,72 +426,13 @@ Result Station::run() {
                                       {"offset_mm", to_json(Vec3(u.slot.pose.r_f * 1e3))}});
       if (fixture_mode_ && !u.slot.imu.empty()) meta.extra["station"]["imu"] = u.slot.imu;
       u.writer = std::make_unique<RecordingWriter>(u.rec_dir, meta, ImuForm::rates, true, true);
-      if (u.emu && u.inj.skip_every) u.emu->faults().skip_every = u.inj.skip_every;
-      if (u.emu && u.inj.flags_from_s < 0) u.emu->faults().sys_e_flag = u.inj.sys_e_flag;
     }
-    start_readers();
+    runner_->start_readers();
 
-    for (step_index_ = 0; step_index_ < plan_.steps.size(); ++step_index_) {
-      const PlanStep& s = plan_.steps[step_index_];
-      if (s.mount != mount_) {
-        // Stop, and have the cube (the fixture) re-mounted with axis `mount` on the inner axis.
-        if (st_[kInner].mode == table::Mode::rate) table_->command_rate(kInner, 0.0);
-        log_ << (o_.progress_tty ? "\n" : "")
-             << (s.mount >= 3      ? "re-mount on the 45° wedge: IMU "
-                 : fixture_mode_ ? "re-mount the fixture: fixture "
-                                 : "re-mount the cube: IMU ")
-             << mount_name(s.mount) << (s.mount < 3 ? " axis" : " diagonal") << " on the inner axis ("
-             << plan_.table.remount_s << " s)\n";
-        wait_for(plan_.table.remount_s);
-        mount_ = s.mount;  // emulated: the operator did it; real: the operator had remount_s
-      }
-      std::vector<Unit*> pending;
-      for (auto& u : units_)
-        if (u->live()) pending.push_back(u.get());
-      int attempt = 0;
-      for (;; ++attempt) {
-        command_step(s);
-        wait_settled(s, 600);
-        wait_for(plan_.table.settle_s);
-        record_step(static_cast<int>(step_index_), s, pending);
-        std::vector<Unit*> again;
-        for (Unit* u : pending) {
-          if (u->failed) continue;
-          const std::string why = step_check(*u);
-          if (why.empty()) {
-            for (std::size_t i = 0; i < u->imu_rows.size(); ++i) {
-              u->writer->imu(u->imu_rows[i]);
-              u->writer->bench_ref(u->ref_rows[i]);
-            }
-            u->writer->flush();
-            u->steps.push_back({{"step", step_index_}, {"label", s.label}, {"samples", u->imu_rows.size()}, {"repeats", attempt}});
-            u->imu_rows.clear();
-            u->ref_rows.clear();
-            continue;
-          }
-          log_ << (o_.progress_tty ? "\n" : "") << "step " << step_index_ + 1 << " '" << s.label << "' failed its check"
-               << (fixture_mode_ ? " on " + u->label() : "") << ": " << why;
-          if (attempt >= o_.max_repeats) {
-            log_ << "\n";
-            const std::string msg = "step '" + s.label + "' failed " + std::to_string(attempt + 1) + " times: " + why;
-            if (!fixture_mode_) throw Aborted(msg);
-            keep_partial(*u);
-            fail_unit(*u, msg);
-            continue;
-          }
-          log_ << "; repeating\n";
-          ++u->repeats;
-          again.push_back(u);
-        }
-        if (again.empty()) break;
-        pending = again;
-      }
-      done_s_ += s.dwell_s + plan_.table.settle_s;
-      progress("done", true);
-    }
+    runner_->run_plan();
     table_->stop_all();
     table_done = true;
-    stop_readers();
+    runner_->stop_readers();
     // Fit (the spine's bench fit) and store, unit by unit.
     std::size_t done = 0;
     for (auto& up : units_) {
@@ -868,29 +443,15 @@ Result Station::run() {
         ++done;
       } catch (const std::exception& e) {
         if (!fixture_mode_) throw;
-        fail_unit(u, std::string("fit or store: ") + e.what());
+        runner_->fail_unit(u, std::string("fit or store: ") + e.what());
       }
     }
     for (auto& up : units_)
       if (up->failed) {
-        keep_partial(*up);
+        runner_->keep_partial(*up);
         record_aborted(*up, "fail", up->why, res);
       }
-    if (!fixture_mode_) {
-      const Unit& u = *units_.front();
-      res.message = "station run complete: " + std::to_string(plan_.steps.size()) + " steps, coefficients in " +
-                    (u.out / "COEFFS.json").string();
-      res.summary["coefficients"] = u.summary["coefficients"];
-      res.summary["fit"] = u.summary["fit"];
-      if (u.summary.contains("db")) res.summary["db"] = u.summary["db"];
-    } else {
-      res.message = "station run complete: " + std::to_string(plan_.steps.size()) + " steps, " + std::to_string(done) +
-                    " of " + std::to_string(units_.size()) + " units calibrated (coefficients in " +
-                    (o_.out_dir / "SLOT" / "COEFFS.json").string() + ")";
-      for (const auto& u : units_)
-        if (u->failed) res.message += "; " + u->label() + " failed: " + u->why;
-      if (done < units_.size()) res.exit_code = 1;
-    }
+    complete_run(res, facts(), done);
   } catch (const std::exception& e) {
     // Safety first: stop and disable the table (best effort, bounded time), keep the partial recordings.
     bool stopped = table_done;
@@ -898,8 +459,10 @@ Result Station::run() {
       table_->stop_heartbeat();
       stopped = table_->stop_all();
     }
-    stop_readers();
-    for (auto& u : units_) keep_partial(*u);
+    if (runner_) {
+      runner_->stop_readers();
+      for (auto& u : units_) runner_->keep_partial(*u);
+    }
     res.exit_code = (dynamic_cast<const std::invalid_argument*>(&e) || dynamic_cast<const InputError*>(&e)) ? 2 : 1;
     // Before the table or the IMU was touched (a plan error, a bad URI) nothing ran: say so.
     bool ran = table_ != nullptr;
@@ -916,40 +479,7 @@ Result Station::run() {
       res.summary["db"] = units_.front()->summary["db"];
   }
   if (table_emu_) table_emu_->stop();
-  res.summary["ok"] = res.exit_code == 0;
-  res.summary["message"] = res.message;
-  res.summary["run_id"] = run_id_;
-  if (!fixture_mode_) {
-    const fs::path rec = units_.empty() ? o_.out_dir / "recording" : units_.front()->rec_dir;
-    res.summary["recording"] = rec.string();
-    res.summary["steps"] = units_.empty() ? nlohmann::json::array() : units_.front()->steps;
-  } else {
-    res.summary["fixture"] = {{"name", fixture_.name}, {"file", fixture_.file}, {"units", units_.size()},
-                              {"arbitration", "one bridge per unit"}};
-    nlohmann::json us = nlohmann::json::array();
-    for (const auto& u : units_) {
-      nlohmann::json j = u->summary;
-      j["slot"] = u->slot.name;
-      j["ok"] = !u->failed && j.contains("coefficients");
-      if (u->failed) j["failed"] = u->why;
-      if (u->identified) j["serial"] = u->imu->identity().serial_string();
-      j["recording"] = u->rec_dir.string();
-      j["samples"] = u->samples;
-      j["samples_lost"] = u->lost;
-      j["error_samples"] = u->error_samples;
-      j["repeats"] = u->repeats;
-      j["steps"] = u->steps.size();
-      j["rate_hz"] = u->identified ? u->imu->identity().output_rate_hz : 0.0;
-      us.push_back(j);
-    }
-    res.summary["units"] = us;
-  }
-  res.summary["samples"] = total(&Unit::samples);
-  res.summary["samples_lost"] = total(&Unit::lost);
-  res.summary["error_samples"] = total(&Unit::error_samples);
-  res.summary["repeats"] = total(&Unit::repeats);
-  res.summary["emulated_s"] = clock_ ? clock_->now() : (wall_clock_ ? wall_clock_->now() : 0.0);
-  res.summary["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  summarise_run(res, facts());
   return res;
 }
 

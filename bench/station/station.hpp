@@ -17,21 +17,16 @@
 #include <nlohmann/json.hpp>
 
 #include "calibration/bench_plan.hpp"
+#include "devices/adis16488a_emulator.hpp"
 
 namespace calbench::station {
 
-struct ImuInjections {               // faults of an emulated IMU
-  std::optional<std::uint16_t> prod_id;
-  std::uint16_t sys_e_flag = 0;      // from the first recorded step on (or from flags_from_s)
-  double flags_from_s = -1;          // ≥ 0: the error flags from this emulated time on
-  int skip_every = 0;
-  std::uint16_t self_test_diag = 0;
-};
-
-struct Injections {                  // fault injection for the emulated devices (tests, demos)
-  double table_kill_at_s = -1;       // stop the in-process table emulator at this emulated time
-  ImuInjections imu;                 // every unit's
-  std::map<std::string, ImuInjections> slot;  // one slot's (by name), instead of `imu`
+// Fault injection for the emulated devices (tests, demos): the emulators' own configuration
+// (devices/adis16488a_emulator.hpp EmuFaults, devices/table_emulator.hpp kill_at_s), passed on as is.
+struct Injections {
+  double table_kill_at_s = -1;                     // the in-process table controller dies at this emulated time
+  devices::EmuFaults imu;                          // every unit's
+  std::map<std::string, devices::EmuFaults> slot;  // one slot's (by name), instead of `imu`
 };
 
 struct Options {
@@ -61,6 +56,9 @@ struct Result {
   nlohmann::json summary;
 };
 
+// Code: this file's station.cpp (setup, fit and store, the abort path), step_runner.* (the plan's
+// steps), run_summary.* (the message and --json summary), unit.hpp (one unit), fixture.* (the slots,
+// checked); devices/imu_open.hpp opens the IMUs.
 // Runs the whole station. Never throws for device/link problems: they end in Result with exit code
 // 1 after the table was told to stop. `stop` is polled (Ctrl-C).
 Result run(const Options& opt, std::ostream& log, const std::atomic<bool>& stop);

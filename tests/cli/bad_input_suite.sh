@@ -328,10 +328,12 @@ t prov-both-targets 2 "--to-device.*--export|--export.*--to-device" "$CALBENCH" 
 t prov-no-target 2 "give --to-device IMU-URI or --export FILE" "$CALBENCH" provision "$SERIAL" --db d.db
 t prov-draft-set 1 "set 1 is draft: only approved sets are provisioned" "$CALBENCH" provision "$SERIAL" --db d.db --set 1 --export p.json
 t prov-set-zero 2 "--set: .*'0'" "$CALBENCH" provision "$SERIAL" --db d.db --set 0 --export p.json
-t prov-uri-no-scheme 2 "--to-device: expected emu://SERIAL, mcp2210\[:USB-SERIAL\] or ft232h\[:USB-SERIAL\]" "$CALBENCH" provision "$SERIAL" --db d.db --to-device /dev/spidev0
-t prov-uri-scheme 2 "--to-device: unknown IMU URI scheme 'usb'" "$CALBENCH" provision "$SERIAL" --db d.db --to-device usb://1
-t prov-uri-serial 2 "--to-device: SERIAL_NUM is 16-bit" "$CALBENCH" provision "$SERIAL" --db d.db --to-device emu://70000
-t prov-uri-option 2 "--to-device: unknown emulator option 'speed'" "$CALBENCH" provision "$SERIAL" --db d.db --to-device 'emu://3?speed=2'
+t prov-uri-no-scheme 2 "--to-device: '/dev/spidev0': expected ft232h\[:USB-SERIAL\]\[#csN\] or mcp2210\[:USB-SERIAL\]\[#csN\] .*or emu://SERIAL" "$CALBENCH" provision "$SERIAL" --db d.db --to-device /dev/spidev0
+t prov-uri-scheme 2 "--to-device: 'usb://1': unknown IMU URI scheme 'usb'" "$CALBENCH" provision "$SERIAL" --db d.db --to-device usb://1
+t prov-uri-serial 2 "--to-device: 'emu://70000': emulated SERIAL_NUM is 16-bit" "$CALBENCH" provision "$SERIAL" --db d.db --to-device emu://70000
+t prov-uri-option 2 "--to-device: 'emu://3\?speed=2': unknown emulator option 'speed'" "$CALBENCH" provision "$SERIAL" --db d.db --to-device 'emu://3?speed=2'
+t prov-uri-ft232h-cs 2 "--to-device: 'ft232h:F1#cs1': the FT232H bus drives chip select cs0 \(ADBUS3\) only" "$CALBENCH" provision "$SERIAL" --db d.db --to-device 'ft232h:F1#cs1'
+t prov-uri-bridge-option 2 "--to-device: 'mcp2210:A\?x=1': options after '\?' are for an emulated unit" "$CALBENCH" provision "$SERIAL" --db d.db --to-device 'mcp2210:A?x=1'
 t prov-export-missing-folder 2 "nowhere/p\.json: cannot write: the folder nowhere does not exist" "$CALBENCH" provision "$SERIAL" --db d.db --export nowhere/p.json
 t prov-db-missing 2 "nope\.db: no database here" "$CALBENCH" provision "$SERIAL" --db nope.db --export p.json
 

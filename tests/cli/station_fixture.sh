@@ -7,7 +7,8 @@
 #  - slots failing (error flags from an emulated time on; a wrong PROD_ID): the others complete and are
 #    stored, the failed slots are reported with their reasons and recorded as failed runs, exit 1;
 #  - bad input: --units without --emulated, --units with --fixture, an unknown slot in --inject, two
-#    slots on one bridge → exit 2 naming it, before anything moves.
+#    slots on one bridge, a chip select the FT232H cannot drive → exit 2 naming it, before anything moves,
+#    the same with --emulated as on hardware (issue 35 item 4).
 set -euo pipefail
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -101,6 +102,15 @@ imu = "mcp2210:S1#cs1"
 TOML
 expect2 "two slots on one bridge" "shared.toml:4: 'imu': slots 'a' and 'b' share the bridge" \
   --fixture "$tmp/shared.toml" --table modbus-tcp://127.0.0.1:1
+# Issue 35 item 4: the fixture is checked in one place, the same for an emulated and a real run.
+expect2 "two slots on one bridge, emulated" "shared.toml:4: 'imu': slots 'a' and 'b' share the bridge" \
+  --fixture "$tmp/shared.toml" --emulated
+sed 's/mcp2210:S1/ft232h:FT4ZK1A/' "$tmp/shared.toml" > "$tmp/ft.toml"  # the issue's fixture
+for mode in "--emulated" "--table modbus-tcp://127.0.0.1:1"; do
+  # shellcheck disable=SC2086
+  expect2 "ft232h #cs0 and #cs1 ($mode)" "ft.toml:6: 'slot\[2\].imu': 'ft232h:FT4ZK1A#cs1': the FT232H bus drives chip select cs0 (ADBUS3) only" \
+    --fixture "$tmp/ft.toml" $mode
+done
 sed -i 's/#cs1/#cs0/' "$tmp/shared.toml"
 expect2 "two slots on one chip select" "'slot\[2\].imu'.*two units on one chip select" \
   --fixture "$tmp/shared.toml" --table modbus-tcp://127.0.0.1:1

@@ -87,6 +87,43 @@ TEST(Fixture, BadInputNamesTheKey) {
   EXPECT_EQ(e.field(), "slot");
 }
 
+// Issue 35 item 4: what the hardware refuses is refused when the fixture is read, before any run
+// (emulated or not): two units on one bridge (different chip selects), a chip select the FT232H
+// bus cannot drive, an emulated unit as a slot; --imu alone the same.
+TEST(Fixture, BridgeChecksAreTheFixturesForEveryRun) {
+  const std::string two = "[[slot]]\nname = \"a\"\nimu = \"ft232h:FT4ZK1A#cs0\"\n[[slot]]\nname = \"b\"\nimu = \"%U\"\n";
+  auto with = [&](const std::string& uri) {
+    std::string t = two;
+    t.replace(t.find("%U"), 2, uri);
+    return t;
+  };
+  {
+    TempFile ok(with("ft232h:FT4ZK1B"));  // each unit on its own bridge: read
+    EXPECT_EQ(load_fixture(ok.path).slots.size(), 2u);
+  }
+  InputError e = load_error(with("ft232h:FT4ZK1A#cs1"));  // the issue's fixture: one bridge, two chip selects
+  EXPECT_EQ(e.field(), "slot[2].imu");
+  EXPECT_NE(e.message().find("cs0 (ADBUS3) only"), std::string::npos) << e.what();
+  e = load_error(with("ft232h:FT4ZK1B#cs2"));  // an FT232H of its own, but a chip select its bus cannot drive
+  EXPECT_NE(e.message().find("cs0 (ADBUS3) only"), std::string::npos) << e.what();
+  e = load_error("[[slot]]\nname = \"a\"\nimu = \"mcp2210:M1#cs0\"\n[[slot]]\nname = \"b\"\nimu = \"mcp2210:M1#cs1\"\n");
+  EXPECT_EQ(e.field(), "imu");  // one MCP2210, two chip selects: one bridge per unit
+  EXPECT_EQ(e.line(), 4u);
+  EXPECT_NE(e.message().find("slots 'a' and 'b' share the bridge mcp2210:M1"), std::string::npos) << e.what();
+  e = load_error(with("emu://5"));
+  EXPECT_EQ(e.field(), "slot[2].imu");
+  EXPECT_NE(e.message().find("--emulated"), std::string::npos) << e.what();
+  for (const char* bad : {"ft232h#cs1", "emu://7"}) {
+    try {
+      single_unit_fixture(bad);
+      ADD_FAILURE() << "--imu " << bad << " accepted";
+    } catch (const InputError& x) {
+      EXPECT_EQ(x.file(), "--imu") << x.what();
+    }
+  }
+  EXPECT_EQ(single_unit_fixture("mcp2210:M1#cs3").slots.front().uri.cs, 3);
+}
+
 TEST(Fixture, EmulatedUnitsAreRoundTheCentreAndTurned) {
   const Fixture fx = emulated_fixture(8);
   ASSERT_EQ(fx.slots.size(), 8u);

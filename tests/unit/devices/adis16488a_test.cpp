@@ -105,6 +105,28 @@ TEST(Adis16488a, ErrorFlagsAreFlaggedAndDecoded) {
   EXPECT_EQ(adis::decode_sys_e_flag(adis::sys_e::new_mag | adis::sys_e::new_baro), "");
 }
 
+// Issue 35: injected faults are the emulator's configuration. after_self_test: a unit that fails in
+// service is identified and self-tested as a good one; flags_from_s delays the flags further.
+TEST(Adis16488a, ConfiguredFaultsActAfterTheSelfTestAndFromTheirTime) {
+  auto clock = std::make_shared<VirtualClock>();
+  Adis16488aEmulatorConfig cfg;
+  cfg.faults.sys_e_flag = adis::sys_e::spi_error;
+  cfg.faults.after_self_test = true;
+  cfg.faults.flags_from_s = 2.0;
+  Adis16488aEmulator emu(clock, [](double) { return EmuTruth{kW, kF}; }, {}, quiet(), cfg);
+  Adis16488a imu(emu);
+  imu.connect();
+  ASSERT_FALSE(imu.read_sample()->error());  // before the self-test: a good unit
+  ASSERT_TRUE(imu.self_test().passed);
+  for (int k = 0; k < 100; ++k) ASSERT_FALSE(imu.read_sample()->error()) << k;  // before 2 s
+  clock->wait_until(2.0);
+  imu.read_sample();  // a sample latched before may come first
+  auto s = imu.read_sample();
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->error());
+  EXPECT_EQ(s->error_text(), "SPI communication error");
+}
+
 TEST(Adis16488a, MissingSamplesAreCounted) {
   Rig r;
   r.imu.connect();

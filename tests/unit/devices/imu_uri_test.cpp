@@ -24,6 +24,23 @@ TEST(ImuUri, ParsesKindSerialAndChipSelect) {
   EXPECT_EQ(parse_imu_uri("mcp2210:A#cs8").cs, 8);
 }
 
+// Provision's emulated unit goes through the same parser (issue 35: one parser, one opener).
+TEST(ImuUri, ParsesAnEmulatedUnitWithItsFaults) {
+  ImuUri u = parse_imu_uri("emu://4660");
+  EXPECT_TRUE(u.emulated());
+  EXPECT_EQ(u.emu_serial, 4660);
+  EXPECT_FALSE(u.emu_prod_id);
+  EXPECT_FALSE(u.emu_flash_fails);
+  u = parse_imu_uri("emu://0x1234?prod_id=0x4060&flash_fails=1");
+  EXPECT_EQ(u.emu_serial, 0x1234);
+  EXPECT_EQ(u.emu_prod_id.value_or(0), 0x4060);
+  EXPECT_TRUE(u.emu_flash_fails);
+  EXPECT_EQ(parse_imu_uri("ft232h://FT1#cs2").text(), "ft232h:FT1#cs2");
+  for (const char* bad : {"emu://70000", "emu://x", "emu://-1", "emu://3?speed=2", "emu://3?prod_id=0x10000",
+                          "emu://3#cs1", "mcp2210:A?prod_id=1", "usb://1", "emu:3"})
+    EXPECT_THROW(parse_imu_uri(bad), std::invalid_argument) << bad;
+}
+
 TEST(ImuUri, RefusesWhatIsNotAnImuAddress) {
   for (const char* bad : {"", "spi0", "ft232h:bad serial", "ft232h#cs4", "mcp2210#cs9", "mcp2210#cs", "mcp2210#x1",
                           "mcp2210#cs-1", "mcp2210#cs1x", "usb:123"})

@@ -232,3 +232,28 @@ TEST_F(Table, WordOrderIsConfigurable) {
 }
 
 }  // namespace
+
+namespace {
+// Issue 35: the controller's death is the emulator's own configuration (kill_at_s), not the station's:
+// it answers until the emulated time reaches kill_at_s, then the next request fails and nothing
+// reconnects.
+TEST(TableEmulatorFaults, KillAtDiesAtItsEmulatedTime) {
+  auto clock = std::make_shared<VirtualClock>();
+  TableEmulatorConfig cfg;
+  cfg.kill_at_s = 5.0;
+  TableEmulator emu(cfg, clock);
+  emu.start();
+  TableClientOptions o;
+  o.response_timeout_s = 0.1;
+  o.retries = 2;
+  o.reconnect_backoff_s = 0.01;
+  TableClient cli(parse_table_uri(emu.uri()), o);
+  cli.connect();
+  clock->wait_until(4.9);
+  EXPECT_NO_THROW(cli.status(0));  // alive before its time
+  clock->wait_until(5.0);
+  EXPECT_THROW(cli.status(0), TableError);
+  EXPECT_FALSE(cli.stop_all());
+  emu.stop();
+}
+}  // namespace
