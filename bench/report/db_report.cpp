@@ -12,6 +12,7 @@
 #include "bench/report/inmotion_section.hpp"
 #include "db/fleet.hpp"
 #include "db/input_errors.hpp"
+#include "db/signer.hpp"
 
 namespace calbench::report {
 namespace {
@@ -24,6 +25,13 @@ std::string now_utc() {
   return b;
 }
 const char* kAxes[] = {"x", "y", "z"};
+
+// Who signed an audit entry: the name, the station, and how it was authenticated ("login anna", or
+// "OS user tess, not authenticated (SQLite)").
+std::string signed_by(const Store& store, const AuditEntry& a) {
+  const std::string note = signature_note(a.login, store.authenticated());
+  return a.user + "@" + a.station + (note.empty() ? "" : " (" + note + ")");
+}
 
 const char* kStyle = R"CSS(
 body{font-family:DejaVu Sans,Arial,sans-serif;font-size:11px;margin:16px;color:#111;max-width:1400px}
@@ -206,7 +214,7 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
       if (a.entity == "coefficient_set" && a.entity_id == current->id &&
           (a.action == "approve-refused" || (a.action == "status" && a.detail.rfind("draft -> approved", 0) == 0)))
         b << "<p class=\"note\">" << html_escape(a.action == "status" ? "Approved" : "Approval refused") << " " << html_escape(a.at)
-          << " by " << html_escape(a.user + "@" + a.station) << ": " << html_escape(a.detail) << "</p>\n";
+          << " by " << html_escape(signed_by(store, a)) << ": " << html_escape(a.detail) << "</p>\n";
   b << "<p class=\"note\">Thresholds in force for this verdict: " << html_escape(t.source) << "</p>\n<ul id=\"thresholds\" class=\"note\">";
   for (const auto& line : describe_thresholds(t)) b << "<li>" << html_escape(line) << "</li>";
   b << "</ul></div>\n";
@@ -255,8 +263,11 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
     b << "<h3>Bench run " << r->id << " → set " << s.id << "</h3>\n<table>"
       << "<tr><th class=\"l\">station</th><td class=\"l\">" << html_escape(r->station) << "</td></tr>"
       << "<tr><th class=\"l\">plan</th><td class=\"l\">" << html_escape(r->plan) << "</td></tr>"
-      << "<tr><th class=\"l\">recording</th><td class=\"l\">" << html_escape(r->recording_path) << "<br>SHA-256 of imu.csv "
-      << digest(r->recording_sha256) << "</td></tr>"
+      << "<tr><th class=\"l\">recording</th><td class=\"l\">"
+      << html_escape(r->recording_uri.empty() ? r->recording_path : r->recording_uri) << "<br>SHA-256 of imu.csv "
+      << digest(r->recording_sha256)
+      << (r->recording_digest.empty() ? std::string() : "<br>SHA-256 of all its files " + digest(r->recording_digest))
+      << "</td></tr>"
       << "<tr><th class=\"l\">time</th><td class=\"l\">" << html_escape(r->started_at) << " – " << html_escape(r->ended_at) << "</td></tr>"
       << "<tr><th class=\"l\">outcome</th><td class=\"l " << (r->outcome == "pass" ? "pass" : "fail") << "\">"
       << html_escape(r->outcome) << "</td></tr></table>\n"
@@ -289,7 +300,7 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
 
   b << "<h2>History (audit log)</h2>\n<table><tr><th class=\"l\">when</th><th class=\"l\">who</th><th class=\"l\">what</th><th class=\"l\">detail</th></tr>\n";
   for (const auto& a : store.audit_of_device(dev->id))
-    b << "<tr><td class=\"l t\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(a.user + "@" + a.station)
+    b << "<tr><td class=\"l t\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(signed_by(store, a))
       << "</td><td class=\"l\">" << html_escape(a.entity + " " + std::to_string(a.entity_id) + " " + a.action) << "</td><td class=\"l\">"
       << html_escape(a.detail) << "</td></tr>\n";
   b << "</table>\n";

@@ -3,6 +3,7 @@
 #include "common/input_error.hpp"
 #include "common/units.hpp"
 #include "db/approval.hpp"
+#include "db/signer.hpp"
 #include "db/inmotion_import.hpp"
 #include "db_test_util.hpp"
 
@@ -194,6 +195,36 @@ TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {
     signed_entry = signed_entry || (a.action == "status" && a.user == "sam" &&
                                     a.detail.find("signed by sam (CALBENCH_OPERATOR), stored by sam, four-eyes off") !=
                                         std::string::npos);
+  EXPECT_TRUE(signed_entry);
+}
+
+// Issue 35: on SQLite (no authentication) four-eyes compares the typed names ignoring case and
+// runs of whitespace, and the OS user is recorded beside each signature.
+TEST(DbApproval, FourEyesIgnoresCaseAndSpacingOfNamesOnSqlite) {
+  EXPECT_EQ(normalized_name("  Tess \t  TUCK "), "tess tuck");
+  EXPECT_TRUE(same_person("Tess Tuck", "tess   tuck"));
+  EXPECT_FALSE(same_person("Tess Tuck", "Tess Tucker"));
+  test::TempDir t;
+  Actor tess{"Tess  Tuck", "line-1", "--operator", "tessos"};
+  Store station(t.db(), test::create_opts(), tess);
+  const auto id =
+      station.store_bench({"ADIS16488A", "S1", ""}, test::bench_run(), test::payload("S1", test::random_errors(4))).set_id;
+  EXPECT_EQ(station.get_set(id).created_by_login, "tessos");
+  for (const char* variant : {"tess tuck", "TESS TUCK", "Tess\tTuck"}) {
+    Store s(t.db(), {}, Actor{variant, "qc-desk", "--operator", "other"});
+    const auto r = approve_checked(s, id, default_thresholds());
+    EXPECT_FALSE(r.ok) << variant;
+    EXPECT_TRUE(has_reason(r, "four-eyes: set " + std::to_string(id) + " was stored by 'Tess  Tuck'")) << variant;
+  }
+  EXPECT_EQ(station.get_set(id).status, SetStatus::draft);
+  Store quinn(t.db(), {}, Actor{"Quinn", "qc-desk", "--operator", "quinnos"});
+  ASSERT_TRUE(approve_checked(quinn, id, default_thresholds()).ok);
+  bool signed_entry = false;
+  for (const auto& a : quinn.audit_of_device(quinn.get_set(id).device_id))
+    signed_entry = signed_entry || (a.action == "status" && a.login == "quinnos" &&
+                                    a.detail.find("signed by Quinn (--operator; OS user quinnos, not authenticated "
+                                                  "(SQLite)), stored by Tess  Tuck (OS user tessos, not authenticated "
+                                                  "(SQLite))") != std::string::npos);
   EXPECT_TRUE(signed_entry);
 }
 
