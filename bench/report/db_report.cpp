@@ -166,6 +166,11 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
   std::ostringstream b;
   std::vector<std::string> reasons;
   std::string word = "FAIL", cls = "fail", said;
+  const auto audit = store.audit_of_device(dev.id);
+  const auto approval_row = [&](const AuditEntry& a) {
+    return a.entity == "coefficient_set" && current && a.entity_id == current->id && a.action == "status" &&
+           a.detail.rfind("draft -> approved", 0) == 0;
+  };
   if (!current) {
     reasons.push_back(sets.empty() ? "the device has no coefficient set" : "every coefficient set of the device is revoked");
   } else {
@@ -173,18 +178,25 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     const bool approved = current->status == SetStatus::approved || current->status == SetStatus::provisioned;
     reasons = chk.reasons;
     const std::string set = "Set " + std::to_string(current->id);
-    if (chk.ok && approved) {
+    // A status changed behind calbench's back (e.g. by hand in a SQLite file) has no signed
+    // approval in the audit log: not a pass.
+    const bool signed_approval = !approved || std::any_of(audit.begin(), audit.end(), approval_row);
+    if (!signed_approval)
+      reasons.push_back("set " + std::to_string(current->id) + " is " + to_string(current->status) +
+                        " but the audit log holds no signed approval of it: its status was changed outside calbench");
+    if (chk.ok && approved && signed_approval) {
       word = "PASS";
       cls = "pass";
       said = set + " is " + to_string(current->status) + " and meets every threshold in force.";
-    } else if (chk.ok) {
+    } else if (chk.ok && !approved) {
       word = "NOT APPROVED";
       cls = "draft";
       said = set + " is a draft: it meets every threshold in force but has not been approved (calbench db approve " +
              std::to_string(current->id) + ").";
     } else {
-      said = approved ? set + " is " + to_string(current->status) + " but does not meet the thresholds in force:"
-                      : set + " is a draft and would be refused approval:";
+      said = !approved ? set + " is a draft and would be refused approval:"
+             : chk.ok  ? set + " is " + to_string(current->status) + " without a signed approval:"
+                       : set + " is " + to_string(current->status) + " but does not meet the thresholds in force:";
     }
   }
   b << "<div id=\"verdict\" class=\"verdict " << cls << "\" data-verdict=\"" << word << "\">" << word << "</div> ";
@@ -210,9 +222,8 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     b << "</ul>\n";
   }
   if (current)  // what happened to this set at approval
-    for (const auto& a : store.audit_of_device(dev.id))
-      if (a.entity == "coefficient_set" && a.entity_id == current->id &&
-          (a.action == "approve-refused" || (a.action == "status" && a.detail.rfind("draft -> approved", 0) == 0)))
+    for (const auto& a : audit)
+      if (approval_row(a) || (a.entity == "coefficient_set" && a.entity_id == current->id && a.action == "approve-refused"))
         b << "<p class=\"note\">" << html_escape(a.action == "status" ? "Approved" : "Approval refused") << " " << html_escape(a.at)
           << " by " << html_escape(signed_by(store, a)) << ": " << html_escape(a.detail) << "</p>\n";
   b << "<p class=\"note\">Thresholds in force for this verdict: " << html_escape(t.source) << "</p>\n<ul id=\"thresholds\" class=\"note\">";

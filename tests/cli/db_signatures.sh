@@ -106,4 +106,9 @@ grep -q "Sam Station@line-7  bench_run 4  create  plan short, outcome aborted: .
 grep -q "Quinn QC@line-7" r.html && grep -q "Pat Provisioning@line-7" r.html && grep -q "Sam Station@line-7" r.html \
   || fail "report without the operators' names"
 grep -q "Quinn QC@line-7 (OS user $me, not authenticated (SQLite))" r.html || fail "report does not say the signature is unauthenticated"
+# A status changed by hand in the file (no signed approval in the audit log) is not a PASS (issue 35).
+sqlite3 s.db "UPDATE coefficient_sets SET status = 'approved' WHERE id = 3"
+"$CALBENCH" report 1001 --html r2.html > /dev/null
+grep -q 'data-verdict="FAIL"' r2.html && grep -q "set 3 is approved but the audit log holds no signed approval of it" r2.html \
+  || fail "a hand-made approval passed the report"
 echo "db_signatures: ok"
