@@ -15,7 +15,8 @@ std::string normalized_name(const std::string& name);
 bool same_person(const std::string& a, const std::string& b);
 
 // Whether `set` was stored by the one who signs on `store` now (four-eyes): on PostgreSQL the same
-// login, on SQLite the same name (normalized_name). `signer_name` is the store's actor's name.
+// login, on SQLite the same name as the store's actor's (normalized_name). The check that the
+// signer is the login's person is Store::check_signer (db/signer.cpp).
 bool stored_by_signer(const Store& store, const CoefficientSetRecord& set);
 // The creator's name of a set ("NAME" of created_by "NAME@STATION").
 std::string creator_name(const CoefficientSetRecord& set);

@@ -162,12 +162,12 @@ TEST(DbApproval, OutageThresholdPerLengthOnTheResultSet) {
 
 TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {
   test::TempDir t;
-  Store station(t.db(), test::create_opts(), Actor{"sam", "line-1", "CALBENCH_OPERATOR"});
+  Store station(t.db(), test::create_opts(), Actor{"sam", "line-1", "CALBENCH_OPERATOR", "samos"});
   const auto id =
       station.store_bench({"ADIS16488A", "S1", ""}, test::bench_run(), test::payload("S1", test::random_errors(4))).set_id;
   EXPECT_EQ(station.get_set(id).created_by, "sam@line-1");
   // An OS user records who ran a command but does not sign.
-  Store os(t.db(), {}, Actor{"root", "qc-desk"});
+  Store os(t.db(), {}, Actor{"root", "qc-desk", "OS user", "root"});
   auto r = approve_checked(os, id, default_thresholds());
   EXPECT_FALSE(r.ok);
   EXPECT_TRUE(has_reason(r, "approval needs a named operator"));
@@ -193,7 +193,8 @@ TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {
   bool signed_entry = false;
   for (const auto& a : os.audit_of_device(os.get_set(id).device_id))
     signed_entry = signed_entry || (a.action == "status" && a.user == "sam" &&
-                                    a.detail.find("signed by sam (CALBENCH_OPERATOR), stored by sam, four-eyes off") !=
+                                    a.detail.find("signed by sam (CALBENCH_OPERATOR; OS user samos, not authenticated (SQLite)), stored by sam (OS "
+                                                  "user samos, not authenticated (SQLite)), four-eyes off") !=
                                         std::string::npos);
   EXPECT_TRUE(signed_entry);
 }

@@ -226,7 +226,7 @@ TEST(DbStore, MalformedPayloadsAreRefusedAndNothingIsWritten) {
 
 TEST(DbStore, SqlMetacharactersInNamesAreStoredVerbatim) {
   TempDir t;
-  Store s(t.db(), test::create_opts(), Actor{"o'brien\"; DROP TABLE devices; --", "st'1"});
+  Store s(t.db(), test::create_opts(), Actor{"o'brien\"; DROP TABLE devices; --", "st'1", "OS user", "o'os"});
   const std::string serial = "X'); DROP TABLE coefficient_sets; --";
   BenchRunInput run = test::bench_run();
   run.station = "bench \"7\"; DELETE FROM audit_log;";
