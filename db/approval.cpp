@@ -10,6 +10,7 @@
 #include "common/json_parse.hpp"
 #include "common/units.hpp"
 #include "db/inmotion_import.hpp"
+#include "db/signer.hpp"
 
 namespace calbench::db {
 namespace {
@@ -214,7 +215,16 @@ std::vector<std::string> describe_thresholds(const Thresholds& t) {
   return out;
 }
 
+namespace {
+// SQLite: the OS user beside the typed name (PostgreSQL's source already names the login).
+std::string signature_suffix(const Store& store) {
+  const std::string note = store.authenticated() ? "" : signature_note(store.login(), false);
+  return note.empty() ? "" : "; " + note;
+}
+}  // namespace
+
 ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t) {
+  store.check_signer();  // an --operator that is not the login's person is refused before anything
   ApprovalCheck r;
   store.connection().write_transaction([&] {
     const CoefficientSetRecord set = store.get_set(set_id);
@@ -223,17 +233,20 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
       return;
     }
     r = check_approval(set, store.qc_of_set(set), t);
-    // The signature: a named operator, by default another than the one who stored the set.
+    // The signature: a named operator, by default another than the one who stored the set
+    // (db/signer.hpp: on PostgreSQL the login's person, four-eyes by login).
     const Actor& who = store.actor();
-    const std::string creator = set.created_by.substr(0, set.created_by.rfind('@'));
+    const std::string creator = creator_name(set);
     const bool four_eyes = store.setting(kFourEyes) == "on";
     if (!who.named()) {
       r.reasons.push_back("approval needs a named operator: --operator NAME or CALBENCH_OPERATOR (the OS user '" +
                           who.user + "' records who ran a command but does not sign)");
       r.ok = false;
-    } else if (four_eyes && who.user == creator) {
-      r.reasons.push_back("four-eyes: set " + std::to_string(set_id) + " was stored by '" + creator +
-                          "'; another operator must approve it (a one-person lab: calbench db settings four_eyes off)");
+    } else if (four_eyes && stored_by_signer(store, set)) {
+      r.reasons.push_back("four-eyes: set " + std::to_string(set_id) + " was stored by '" + creator + "'" +
+                          (store.authenticated() ? " with login '" + set.created_by_login + "', the login signing now"
+                                                 : "") +
+                          "; another operator must approve it (a one-person lab: calbench db settings four_eyes off)");
       r.ok = false;
     }
     if (const std::string why = parent_reason(store, set); !why.empty()) {
@@ -242,7 +255,8 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
     }
     if (r.ok) {
       store.set_status(set_id, SetStatus::approved,
-                       "signed by " + who.user + " (" + who.source + "), stored by " + creator +
+                       "signed by " + who.user + " (" + who.source + signature_suffix(store) + "), stored by " + creator +
+                           (set.created_by_login.empty() ? "" : " (" + signature_note(set.created_by_login, store.authenticated()) + ")") +
                            (four_eyes ? "" : ", four-eyes off") + "; thresholds: " + t.source);
     } else {
       std::string why;

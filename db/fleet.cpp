@@ -65,7 +65,10 @@ std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values)
 }
 
 std::string station_verdict(const StationStats& s) {
-  return !s.tested ? "not compared (too few units)" : s.flagged ? "DRIFTS APART: check its table and fixture" : "consistent";
+  if (s.tested) return s.flagged ? "DRIFTS APART: check its table and fixture" : "consistent";
+  if (s.others == 0) return "not compared (no other station to compare with)";
+  return "not compared (too few units: " + std::to_string(s.devices) + " here, " + std::to_string(s.others) +
+         " elsewhere; it needs 2 here and 3 elsewhere)";
 }
 
 std::vector<StationStats> station_stats(const std::vector<FleetValue>& values) {
@@ -83,6 +86,8 @@ std::vector<StationStats> station_stats(const std::vector<FleetValue>& values) {
     st.station = station;
     st.serials = serials[station];
     st.devices = st.serials.size();
+    for (const auto& [o, os] : serials)
+      if (o != station) st.others += os.size();
     for (const auto& name : coefficient_names()) {
       const auto it = coeffs.find(name);
       if (it == coeffs.end()) continue;

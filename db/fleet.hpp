@@ -52,13 +52,15 @@ struct StationCoefficient {
 struct StationStats {
   std::string station;  // "" : sets without a known station
   std::size_t devices = 0;
+  std::size_t others = 0;  // units of the other stations
   bool tested = false;  // enough units here and elsewhere to compare
   bool flagged = false;
   std::vector<StationCoefficient> coefficients;  // every coefficient when tested
   std::vector<std::string> serials;
 };
 std::vector<StationStats> station_stats(const std::vector<FleetValue>& values);
-// "consistent", "DRIFTS APART: check its table and fixture" or "not compared (too few units)".
+// "consistent", "DRIFTS APART: check its table and fixture", "not compared (no other station to
+// compare with)" or "not compared (too few units: …)".
 std::string station_verdict(const StationStats& s);
 
 }  // namespace calbench::db

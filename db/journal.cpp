@@ -67,6 +67,8 @@ SyncOutcome sync_journal(Store& journal, const std::string& central, const OpenO
     in.plan = run->plan;
     in.recording_path = run->recording_path;
     in.recording_sha256 = run->recording_sha256;
+    in.recording_uri = run->recording_uri;
+    in.recording_digest = run->recording_digest;
     in.started_at = run->started_at;
     in.ended_at = run->ended_at;
     in.outcome = run->outcome;

@@ -176,6 +176,18 @@ ALTER TABLE bench_runs ADD COLUMN slot TEXT NOT NULL DEFAULT '';
 ALTER TABLE bench_runs ADD COLUMN table_run TEXT NOT NULL DEFAULT '';
 CREATE INDEX bench_runs_table_run ON bench_runs(table_run);
 )SQL",
+      // ---- 6: signatures and recordings a central store can use (issue 35): the login beside the
+      //         typed name (SQLite: the OS user, not authenticated), and each recording's absolute
+      //         URI and digest of all its files ----
+      R"SQL(
+ALTER TABLE coefficient_sets ADD COLUMN created_by_role TEXT NOT NULL DEFAULT '';
+CREATE TRIGGER coefficient_sets_role_immutable BEFORE UPDATE OF created_by_role ON coefficient_sets
+WHEN NEW.created_by_role IS NOT OLD.created_by_role
+BEGIN SELECT RAISE(ABORT, 'coefficient sets are immutable'); END;
+ALTER TABLE audit_log ADD COLUMN db_role TEXT NOT NULL DEFAULT '';
+ALTER TABLE bench_runs ADD COLUMN recording_uri TEXT NOT NULL DEFAULT '';
+ALTER TABLE bench_runs ADD COLUMN recording_digest TEXT NOT NULL DEFAULT '';
+)SQL",
   };
   return m;
 }

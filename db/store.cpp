@@ -82,12 +82,13 @@ Actor Actor::from_environment(const std::string& operator_option) {
   } else if (const std::string u = env("CALBENCH_USER"); !u.empty()) {
     check_operator_name(u, "CALBENCH_USER");
     a.user = u, a.source = "CALBENCH_USER";
-  } else {
-    const passwd* pw = ::getpwuid(::geteuid());
-    std::string os = pw && pw->pw_name && *pw->pw_name ? pw->pw_name : env("USER");
-    a.user = os.empty() ? "unknown" : os;
-    a.source = "OS user";
   }
+  {
+    const passwd* pw = ::getpwuid(::geteuid());
+    const std::string os = pw && pw->pw_name && *pw->pw_name ? pw->pw_name : env("USER");
+    a.os_user = os.empty() ? "unknown" : os;
+  }
+  if (a.user.empty()) a.user = a.os_user, a.source = "OS user";
   const std::string s = env("CALBENCH_STATION");
   if (!s.empty()) {
     a.station = s;
@@ -161,10 +162,10 @@ int Store::schema_version() {
 }
 
 void Store::audit_migration(int from) {
-  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, action, detail) "
-                                       "VALUES (") + conn_->now_sql() + ", ?, ?, 'schema', ?, 'migrate', ?)");
+  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, action, detail, "
+                                       "db_role) VALUES (") + conn_->now_sql() + ", ?, ?, 'schema', ?, 'migrate', ?, ?)");
   st.bind(1, actor_.user).bind(2, actor_.station).bind(3, kSchemaVersion)
-      .bind(4, "from version " + std::to_string(from) + " to " + std::to_string(kSchemaVersion));
+      .bind(4, "from version " + std::to_string(from) + " to " + std::to_string(kSchemaVersion)).bind(5, login());
   st.run();
 }
 
@@ -215,6 +216,11 @@ void Store::migrate_postgres() {
                          static_cast<PgConnection&>(*conn_).role() +
                          "' may not change the schema: the database owner runs `calbench db init --db URI`");
   }
+}
+
+std::string Store::login() const {
+  if (conn_->dialect() == Dialect::postgres) return static_cast<const PgConnection&>(*conn_).role();
+  return actor_.os_user;
 }
 
 std::string Store::may_record_provisioning() {

@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 5;
+inline constexpr int kSchemaVersion = 6;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -43,6 +43,9 @@ struct Actor {
   // CALBENCH_OPERATOR) — a named operator, a signature — or "OS user" (the login name, which
   // records who ran the command but does not sign an approval).
   std::string source = "OS user";
+  // The OS user running the command (getpwuid(geteuid())), whatever name was typed: recorded beside
+  // it on SQLite, where nothing is authenticated.
+  std::string os_user;
   bool named() const { return source != "OS user"; }
   // The operator: `operator_option` (the CLI's --operator) if given, else $CALBENCH_OPERATOR, else
   // $CALBENCH_USER, else the OS user. Station: $CALBENCH_STATION, else the host name. A name must
@@ -93,8 +96,10 @@ struct QcResult {
 struct BenchRunInput {
   std::string station;          // station name; created on first use
   std::string plan;             // plan name or path
-  std::string recording_path;   // the bench recording folder
+  std::string recording_path;   // the bench recording folder, as given
   std::string recording_sha256; // SHA-256 of imu.csv (or of the recording as the station defines it)
+  std::string recording_uri;    // file://HOST/absolute/path of the folder (HOST: the station's host name)
+  std::string recording_digest; // SHA-256 of every file of the folder (bench/io/recording_location.hpp)
   std::string started_at, ended_at;  // ISO 8601 UTC
   std::string outcome = "pass";  // "pass" | "fail" | "aborted"
   // Stable id of the run (forwarding from a station's journal): a run whose uid is already stored
@@ -109,6 +114,7 @@ struct BenchRun {
   std::int64_t id = 0, device_id = 0;
   std::string station, plan, recording_path, recording_sha256, started_at, ended_at, outcome, created_at;
   std::string slot, table_run;
+  std::string recording_uri, recording_digest;  // "" before schema version 6
 };
 
 struct InMotionRun {
@@ -127,6 +133,9 @@ struct CoefficientSetRecord {
   std::optional<std::int64_t> parent_id, bench_run_id, inmotion_run_id;
   std::string payload_json;  // coefficients.json text
   std::string created_at, created_by;
+  // The login that stored it: PostgreSQL's session_user (authenticated), SQLite's OS user (not);
+  // "" for a set stored before schema version 6 on SQLite.
+  std::string created_by_login;
   SensorErrors errors;  // the indexed coefficients (σ = +inf when unknown)
 };
 
@@ -143,6 +152,9 @@ struct AuditEntry {
   std::string at, user, station, entity;
   std::int64_t entity_id = 0;
   std::string action, detail;
+  // The login that wrote it (PostgreSQL: session_user, authenticated; SQLite: the OS user, not
+  // authenticated; "" before schema version 6 on SQLite).
+  std::string login;
 };
 
 struct DeviceSummary {
@@ -203,6 +215,13 @@ class Store {
   // "set-values") in the middle of writing a set. Not for production use.
   void set_test_hook(std::function<void(const char* point)> hook) { hook_ = std::move(hook); }
   const Actor& actor() const { return actor_; }
+  // The login of this connection: PostgreSQL's session_user (authenticated), else the OS user.
+  std::string login() const;
+  bool authenticated() const { return conn_->dialect() == Dialect::postgres; }
+  // The signer of an approval, revocation, setting change or provisioning (db/signer.cpp): on
+  // PostgreSQL the login's person (db user add); an --operator that is not that person, or a login
+  // mapped to nobody, is refused (InputError). Sets the actor's name to the person's.
+  void check_signer();
   // Who the next changes are by (forwarding from a journal writes as the operator who ran the station).
   void set_actor(Actor a) { actor_ = std::move(a); }
   // "" when this connection may record provisioning events and mark sets provisioned, else why not
@@ -242,6 +261,14 @@ class Store {
   std::optional<CoefficientSetRecord> find_set(std::int64_t set_id);
   CoefficientSetRecord get_set(std::int64_t set_id);  // InputError when missing
   std::vector<CoefficientSetRecord> sets_of(std::int64_t device_id);  // by version
+  // Every set of the device with its status, by version, whatever this role may read of the sets
+  // themselves (PostgreSQL: provisioning sees no draft, but is told that one waits).
+  struct SetStatusRow {
+    std::int64_t id = 0;
+    int version = 0;
+    SetStatus status = SetStatus::draft;
+  };
+  std::vector<SetStatusRow> set_statuses(std::int64_t device_id);
   // Newest set of the device with the given status (e.g. approved), if any.
   std::optional<CoefficientSetRecord> latest_set(std::int64_t device_id, std::optional<SetStatus> status);
   std::optional<BenchRun> bench_run(std::int64_t id);

@@ -38,7 +38,7 @@ std::vector<DeviceSummary> Store::device_summaries() {
 
 static const char* kSetColumns =
     "SELECT s.id, s.device_id, d.serial, d.model, s.version, s.source, s.status, s.parent_id, s.bench_run_id, "
-    "s.inmotion_run_id, s.payload_json, s.created_at, s.created_by FROM coefficient_sets s "
+    "s.inmotion_run_id, s.payload_json, s.created_at, s.created_by, s.created_by_role FROM coefficient_sets s "
     "JOIN devices d ON d.id = s.device_id ";
 
 CoefficientSetRecord Store::read_set_row(Statement& st) {
@@ -56,6 +56,7 @@ CoefficientSetRecord Store::read_set_row(Statement& st) {
   r.payload_json = st.text(10);
   r.created_at = st.text(11);
   r.created_by = st.text(12);
+  r.created_by_login = st.text(13);
   return r;
 }
 
@@ -120,12 +121,14 @@ std::optional<CoefficientSetRecord> Store::latest_set(std::int64_t device_id, st
 std::optional<BenchRun> Store::bench_run(std::int64_t id) {
   auto st = conn_->prepare(
       "SELECT r.id, r.device_id, COALESCE(s.name, ''), r.plan, r.recording_path, r.recording_sha256, r.started_at, "
-      "r.ended_at, r.outcome, r.created_at, r.slot, r.table_run FROM bench_runs r LEFT JOIN stations s ON "
+      "r.ended_at, r.outcome, r.created_at, r.slot, r.table_run, r.recording_uri, r.recording_digest FROM bench_runs r "
+      "LEFT JOIN stations s ON "
       "s.id = r.station_id WHERE r.id = ?");
   st.bind(1, id);
   if (!st.step()) return std::nullopt;
   return BenchRun{st.int64(0), st.int64(1), st.text(2), st.text(3), st.text(4), st.text(5),
-                  st.text(6), st.text(7), st.text(8), st.text(9), st.text(10), st.text(11)};
+                  st.text(6), st.text(7), st.text(8), st.text(9), st.text(10), st.text(11),
+                  st.text(12), st.text(13)};
 }
 
 std::optional<InMotionRun> Store::inmotion_run(std::int64_t id) {
@@ -192,14 +195,25 @@ std::vector<ProvisioningEvent> Store::provisioning_of(std::int64_t device_id) {
   return out;
 }
 
+std::vector<Store::SetStatusRow> Store::set_statuses(std::int64_t device_id) {
+  std::vector<SetStatusRow> out;
+  auto st = conn_->prepare(conn_->dialect() == Dialect::postgres
+                               ? "SELECT id, version, status FROM calbench_set_statuses(?)"
+                               : "SELECT id, version, status FROM coefficient_sets WHERE device_id = ? ORDER BY version");
+  st.bind(1, device_id);
+  while (st.step())
+    out.push_back(SetStatusRow{st.int64(0), static_cast<int>(st.int64(1)), status_from_string(st.text(2))});
+  return out;
+}
+
 std::vector<AuditEntry> Store::audit_of_device(std::int64_t device_id) {
   std::vector<AuditEntry> out;
-  auto st = conn_->prepare("SELECT id, at, \"user\", station, entity, entity_id, action, detail FROM audit_log "
+  auto st = conn_->prepare("SELECT id, at, \"user\", station, entity, entity_id, action, detail, db_role FROM audit_log "
                            "WHERE device_id = ? ORDER BY id");
   st.bind(1, device_id);
   while (st.step())
     out.push_back(AuditEntry{st.int64(0), st.text(1), st.text(2), st.text(3), st.text(4), st.int64(5), st.text(6),
-                             st.text(7)});
+                             st.text(7), st.text(8)});
   return out;
 }
 

@@ -23,10 +23,11 @@ void Store::audit_locked(const std::string& entity, std::int64_t entity_id, cons
     st.bind(1, entity_id);
     if (st.step()) device = st.int64(0);
   }
-  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, device_id, action, detail) "
-                                       "VALUES (") + conn_->now_sql() + ", ?, ?, ?, ?, ?, ?, ?)");
+  // db_role: the login (on PostgreSQL the server stamps session_user, whatever is sent).
+  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, device_id, action, "
+                                       "detail, db_role) VALUES (") + conn_->now_sql() + ", ?, ?, ?, ?, ?, ?, ?, ?)");
   st.bind(1, actor_.user).bind(2, actor_.station).bind(3, entity).bind(4, entity_id).bind(5, device)
-      .bind(6, action).bind(7, detail);
+      .bind(6, action).bind(7, detail).bind(8, login());
   st.run();
 }
 
@@ -111,11 +112,11 @@ std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, 
   const int version = static_cast<int>(v.int64(0));
   auto ins = conn_->prepare(std::string(
       "INSERT INTO coefficient_sets(device_id, version, source, parent_id, bench_run_id, inmotion_run_id, "
-      "payload_json, status, created_at, created_by, uid) VALUES (?, ?, ?, ?, ?, ?, ?, 'draft', ") + conn_->now_sql() +
-      ", ?, ?) RETURNING id");
+      "payload_json, status, created_at, created_by, uid, created_by_role) VALUES (?, ?, ?, ?, ?, ?, ?, 'draft', ") +
+      conn_->now_sql() + ", ?, ?, ?) RETURNING id");
   ins.bind(1, device_id).bind(2, version).bind(3, to_string(source)).bind(4, parent).bind(5, bench_run)
       .bind(6, inmotion_run).bind(7, canonical_json).bind(8, actor_.user + "@" + actor_.station)
-      .bind(9, uid.empty() ? new_uid() : uid);
+      .bind(9, uid.empty() ? new_uid() : uid).bind(10, login());
   ins.step();
   const std::int64_t id = ins.int64(0);
   if (hook_) hook_("set-row");
@@ -158,7 +159,7 @@ static void check_bench_run(const BenchRunInput& run) {
   if (run.outcome != "pass" && run.outcome != "fail" && run.outcome != "aborted")
     throw arg_error("outcome", "expected pass, fail or aborted, got '" + run.outcome + "'");
   for (const auto* f : {&run.plan, &run.recording_path, &run.recording_sha256, &run.started_at, &run.ended_at, &run.slot,
-                        &run.table_run})
+                        &run.table_run, &run.recording_uri, &run.recording_digest})
     check_text(*f, "bench_run", false);
 }
 
@@ -180,11 +181,12 @@ static std::int64_t insert_bench_run_locked(Store& store, Connection& c, std::in
   if (!run.station.empty()) station = ensure_station_locked(store, c, run.station, "");
   auto st = c.prepare(std::string(
       "INSERT INTO bench_runs(device_id, station_id, plan, recording_path, recording_sha256, started_at, ended_at, "
-      "outcome, created_at, uid, slot, table_run) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") + c.now_sql() +
-      ", ?, ?, ?) RETURNING id");
+      "outcome, created_at, uid, slot, table_run, recording_uri, recording_digest) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ") +
+      c.now_sql() + ", ?, ?, ?, ?, ?) RETURNING id");
   st.bind(1, device_id).bind(2, station).bind(3, run.plan).bind(4, run.recording_path)
       .bind(5, run.recording_sha256).bind(6, run.started_at).bind(7, run.ended_at).bind(8, run.outcome)
-      .bind(9, run.uid).bind(10, run.slot).bind(11, run.table_run);
+      .bind(9, run.uid).bind(10, run.slot).bind(11, run.table_run).bind(12, run.recording_uri)
+      .bind(13, run.recording_digest);
   st.step();
   const std::int64_t id = st.int64(0);
   store.audit_locked("bench_run", id, "create", detail);

@@ -34,6 +34,7 @@ void Store::set_setting(const std::string& key, const std::string& value) {
     for (const auto& v : k.values) vals += (vals.empty() ? "" : ", ") + v;
     throw arg_error(key, "'" + value + "' is not one of: " + vals);
   }
+  check_signer();
   if (!actor_.named())
     throw DbError(1, "changing a setting needs a named operator (--operator NAME or CALBENCH_OPERATOR); the OS "
                      "user '" + actor_.user + "' is not a signature");
@@ -68,6 +69,7 @@ std::vector<Setting> Store::settings() {
 
 void Store::set_status(std::int64_t set_id, SetStatus to, const std::string& reason) {
   check_text(reason, "reason", false);
+  check_signer();
   conn_->write_transaction([&] {
     auto st = conn_->prepare("SELECT status FROM coefficient_sets WHERE id = ?");
     st.bind(1, set_id);
@@ -90,6 +92,7 @@ void Store::record_provisioning(std::int64_t set_id, const std::string& kind, co
                                 const std::string& readback_json, const std::string& message) {
   if (kind != "device" && kind != "export") throw arg_error("kind", "expected device or export");
   check_text(target, "target", true);
+  check_signer();
   conn_->write_transaction([&] {
     auto st = conn_->prepare("SELECT device_id, status FROM coefficient_sets WHERE id = ?");
     st.bind(1, set_id);

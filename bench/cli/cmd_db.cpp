@@ -18,6 +18,7 @@
 #include "bench/io/json_util.hpp"
 #include "db/approval.hpp"
 #include "db/fleet.hpp"
+#include "db/signer.hpp"
 #include "db/store.hpp"
 
 namespace calbench::cli {
@@ -183,17 +184,32 @@ void cmd_history(const DbArgs& a) {
   auto s = open_store(a);
   const Device d = need_device(*s, a.serial);
   const auto log = s->audit_of_device(d.id);
+  const bool auth = s->authenticated();
   if (a.json) {
     json arr = json::array();
-    for (const auto& e : log)
-      arr.push_back({{"id", e.id}, {"at", e.at}, {"user", e.user}, {"station", e.station}, {"entity", e.entity},
-                     {"entity_id", e.entity_id}, {"action", e.action}, {"detail", e.detail}});
-    print_json(json{{"serial", d.serial}, {"history", arr}}.dump(2));
+    for (const auto& e : log) {
+      json j = {{"id", e.id}, {"at", e.at}, {"user", e.user}, {"station", e.station}, {"entity", e.entity},
+                {"entity_id", e.entity_id}, {"action", e.action}, {"detail", e.detail},
+                {"login", e.login.empty() ? json(nullptr) : json(e.login)}, {"name", e.user}, {"authenticated", auth}};
+      // A bench run: where its recording is (absolute URI) and the digest of all its files.
+      if (e.entity == "bench_run")
+        if (const auto r = s->bench_run(e.entity_id))
+          j["recording"] = {{"path", r->recording_path}, {"uri", r->recording_uri}, {"digest_sha256", r->recording_digest},
+                            {"imu_csv_sha256", r->recording_sha256}};
+      arr.push_back(j);
+    }
+    print_json(json{{"serial", d.serial}, {"authenticated", auth}, {"history", arr}}.dump(2));
     return;
   }
-  for (const auto& e : log)
+  for (const auto& e : log) {
+    const std::string note = signature_note(e.login, auth);
     std::cout << e.at << "  " << e.user << "@" << e.station << "  " << e.entity << " " << e.entity_id << "  "
-              << e.action << (e.detail.empty() ? "" : "  " + e.detail) << "\n";
+              << e.action << (e.detail.empty() ? "" : "  " + e.detail) << (note.empty() ? "" : "  [" + note + "]")
+              << "\n";
+    if (e.entity == "bench_run")
+      if (const auto r = s->bench_run(e.entity_id); r && !r->recording_uri.empty())
+        std::cout << "    recording " << r->recording_uri << "  SHA-256 of its files " << r->recording_digest << "\n";
+  }
 }
 
 void cmd_approve(const DbArgs& a) {
@@ -362,7 +378,9 @@ const bool registered = add_command(70, [](CLI::App& app) {
   appr->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(appr, *a);
   appr->footer("The approval is signed: a named operator (--operator or CALBENCH_OPERATOR) other than the one who\n"
-               "stored the set (four-eyes; a one-person lab: calbench db settings four_eyes off).");
+               "stored the set (four-eyes; a one-person lab: calbench db settings four_eyes off). On PostgreSQL the\n"
+               "signer is the login's person (calbench db user add): --operator may only name that person or the\n"
+               "login, and four-eyes compares logins. On SQLite names compare ignoring case and spacing.");
   auto* rev = leaf(db, "revoke", "revoke a set (it can no longer be provisioned)", a, cmd_revoke);
   rev->add_option("SET", a->set, "coefficient set id")->required()->check(set_id());
   rev->add_option("--reason", a->reason, "why (recorded in the audit log)");
@@ -387,6 +405,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   imp->add_option("--parent", a->parent, "set the fit started from (default: found by composition)")->check(set_id());
   imp->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(imp, *a);
+  add_user_commands(db, a);
   auto* sync = leaf(db, "sync", "forward a station's journal to the central PostgreSQL store (exactly once)", a, cmd_sync);
   sync->add_option("--journal", a->journal, "the station's journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   sync->add_flag("--status", a->status, "only list what is pending (nothing is forwarded; exit 0 either way)");

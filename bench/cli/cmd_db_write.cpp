@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "bench/cli/db_args.hpp"
+#include "bench/io/recording_location.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/json_util.hpp"
@@ -150,7 +151,7 @@ void cmd_store_bench(const DbArgs& a) {
   BenchRunInput run;
   run.station = a.station.empty() ? Actor::from_environment(a.op).station : a.station;
   run.plan = a.plan;
-  run.recording_path = a.recording;
+  if (!a.recording.empty()) describe_recording(run, a.recording);  // absolute URI and digest of its files
   run.recording_sha256 = a.sha256;
   if (run.recording_sha256.empty() && !a.recording.empty()) {
     const std::filesystem::path imu = table_file(a.recording, "imu");  // imu.csv, or recording.h5

@@ -68,7 +68,20 @@ CoefficientSetRecord choose_set(Store& s, const Device& d, std::int64_t set_id) 
   const auto sets = s.sets_of(d.id);
   for (auto it = sets.rbegin(); it != sets.rend(); ++it)
     if (it->status == SetStatus::approved || it->status == SetStatus::provisioned) return *it;
-  if (sets.empty()) throw std::runtime_error("device " + d.serial + " has no coefficient set (calbench station run, db store-bench)");
+  if (sets.empty()) {
+    // This login may not see drafts (PostgreSQL provisioning): say what waits, and for whom.
+    const auto all = s.set_statuses(d.id);
+    if (all.empty())
+      throw std::runtime_error("device " + d.serial + " has no coefficient set (calbench station run, db store-bench)");
+    const auto& newest = all.back();
+    throw std::runtime_error(
+        "device " + d.serial + " has no approved coefficient set: its newest, set " + std::to_string(newest.id) + " (v" +
+        std::to_string(newest.version) + "), is " + to_string(newest.status) +
+        (newest.status == SetStatus::draft
+             ? ", awaiting approval: a QC login approves it (calbench db approve " + std::to_string(newest.id) +
+                   " --db postgresql://QC_LOGIN@HOST/DB), then provision again"
+             : ""));
+  }
   const auto& newest = sets.back();
   throw std::runtime_error("device " + d.serial + " has no approved coefficient set: its newest, set " + std::to_string(newest.id) +
                            ", is " + to_string(newest.status) +
@@ -97,6 +110,7 @@ void run(const ProvisionArgs& a) {
   // A central store's role must be allowed to record the event before anything reaches a device
   // or a file: a device written without its record would be a unit nobody can trace.
   if (const std::string why = s.may_record_provisioning(); !why.empty()) throw PermissionError(0, why);
+  s.check_signer();  // PostgreSQL: --operator must be the login's person (db/signer.hpp)
 
   if (!a.out.empty()) {
     write_text_atomic(a.out, set.payload_json + "\n");

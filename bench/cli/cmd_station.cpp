@@ -95,6 +95,15 @@ bool holds_run(const std::filesystem::path& dir) {
   return false;
 }
 
+// The approval is QC's: the central store's URI with a QC login in place of the station's (whose
+// login the database refuses an approval), e.g. postgresql://QC_LOGIN@host:5432/calbench.
+std::string qc_login_uri(const std::string& shown) {
+  std::string qc = shown;
+  if (const auto s = qc.find("://"), at = qc.find('@'); s != std::string::npos && at != std::string::npos && at > s)
+    qc.replace(s + 3, at - s - 3, "QC_LOGIN");
+  return qc;
+}
+
 void run_station(StationArgs& a) {
   a.o.plan_file = a.plan;
   a.o.out_dir = a.out;
@@ -127,7 +136,7 @@ void run_station(StationArgs& a) {
       const std::string slot = u["slot"].get<std::string>();
       if (u.contains("db") && u["db"].contains("central") && u["db"]["central"].contains("set"))
         std::cerr << "next (slot " << slot << "): calbench db approve " << u["db"]["central"]["set"].get<long long>()
-                  << " --db " << shown << " --operator NAME   (as a member of calbench_qc)" << std::endl;
+                  << " --db " << qc_login_uri(shown) << "   (as a QC login, member of calbench_qc)" << std::endl;
       else if (u.contains("db") && u["db"].contains("set") && !db::is_postgres_uri(a.o.db))
         std::cerr << "next (slot " << slot << "): calbench db approve " << u["db"]["set"].get<long long>() << " --db "
                   << shown << " --operator NAME" << std::endl;
@@ -142,14 +151,9 @@ void run_station(StationArgs& a) {
   // The next step of the workflow, to type.
   if (r.summary.contains("db") && r.summary["db"].contains("central")) {
     const auto& c = r.summary["db"]["central"];
-    // The approval is QC's: the same database as a QC login.
-    std::string qc = shown;
-    if (const auto s = qc.find("://"), at = qc.find('@'); s != std::string::npos && at != std::string::npos && at > s)
-      qc.replace(s + 3, at - s - 3, "QC_USER");
     if (c.contains("set"))
-      std::cerr << "next: calbench db approve " << c["set"].get<long long>() << " --db " << qc
-                << " --operator NAME   (as a member of calbench_qc, signed by someone other than the station's operator)"
-                << std::endl;
+      std::cerr << "next: calbench db approve " << c["set"].get<long long>() << " --db " << qc_login_uri(shown)
+                << "   (as a QC login, member of calbench_qc: its person signs, not the station's login)" << std::endl;
     else
       std::cerr << "next: calbench db sync --db " << shown << (a.o.journal.empty() ? "" : " --journal " + a.o.journal)
                 << "   (the run waits in the journal until the central store answers)" << std::endl;

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
 #include "db/store.hpp"
 
 namespace calbench::cli::dbcmd {
@@ -27,6 +29,7 @@ struct DbArgs {
   bool roles = false;  // db init --roles
   std::string journal;  // a station's journal (with a PostgreSQL --db)
   bool status = false;  // db sync --status
+  std::string login, name, role;  // db user add
 };
 
 inline std::string db_path(const DbArgs& a) { return a.db.empty() ? db::Store::default_path() : a.db; }
@@ -44,5 +47,7 @@ void cmd_import_inmotion(const DbArgs& a);
 void cmd_store_bench(const DbArgs& a);
 // db sync: forward the journal's pending runs and sets to the central store (--db URI).
 void cmd_sync(const DbArgs& a);
+// db user add|list: the people behind PostgreSQL logins (bench/cli/cmd_db_user.cpp), under `db`.
+void add_user_commands(CLI::App* db, const std::shared_ptr<DbArgs>& a);
 
 }  // namespace calbench::cli::dbcmd

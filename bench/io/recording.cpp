@@ -390,16 +390,20 @@ void RecordingWriter::finish() {
   finished_ = true;
 }
 
-std::string sha256_file(const fs::path& file) {
+void sha256_add_file(Sha256& h, const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), 0, "", "cannot open");
-  Sha256 h;
   std::vector<char> buf(1 << 20);
   while (in) {
     in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
     h.update(buf.data(), static_cast<std::size_t>(in.gcount()));
   }
   if (in.bad()) throw InputError(file.string(), 0, "", "read error");
+}
+
+std::string sha256_file(const fs::path& file) {
+  Sha256 h;
+  sha256_add_file(h, file);
   return h.hex();
 }
 

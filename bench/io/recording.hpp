@@ -174,8 +174,10 @@ class RecordingWriter {
   bool finished_ = false;
 };
 
-// SHA-256 of a file, hex.
+// SHA-256 of a file, hex; sha256_add_file feeds a file's bytes into a digest being computed.
 std::string sha256_file(const fs::path& file);
+class Sha256;
+void sha256_add_file(Sha256& h, const fs::path& file);
 
 // Provenance at a hand-over: a coefficient set (from `source`, a file or an option) used with the
 // recording in `dir` must be of the recording's unit — same serial and model as its meta.json (an

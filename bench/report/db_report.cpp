@@ -12,6 +12,7 @@
 #include "bench/report/inmotion_section.hpp"
 #include "db/fleet.hpp"
 #include "db/input_errors.hpp"
+#include "db/signer.hpp"
 
 namespace calbench::report {
 namespace {
@@ -24,6 +25,13 @@ std::string now_utc() {
   return b;
 }
 const char* kAxes[] = {"x", "y", "z"};
+
+// Who signed an audit entry: the name, the station, and how it was authenticated ("login anna", or
+// "OS user tess, not authenticated (SQLite)").
+std::string signed_by(const Store& store, const AuditEntry& a) {
+  const std::string note = signature_note(a.login, store.authenticated());
+  return a.user + "@" + a.station + (note.empty() ? "" : " (" + note + ")");
+}
 
 const char* kStyle = R"CSS(
 body{font-family:DejaVu Sans,Arial,sans-serif;font-size:11px;margin:16px;color:#111;max-width:1400px}
@@ -158,6 +166,11 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
   std::ostringstream b;
   std::vector<std::string> reasons;
   std::string word = "FAIL", cls = "fail", said;
+  const auto audit = store.audit_of_device(dev.id);
+  const auto approval_row = [&](const AuditEntry& a) {
+    return a.entity == "coefficient_set" && current && a.entity_id == current->id && a.action == "status" &&
+           a.detail.rfind("draft -> approved", 0) == 0;
+  };
   if (!current) {
     reasons.push_back(sets.empty() ? "the device has no coefficient set" : "every coefficient set of the device is revoked");
   } else {
@@ -165,18 +178,25 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     const bool approved = current->status == SetStatus::approved || current->status == SetStatus::provisioned;
     reasons = chk.reasons;
     const std::string set = "Set " + std::to_string(current->id);
-    if (chk.ok && approved) {
+    // A status changed behind calbench's back (e.g. by hand in a SQLite file) has no signed
+    // approval in the audit log: not a pass.
+    const bool signed_approval = !approved || std::any_of(audit.begin(), audit.end(), approval_row);
+    if (!signed_approval)
+      reasons.push_back("set " + std::to_string(current->id) + " is " + to_string(current->status) +
+                        " but the audit log holds no signed approval of it: its status was changed outside calbench");
+    if (chk.ok && approved && signed_approval) {
       word = "PASS";
       cls = "pass";
       said = set + " is " + to_string(current->status) + " and meets every threshold in force.";
-    } else if (chk.ok) {
+    } else if (chk.ok && !approved) {
       word = "NOT APPROVED";
       cls = "draft";
       said = set + " is a draft: it meets every threshold in force but has not been approved (calbench db approve " +
              std::to_string(current->id) + ").";
     } else {
-      said = approved ? set + " is " + to_string(current->status) + " but does not meet the thresholds in force:"
-                      : set + " is a draft and would be refused approval:";
+      said = !approved ? set + " is a draft and would be refused approval:"
+             : chk.ok  ? set + " is " + to_string(current->status) + " without a signed approval:"
+                       : set + " is " + to_string(current->status) + " but does not meet the thresholds in force:";
     }
   }
   b << "<div id=\"verdict\" class=\"verdict " << cls << "\" data-verdict=\"" << word << "\">" << word << "</div> ";
@@ -202,11 +222,10 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     b << "</ul>\n";
   }
   if (current)  // what happened to this set at approval
-    for (const auto& a : store.audit_of_device(dev.id))
-      if (a.entity == "coefficient_set" && a.entity_id == current->id &&
-          (a.action == "approve-refused" || (a.action == "status" && a.detail.rfind("draft -> approved", 0) == 0)))
+    for (const auto& a : audit)
+      if (approval_row(a) || (a.entity == "coefficient_set" && a.entity_id == current->id && a.action == "approve-refused"))
         b << "<p class=\"note\">" << html_escape(a.action == "status" ? "Approved" : "Approval refused") << " " << html_escape(a.at)
-          << " by " << html_escape(a.user + "@" + a.station) << ": " << html_escape(a.detail) << "</p>\n";
+          << " by " << html_escape(signed_by(store, a)) << ": " << html_escape(a.detail) << "</p>\n";
   b << "<p class=\"note\">Thresholds in force for this verdict: " << html_escape(t.source) << "</p>\n<ul id=\"thresholds\" class=\"note\">";
   for (const auto& line : describe_thresholds(t)) b << "<li>" << html_escape(line) << "</li>";
   b << "</ul></div>\n";
@@ -255,8 +274,11 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
     b << "<h3>Bench run " << r->id << " → set " << s.id << "</h3>\n<table>"
       << "<tr><th class=\"l\">station</th><td class=\"l\">" << html_escape(r->station) << "</td></tr>"
       << "<tr><th class=\"l\">plan</th><td class=\"l\">" << html_escape(r->plan) << "</td></tr>"
-      << "<tr><th class=\"l\">recording</th><td class=\"l\">" << html_escape(r->recording_path) << "<br>SHA-256 of imu.csv "
-      << digest(r->recording_sha256) << "</td></tr>"
+      << "<tr><th class=\"l\">recording</th><td class=\"l\">"
+      << html_escape(r->recording_uri.empty() ? r->recording_path : r->recording_uri) << "<br>SHA-256 of imu.csv "
+      << digest(r->recording_sha256)
+      << (r->recording_digest.empty() ? std::string() : "<br>SHA-256 of all its files " + digest(r->recording_digest))
+      << "</td></tr>"
       << "<tr><th class=\"l\">time</th><td class=\"l\">" << html_escape(r->started_at) << " – " << html_escape(r->ended_at) << "</td></tr>"
       << "<tr><th class=\"l\">outcome</th><td class=\"l " << (r->outcome == "pass" ? "pass" : "fail") << "\">"
       << html_escape(r->outcome) << "</td></tr></table>\n"
@@ -289,7 +311,7 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
 
   b << "<h2>History (audit log)</h2>\n<table><tr><th class=\"l\">when</th><th class=\"l\">who</th><th class=\"l\">what</th><th class=\"l\">detail</th></tr>\n";
   for (const auto& a : store.audit_of_device(dev->id))
-    b << "<tr><td class=\"l t\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(a.user + "@" + a.station)
+    b << "<tr><td class=\"l t\">" << html_escape(a.at) << "</td><td class=\"l\">" << html_escape(signed_by(store, a))
       << "</td><td class=\"l\">" << html_escape(a.entity + " " + std::to_string(a.entity_id) + " " + a.action) << "</td><td class=\"l\">"
       << html_escape(a.detail) << "</td></tr>\n";
   b << "</table>\n";

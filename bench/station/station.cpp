@@ -15,6 +15,7 @@
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "bench/io/recording.hpp"
+#include "bench/io/recording_location.hpp"
 #include "bench/station/fixture.hpp"
 #include "bench/station/run_summary.hpp"
 #include "bench/station/step_runner.hpp"
@@ -359,6 +360,7 @@ void Station::finish_unit(Unit& u) {
     const std::unique_ptr<db::Store> store = open_store();
     db::BenchRunInput run = bench_run_record(u, *store, "pass", u.rec_dir.string());
     run.recording_sha256 = sha256_file(u.rec_dir / "imu.csv");
+    describe_recording(run, u.rec_dir);  // a central store's view: file://HOST/path and the digest of its files
     run.qc.push_back({"step_repeats", static_cast<double>(u.repeats), std::nullopt, true, "", db::kSampleNotApplicable, ""});
     const auto& id = u.imu->identity();
     const db::StoredSet st = store->store_bench({"ADIS16488A", id.serial_string(), id.firmware()}, run,

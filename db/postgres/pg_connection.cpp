@@ -168,7 +168,13 @@ void check_target(const std::string& target) {
   // Values libpq checks only when it connects: checked here, so that a typo is bad input (exit 2)
   // and not an unreachable server.
   std::string bad;
-  for (PQconninfoOption* p = o; p->keyword; ++p) {
+  // No database: libpq would take the user's name for it, and the server's answer ("refused the
+  // credentials", or no such database) would hide that the URI lacks a part.
+  bool has_db = false;
+  for (PQconninfoOption* p = o; p->keyword; ++p)
+    if (std::string(p->keyword) == "dbname" && p->val && *p->val) has_db = true;
+  if (!has_db) bad = "no database named (the path after HOST[:PORT]/ is empty)";
+  for (PQconninfoOption* p = o; p->keyword && bad.empty(); ++p) {
     if (!p->val) continue;
     const std::string k = p->keyword, v = p->val;
     if (k == "port" || k == "connect_timeout") {

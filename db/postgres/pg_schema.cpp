@@ -27,6 +27,61 @@ ALTER TABLE bench_runs ADD COLUMN table_run text NOT NULL DEFAULT '';
 CREATE INDEX bench_runs_table_run ON bench_runs(table_run);
 INSERT INTO schema_version(version) VALUES (5);
 )SQL",
+      // ---- 6: signatures a QC team can rely on, recordings a central store can use (issue 35) ----
+      R"SQL(
+-- Who a login is: the person who signs with it (calbench db user add). History keeps the name
+-- written at signing time; this table says who may sign now.
+CREATE TABLE calbench_users (
+  login    text PRIMARY KEY,
+  name     text NOT NULL CHECK (name <> ''),
+  role     text NOT NULL CHECK (role IN ('qc', 'station', 'provisioning')),
+  added_at timestamptz NOT NULL DEFAULT now(),
+  added_by text NOT NULL DEFAULT session_user
+);
+DO $$
+DECLARE r text;
+BEGIN
+  FOREACH r IN ARRAY ARRAY['calbench_station', 'calbench_qc', 'calbench_provisioning', 'calbench_reader'] LOOP
+    IF EXISTS (SELECT 1 FROM pg_roles WHERE rolname = r) THEN
+      EXECUTE format('GRANT SELECT ON calbench_users TO %I', r);
+    END IF;
+  END LOOP;
+END $$;
+ALTER TABLE bench_runs ADD COLUMN recording_uri text NOT NULL DEFAULT '';
+ALTER TABLE bench_runs ADD COLUMN recording_digest text NOT NULL DEFAULT '';
+-- The transaction that wrote an audit row (stamped by the server, as db_role).
+ALTER TABLE audit_log ADD COLUMN txid bigint NOT NULL DEFAULT txid_current();
+CREATE FUNCTION calbench_stamp_txid() RETURNS trigger LANGUAGE plpgsql AS $f$
+BEGIN
+  NEW.txid := txid_current();
+  RETURN NEW;
+END $f$;
+CREATE TRIGGER audit_log_txid BEFORE INSERT ON audit_log FOR EACH ROW EXECUTE FUNCTION calbench_stamp_txid();
+-- No status change without its audit row, for every role, the owner included: at commit, the
+-- transaction that moved a set's status must have written the audit row saying so.
+CREATE FUNCTION calbench_status_audited() RETURNS trigger LANGUAGE plpgsql SECURITY DEFINER
+  SET search_path = public, pg_temp AS $f$
+BEGIN
+  IF NOT EXISTS (SELECT 1 FROM audit_log a WHERE a.entity = 'coefficient_set' AND a.entity_id = NEW.id
+                 AND a.action = 'status' AND a.txid = txid_current()
+                 AND a.detail LIKE OLD.status || ' -> ' || NEW.status || '%') THEN
+    RAISE EXCEPTION 'status change of coefficient set % (% -> %) without its audit row: change a status with '
+                    'calbench (db approve, db revoke, provision), which writes both in one transaction',
+                    NEW.id, OLD.status, NEW.status USING ERRCODE = 'integrity_constraint_violation';
+  END IF;
+  RETURN NULL;
+END $f$;
+CREATE CONSTRAINT TRIGGER coefficient_sets_status_audited AFTER UPDATE OF status ON coefficient_sets
+  DEFERRABLE INITIALLY DEFERRED FOR EACH ROW WHEN (OLD.status IS DISTINCT FROM NEW.status)
+  EXECUTE FUNCTION calbench_status_audited();
+-- Which sets a device has, and their status, for every role (provisioning sees no draft's row, but
+-- may be told that one waits for approval).
+CREATE FUNCTION calbench_set_statuses(device bigint) RETURNS TABLE (id bigint, version integer, status text)
+  LANGUAGE sql STABLE SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+  SELECT s.id, s.version, s.status FROM coefficient_sets s WHERE s.device_id = device ORDER BY s.version
+$f$;
+INSERT INTO schema_version(version) VALUES (6);
+)SQL",
   };
   return m;
 }

@@ -39,6 +39,13 @@ GRANT USAGE ON SCHEMA public TO calbench_station, calbench_qc, calbench_provisio
 GRANT SELECT ON ALL TABLES IN SCHEMA public TO calbench_station, calbench_qc, calbench_reader;
 GRANT SELECT ON devices, stations, coefficient_sets, coefficient_values, provisioning_events, settings,
   schema_version TO calbench_provisioning;
+-- Who each login is (schema version 6): every role reads it, to sign as its person.
+DO $$
+BEGIN
+  IF to_regclass('calbench_users') IS NOT NULL THEN
+    GRANT SELECT ON calbench_users TO calbench_provisioning;
+  END IF;
+END $$;
 
 -- The station: new rows only.
 GRANT INSERT ON devices, stations, bench_runs, inmotion_runs, coefficient_sets, coefficient_values,

@@ -255,6 +255,7 @@ t db-devices-missing 2 "nope\.db: no database here" "$CALBENCH" db devices --db 
 # and a station or store-bench with a malformed URI writes no journal.
 t db-pg-bad-port 2 "postgresql://st@127\.0\.0\.1:x1/c: not a valid PostgreSQL URI: port 'x1' is not a port number" "$CALBENCH" db devices --db "postgresql://st@127.0.0.1:x1/c"
 t db-pg-port-range 2 "port '70000' is not a port number" "$CALBENCH" db devices --db "postgresql://st@127.0.0.1:70000/c"
+t db-pg-no-database 2 "postgresql://st@127\.0\.0\.1:5432: not a valid PostgreSQL URI: no database named" "$CALBENCH" db devices --db "postgresql://st@127.0.0.1:5432"
 t db-pg-sslmode 2 "sslmode 'sometimes' is not one of" "$CALBENCH" db devices --db "postgresql://st@h/c?sslmode=sometimes"
 t db-pg-bad-param 2 "not a valid PostgreSQL URI \(invalid URI query parameter" "$CALBENCH" db devices --db "postgresql://st@h/c?colour=blue"
 t db-pg-bad-escape 2 "^calbench: error: postgresql://st@h/c: not a valid PostgreSQL URI \(invalid password part|invalid percent" "$CALBENCH" db devices --db "postgresql://st:pa%zzss@h/c"

@@ -21,7 +21,7 @@ ADMIN="postgresql:///calbench?host=$T/pg&port=$port&user=calbench_admin"
 p1=$!
 "$CALBENCH" db init --db "$ADMIN" --roles --operator admin > i2.txt 2>&1 || { cat i2.txt; fail "second init"; }
 wait $p1 || { cat i1.txt; fail "first init"; }
-grep -q "schema version 5" i1.txt && grep -q "schema version 5" i2.txt || fail "init output"
+grep -q "schema version 6" i1.txt && grep -q "schema version 6" i2.txt || fail "init output"
 [ "$(admin -d calbench -c "SELECT count(*) FROM schema_version WHERE version = 5")" = 1 ] || fail "migrated twice"
 [ "$(admin -d calbench -c "SELECT count(*) FROM audit_log WHERE entity = 'schema' AND action = 'migrate'")" = 1 ] || fail "migration audited twice"
 
@@ -35,6 +35,9 @@ for u in station3:calbench_station anna:calbench_qc prov1:calbench_provisioning 
 done
 uri() { echo "postgresql://$1@127.0.0.1:$port/calbench"; }
 ST=$(uri station3) QC=$(uri anna) PV=$(uri prov1) RD=$(uri reader1)
+# The people who sign with the QC and provisioning logins (issue 35).
+"$CALBENCH" db user add anna --name anna --role qc --db "$ADMIN" --operator admin > /dev/null
+"$CALBENCH" db user add prov1 --name pete --role provisioning --db "$ADMIN" --operator admin > /dev/null
 export CALBENCH_STATION=line-3 CALBENCH_JOURNAL="$T/journal.db"
 
 # A station run on emulated hardware into the central store (through the journal).
@@ -43,7 +46,7 @@ export CALBENCH_STATION=line-3 CALBENCH_JOURNAL="$T/journal.db"
 grep -q "forwarded to postgresql://station3@127.0.0.1:$port/calbench: 1005 run 1 (pass) -> central run" st.txt || { cat st.txt; fail "station did not forward"; }
 set_id=$(sed -n 's/^next: calbench db approve \([0-9]*\) --db postgresql.*/\1/p' st.txt)
 [ -n "$set_id" ] || { cat st.txt; fail "no central set in the next-step hint"; }
-grep -q "^next: calbench db approve $set_id --db postgresql://QC_USER@127.0.0.1:$port/calbench" st.txt || { cat st.txt; fail "the hint does not say QC approves"; }
+grep -q "^next: calbench db approve $set_id --db postgresql://QC_LOGIN@127.0.0.1:$port/calbench" st.txt || { cat st.txt; fail "the hint does not say QC approves"; }
 [ "$(admin -d calbench -c "SELECT s.status || ' ' || s.created_by || ' ' || s.created_by_role || ' ' || st.name FROM coefficient_sets s JOIN bench_runs r ON r.id = s.bench_run_id JOIN stations st ON st.id = r.station_id WHERE s.id = $set_id")" = "draft sam@line-3 station3 line-3" ] \
   || fail "central set not recorded as the station's draft"
 
@@ -135,11 +138,15 @@ admin -d old -1 -f "$SRC/db/postgres/schema.sql" > /dev/null
 admin -d old -f "$SRC/db/postgres/roles.sql" > /dev/null
 echo "127.0.0.1:$port:old:station3:${PW[station3]}" >> "$PGPASSFILE"
 set +e; "$CALBENCH" db devices --db "postgresql://station3@127.0.0.1:$port/old" 2> err.txt; rc=$?; set -e
-[ "$rc" = 1 ] && grep -q "schema version 3, this calbench needs 5" err.txt && grep -q "db init" err.txt || { cat err.txt; fail "older schema: exit $rc"; }
+[ "$rc" = 1 ] && grep -q "schema version 3, this calbench needs 6" err.txt && grep -q "db init" err.txt || { cat err.txt; fail "older schema: exit $rc"; }
 # Two units in one table cycle (a fixture): both reach the centre with their slots and one table run.
 "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --units 2 --seed 40 --db "$ST" --out fx \
   --json > fx.json 2> fx.txt || { cat fx.txt; fail "fixture station run"; }
 run_id=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["run_id"])' fx.json)
+# The next steps name a QC login, not the station's own (which the database refuses an approval).
+[ "$(grep -c "^next (slot [12]): calbench db approve [0-9]* --db postgresql://QC_LOGIN@127.0.0.1:$port/calbench" fx.txt)" = 2 ] \
+  || { cat fx.txt; fail "the fixture's next steps do not name a QC login"; }
+! grep "^next" fx.txt | grep -q "station3@" || { cat fx.txt; fail "a next step suggests the station's login"; }
 [ "$(admin -d calbench -c "SELECT string_agg(r.slot || ':' || d.serial, ' ' ORDER BY r.slot) FROM bench_runs r JOIN devices d ON d.id = r.device_id WHERE r.table_run = '$run_id'")" = "1:1040 2:1041" ] \
   || { admin -d calbench -c "SELECT slot, table_run FROM bench_runs"; fail "the fixture's runs at the centre"; }
 echo "PASS"

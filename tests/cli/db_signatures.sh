@@ -34,8 +34,22 @@ run "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated 
 # Another, named operator signs: approved; the audit log names signer and storer.
 "$CALBENCH" db approve 1 --operator "Quinn QC" > out.txt || { cat out.txt; fail "signed approval refused"; }
 "$CALBENCH" db history 1001 > hist.txt
-grep -q "Quinn QC@line-7  coefficient_set 1  status  draft -> approved: signed by Quinn QC (--operator), stored by Sam Station" hist.txt \
+me=$(id -un)
+grep -q "Quinn QC@line-7  coefficient_set 1  status  draft -> approved: signed by Quinn QC (--operator; OS user $me, not authenticated (SQLite)), stored by Sam Station (OS user $me, not authenticated (SQLite))" hist.txt \
   || { cat hist.txt; fail "approval signature not in the history"; }
+# Issue 35: the OS user is recorded beside the typed name, and said to be unauthenticated.
+[ "$(sqlite3 s.db "SELECT db_role FROM audit_log WHERE entity_id = 1 AND action = 'status'")" = "$me" ] || fail "OS user not recorded"
+[ "$(sqlite3 s.db "SELECT created_by_role FROM coefficient_sets WHERE id = 1")" = "$me" ] || fail "creator's OS user not recorded"
+grep -q "draft -> approved.*\[OS user $me, not authenticated (SQLite)\]" hist.txt || { cat hist.txt; fail "history without the OS user"; }
+"$CALBENCH" db history 1001 --json | python3 -c '
+import json, sys
+h = json.load(sys.stdin)
+assert h["authenticated"] is False, h
+sig = [e for e in h["history"] if e["action"] == "status"][0]
+assert sig["login"] == sys.argv[1] and sig["name"] == "Quinn QC" and sig["authenticated"] is False, sig
+run = [e for e in h["history"] if e["entity"] == "bench_run"][0]["recording"]
+assert run["uri"].startswith("file://") and run["uri"].endswith("/run/recording"), run
+assert len(run["digest_sha256"]) == 64, run' "$me" || fail "history --json without login, name or recording"
 grep -q "approve-refused  four-eyes" hist.txt || fail "four-eyes refusal not in the history"
 
 # Settings: changing needs a named operator; unknown keys/values are bad input; audited with name and time.
@@ -60,6 +74,20 @@ assert s["changed_by"] == "Olga Solo@line-7" and s["changed_at"], s'
 "$CALBENCH" db approve 2 --operator "Olga Solo" > out.txt || { cat err.txt; fail "one-person lab approval refused"; }
 grep -q "four-eyes off" <("$CALBENCH" db history 1001) || fail "relaxed approval not marked in the history"
 
+# Four-eyes compares names ignoring case and spacing (issue 35): Tess stores, "tess" and "TESS  tuck"-like
+# variants are the same person and are refused; the status stays draft.
+CALBENCH_OPERATOR="Tess  Tuck" "$CALBENCH" db store-bench --coeffs run/COEFFS.json --recording run/recording \
+  --qc residual=0.1:1 > /dev/null
+"$CALBENCH" db settings four_eyes on --operator "Olga Solo" > /dev/null
+for who in "tess tuck" "TESS TUCK" "Tess   tuck"; do
+  run "$CALBENCH" db approve 3 --operator "$who"
+  [ "$rc" = 1 ] && grep -q "four-eyes: set 3 was stored by 'Tess  Tuck'" err.txt || { cat err.txt; fail "'$who' approved Tess Tuck's set: exit $rc"; }
+done
+[ "$(sqlite3 s.db "SELECT status FROM coefficient_sets WHERE id = 3")" = draft ] || fail "a case variant approved"
+# The recording: an absolute file:// URI naming this host, and the digest of all its files.
+row=$(sqlite3 s.db "SELECT recording_uri || ' ' || recording_digest FROM bench_runs ORDER BY id DESC LIMIT 1")
+[ "$row" = "file://$(hostname)$T/run/recording $(python3 "$SRC/tests/support/folder_digest.py" run/recording)" ] || fail "recording uri/digest: $row"
+
 # Provisioning records its operator.
 "$CALBENCH" provision 1001 --set 2 --export p.json --operator "Pat Provisioning" > /dev/null
 [ "$(sqlite3 s.db "SELECT actor FROM provisioning_events ORDER BY id DESC LIMIT 1")" = "Pat Provisioning@line-7" ] || fail "provisioning actor"
@@ -67,14 +95,20 @@ grep -q "four-eyes off" <("$CALBENCH" db history 1001) || fail "relaxed approval
 # An aborted run is in the history, with its reason and the partial recording.
 run "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --db s.db --out run2 \
   --inject table-kill-at=20 --operator "Sam Station"
-[ "$rc" = 1 ] && grep -q "recorded as aborted bench run 3 in s.db" err.txt || { cat err.txt; fail "aborted run: exit $rc"; }
+[ "$rc" = 1 ] && grep -q "recorded as aborted bench run 4 in s.db" err.txt || { cat err.txt; fail "aborted run: exit $rc"; }
 "$CALBENCH" db history 1001 > hist.txt
-grep -q "Sam Station@line-7  bench_run 3  create  plan short, outcome aborted: .*; partial recording run2/recording" hist.txt \
+grep -q "Sam Station@line-7  bench_run 4  create  plan short, outcome aborted: .*; partial recording run2/recording" hist.txt \
   || { cat hist.txt; fail "aborted run not in the history"; }
-[ "$(sqlite3 s.db "SELECT count(*) FROM coefficient_sets")" = 2 ] || fail "an aborted run created a set"
+[ "$(sqlite3 s.db "SELECT count(*) FROM coefficient_sets")" = 3 ] || fail "an aborted run created a set"
 
 # The device report shows the names.
 "$CALBENCH" report 1001 --html r.html > /dev/null
 grep -q "Quinn QC@line-7" r.html && grep -q "Pat Provisioning@line-7" r.html && grep -q "Sam Station@line-7" r.html \
   || fail "report without the operators' names"
+grep -q "Quinn QC@line-7 (OS user $me, not authenticated (SQLite))" r.html || fail "report does not say the signature is unauthenticated"
+# A status changed by hand in the file (no signed approval in the audit log) is not a PASS (issue 35).
+sqlite3 s.db "UPDATE coefficient_sets SET status = 'approved' WHERE id = 3"
+"$CALBENCH" report 1001 --html r2.html > /dev/null
+grep -q 'data-verdict="FAIL"' r2.html && grep -q "set 3 is approved but the audit log holds no signed approval of it" r2.html \
+  || fail "a hand-made approval passed the report"
 echo "db_signatures: ok"

@@ -3,6 +3,7 @@
 #include "common/input_error.hpp"
 #include "common/units.hpp"
 #include "db/approval.hpp"
+#include "db/signer.hpp"
 #include "db/inmotion_import.hpp"
 #include "db_test_util.hpp"
 
@@ -161,12 +162,12 @@ TEST(DbApproval, OutageThresholdPerLengthOnTheResultSet) {
 
 TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {
   test::TempDir t;
-  Store station(t.db(), test::create_opts(), Actor{"sam", "line-1", "CALBENCH_OPERATOR"});
+  Store station(t.db(), test::create_opts(), Actor{"sam", "line-1", "CALBENCH_OPERATOR", "samos"});
   const auto id =
       station.store_bench({"ADIS16488A", "S1", ""}, test::bench_run(), test::payload("S1", test::random_errors(4))).set_id;
   EXPECT_EQ(station.get_set(id).created_by, "sam@line-1");
   // An OS user records who ran a command but does not sign.
-  Store os(t.db(), {}, Actor{"root", "qc-desk"});
+  Store os(t.db(), {}, Actor{"root", "qc-desk", "OS user", "root"});
   auto r = approve_checked(os, id, default_thresholds());
   EXPECT_FALSE(r.ok);
   EXPECT_TRUE(has_reason(r, "approval needs a named operator"));
@@ -192,8 +193,39 @@ TEST(DbApproval, NeedsANamedOperatorOtherThanWhoStoredTheSet) {
   bool signed_entry = false;
   for (const auto& a : os.audit_of_device(os.get_set(id).device_id))
     signed_entry = signed_entry || (a.action == "status" && a.user == "sam" &&
-                                    a.detail.find("signed by sam (CALBENCH_OPERATOR), stored by sam, four-eyes off") !=
+                                    a.detail.find("signed by sam (CALBENCH_OPERATOR; OS user samos, not authenticated (SQLite)), stored by sam (OS "
+                                                  "user samos, not authenticated (SQLite)), four-eyes off") !=
                                         std::string::npos);
+  EXPECT_TRUE(signed_entry);
+}
+
+// Issue 35: on SQLite (no authentication) four-eyes compares the typed names ignoring case and
+// runs of whitespace, and the OS user is recorded beside each signature.
+TEST(DbApproval, FourEyesIgnoresCaseAndSpacingOfNamesOnSqlite) {
+  EXPECT_EQ(normalized_name("  Tess \t  TUCK "), "tess tuck");
+  EXPECT_TRUE(same_person("Tess Tuck", "tess   tuck"));
+  EXPECT_FALSE(same_person("Tess Tuck", "Tess Tucker"));
+  test::TempDir t;
+  Actor tess{"Tess  Tuck", "line-1", "--operator", "tessos"};
+  Store station(t.db(), test::create_opts(), tess);
+  const auto id =
+      station.store_bench({"ADIS16488A", "S1", ""}, test::bench_run(), test::payload("S1", test::random_errors(4))).set_id;
+  EXPECT_EQ(station.get_set(id).created_by_login, "tessos");
+  for (const char* variant : {"tess tuck", "TESS TUCK", "Tess\tTuck"}) {
+    Store s(t.db(), {}, Actor{variant, "qc-desk", "--operator", "other"});
+    const auto r = approve_checked(s, id, default_thresholds());
+    EXPECT_FALSE(r.ok) << variant;
+    EXPECT_TRUE(has_reason(r, "four-eyes: set " + std::to_string(id) + " was stored by 'Tess  Tuck'")) << variant;
+  }
+  EXPECT_EQ(station.get_set(id).status, SetStatus::draft);
+  Store quinn(t.db(), {}, Actor{"Quinn", "qc-desk", "--operator", "quinnos"});
+  ASSERT_TRUE(approve_checked(quinn, id, default_thresholds()).ok);
+  bool signed_entry = false;
+  for (const auto& a : quinn.audit_of_device(quinn.get_set(id).device_id))
+    signed_entry = signed_entry || (a.action == "status" && a.login == "quinnos" &&
+                                    a.detail.find("signed by Quinn (--operator; OS user quinnos, not authenticated "
+                                                  "(SQLite)), stored by Tess  Tuck (OS user tessos, not authenticated "
+                                                  "(SQLite))") != std::string::npos);
   EXPECT_TRUE(signed_entry);
 }
 

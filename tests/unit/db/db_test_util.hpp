@@ -33,8 +33,8 @@ inline OpenOptions create_opts() {
 }
 
 // The station's actor (an OS user: records, does not sign) and a QC engineer who signs approvals.
-inline Actor test_actor() { return Actor{"tester", "station-T"}; }
-inline Actor qc_actor() { return Actor{"qc-anna", "qc-desk", "--operator"}; }
+inline Actor test_actor() { return Actor{"tester", "station-T", "OS user", "tester"}; }
+inline Actor qc_actor() { return Actor{"qc-anna", "qc-desk", "--operator", "anna"}; }
 
 // A plausible ADIS16488A error set with σ, drawn from `seed`.
 inline SensorErrors random_errors(unsigned seed) {

@@ -79,7 +79,16 @@ TEST(DbFleet, StationsNeedUnitsOnBothSidesToBeCompared) {
   for (const auto& s : station_stats(v)) {
     EXPECT_FALSE(s.tested) << s.station;
     EXPECT_FALSE(s.flagged) << s.station;
+    // Why not (issue 35): the counts on both sides, not a bare "too few units".
+    EXPECT_EQ(station_verdict(s), s.station == "line-1"
+                                      ? "not compared (too few units: 1 here, 2 elsewhere; it needs 2 here and 3 elsewhere)"
+                                      : "not compared (too few units: 2 here, 1 elsewhere; it needs 2 here and 3 elsewhere)");
   }
+  // One station alone: there is nothing to compare with, whatever its number of units.
+  v[0].station = "line-2";
+  const auto alone = station_stats(v);
+  ASSERT_EQ(alone.size(), 1u);
+  EXPECT_EQ(station_verdict(alone[0]), "not compared (no other station to compare with)");
 }
 
 TEST(DbFleet, MedianOfEvenAndOdd) {

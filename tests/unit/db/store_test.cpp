@@ -59,6 +59,43 @@ TEST(DbStore, MigratesSchema1QcResults) {
   EXPECT_THROW(s.connection().exec("UPDATE qc_results SET sample = 'half-sample'"), DbError);
 }
 
+// Issue 35: a store of schema 5 is migrated to 6 (the login beside each name; a recording's URI
+// and digest). Old rows read with those empty; new ones carry them; the login of a set is immutable.
+TEST(DbStore, MigratesSchema5ToLoginsAndRecordingLocations) {
+  TempDir t;
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(t.db().c_str(), &raw), SQLITE_OK);
+    for (int i = 0; i < 5; ++i) ASSERT_EQ(sqlite3_exec(raw, migrations()[i], nullptr, nullptr, nullptr), SQLITE_OK);
+    const char* rows =
+        "INSERT INTO devices VALUES (1, 'ADIS16488A', 'OLD1', '', '2026-01-01T00:00:00.000Z');"
+        "INSERT INTO bench_runs(id, device_id, outcome, created_at) VALUES (1, 1, 'pass', '2026-01-01T00:00:00.000Z');"
+        "INSERT INTO coefficient_sets(id, device_id, version, source, bench_run_id, payload_json, created_at, created_by) "
+        "VALUES (1, 1, 1, 'bench', 1, '{}', '2026-01-01T00:00:00.000Z', 'old@x');"
+        "INSERT INTO audit_log(at, user, station, entity, entity_id, device_id, action) "
+        "VALUES ('2026-01-01T00:00:00.000Z', 'old', 'x', 'coefficient_set', 1, 1, 'create');"
+        "PRAGMA user_version = 5;";
+    ASSERT_EQ(sqlite3_exec(raw, rows, nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(raw);
+  }
+  Store s(t.db(), {}, Actor{"Nora", "line-2", "--operator", "noraos"});
+  EXPECT_EQ(s.schema_version(), 6);
+  EXPECT_EQ(s.get_set(1).created_by_login, "");
+  EXPECT_EQ(s.bench_run(1)->recording_uri, "");
+  const auto old = s.audit_of_device(1);
+  ASSERT_FALSE(old.empty());
+  EXPECT_EQ(old.front().login, "");
+  BenchRunInput run = test::bench_run();
+  run.recording_uri = "file://h/abs/rec";
+  run.recording_digest = std::string(64, 'a');
+  const auto st = s.store_bench({"ADIS16488A", "NEW1", ""}, run, test::payload("NEW1", test::random_errors(2)));
+  EXPECT_EQ(s.get_set(st.set_id).created_by_login, "noraos");
+  EXPECT_EQ(s.bench_run(st.run_id)->recording_uri, "file://h/abs/rec");
+  EXPECT_EQ(s.bench_run(st.run_id)->recording_digest, std::string(64, 'a'));
+  EXPECT_EQ(s.audit_of_device(st.device_id).back().login, "noraos");
+  EXPECT_THROW(s.connection().exec("UPDATE coefficient_sets SET created_by_role = 'someone' WHERE id = 1"), DbError);
+}
+
 TEST(DbStore, RefusesMissingFileWithoutCreateAndNewerSchema) {
   TempDir t;
   EXPECT_THROW(Store(t.db(), {}, test::test_actor()), InputError);
@@ -189,7 +226,7 @@ TEST(DbStore, MalformedPayloadsAreRefusedAndNothingIsWritten) {
 
 TEST(DbStore, SqlMetacharactersInNamesAreStoredVerbatim) {
   TempDir t;
-  Store s(t.db(), test::create_opts(), Actor{"o'brien\"; DROP TABLE devices; --", "st'1"});
+  Store s(t.db(), test::create_opts(), Actor{"o'brien\"; DROP TABLE devices; --", "st'1", "OS user", "o'os"});
   const std::string serial = "X'); DROP TABLE coefficient_sets; --";
   BenchRunInput run = test::bench_run();
   run.station = "bench \"7\"; DELETE FROM audit_log;";

@@ -1,0 +1,64 @@
+// calbench db user add|list: who a PostgreSQL login is (db/users.hpp, issue 35).
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "bench/cli/db_args.hpp"
+#include "bench/cli/operator_option.hpp"
+#include "bench/cli/registry.hpp"
+#include "bench/io/json_util.hpp"
+#include "db/users.hpp"
+
+namespace calbench::cli::dbcmd {
+namespace {
+using nlohmann::json;
+
+void cmd_user_add(const DbArgs& a) {
+  db::group_of_role(a.role);  // bad input before the server is asked
+  auto s = open_store(a);
+  const std::string said = db::add_user(*s, a.login, a.name, a.role);
+  std::cout << "login " << a.login << " = " << a.name << " (" << a.role << ", member of " << db::group_of_role(a.role)
+            << "): " << said << "\n";
+}
+
+void cmd_user_list(const DbArgs& a) {
+  auto s = open_store(a);
+  const auto list = db::users(*s);
+  if (a.json) {
+    json arr = json::array();
+    for (const auto& u : list)
+      arr.push_back({{"login", u.login}, {"name", u.name}, {"role", u.role}, {"added_at", u.added_at}, {"added_by", u.added_by}});
+    print_json(json{{"users", arr}}.dump(2));
+    return;
+  }
+  for (const auto& u : list)
+    std::cout << std::left << std::setw(16) << u.login << std::setw(14) << u.role << u.name << "  (by " << u.added_by
+              << " at " << u.added_at << ")\n";
+  std::cout << list.size() << " login(s) mapped to a person\n";
+}
+}  // namespace
+
+void add_user_commands(CLI::App* db, const std::shared_ptr<DbArgs>& a) {
+  auto* user = db->add_subcommand("user", "PostgreSQL: who each login is (the person who signs with it)");
+  user->require_subcommand(1);
+  const auto db_opt = [&](CLI::App* sub) {
+    sub->add_option("--db", a->db, "the central store: postgresql://USER@HOST[:PORT]/DB (default: $CALBENCH_DB)");
+  };
+  auto* add = user->add_subcommand("add", "map a login to a person and a role (grants the role's group if needed; audited)");
+  db_opt(add);
+  add->add_option("LOGIN", a->login, "an existing PostgreSQL login role (CREATE ROLE LOGIN LOGIN PASSWORD '...')")->required();
+  add->add_option("--name", a->name, "the person's full name, as it will appear beside each signature")->required();
+  add->add_option("--role", a->role, "qc | station | provisioning (member of calbench_qc, calbench_station, calbench_provisioning)")
+      ->required()
+      ->check(CLI::IsMember({"qc", "station", "provisioning"}));
+  add_operator_option(add, a->op, "who you are, recorded in the audit log (default: $CALBENCH_OPERATOR, else the OS user)");
+  add->footer("Run as an administrator (the database owner, or a role that may grant the groups). Once mapped, the login's\n"
+              "person signs: --operator may only name that person or the login, and four-eyes compares logins.");
+  add->callback([a] { cmd_user_add(*a); });
+  auto* list = user->add_subcommand("list", "the logins mapped to people");
+  db_opt(list);
+  list->add_flag("--json", a->json, "machine-readable output");
+  list->callback([a] { cmd_user_list(*a); });
+}
+
+}  // namespace calbench::cli::dbcmd

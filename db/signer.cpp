@@ -1,0 +1,67 @@
+#include "db/signer.hpp"
+
+#include <cctype>
+
+#include "db/input_errors.hpp"
+
+namespace calbench::db {
+
+std::string normalized_name(const std::string& name) {
+  std::string out;
+  bool space = false;
+  for (unsigned char c : name) {
+    if (std::isspace(c)) {
+      space = !out.empty();
+      continue;
+    }
+    if (space) out += ' ';
+    space = false;
+    out += static_cast<char>(std::tolower(c));
+  }
+  return out;
+}
+
+bool same_person(const std::string& a, const std::string& b) { return normalized_name(a) == normalized_name(b); }
+
+std::string creator_name(const CoefficientSetRecord& set) { return set.created_by.substr(0, set.created_by.rfind('@')); }
+
+bool stored_by_signer(const Store& store, const CoefficientSetRecord& set) {
+  if (store.authenticated()) return set.created_by_login == store.login();
+  return same_person(creator_name(set), store.actor().user);
+}
+
+std::string signature_note(const std::string& login, bool authenticated) {
+  if (login.empty()) return {};
+  return authenticated ? "login " + login : "OS user " + login + ", not authenticated (SQLite)";
+}
+
+void Store::check_signer() {
+  if (conn_->dialect() != Dialect::postgres) return;  // SQLite: the typed name, the OS user beside it
+  const std::string who = login();
+  auto st = conn_->prepare("SELECT name FROM calbench_users WHERE login = ?");
+  st.bind(1, who);
+  if (!st.step()) {
+    // A login that may not sign at all (a station's) is told so by the database's rules first.
+    auto pr = conn_->prepare("SELECT has_column_privilege('coefficient_sets', 'status', 'UPDATE')");
+    pr.step();
+    if (pr.int64(0) == 0)
+      throw PermissionError(0, conn_->path() + ": the database refused this to role '" + who +
+                                   "': permission denied for table coefficient_sets (this login may not sign: a "
+                                   "login in calbench_qc approves, revokes and changes settings, one in "
+                                   "calbench_provisioning provisions)",
+                            "42501");
+    throw arg_error("login", "login '" + who + "' (" + conn_->path() +
+                                 ") is not mapped to a person, and a signature names one: an administrator runs "
+                                 "`calbench db user add " + who +
+                                 " --name \"FULL NAME\" --role qc|station|provisioning --db postgresql://ADMIN@HOST/DB`");
+  }
+  const std::string name = st.text(0);
+  if (actor_.named() && !same_person(actor_.user, name) && !same_person(actor_.user, who))
+    throw arg_error(actor_.source, "'" + actor_.user + "' is not who is logged in: login '" + who + "' is " + name +
+                                       "; type --operator \"" + name + "\" (or leave --operator out), or connect as "
+                                       "your own login");
+  actor_.user = name;
+  actor_.source = "login " + who;
+}
+
+}  // namespace calbench::db

@@ -1,0 +1,28 @@
+// Who signs (issue 35): an approval, a revocation, a setting change or a provisioning is signed by a
+// person. On PostgreSQL the person is the authenticated login's (table calbench_users, filled by
+// `calbench db user add`): --operator may only name that person (or the login itself) and four-eyes
+// compares logins. On SQLite (one station, no authentication) the typed name signs, the OS user is
+// recorded beside it, and names are compared ignoring case and runs of whitespace.
+#pragma once
+#include <string>
+
+#include "db/store.hpp"
+
+namespace calbench::db {
+
+// `name` lower-cased (ASCII), trimmed, with every run of whitespace made one space.
+std::string normalized_name(const std::string& name);
+bool same_person(const std::string& a, const std::string& b);
+
+// Whether `set` was stored by the one who signs on `store` now (four-eyes): on PostgreSQL the same
+// login, on SQLite the same name as the store's actor's (normalized_name). The check that the
+// signer is the login's person is Store::check_signer (db/signer.cpp).
+bool stored_by_signer(const Store& store, const CoefficientSetRecord& set);
+// The creator's name of a set ("NAME" of created_by "NAME@STATION").
+std::string creator_name(const CoefficientSetRecord& set);
+
+// How a signature was made, for history and reports: "login anna" (PostgreSQL) or
+// "OS user tess, not authenticated (SQLite)"; "" when the login was not recorded (before schema 6).
+std::string signature_note(const std::string& login, bool authenticated);
+
+}  // namespace calbench::db
