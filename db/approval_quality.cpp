@@ -183,9 +183,9 @@ void parent_reasons(const CoefficientSetRecord& set, const CoefficientSetRecord&
     };
     const double al = allowance_of(a, name), bound = q.max_move_sigmas * std::hypot(sp, al);
     if (std::abs(vc - vp) > bound)
-      why.push_back("combined " + name + " moved " + fmt((vc - vp) / d.unit, 3) + " " + d.name + " from the " + ref + " (" +
+      why.push_back("combined " + name + " moved " + fmt((vc - vp) / d.unit) + " " + d.name + " from the " + ref + " (" +
                     pm(vp, sp) + " → " + pm(vc, sc) + "), more than " + fmt(q.max_move_sigmas) + "·√(σ_parent² + allowance²) = " +
-                    fmt(bound / d.unit, 3) + " " + d.name + " (" + whose + " " + fmt(al / d.unit, 3) + " " + d.name + ")");
+                    fmt(bound / d.unit) + " " + d.name + " (" + whose + " " + fmt(al / d.unit) + " " + d.name + ")");
     if (!std::isfinite(sc))
       why.push_back("combined " + name + ": σ unknown where the " + ref + " states " + pm(vp, sp));
     else if (sc > q.max_sigma_growth * sp)

@@ -102,6 +102,20 @@ python3 -c '
 import json; p = json.load(open("moved_r.json"))["approval_preview"]
 assert any(r.startswith("combined gyro.M.zz moved ") and "ADIS16488A allowance 300 ppm" in r for r in p["reasons"]), p["reasons"]' \
   || fail "moved coefficient not named"
+# Without --window the QC is in-sample: refitting the combined result on its own drive is judged by
+# "never worse than the set the fit started from", and the preview names that QC metric whenever
+# the in-motion set's final ΔS exceeds the input's (here 135.3 against 134.5 m), as db approve will.
+"$CALBENCH" fit drive rec --coeffs bench.json --out full.json > /dev/null
+"$CALBENCH" fit drive rec --coeffs full.json --out again.json > again.txt 2> /dev/null
+python3 - <<'PY' || { cat again.txt; fail "in-sample QC not in the approval preview"; }
+import json
+r = json.load(open("again.json")); q = {s["name"]: s["final_cpe_m"] for s in r["qc"]["sets"]}
+named = [x for x in r["approval_preview"]["reasons"] if x.startswith("QC sets.in-motion.final_cpe_m")]
+assert r["qc"]["sample"].startswith("in-sample"), r["qc"]["sample"]
+assert bool(named) == (q["in-motion"] > q["input"]), (q, named)
+assert named and "in-sample" in named[0], (q, named)
+PY
+grep -q "QC sets.in-motion.final_cpe_m = .* failed" again.txt || fail "console preview without the QC reason"
 # A QC that accepts the wider σ knowingly says so in its thresholds file (the audit names the file).
 echo '{"combined": {"max_sigma_growth": 100}}' > accept.json
 "$CALBENCH" db approve 2 --operator qc-anna --thresholds accept.json > appr.txt || { cat appr.txt; fail "combined set refused with growth accepted"; }
