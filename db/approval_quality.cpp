@@ -205,7 +205,7 @@ FitQualityLimits default_fit_quality_limits() {
     q.max_residual_gyro[kind] = 60 * kDegPerHour;
     q.max_residual_accel[kind] = 1 * kMilliG;
   }
-  // Mean NIS per degree of freedom: 1 for a consistent filter; the real drives give 0.38–1.58.
+  // Mean NIS per degree of freedom: 1 for a consistent filter; the real drives give 0.62–1.72.
   q.nis_band[kDefaultBand] = {0.1, 2.0};
   return q;
 }
