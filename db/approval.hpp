@@ -5,7 +5,8 @@
 //    "accel": {"max_abs_bias_mg": 80, "max_abs_scale_ppm": 25000, "max_abs_skew_ppm": 5000,
 //              "max_sigma_bias_mg": 2, "max_sigma_M_ppm": 500},
 //    "allow_unknown_sigma": false, "require_qc": true, "required_qc_metrics": [],
-//    "max_outage_median_m": {"15": 10, "30": 30, "60": 100}}   (outage QC, GNSS-only drives; none by default)
+//    "max_outage_median_m": {"15": 10, "30": 30, "60": 100},  (outage QC, GNSS-only drives; none by default)
+//    "bench": {...}, "inmotion": {...}, "combined": {...}}     (the fit's quality: db/approval_quality.hpp)
 // See docs/database.md.
 #pragma once
 #include <map>
