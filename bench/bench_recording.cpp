@@ -5,6 +5,7 @@
 #include <ctime>
 #include <sstream>
 
+#include "calibration/qc/bench_fit_quality.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "common/units.hpp"
@@ -109,6 +110,7 @@ CoefficientSet bench_result_to_coefficients(const BenchFitResult& r, const Bench
   CoefficientSet c;
   c.device = meta.device;
   c.errors = r.estimate;
+  c.fit_quality = qc::bench_fit_quality(r);
   nlohmann::json un = nlohmann::json::array();
   for (const auto& u : r.unobservable) un.push_back({{"triad", u.triad}, {"param", u.param}, {"reason", u.reason}});
   c.extra["calibration"] = {

@@ -1,6 +1,7 @@
 #include "common/coefficients_codec.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "common/input_error.hpp"
@@ -20,6 +21,63 @@ TriadErrors triad_from_json(const nlohmann::json& j, const std::string& f, const
     if (it.key() != "bias" && it.key() != "M" && it.key() != "sigma_bias" && it.key() != "sigma_M")
       extra[name][it.key()] = it.value();
   return t;
+}
+
+Vec3 chi2_json(const nlohmann::json& j, const std::string& f, const std::string& key) {
+  const Vec3 v = jvec3(j, f, key);
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(v(i)) || v(i) < 0) throw InputError(f, 0, key, "expected finite non-negative numbers");
+  return v;
+}
+
+// "fit_quality": {"chi2_per_dof": {"gyro": [3], "accel": [3]}, "steps": [{"step", "kind",
+// "gyro_mean_rad_s": [3], "accel_mean_m_s2": [3]}], "largest_systematic": {...}} (the last is
+// derived from the steps: written for readers, not read back).
+BenchFitQuality fit_quality_from_json(const nlohmann::json& j, const std::string& f) {
+  const std::string k = "fit_quality";
+  if (!j.is_object()) throw InputError(f, 0, k, "expected an object");
+  BenchFitQuality q;
+  const auto& c = jreq(j, "chi2_per_dof", f, k);
+  q.gyro_chi2_dof = chi2_json(jreq(c, "gyro", f, k + ".chi2_per_dof"), f, k + ".chi2_per_dof.gyro");
+  q.accel_chi2_dof = chi2_json(jreq(c, "accel", f, k + ".chi2_per_dof"), f, k + ".chi2_per_dof.accel");
+  const auto& steps = jreq(j, "steps", f, k);
+  if (!steps.is_array()) throw InputError(f, 0, k + ".steps", "expected an array");
+  for (std::size_t n = 0; n < steps.size(); ++n) {
+    const std::string sk = k + ".steps[" + std::to_string(n) + "]";
+    const auto& e = steps[n];
+    if (!e.is_object()) throw InputError(f, 0, sk, "expected an object");
+    StepMeanResidual s;
+    const auto& step = jreq(e, "step", f, sk);
+    if (!step.is_number_integer() || step.get<long long>() < 0 || step.get<long long>() > 1000000)
+      throw InputError(f, 0, sk + ".step", "expected a step number (integer ≥ 0)");
+    s.step = static_cast<int>(step.get<long long>());
+    s.kind = jstr(jreq(e, "kind", f, sk), f, sk + ".kind");
+    if (s.kind != kStepStatic && s.kind != kStepRate)
+      throw InputError(f, 0, sk + ".kind", "expected \"static\" or \"rate\", got '" + s.kind + "'");
+    s.gyro = jvec3(jreq(e, "gyro_mean_rad_s", f, sk), f, sk + ".gyro_mean_rad_s");
+    s.accel = jvec3(jreq(e, "accel_mean_m_s2", f, sk), f, sk + ".accel_mean_m_s2");
+    if (!s.gyro.allFinite() || !s.accel.allFinite()) throw InputError(f, 0, sk, "expected finite residuals");
+    q.steps.push_back(s);
+  }
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (it.key() != "chi2_per_dof" && it.key() != "steps" && it.key() != "largest_systematic")
+      throw InputError(f, 0, k + "." + it.key(), "unknown key (expected chi2_per_dof, steps, largest_systematic)");
+  return q;
+}
+
+nlohmann::json fit_quality_to_json(const BenchFitQuality& q) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& s : q.steps)
+    steps.push_back({{"step", s.step}, {"kind", s.kind}, {"gyro_mean_rad_s", to_json(s.gyro)},
+                     {"accel_mean_m_s2", to_json(s.accel)}});
+  nlohmann::json largest = nlohmann::json::object();
+  for (const bool gyro : {true, false})
+    for (const auto& L : largest_residuals(q, gyro))
+      largest[L.kind][gyro ? "gyro_rad_s" : "accel_m_s2"] = {
+          {"value", L.value}, {"step", L.step}, {"axis", std::string(1, "xyz"[L.axis])}, {"steps", L.steps}};
+  return {{"chi2_per_dof", {{"gyro", to_json(q.gyro_chi2_dof)}, {"accel", to_json(q.accel_chi2_dof)}}},
+          {"steps", steps},
+          {"largest_systematic", largest}};
 }
 
 nlohmann::json triad_to_json(const TriadErrors& t, const nlohmann::json& extra) {
@@ -50,8 +108,10 @@ CoefficientSet coefficients_from_json(const nlohmann::json& j, const std::string
   c.device = coefficients_device(j, f);
   c.errors.gyro = triad_from_json(jreq(j, "gyro", f, ""), f, "gyro", c.extra);
   c.errors.accel = triad_from_json(jreq(j, "accel", f, ""), f, "accel", c.extra);
+  if (j.contains("fit_quality")) c.fit_quality = fit_quality_from_json(j["fit_quality"], f);
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (it.key() != "format" && it.key() != "device" && it.key() != "gyro" && it.key() != "accel")
+    if (it.key() != "format" && it.key() != "device" && it.key() != "gyro" && it.key() != "accel" &&
+        it.key() != "fit_quality")
       c.extra[it.key()] = it.value();
   return c;
 }
@@ -64,7 +124,8 @@ nlohmann::json coefficients_to_json(const CoefficientSet& c) {
   j["gyro"] = triad_to_json(c.errors.gyro, c.extra.contains("gyro") ? c.extra["gyro"] : none);
   j["accel"] = triad_to_json(c.errors.accel, c.extra.contains("accel") ? c.extra["accel"] : none);
   for (auto it = c.extra.begin(); it != c.extra.end(); ++it)
-    if (it.key() != "gyro" && it.key() != "accel") j[it.key()] = it.value();
+    if (it.key() != "gyro" && it.key() != "accel" && it.key() != "fit_quality") j[it.key()] = it.value();
+  if (c.fit_quality) j["fit_quality"] = fit_quality_to_json(*c.fit_quality);
   return j;
 }
 

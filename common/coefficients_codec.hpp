@@ -5,9 +5,11 @@
 // the caller's (bench/io/coefficients_json.hpp); the codec works on parsed JSON.
 #pragma once
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "common/fit_quality.hpp"
 #include "common/sensor_model.hpp"
 
 namespace calbench {
@@ -17,9 +19,12 @@ inline constexpr const char* kCoefficientsFormat = "calbench-coefficients/1";
 struct CoefficientSet {
   DeviceId device;
   SensorErrors errors;
-  // Top-level keys beyond format/device/gyro/accel, and unknown keys inside gyro/accel
+  // Top-level keys beyond format/device/gyro/accel/fit_quality, and unknown keys inside gyro/accel
   // (as extra["gyro"][...] / extra["accel"][...]), preserved on write.
   nlohmann::json extra = nlohmann::json::object();
+  // "fit_quality" of a bench fit (χ²/dof per axis, mean residual per step; common/fit_quality.hpp),
+  // read strictly; absent in sets from other sources and older fits.
+  std::optional<BenchFitQuality> fit_quality;
 };
 
 // "format" and "device" only: lets a caller check the device before the coefficients (the store

@@ -115,11 +115,13 @@ Thresholds parse_thresholds(const std::string& text, const std::string& f) {
           throw InputError(f, 0, key, "expected a finite non-negative number of metres");
         t.max_outage_median_m[L] = e->get<double>();
       }
+    } else if (parse_fit_quality_key(k, *it, f, t.quality)) {
+      // bench, inmotion, combined: db/approval_quality.cpp
     } else if (k == "model" || k == "comment") {
       // informative
     } else {
       throw InputError(f, 0, k, "unknown key (expected gyro, accel, allow_unknown_sigma, require_qc, required_qc_metrics, "
-                                    "max_outage_median_m)");
+                                    "max_outage_median_m, bench, inmotion, combined)");
     }
   }
   return t;
@@ -133,8 +135,9 @@ Thresholds load_thresholds(const std::string& path) {
   return parse_thresholds(ss.str(), path);
 }
 
-ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t) {
-  ApprovalCheck r = check_thresholds(set, qc, t);
+ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t,
+                             const FitEvidence& ev) {
+  ApprovalCheck r = check_verdict(set, qc, ev, t);
   if (set.status != SetStatus::draft)
     r.reasons.insert(r.reasons.begin(), "set " + std::to_string(set.id) + " is " + to_string(set.status) +
                                             ", only draft sets can be approved");
@@ -168,6 +171,14 @@ ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vecto
   return r;
 }
 
+ApprovalCheck check_verdict(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const FitEvidence& ev,
+                            const Thresholds& t) {
+  ApprovalCheck r = check_thresholds(set, qc, t);
+  for (auto& why : fit_quality_reasons(set, ev, t.quality)) r.reasons.push_back(std::move(why));
+  r.ok = r.reasons.empty();
+  return r;
+}
+
 std::string parent_reason(Store& store, const CoefficientSetRecord& set) {
   if (!set.parent_id) return {};
   const auto p = store.find_set(*set.parent_id);
@@ -178,7 +189,7 @@ std::string parent_reason(Store& store, const CoefficientSetRecord& set) {
 }
 
 ApprovalCheck check_standing(Store& store, const CoefficientSetRecord& set, const Thresholds& t) {
-  ApprovalCheck r = check_thresholds(set, store.qc_of_set(set), t);
+  ApprovalCheck r = check_verdict(set, store.qc_of_set(set), fit_evidence(store, set), t);
   if (const std::string why = parent_reason(store, set); !why.empty()) r.reasons.push_back(why);
   r.ok = r.reasons.empty();
   return r;
@@ -207,6 +218,7 @@ std::vector<std::string> describe_thresholds(const Thresholds& t) {
     for (const auto& [L, lim] : t.max_outage_median_m) m += (m.empty() ? "" : ", ") + f(L) + " s ≤ " + f(lim) + " m";
     out.push_back("outage QC (GNSS-only drives), median of the largest horizontal error of the result set: " + m);
   }
+  for (auto& line : describe_fit_quality(t.quality)) out.push_back(std::move(line));
   if (!t.required_qc_metrics.empty()) {
     std::string m;
     for (const auto& x : t.required_qc_metrics) m += (m.empty() ? "" : ", ") + x;
@@ -232,7 +244,7 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
       r.already = true;  // approving again changes nothing, and is not a refusal
       return;
     }
-    r = check_approval(set, store.qc_of_set(set), t);
+    r = check_approval(set, store.qc_of_set(set), t, fit_evidence(store, set));
     // The signature: a named operator, by default another than the one who stored the set
     // (db/signer.hpp: on PostgreSQL the login's person, four-eyes by login).
     const Actor& who = store.actor();

@@ -5,13 +5,15 @@
 //    "accel": {"max_abs_bias_mg": 80, "max_abs_scale_ppm": 25000, "max_abs_skew_ppm": 5000,
 //              "max_sigma_bias_mg": 2, "max_sigma_M_ppm": 500},
 //    "allow_unknown_sigma": false, "require_qc": true, "required_qc_metrics": [],
-//    "max_outage_median_m": {"15": 10, "30": 30, "60": 100}}   (outage QC, GNSS-only drives; none by default)
+//    "max_outage_median_m": {"15": 10, "30": 30, "60": 100},  (outage QC, GNSS-only drives; none by default)
+//    "bench": {...}, "inmotion": {...}, "combined": {...}}     (the fit's quality: db/approval_quality.hpp)
 // See docs/database.md.
 #pragma once
 #include <map>
 #include <string>
 #include <vector>
 
+#include "db/approval_quality.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -33,6 +35,8 @@ struct Thresholds {
   // maximum horizontal error (m) of the result set (metric outages.in-motion.Ls.median_max_m).
   // Checked where the run has the metric; none by default.
   std::map<double, double> max_outage_median_m;
+  // The fit's quality (db/approval_quality.hpp): "bench", "inmotion" and "combined" in the file.
+  FitQualityLimits quality = default_fit_quality_limits();
   std::string source = "built-in ADIS16488A defaults";
 };
 
@@ -46,10 +50,17 @@ struct ApprovalCheck {
   bool already = false;              // the set was approved (or provisioned) before: nothing changed
   std::vector<std::string> reasons;  // why not (empty when ok)
 };
-ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);
+// check_verdict() and the status (only a draft can be approved).
+ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t,
+                             const FitEvidence& ev = {});
 // Every check of check_approval() except the status (that only a draft can be approved): whether
 // a set, approved or not, meets the thresholds `t` (the device report's verdict).
 ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t);
+// The verdict on a set whatever its status: check_thresholds() and the fit's quality
+// (fit_quality_reasons of db/approval_quality.hpp on `ev`). The one verdict of approve_checked(),
+// check_standing() (the device report) and the preview `fit drive` ends with.
+ApprovalCheck check_verdict(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const FitEvidence& ev,
+                            const Thresholds& t);
 // Why a set cannot be approved because of its parent (a combined set refines an approved set: the
 // parent must not be draft or revoked), or "" when the parent is fine or there is none.
 std::string parent_reason(Store& store, const CoefficientSetRecord& set);

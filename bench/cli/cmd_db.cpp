@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "bench/approval_thresholds.hpp"
 #include "bench/cli/db_args.hpp"
 #include "bench/cli/operator_option.hpp"
 #include "bench/cli/number_options.hpp"
@@ -214,7 +215,7 @@ void cmd_history(const DbArgs& a) {
 
 void cmd_approve(const DbArgs& a) {
   auto s = open_store(a);
-  const Thresholds t = a.thresholds.empty() ? default_thresholds() : load_thresholds(a.thresholds);
+  const Thresholds t = approval_thresholds(a.thresholds);
   const ApprovalCheck r = approve_checked(*s, a.set, t);
   if (a.json)
     print_json(json{{"set", a.set}, {"approved", r.ok}, {"already_approved", r.already}, {"reasons", r.reasons}, {"thresholds", t.source}}

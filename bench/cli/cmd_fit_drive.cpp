@@ -6,6 +6,7 @@
 #include <iostream>
 #include <map>
 
+#include "bench/drive/approval_preview.hpp"
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/outage_options.hpp"
 #include "bench/cli/registry.hpp"
@@ -191,6 +192,7 @@ void print_summary(const DriveResult& r) {
                 << qc["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
                 << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
   if (qc.contains("outages")) print_outage_summary(qc["outages"], std::cout);
+  if (j.contains("approval_preview")) std::cout << approval_preview_text(j["approval_preview"]);
   std::cout << std::flush;
 }
 

@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "bench/approval_thresholds.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/report/db_report.hpp"
@@ -23,7 +24,7 @@ const bool registered = add_command(90, [](CLI::App& app) {
   sub->add_option("--thresholds", a->thresholds,
                   "approval thresholds (JSON, as for `db approve`) for the verdict; default: built-in ADIS16488A limits");
   sub->callback([a] {
-    const db::Thresholds t = a->thresholds.empty() ? db::default_thresholds() : db::load_thresholds(a->thresholds);
+    const db::Thresholds t = approval_thresholds(a->thresholds);
     db::OpenOptions o;
     o.read_only = true;
     db::Store s(a->db.empty() ? db::Store::default_path() : a->db, o);

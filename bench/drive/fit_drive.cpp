@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/drive/approval_preview.hpp"
 #include "bench/drive/drive_series.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/drive/qc_drive.hpp"
@@ -713,7 +714,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   j["covariance"] = a.covariance;
   r.coefficients.device = dev;
   r.coefficients.errors = total;
-  r.correction = CoefficientSet{dev, corr, nlohmann::json::object()};
+  r.correction = CoefficientSet{dev, corr, nlohmann::json::object(), std::nullopt};
   j["input_coefficients"] = a.coeffs.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.coeffs);
   if (!a.coeffs.empty() && fs::is_regular_file(a.coeffs)) j["input_coefficients_sha256"] = sha256_file(a.coeffs);
   r.priors = pc.json;
@@ -867,6 +868,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   }
   r.qc = qj;
   read_typed_sections(r, "fit drive result");
+  r.extra["approval_preview"] = approval_preview(r, bench);  // what db approve will say (issue 35 item 6)
   if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
   return r;
 }

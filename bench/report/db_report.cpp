@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "bench/report/bench_fit_section.hpp"
 #include "bench/report/gnuplot.hpp"
 #include "bench/report/html_parts.hpp"
 #include "bench/report/inmotion_section.hpp"
@@ -282,7 +283,7 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
       << "<tr><th class=\"l\">time</th><td class=\"l\">" << html_escape(r->started_at) << " – " << html_escape(r->ended_at) << "</td></tr>"
       << "<tr><th class=\"l\">outcome</th><td class=\"l " << (r->outcome == "pass" ? "pass" : "fail") << "\">"
       << html_escape(r->outcome) << "</td></tr></table>\n"
-      << qc_table(store.qc_of_bench_run(r->id), "qc-bench-" + std::to_string(r->id));
+      << qc_table(store.qc_of_bench_run(r->id), "qc-bench-" + std::to_string(r->id)) << bench_fit_part(s, thresholds);
   }
   if (!any_bench) b << "<p class=\"muted\">no bench runs</p>\n";
 

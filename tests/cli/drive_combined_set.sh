@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The two stages compose (issue 16): fit drive --coeffs BENCH refines the bench set with priors from
 # it (set sigma combined with the stability allowance); the combined set's sigma never exceed
-# hypot(parent sigma, allowance); it imports with its parent, is approved with the default thresholds
-# and provisioned into the emulated ADIS16488A (readback equal). Bad allowances and bad input sigma
+# hypot(parent sigma, allowance); it imports with its parent, is refused with the default thresholds
+# naming every coefficient whose sigma grew beyond 3x the parent's (as fit drive's approval preview
+# said), is approved with a thresholds file that accepts it, and is provisioned into the emulated ADIS16488A (readback equal). Bad allowances and bad input sigma
 # exit 2 naming the option or the file and key.
 set -euo pipefail
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
@@ -75,7 +76,49 @@ serial=$(python3 -c 'import json; print(json.load(open("r.json"))["device"]["ser
 "$CALBENCH" report "$serial" --html rep.html > /dev/null
 grep -q "parent set 1 is draft: approve the set it refines first" rep.html || fail "report verdict does not name the draft parent"
 "$CALBENCH" db approve 1 --operator qc-anna >/dev/null || fail "bench set not approved"
-"$CALBENCH" db approve 2 --operator qc-anna > appr.txt || { cat appr.txt; fail "combined set refused with the default thresholds"; }
+# The combined set against its parent, coefficient by coefficient (issue 35): coefficients the drive
+# did not inform come back with the allowance's σ (gyro scale 4 -> ~280 ppm): refused with the
+# default thresholds, each named with its figures; the fit's approval preview said the same.
+set +e; "$CALBENCH" db approve 2 --operator qc-anna --json > appr.json 2> /dev/null; rc=$?; set -e
+[ "$rc" = 1 ] || fail "combined set with grown sigma approved (exit $rc)"
+python3 - <<'PY' || fail "combined refusal / preview"
+import json
+a = json.load(open("appr.json")); p = json.load(open("r.json"))["approval_preview"]
+assert not a["approved"], a
+grown = [r for r in a["reasons"] if ": σ grew from" in r]
+assert any(r.startswith("combined gyro.M.xx: σ grew from 4 to ") for r in grown), grown
+assert all("limit 3×" in r and "parent set 1's" in r for r in grown), grown
+# One verdict: the preview named the same coefficients with the same figures (the input set is parent set 1).
+assert p["verdict"] == "refused", p
+assert sorted(r.replace("input set", "parent set 1") for r in p["reasons"]) == sorted(a["reasons"]), (p["reasons"], a["reasons"])
+PY
+grep -q "approval preview db approve will REFUSE this result" fit.txt && grep -q "combined gyro.M.xx: σ grew" fit.txt \
+  || { cat fit.txt; fail "fit drive did not end with the approval preview"; }
+# A coefficient moved beyond sqrt(σ_parent² + allowance²): a parent whose gyro z scale is 2000 ppm off.
+python3 -c '
+import json; b = json.load(open("bench.json")); b["gyro"]["M"][2][2] += 2e-3; json.dump(b, open("moved.json", "w"))'
+"$CALBENCH" fit drive rec --coeffs moved.json --window 0:150 --out moved_r.json > /dev/null
+python3 -c '
+import json; p = json.load(open("moved_r.json"))["approval_preview"]
+assert any(r.startswith("combined gyro.M.zz moved ") and "ADIS16488A allowance 300 ppm" in r for r in p["reasons"]), p["reasons"]' \
+  || fail "moved coefficient not named"
+# Without --window the QC is in-sample: refitting the combined result on its own drive is judged by
+# "never worse than the set the fit started from", and the preview names that QC metric whenever
+# the in-motion set's final ΔS exceeds the input's (here 135.3 against 134.5 m), as db approve will.
+"$CALBENCH" fit drive rec --coeffs bench.json --out full.json > /dev/null
+"$CALBENCH" fit drive rec --coeffs full.json --out again.json > again.txt 2> /dev/null
+python3 - <<'PY' || { cat again.txt; fail "in-sample QC not in the approval preview"; }
+import json
+r = json.load(open("again.json")); q = {s["name"]: s["final_cpe_m"] for s in r["qc"]["sets"]}
+named = [x for x in r["approval_preview"]["reasons"] if x.startswith("QC sets.in-motion.final_cpe_m")]
+assert r["qc"]["sample"].startswith("in-sample"), r["qc"]["sample"]
+assert bool(named) == (q["in-motion"] > q["input"]), (q, named)
+assert named and "in-sample" in named[0], (q, named)
+PY
+grep -q "QC sets.in-motion.final_cpe_m = .* failed" again.txt || fail "console preview without the QC reason"
+# A QC that accepts the wider σ knowingly says so in its thresholds file (the audit names the file).
+echo '{"combined": {"max_sigma_growth": 100}}' > accept.json
+"$CALBENCH" db approve 2 --operator qc-anna --thresholds accept.json > appr.txt || { cat appr.txt; fail "combined set refused with growth accepted"; }
 # Approving again changes nothing and is not a refusal.
 "$CALBENCH" db approve 2 --operator qc-anna > again.txt || fail "approving an approved set again failed"
 grep -q "already approved" again.txt || fail "second approval not reported as already approved"

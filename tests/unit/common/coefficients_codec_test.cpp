@@ -118,3 +118,51 @@ TEST(CoefficientsCodec, TheIndexedCoefficientsAddressTheSet) {
 
 }  // namespace
 }  // namespace calbench
+
+namespace calbench {
+namespace {
+// "fit_quality" of a bench fit: read strictly into its type, written back with the derived
+// largest_systematic (per kind and triad), and a bad value refused naming its key.
+TEST(CoefficientsCodec, FitQualityIsTypedAndChecked) {
+  json j = sample();
+  j["fit_quality"] = json::parse(R"({
+    "chi2_per_dof": {"gyro": [1.0, 0.9, 1.1], "accel": [1.0, 4.0, 1.0]},
+    "steps": [{"step": 0, "kind": "static", "gyro_mean_rad_s": [1e-5, -3e-4, 0], "accel_mean_m_s2": [0, 0, 1e-3]},
+              {"step": 4, "kind": "rate", "gyro_mean_rad_s": [2e-4, 0, 0], "accel_mean_m_s2": [0, -5e-3, 0]}]})");
+  const CoefficientSet c = coefficients_from_json(j, "c.json");
+  ASSERT_TRUE(c.fit_quality);
+  EXPECT_FALSE(c.extra.contains("fit_quality"));
+  EXPECT_DOUBLE_EQ(c.fit_quality->accel_chi2_dof(1), 4.0);
+  ASSERT_EQ(c.fit_quality->steps.size(), 2u);
+  EXPECT_EQ(c.fit_quality->steps[1].kind, "rate");
+  const json out = coefficients_to_json(c);
+  const json& L = out["fit_quality"]["largest_systematic"];
+  EXPECT_DOUBLE_EQ(L["static"]["gyro_rad_s"]["value"].get<double>(), 3e-4);
+  EXPECT_EQ(L["static"]["gyro_rad_s"]["axis"], "y");
+  EXPECT_EQ(L["rate"]["accel_m_s2"]["step"], 4);
+  EXPECT_DOUBLE_EQ(L["rate"]["accel_m_s2"]["value"].get<double>(), 5e-3);
+  // Read back: the same figures (largest_systematic is derived, not read).
+  const CoefficientSet again = coefficients_from_json(out, "again.json");
+  EXPECT_EQ(coefficients_to_json(again), out);
+  // No fit_quality: none written.
+  EXPECT_FALSE(coefficients_to_json(coefficients_from_json(sample(), "s.json")).contains("fit_quality"));
+  std::string field;
+  json bad = j;
+  bad["fit_quality"]["steps"][1]["kind"] = "spin";
+  EXPECT_NE(refusal(bad, &field), "");
+  EXPECT_EQ(field, "fit_quality.steps[1].kind");
+  bad = j;
+  bad["fit_quality"]["chi2_per_dof"]["gyro"][2] = -1;
+  EXPECT_NE(refusal(bad, &field), "");
+  EXPECT_EQ(field, "fit_quality.chi2_per_dof.gyro");
+  bad = j;
+  bad["fit_quality"]["residuals"] = 1;
+  EXPECT_NE(refusal(bad, &field), "");
+  EXPECT_EQ(field, "fit_quality.residuals");
+  bad = j;
+  bad["fit_quality"]["steps"][0].erase("accel_mean_m_s2");
+  EXPECT_NE(refusal(bad, &field), "");
+  EXPECT_EQ(field, "fit_quality.steps[0].accel_mean_m_s2");
+}
+}  // namespace
+}  // namespace calbench

@@ -1,0 +1,95 @@
+#include "bench/report/bench_fit_section.hpp"
+
+#include <cmath>
+#include <map>
+#include <optional>
+#include <sstream>
+
+#include "bench/report/html_parts.hpp"
+#include "bench/report/svg_plot.hpp"
+#include "common/coefficients_codec.hpp"
+#include "common/input_error.hpp"
+#include "common/json_parse.hpp"
+#include "common/units.hpp"
+
+namespace calbench::report {
+namespace {
+using namespace calbench::units;
+const char* const kAxis[] = {"x", "y", "z"};
+
+std::string residual_plot(const BenchFitQuality& q, bool gyro, const std::map<std::string, double>& limits) {
+  const double unit = gyro ? kDegPerHour : kMilliG;
+  std::vector<PlotCurve> curves;
+  for (int i = 0; i < 3; ++i) {
+    PlotCurve c{std::string(gyro ? "gyro " : "accel ") + kAxis[i], {}, {}};
+    for (const auto& s : q.steps) {
+      c.x.push_back(s.step);
+      c.y.push_back((gyro ? s.gyro(i) : s.accel(i)) / unit);
+    }
+    curves.push_back(std::move(c));
+  }
+  if (!q.steps.empty())
+    for (const auto& [kind, lim] : limits)
+      for (const double sign : {1.0, -1.0}) {
+        PlotCurve c{(sign > 0 ? "+limit " : "-limit ") + kind, {}, {}};
+        for (const auto& s : q.steps) {
+          c.x.push_back(s.step);
+          c.y.push_back(s.kind == kind ? sign * lim / unit : std::nan(""));
+        }
+        curves.push_back(std::move(c));
+      }
+  PlotSpec p;
+  p.title = std::string(gyro ? "gyro" : "accelerometer") + ": mean residual of each step";
+  p.x_label = "plan step";
+  p.y_label = gyro ? "mean residual [°/h]" : "mean residual [mg]";
+  p.css_class = gyro ? "residual-gyro" : "residual-accel";
+  return svg_line_plot(curves, p);
+}
+}  // namespace
+
+std::string bench_fit_part(const db::CoefficientSetRecord& set, const db::Thresholds& t) {
+  std::ostringstream h;
+  h << "<h4>Fit residuals</h4>\n";
+  std::optional<BenchFitQuality> q;
+  try {
+    const std::string where = "set " + std::to_string(set.id);
+    q = coefficients_from_json(parse_json_text(set.payload_json, where), where).fit_quality;
+  } catch (const InputError& e) {
+    return h.str() + "<p class=\"fail\">unreadable: " + html_escape(e.what()) + "</p>\n";
+  }
+  if (!q) return h.str() + "<p class=\"muted\">not recorded with the set (a fit before calbench stored its residuals, or a set from elsewhere)</p>\n";
+  const auto& L = t.quality;
+  h << "<table class=\"chi2\" id=\"chi2-" << set.id << "\"><tr><th class=\"l\">triad</th><th>χ²/dof x</th><th>χ²/dof y</th>"
+       "<th>χ²/dof z</th><th>limit</th></tr>\n";
+  for (const bool gyro : {true, false}) {
+    const Vec3& c = gyro ? q->gyro_chi2_dof : q->accel_chi2_dof;
+    const double lim = gyro ? L.max_chi2_dof_gyro : L.max_chi2_dof_accel;
+    h << "<tr><td class=\"l\">" << (gyro ? "gyro" : "accel") << "</td>";
+    for (int i = 0; i < 3; ++i) h << "<td class=\"" << (c(i) > lim ? "fail" : "pass") << "\">" << num(c(i), 3) << "</td>";
+    h << "<td>" << num(lim) << "</td></tr>\n";
+  }
+  h << "</table>\n<table class=\"systematic\" id=\"systematic-" << set.id
+    << "\"><tr><th class=\"l\">triad</th><th class=\"l\">steps</th><th>count</th><th>largest systematic residual</th>"
+       "<th>at step, axis</th><th>limit</th></tr>\n";
+  for (const bool gyro : {true, false}) {
+    const double unit = gyro ? kDegPerHour : kMilliG;
+    const char* un = gyro ? " °/h" : " mg";
+    const auto& limits = gyro ? L.max_residual_gyro : L.max_residual_accel;
+    for (const auto& r : largest_residuals(*q, gyro)) {
+      const auto lim = limits.find(r.kind);
+      const bool bad = lim != limits.end() && r.value > lim->second;
+      h << "<tr data-kind=\"" << r.kind << "\"><td class=\"l\">" << (gyro ? "gyro" : "accel") << "</td><td class=\"l\">"
+        << (r.kind == kStepStatic ? "static positions" : "rate steps") << "</td><td>" << r.steps << "</td><td class=\""
+        << (bad ? "fail" : "pass") << "\">" << num(r.value / unit, 3) << un << "</td><td>" << r.step << ", " << kAxis[r.axis]
+        << "</td><td>" << (lim == limits.end() ? std::string("–") : num(lim->second / unit) + un) << "</td></tr>\n";
+    }
+  }
+  h << "</table>\n<div class=\"plots\">" << residual_plot(*q, true, L.max_residual_gyro)
+    << residual_plot(*q, false, L.max_residual_accel) << "</div>\n"
+    << "<p class=\"note\">χ²/dof: the whitened residuals Σr²/dof of each axis (≈ 1 when the model and its noise fit the "
+       "data). A step's mean residual is what the model leaves in that step (in-run drift, bench error, or an effect the "
+       "model lacks).</p>\n";
+  return h.str();
+}
+
+}  // namespace calbench::report
