@@ -573,7 +573,9 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   long n_imu = 0;
   DriveStream::Event e;
   while (st.next(e)) {
-    t_data_end = std::max(t_data_end, e.t);
+    // Where the IMU data end: a QC after the fit window needs IMU rows there (a reference that goes
+    // on past a cut imu.csv is no out-of-sample data).
+    if (!e.is_ref) t_data_end = std::max(t_data_end, e.t);
     if (e.is_ref) {
       keep_for_qc(e.t, f != nullptr || (e.t >= t0 - 1e-9 && e.t <= t1 + 1e-9));
       if (const DriveRefRow* r = st.last_reference_row()) aiding_stats.add(*r);

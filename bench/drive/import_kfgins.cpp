@@ -12,6 +12,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
+#include "bench/io/number_parse.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"
 
@@ -42,14 +43,13 @@ class TextRows {
         if (c >= e) break;
         double x = 0;
         const char* start = c;
-        if (*c == '+') ++c;
-        auto r = std::from_chars(c, e, x);
-        if (r.ec != std::errc() || (r.ptr < e && !(*r.ptr == ' ' || *r.ptr == '\t' || *r.ptr == '\r' || *r.ptr == ',')))
+        const char* end = parse_number(c, e, x);
+        if (!end || (end < e && !(*end == ' ' || *end == '\t' || *end == '\r' || *end == ',')))
           throw InputError(path_, line_, "column " + std::to_string(v.size() + 1),
                            "not a number: '" + field_text(std::string_view(start, static_cast<std::size_t>(e - start)), 20) + "'");
         if (!std::isfinite(x)) throw InputError(path_, line_, "column " + std::to_string(v.size() + 1), "NaN or infinity");
         v.push_back(x);
-        c = r.ptr;
+        c = end;
       }
       if (v.size() < min_)
         throw InputError(path_, line_, "", "expected at least " + std::to_string(min_) + " columns, found " + std::to_string(v.size()));

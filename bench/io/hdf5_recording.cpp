@@ -19,6 +19,7 @@
 #include <stdexcept>
 
 #include "bench/io/message_text.hpp"
+#include "bench/io/plausible.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
 #include <nlohmann/json.hpp>
@@ -478,6 +479,7 @@ class Hdf5Table final : public TableSource {
       if (c == name) return true;
     return false;
   }
+  const std::vector<std::string>& columns() const override { return t_.columns; }
   void set_time_slot(int slot) override { time_slot_ = slot; }
   bool next() override {
     if (row_ >= t_.rows) {
@@ -495,10 +497,7 @@ class Hdf5Table final : public TableSource {
     if (time_slot_ >= 0) {
       const double tv = values_[static_cast<std::size_t>(time_slot_)];
       const std::string& name = t_.columns[cols_[static_cast<std::size_t>(time_slot_)]];
-      if (row_ > 1) {
-        if (tv == last_time_) fail_at(name, "duplicated time " + number_text(tv));
-        if (tv < last_time_) fail_at(name, "time goes backwards");
-      }
+      plausible::check_row_time(*this, name, tv, row_ > 1, last_time_);
       last_time_ = tv;
     }
     return true;
@@ -579,6 +578,14 @@ bool recording_has_table(const fs::path& dir, const std::string& name) {
   } catch (const InputError&) {
     return false;  // a damaged file: its reader says so
   }
+}
+
+bool hdf5_has_dataset(const fs::path& file, const std::string& name) {
+  if (!fs::exists(file)) throw InputError(file.string(), 0, "", "cannot open: no such file");
+  const FileMeta& fm = survey(file);
+  if (!fm.error.empty()) throw InputError(file.string(), 0, "", fm.error);
+  const auto it = fm.tables.find(name);
+  return it != fm.tables.end() && it->second.present;
 }
 
 fs::path table_file(const fs::path& dir, const std::string& name) {
