@@ -1,5 +1,6 @@
 #include "bench/io/verify_recording.hpp"
 
+#include <fstream>
 #include <stdexcept>
 
 #include "bench/io/hdf5_recording.hpp"
@@ -24,11 +25,25 @@ const std::string& TableTally::sha256() {
   return hex_;
 }
 
+void TextTally::add(std::string_view text) {
+  digest_->update(text.data(), text.size());
+  bytes_ += text.size();
+  for (const char c : text) lines_ += c == '\n';
+}
+
+const std::string& TextTally::sha256() {
+  if (digest_) {
+    hex_ = digest_->hex();
+    digest_.reset();
+  }
+  return hex_;
+}
+
 namespace {
 
 [[noreturn]] void not_verified(const std::string& file, const std::string& what) {
   throw std::runtime_error(file + ": the output does not read back as written (" + what +
-                           "): not marked complete; check the disk and run the command again");
+                           "): not kept or marked complete; check the disk and run the command again");
 }
 
 std::string join(const std::vector<std::string>& v) {
@@ -64,6 +79,23 @@ void verify_table(const std::filesystem::path& dir, TableTally& w) {
 }
 
 }  // namespace
+
+void verify_written_text(const std::filesystem::path& file, TextTally& written) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) not_verified(file.string(), "cannot open it again");
+  TextTally back;
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    back.add(std::string_view(buf.data(), static_cast<std::size_t>(in.gcount())));
+  }
+  if (in.bad()) not_verified(file.string(), "read error");
+  if (back.bytes() != written.bytes() || back.lines() != written.lines())
+    not_verified(file.string(), std::to_string(written.lines()) + " lines (" + std::to_string(written.bytes()) +
+                                    " bytes) written, " + std::to_string(back.lines()) + " (" + std::to_string(back.bytes()) +
+                                    " bytes) read back");
+  if (back.sha256() != written.sha256()) not_verified(file.string(), "the bytes differ from those written");
+}
 
 void verify_written_recording(const std::filesystem::path& dir, std::vector<TableTally>& written) {
   for (const char* t : kRecordingTables) {

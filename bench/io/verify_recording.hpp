@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "bench/io/sha256.hpp"
@@ -31,6 +32,26 @@ class TableTally {
   std::unique_ptr<Sha256> digest_;
   std::string hex_;
 };
+
+// A text file as written (KF-GINS files of `export kf-gins`, JSON outputs): its lines and the
+// SHA-256 of its bytes.
+class TextTally {
+ public:
+  TextTally() : digest_(std::make_unique<Sha256>()) {}
+  void add(std::string_view text);  // bytes as written; lines counted by their '\n'
+  std::size_t lines() const { return lines_; }
+  std::size_t bytes() const { return bytes_; }
+  const std::string& sha256();  // finishes the tally
+
+ private:
+  std::size_t lines_ = 0, bytes_ = 0;
+  std::unique_ptr<Sha256> digest_;
+  std::string hex_;
+};
+
+// Re-reads `file` and compares its lines, size and digest with `written`: std::runtime_error
+// naming the file and what differs otherwise.
+void verify_written_text(const std::filesystem::path& file, TextTally& written);
 
 // Re-reads every table of the recording folder `dir` and compares it with `written`: a table
 // missing, one not written, other columns, another row count or other values throw
