@@ -13,6 +13,7 @@
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/number_parse.hpp"
+#include "bench/io/plausible.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"
 
@@ -75,6 +76,9 @@ void check_range(const TextRows& r, std::size_t col, double v, double lo, double
 }
 
 void check_time(const TextRows& r, double t, double& last, bool& first) {
+  if (!(std::abs(t) <= plausible::kMaxAbsTime_s))  // the bound every reader of the recording applies
+    throw InputError(r.path(), r.line(), "time",
+                     "time " + number_text(t) + " s is not plausible (at most " + number_text(plausible::kMaxAbsTime_s) + " s)");
   if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
   first = false;
   last = t;

@@ -398,6 +398,8 @@ for num in '+-1' '-+1' '++1' '--1'; do
   printf '1.00 0 0 0 0 0 0\n1.01 0 %s 0 0 0 0\n1.02 0 0 0 0 0 0\n' "$num" > imu-sign.txt
   LEFT="kf" t "import-number-$num" 2 "^calbench: error: imu-sign\.txt:2: 'column 3': not a number: '$re" "$CALBENCH" import kf-gins --imu imu-sign.txt --truth truth.nav --out kf
 done
+printf '1.00 0 0 0 0 0 0\n1.7e308 0 0 0 0 0 0\n' > imu-time.txt
+LEFT="kf" t import-time-1.7e308 2 "^calbench: error: imu-time\.txt:2: 'time': time 1\.7e\+308 s is not plausible \(at most 1e\+10 s\)$" "$CALBENCH" import kf-gins --imu imu-time.txt --truth truth.nav --out kf
 mkrec pm && sed -i "10s/^\([^,]*\),[^,]*,/\1,+1e-3,/" pm/imu.csv  # one '+' is a sign: read
 t convert-number-plus-one 0 NONE "$CALBENCH" convert pm --to h5 --out pmc
 rm -rf pmc
