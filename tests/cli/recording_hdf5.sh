@@ -170,6 +170,19 @@ for t in imu reference; do
   diff <(grep -v '^#' bench/$t.csv | head -n 30001) <(grep -v '^#' chunks1-csv/$t.csv) > /dev/null || fail "1-row chunks: $t values differ"
 done
 
+# Many small chunks, one never written (h5py leaves it unallocated): refused, not read as zeros.
+$PY - <<'PY'
+import h5py, numpy as np, shutil, os
+os.makedirs("sparse"); shutil.copy("drive-h5/meta.json", "sparse")
+with h5py.File("sparse/recording.h5", "w") as f:
+    a = np.zeros((1100, 7)); a[:, 0] = np.arange(1100) * 0.01; a[:, 6] = -9.8
+    d = f.create_dataset("imu", shape=a.shape, chunks=(1, 7), dtype="f8")
+    d[:1000] = a[:1000]; d[1001:] = a[1001:]
+    d.attrs["columns"] = np.array(["t_s", "gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"], dtype="S")
+PY
+expect2 "sparse/recording\.h5: '/imu': dataset /imu, rows from 1: their values are not all stored \(1099 of 1100 chunks" "$CALBENCH" convert sparse --to csv --out sparse-csv
+test ! -e sparse-csv || fail "a refused conversion left sparse-csv"
+
 # Interrupted: SIGTERM while converting leaves neither the output nor a partial folder.
 "$CALBENCH" simulate drive --route "$SRC/bench/routes/gnss_1h.toml" --truth random --seed 8 --until 2400 --out long >/dev/null
 "$CALBENCH" convert long --to h5 --out long-h5 & pid=$!
