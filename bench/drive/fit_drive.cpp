@@ -23,6 +23,7 @@
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/identification/standstill_noise.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
+#include "common/number_parse.hpp"
 #include "common/units.hpp"
 
 namespace calbench {
@@ -54,9 +55,7 @@ std::pair<double, double> parse_window(const std::string& w) {
   if (c == std::string::npos) throw InputError("--window", 0, "", "expected T0:T1 (seconds; either may be empty)");
   // Each bound a whole finite decimal number ("5abc", "nan", "1e999" are bad input).
   auto bound = [&](std::size_t from, std::size_t to, double& t) {
-    const char* p = w.data() + from;
-    const auto r = std::from_chars(p, w.data() + to, t, std::chars_format::general);
-    if (r.ec != std::errc() || r.ptr != w.data() + to || !std::isfinite(t))
+    if (!parse_finite_number(std::string_view(w).substr(from, to - from), t))
       throw InputError("--window", 0, "", "expected T0:T1 (finite seconds), got '" + w + "'");
   };
   if (c > 0) bound(0, c, t0);

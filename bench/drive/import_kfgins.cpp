@@ -12,7 +12,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
-#include "bench/io/number_parse.hpp"
+#include "common/number_parse.hpp"
 #include "bench/io/plausible.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"

@@ -12,7 +12,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/input_warning.hpp"
-#include "bench/io/number_parse.hpp"
+#include "common/number_parse.hpp"
 #include "bench/io/plausible.hpp"
 
 namespace calbench {

@@ -400,6 +400,10 @@ for num in '+-1' '-+1' '++1' '--1'; do
 done
 printf '1.00 0 0 0 0 0 0\n1.7e308 0 0 0 0 0 0\n' > imu-time.txt
 LEFT="kf" t import-time-1.7e308 2 "^calbench: error: imu-time\.txt:2: 'time': time 1\.7e\+308 s is not plausible \(at most 1e\+10 s\)$" "$CALBENCH" import kf-gins --imu imu-time.txt --truth truth.nav --out kf
+# Options and --inject values through the same parser (common/number_parse.hpp).
+LEFT="r.json" t fit-drive-window-plus-minus 2 "--window: expected T0:T1 \(finite seconds\), got '\+-1:5'" "$CALBENCH" fit drive rec --out r.json --window +-1:5
+LEFT="s2" t sim-drive-inject-plus-minus 2 "'value': not a number: '\+-1'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --inject time_offset:value=+-1 --until 1 --out s2
+LEFT="s2" t sim-drive-until-plus-minus 2 "--until: expected a finite number > 0, got '\+-1'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --until +-1 --out s2
 mkrec pm && sed -i "10s/^\([^,]*\),[^,]*,/\1,+1e-3,/" pm/imu.csv  # one '+' is a sign: read
 t convert-number-plus-one 0 NONE "$CALBENCH" convert pm --to h5 --out pmc
 rm -rf pmc
