@@ -8,6 +8,7 @@
 
 #include "common/input_error.hpp"
 #include "common/json_parse.hpp"
+#include "common/number_parse.hpp"
 #include "common/units.hpp"
 #include "db/inmotion_import.hpp"
 #include "db/signer.hpp"
@@ -107,9 +108,8 @@ Thresholds parse_thresholds(const std::string& text, const std::string& f) {
       t.max_outage_median_m.clear();
       for (auto e = it->begin(); e != it->end(); ++e) {
         const std::string key = k + "." + e.key();
-        char* end = nullptr;
-        const double L = std::strtod(e.key().c_str(), &end);
-        if (e.key().empty() || !end || *end != 0 || !std::isfinite(L) || !(L > 0))
+        double L = 0;
+        if (!parse_finite_number(e.key(), L) || !(L > 0))
           throw InputError(f, 0, key, "expected an outage length in seconds (> 0) as the key");
         if (!e->is_number() || !std::isfinite(e->get<double>()) || e->get<double>() < 0)
           throw InputError(f, 0, key, "expected a finite non-negative number of metres");

@@ -334,6 +334,8 @@ const bool registered = add_command(31, [](CLI::App& app) {
         }
       }
       if (*json) print_json(all.dump(2));
+      else if (failed == static_cast<int>(fits.size()))
+        std::cerr << "calbench: no unit fitted: nothing written under " << a->out << std::endl;
       else
         std::cout << fits.size() - static_cast<std::size_t>(failed) << " of " << fits.size() << " units fitted against "
                   << s["reference"]["file"].get<std::string>() << " (parsed once, "

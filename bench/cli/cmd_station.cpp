@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "common/number_parse.hpp"
 #include "bench/cli/operator_option.hpp"
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
@@ -52,8 +53,7 @@ void apply_inject(const std::string& spec, station::Injections& in) {
   devices::EmuFaults& imu = slot.empty() ? in.imu : in.slot[slot];
   auto seconds = [&] {
     double x = 0;
-    const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
-    if (r.ec != std::errc() || r.ptr != v.data() + v.size() || !std::isfinite(x) || x < 0)
+    if (!parse_finite_number(v, x) || x < 0)
       throw InputError("--inject", 0, k, "expected a finite time >= 0 s, got '" + v + "'");
     return x;
   };

@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include "common/number_parse.hpp"
+
 namespace calbench::cli {
 
 namespace number_detail {
@@ -39,9 +41,7 @@ inline CLI::Validator finite_number(double lo = -std::numeric_limits<double>::in
   return CLI::Validator(
       [lo, hi, lo_open, want](std::string& v) -> std::string {
         double x = 0;
-        const auto r = std::from_chars(v.data(), v.data() + v.size(), x, std::chars_format::general);
-        if (r.ec == std::errc() && r.ptr == v.data() + v.size() && std::isfinite(x) && (lo_open ? x > lo : x >= lo) &&
-            x <= hi)
+        if (parse_finite_number(v, x) && (lo_open ? x > lo : x >= lo) && x <= hi)
           return {};
         return "expected a finite number" + (want.empty() ? std::string() : " " + want) + ", got '" + v + "'";
       },

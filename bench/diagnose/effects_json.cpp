@@ -8,6 +8,7 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "calibration/effects/effect_registry.hpp"
+#include "common/number_parse.hpp"
 
 namespace calbench {
 
@@ -221,14 +222,9 @@ void apply_inject_option(const std::string& opt, EffectTerms& e) {
   auto num = [&](const std::string& k) {
     if (!kv.count(k)) throw InputError(where, 0, k, "missing key");
     used[k] = true;
-    try {
-      std::size_t pos = 0;
-      const double v = std::stod(kv[k], &pos);
-      if (pos != kv[k].size() || !std::isfinite(v)) throw std::invalid_argument("");
-      return v;
-    } catch (const std::exception&) {
-      throw InputError(where, 0, k, "not a number: '" + kv[k] + "'");
-    }
+    double v = 0;
+    if (!parse_finite_number(kv[k], v)) throw InputError(where, 0, k, "not a number: '" + kv[k] + "'");
+    return v;
   };
   auto num_or = [&](const std::string& k, double d) { return kv.count(k) ? num(k) : d; };
   auto axis = [&](const std::string& k) {

@@ -112,11 +112,22 @@ std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nl
     }
     args.push_back(std::move(x));
   }
-  for (const DriveUnit& u : du.units) fs::create_directories(out / u.slot);
   // The reference, once for every unit (GNSS aiding reads each unit's gnss.csv: small).
   std::shared_ptr<const SharedReference> ref;
   if (a.aiding != "gnss") ref = load_shared_reference(du.reference);
   for (auto& x : args) x.shared_reference = ref;
+  // What this run makes is removed again where it holds no result: a unit's folder when the unit
+  // failed, and --out with units.json when every unit failed (a failed run leaves nothing behind).
+  const bool out_existed = fs::exists(out);
+  std::vector<bool> slot_existed;
+  for (const DriveUnit& u : du.units) {
+    slot_existed.push_back(fs::exists(out / u.slot));
+    fs::create_directories(out / u.slot);
+  }
+  const auto remove_made = [&](std::size_t k) {
+    std::error_code ec;
+    if (!slot_existed[k]) fs::remove_all(out / du.units[k].slot, ec);
+  };
 
   std::vector<UnitFit> fits(du.units.size());
   std::atomic<std::size_t> next{0};
@@ -142,6 +153,11 @@ std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nl
   work();
   for (auto& t : pool) t.join();
 
+  bool any_fitted = false;
+  for (std::size_t k = 0; k < fits.size(); ++k) {
+    if (fits[k].error.empty()) any_fitted = true;
+    else remove_made(k);
+  }
   nlohmann::json units = nlohmann::json::array();
   for (const UnitFit& r : fits) {
     nlohmann::json u = {{"slot", r.slot}, {"ok", r.error.empty()}};
@@ -161,7 +177,11 @@ std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nl
                                      {"parsed", ref ? "once, for every unit" : "not used (GNSS aiding)"}}},
                       {"threads", threads},
                       {"units", units}};
-  write_text_atomic(out / "units.json", s.dump(2) + "\n");
+  if (any_fitted) write_text_atomic(out / "units.json", s.dump(2) + "\n");
+  else if (!out_existed) {
+    std::error_code ec;
+    fs::remove_all(out, ec);
+  }
   if (summary) *summary = s;
   return fits;
 }

@@ -44,7 +44,8 @@ struct UnitFit {
 // unit, as `station run --fixture` and this command write; a.series: a file name, written per unit
 // as OUT/SLOT/NAME). The reference is parsed once; the units run on up to `threads` threads (0: one
 // per core). Writes OUT/units.json (format calbench-fit-units/1) naming each unit's result. A unit
-// that fails does not stop the others.
+// that fails does not stop the others; its folder is removed again (if this run made it), and when
+// every unit fails neither units.json nor (if this run made it) OUT is left.
 std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nlohmann::json* summary = nullptr);
 
 }  // namespace calbench

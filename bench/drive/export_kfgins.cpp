@@ -13,6 +13,7 @@
 #include "bench/io/json_util.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"
+#include "bench/io/verify_recording.hpp"
 #include "calibration/inmotion/priors.hpp"
 #include "calibration/ins/nav_math.hpp"
 #include "common/input_error.hpp"
@@ -39,13 +40,22 @@ class Line {
     os << s_ << '\n';
     s_.clear();
   }
+  void to(std::ostream& os, TextTally& tally) {  // and tallied, for the check of what was written
+    s_ += '\n';
+    os << s_;
+    tally.add(s_);
+    s_.clear();
+  }
 
  private:
   std::string s_;
 };
 
-void check_written(const std::ofstream& f, const fs::path& p) {
-  if (!f) throw InputError(p.string(), 0, "", "cannot write file");
+// Closes f and reads the file back against what was written to it.
+void check_written(std::ofstream& f, const fs::path& p, TextTally& tally) {
+  f.close();
+  if (!f) throw std::runtime_error(p.string() + ": cannot write the file");
+  verify_written_text(p, tally);
 }
 
 std::string yaml_vec(const Vec3& v) {
@@ -126,6 +136,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
   long still_n = 0;
   {
     std::ofstream f(tmp / "imu.txt");
+    TextTally tally;
     ImuReader r(dir / "imu.csv", meta.imu_rate_hz);
     const bool rates = r.form() == ImuForm::rates;
     ImuRecord rec;
@@ -134,7 +145,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
       const double k = rates ? rec.dt : 1.0;
       const Vec3 dth = C_mb * (rec.gyro * k), dv = C_mb * (rec.accel * k);
       l << rec.t << dth << dv;
-      l.to(f);
+      l.to(f, tally);
       if (sum.imu_rows++ == 0) t_imu0 = rec.t;
       t_imu1 = rec.t;
       const double from = a.start_s >= 0 ? a.start_s : t_imu0;
@@ -147,7 +158,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
         ++still_n;
       }
     }
-    check_written(f, tmp / "imu.txt");
+    check_written(f, tmp / "imu.txt", tally);
   }
   if (sum.imu_rows < 2) throw InputError((dir / "imu.csv").string(), 0, "", "fewer than two IMU rows");
   const double t_from = a.start_s >= 0 ? a.start_s : t_imu0;
@@ -156,13 +167,14 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
   std::optional<Start> start;
   {
     std::ofstream f(tmp / "gnss.pos");
+    TextTally tally;
     GnssReader r(dir / "gnss.csv");
     GnssRow g;
     Line l;
     while (r.next(g)) {
       const double sh = std::isfinite(g.sigma_h_m) ? g.sigma_h_m : 2.0, sv = std::isfinite(g.sigma_v_m) ? g.sigma_v_m : 2 * sh;
       l << g.t << g.lat_deg << g.lon_deg << g.h_m << sh << sh << sv;
-      l.to(f);
+      l.to(f, tally);
       ++sum.gnss_rows;
       if (!has_ref && !start && g.t >= t_from) {  // no reference: the first fix, level, heading from its velocity
         Start s;
@@ -183,18 +195,19 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
         start = s;
       }
     }
-    check_written(f, tmp / "gnss.pos");
+    check_written(f, tmp / "gnss.pos", tally);
   }
   if (sum.gnss_rows == 0) throw InputError((dir / "gnss.csv").string(), 0, "", "no GNSS fixes");
   if (has_ref) {
     std::ofstream f(tmp / "truth.nav");
+    TextTally tally;
     DriveRefReader r(dir / "reference.csv");
     DriveRefRow row;
     Line l;
     const Vec3 mount_sigma = inmotion::datasheet_priors().mount / kDeg;
     while (r.next(row)) {
       l << 0.0 << row.t << row.lat_deg << row.lon_deg << row.h_m << row.v_ned << row.rpy_deg;
-      l.to(f);
+      l.to(f, tally);
       ++sum.truth_rows;
       if (!start && row.t >= t_from - 1e-9) {
         Start s;
@@ -217,7 +230,7 @@ ExportSummary export_kf_gins(const ExportKfGinsArgs& a) {
         start = s;
       }
     }
-    check_written(f, tmp / "truth.nav");
+    check_written(f, tmp / "truth.nav", tally);
     if (sum.truth_rows == 0) throw InputError((dir / "reference.csv").string(), 0, "", "no reference rows");
   }
   if (!start) throw InputError("--start", 0, "", "no " + std::string(has_ref ? "reference epoch" : "GNSS fix") + " at or after " + std::to_string(t_from) + " s");

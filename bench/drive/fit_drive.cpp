@@ -24,6 +24,7 @@
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/identification/standstill_noise.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
+#include "common/number_parse.hpp"
 #include "common/units.hpp"
 
 namespace calbench {
@@ -55,9 +56,7 @@ std::pair<double, double> parse_window(const std::string& w) {
   if (c == std::string::npos) throw InputError("--window", 0, "", "expected T0:T1 (seconds; either may be empty)");
   // Each bound a whole finite decimal number ("5abc", "nan", "1e999" are bad input).
   auto bound = [&](std::size_t from, std::size_t to, double& t) {
-    const char* p = w.data() + from;
-    const auto r = std::from_chars(p, w.data() + to, t, std::chars_format::general);
-    if (r.ec != std::errc() || r.ptr != w.data() + to || !std::isfinite(t))
+    if (!parse_finite_number(std::string_view(w).substr(from, to - from), t))
       throw InputError("--window", 0, "", "expected T0:T1 (finite seconds), got '" + w + "'");
   };
   if (c > 0) bound(0, c, t0);
@@ -574,7 +573,9 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   long n_imu = 0;
   DriveStream::Event e;
   while (st.next(e)) {
-    t_data_end = std::max(t_data_end, e.t);
+    // Where the IMU data end: a QC after the fit window needs IMU rows there (a reference that goes
+    // on past a cut imu.csv is no out-of-sample data).
+    if (!e.is_ref) t_data_end = std::max(t_data_end, e.t);
     if (e.is_ref) {
       keep_for_qc(e.t, f != nullptr || (e.t >= t0 - 1e-9 && e.t <= t1 + 1e-9));
       if (const DriveRefRow* r = st.last_reference_row()) aiding_stats.add(*r);

@@ -12,6 +12,8 @@
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
+#include "common/number_parse.hpp"
+#include "bench/io/plausible.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"
 
@@ -42,14 +44,13 @@ class TextRows {
         if (c >= e) break;
         double x = 0;
         const char* start = c;
-        if (*c == '+') ++c;
-        auto r = std::from_chars(c, e, x);
-        if (r.ec != std::errc() || (r.ptr < e && !(*r.ptr == ' ' || *r.ptr == '\t' || *r.ptr == '\r' || *r.ptr == ',')))
+        const char* end = parse_number(c, e, x);
+        if (!end || (end < e && !(*end == ' ' || *end == '\t' || *end == '\r' || *end == ',')))
           throw InputError(path_, line_, "column " + std::to_string(v.size() + 1),
                            "not a number: '" + field_text(std::string_view(start, static_cast<std::size_t>(e - start)), 20) + "'");
         if (!std::isfinite(x)) throw InputError(path_, line_, "column " + std::to_string(v.size() + 1), "NaN or infinity");
         v.push_back(x);
-        c = r.ptr;
+        c = end;
       }
       if (v.size() < min_)
         throw InputError(path_, line_, "", "expected at least " + std::to_string(min_) + " columns, found " + std::to_string(v.size()));
@@ -75,6 +76,9 @@ void check_range(const TextRows& r, std::size_t col, double v, double lo, double
 }
 
 void check_time(const TextRows& r, double t, double& last, bool& first) {
+  if (!(std::abs(t) <= plausible::kMaxAbsTime_s))  // the bound every reader of the recording applies
+    throw InputError(r.path(), r.line(), "time",
+                     "time " + number_text(t) + " s is not plausible (at most " + number_text(plausible::kMaxAbsTime_s) + " s)");
   if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
   first = false;
   last = t;

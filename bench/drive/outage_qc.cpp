@@ -11,6 +11,7 @@
 #include "calibration/inmotion/state_layout.hpp"
 #include "calibration/qc/inertial_qc.hpp"
 #include "common/input_error.hpp"
+#include "common/number_parse.hpp"
 #include "common/statistics.hpp"
 #include "common/units.hpp"
 
@@ -27,9 +28,7 @@ void parse_outage_lengths(const std::string& text, OutageOptions& o) {
   while (from <= text.size()) {
     const std::size_t c = std::min(text.find(',', from), text.size());
     double v = 0;
-    const char* p = text.data() + from;
-    const auto r = std::from_chars(p, text.data() + c, v, std::chars_format::general);
-    if (c == from || r.ec != std::errc() || r.ptr != text.data() + c || !std::isfinite(v) || !(v > 0) || v > 3600)
+    if (!parse_finite_number(std::string_view(text).substr(from, c - from), v) || !(v > 0) || v > 3600)
       throw InputError("--outages", 0, "",
                        "expected outage lengths in seconds, each > 0 and at most 3600, separated by commas (e.g. "
                        "15,30,60), or none; got '" + text + "'");

@@ -8,6 +8,7 @@
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/io/coefficients_json.hpp"
+#include "bench/io/message_text.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "common/drive_result.hpp"
 #include "common/input_error.hpp"
@@ -115,7 +116,11 @@ void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std
       for (std::size_t i = 0; i < idx.size(); ++i) qc_imu(*runs[i], comp[i], e);
     }
   }
-  if (!started) throw InputError(dir.string(), 0, "--from", "no reference epoch at or after the start time");
+  if (!started)
+    throw InputError(dir.string(), 0, "",
+                     "no reference epoch at or after the QC's start (" + (from_s ? number_text(*from_s) + " s" : std::string("the first epoch")) +
+                         "): the reference or imu.csv ends before it; give an earlier start or check that the "
+                         "recording's files are complete");
   if (st.rows_with_temperature() > 0) q.has_temperature = true;
 }
 }  // namespace

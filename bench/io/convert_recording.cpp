@@ -11,6 +11,7 @@
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/io/staging_folder.hpp"
+#include "bench/io/verify_recording.hpp"
 #include "common/input_error.hpp"
 
 namespace calbench {
@@ -70,65 +71,76 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
   if (!out.parent_path().empty() && !fs::is_directory(out.parent_path()))
     throw InputError("--out", 0, "", "no such directory: " + out.parent_path().string());
 
+  // The source's tables: each read to its end before anything is marked done. A recording.h5 that
+  // cannot be read (cut short, empty, damaged) is refused here, naming the file and what is wrong,
+  // not skipped as a folder without tables.
+  const fs::path h5 = dir / kHdf5RecordingFile;
+  if (from == "h5") hdf5_table_info(h5, "imu");  // the file as a whole, and the table every recording has
+  std::vector<const char*> tables;
+  for (const char* t : kRecordingTables)
+    if (from == "h5" ? hdf5_has_dataset(h5, t) : fs::exists(dir / (std::string(t) + ".csv"))) tables.push_back(t);
+
   ConvertResult res{out, from, to, {}};
   StagingFolder tmp(out, "partial");
   copy_other_files(dir, tmp.path());
-
+  std::unique_ptr<Hdf5RecordingWriter> h5w;
   if (to == "h5") {
     std::ifstream m(dir / "meta.json");
     std::stringstream meta_text;
     meta_text << m.rdbuf();
-    Hdf5RecordingWriter w(tmp.path() / kHdf5RecordingFile, meta_text.str());
-    for (const char* t : kRecordingTables) {
-      const fs::path f = dir / (std::string(t) + ".csv");
-      if (!fs::exists(f)) continue;
-      CsvReader r(f.string());
-      std::vector<int> slot;
-      for (const std::string& c : r.header()) {
-        if (r.optional(c) != static_cast<int>(slot.size()))
-          throw InputError(f.string(), 1, c, "duplicated column name (a dataset's columns must be unique)");
-        slot.push_back(static_cast<int>(slot.size()));
-      }
-      w.begin_table(t, r.header(), r.comments());
-      std::vector<double> row(slot.size());
-      std::size_t n = 0;
-      while (r.next()) {
-        for (std::size_t i = 0; i < slot.size(); ++i) row[i] = r.value(slot[i]);
-        w.row(row.data());
-        if (++n % 65536 == 0) check_stop(stop);
-      }
-      w.end_table();
-      res.tables.push_back({t, n, slot.size()});
-    }
-    check_stop(stop);
-    w.close();
-    fsync_path(tmp.path() / kHdf5RecordingFile);
-  } else {
-    const fs::path h5 = dir / kHdf5RecordingFile;
-    for (const char* t : kRecordingTables) {
-      if (!recording_has_table(dir, t)) continue;
-      const Hdf5TableInfo info = hdf5_table_info(h5, t);
-      const auto src = open_hdf5_table(h5, t);
-      std::vector<int> slot;
-      for (const std::string& c : info.columns) {
-        if (src->optional(c) != static_cast<int>(slot.size()))
-          throw InputError(h5.string(), 0, c, "dataset /" + std::string(t) + ": duplicated column name");
-        slot.push_back(static_cast<int>(slot.size()));
-      }
-      std::string comment;
-      for (std::size_t i = 0; i < info.comments.size(); ++i) comment.append(i ? "\n# " : "").append(info.comments[i]);
-      CsvWriter w((tmp.path() / (std::string(t) + ".csv")).string(), info.columns, comment);
-      std::vector<double> row(slot.size());
-      std::size_t n = 0;
-      while (src->next()) {
-        for (std::size_t i = 0; i < slot.size(); ++i) row[i] = src->value(slot[i]);
-        w.row(row.data(), row.size());
-        if (++n % 65536 == 0) check_stop(stop);
-      }
-      w.close();
-      res.tables.push_back({t, n, slot.size()});
-    }
+    h5w = std::make_unique<Hdf5RecordingWriter>(tmp.path() / kHdf5RecordingFile, meta_text.str());
   }
+  std::vector<TableTally> tally;
+  for (const char* t : tables) {
+    // The source table, read with the readers' own checks: every value a number, time ("t_s")
+    // strictly increasing (TableSource::set_time_slot, as every reader of a recording).
+    std::unique_ptr<TableSource> src;
+    std::vector<std::string> comments;
+    if (from == "csv") {
+      auto csv = std::make_unique<CsvReader>((dir / (std::string(t) + ".csv")).string());
+      comments = csv->comments();
+      src = std::move(csv);
+    } else {
+      comments = hdf5_table_info(h5, t).comments;
+      src = open_hdf5_table(h5, t);
+    }
+    const std::vector<std::string> columns = src->columns();
+    std::vector<int> slot;
+    for (const std::string& c : columns) {
+      if (src->optional(c) != static_cast<int>(slot.size()))
+        throw InputError(src->path(), from == "csv" ? 1 : 0, c, "table " + std::string(t) + ": duplicated column name (a table's columns must be unique)");
+      slot.push_back(static_cast<int>(slot.size()));
+    }
+    src->set_time_slot(src->require("t_s"));
+    std::unique_ptr<CsvWriter> cw;
+    if (h5w) {
+      h5w->begin_table(t, columns, comments);
+    } else {
+      std::string comment;
+      for (std::size_t i = 0; i < comments.size(); ++i) comment.append(i ? "\n# " : "").append(comments[i]);
+      cw = std::make_unique<CsvWriter>((tmp.path() / (std::string(t) + ".csv")).string(), columns, comment);
+    }
+    tally.emplace_back(t, columns);
+    std::vector<double> row(slot.size());
+    while (src->next()) {
+      for (std::size_t i = 0; i < slot.size(); ++i) row[i] = src->value(slot[i]);
+      if (h5w) h5w->row(row.data());
+      else cw->row(row.data(), row.size());
+      tally.back().add(row.data(), row.size());
+      if (tally.back().rows() % 65536 == 0) check_stop(stop);
+    }
+    if (h5w) h5w->end_table();
+    else cw->close();
+    res.tables.push_back({t, tally.back().rows(), slot.size()});
+  }
+  check_stop(stop);
+  if (h5w) {
+    h5w->close();
+    fsync_path(tmp.path() / kHdf5RecordingFile);
+  }
+  // Complete only when the new folder reads back as the source was read: the same tables, columns,
+  // rows and values bit for bit.
+  verify_written_recording(tmp.path(), tally);
   check_stop(stop);
   fsync_path(tmp.path());
   fs::rename(tmp.path(), out);

@@ -8,11 +8,12 @@
 #include <cmath>
 #include <cstring>
 
-#include <fast_float/fast_float.h>
 
 #include "common/input_error.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/input_warning.hpp"
+#include "common/number_parse.hpp"
+#include "bench/io/plausible.hpp"
 
 namespace calbench {
 namespace {
@@ -147,7 +148,8 @@ bool CsvReader::read_line(std::string_view& out) {
     if (t.front() != '#')
       input_warning(path_, line_no_ + 1,
                     "last line has no line end: treated as truncated and not used ('" +
-                        std::string(t.substr(0, std::min<std::size_t>(t.size(), 40))) + "')");
+                        std::string(t.substr(0, std::min<std::size_t>(t.size(), 40))) +
+                        "'); the rows before it are used: if the file was cut short by a copy, copy it again");
   }
   carry_.clear();
   return false;
@@ -170,13 +172,11 @@ bool CsvReader::parse_row(std::string_view t) {
     }
     const char* q = p;
     while (q < e && (*q == ' ' || *q == '\t')) ++q;
-    const char* first = q < e && *q == '+' ? q + 1 : q;
     double v = 0;
-    // fast_float (Debian libfast-float-dev): exact decimal-to-binary rounding, as strtod.
-    const auto r = fast_float::from_chars(first, e, v);
-    const char* end = r.ptr;
+    const char* const num_end = parse_number(q, e, v);
+    const char* end = num_end ? num_end : q;
     while (end < e && (*end == ' ' || *end == '\t')) ++end;
-    const bool bad = r.ec != std::errc() || (end < e && *end != ',') || r.ptr == first;
+    const bool bad = !num_end || (end < e && *end != ',');
     if (bad || !std::isfinite(v)) {
       // The field as written, for the message.
       const void* c = std::memchr(p, ',', static_cast<std::size_t>(e - p));
@@ -207,10 +207,7 @@ bool CsvReader::next() {
     parse_row(t);
     if (time_slot_ >= 0) {
       const double tv = values_[time_slot_];
-      if (rows_ > 0) {
-        if (tv == last_time_) fail(slot_names_[time_slot_], "duplicated time " + number_text(tv));
-        if (tv < last_time_) fail(slot_names_[time_slot_], "time goes backwards");
-      }
+      plausible::check_row_time(*this, slot_names_[time_slot_], tv, rows_ > 0, last_time_);
       last_time_ = tv;
     }
     ++rows_;

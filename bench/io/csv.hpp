@@ -31,6 +31,7 @@ class CsvReader final : public TableSource {
   int require(std::string_view name) override;
   int optional(std::string_view name) override;  // −1 if absent
   bool has(std::string_view name) const override;
+  const std::vector<std::string>& columns() const override { return header_; }
   // Enforce strictly increasing values in this slot (time).
   void set_time_slot(int slot) override { time_slot_ = slot; }
 

@@ -9,6 +9,7 @@
 #include <new>
 #include <map>
 #include <sys/stat.h>
+#include <cstdio>
 #include <cstring>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include <stdexcept>
 
 #include "bench/io/message_text.hpp"
+#include "bench/io/plausible.hpp"
 #include "bench/io/recording.hpp"
 #include "common/input_error.hpp"
 #include <nlohmann/json.hpp>
@@ -203,14 +205,64 @@ struct TableMeta {
   std::uint64_t rows = 0, ncol = 0, chunk_rows = 0, offset = 0;  // chunk_rows 0: contiguous at offset
   std::vector<std::string> columns, comments;
   std::vector<std::uint64_t> chunk_addr;  // chunk k holds rows [k·chunk_rows, (k+1)·chunk_rows)
+  bool side = false;  // the values were read by the library into the side file, contiguous at offset
 };
 struct FileMeta {
   std::string error;  // set: the file is refused as a whole
   std::map<std::string, TableMeta> tables;
+  std::shared_ptr<std::FILE> side;  // the side file (in the parent; survey())
 };
 
+// A dataset of many small chunks (h5py's chunks=(1, n), say) is not located chunk by chunk: the
+// library's H5Dget_chunk_info_by_coord walks the whole chunk index on every call, so that time grew
+// with the square of the chunks (75,807 one-row chunks: 79 s, issue 35). Beyond this many chunks
+// the child reads the values itself (H5Dread of kChunkRows rows at a time: one index walk) into a
+// temporary side file that the reader then reads as a contiguous block.
+constexpr std::uint64_t kMaxLocatedChunks = 1024;
+
+// In the child: the values of a dataset of many chunks (kMaxLocatedChunks), read by the library
+// kChunkRows rows at a time and appended to the side file; m then says where they lie there.
+TableMeta read_to_side(hid_t d, TableMeta m, const std::string& ds, int side_fd, std::uint64_t& side_end) {
+  const auto damaged = [&](std::uint64_t r0, const std::string& why) {
+    m.error_field = ds;
+    m.error = "dataset " + ds + ", rows from " + std::to_string(r0 + 1) + ": " + why;
+    return m;
+  };
+  const std::uint64_t nchunks = (m.rows + m.chunk_rows - 1) / m.chunk_rows;
+  hsize_t allocated = 0;
+  Hid all(H5Dget_space(d), H5Sclose);
+  if (!all || H5Dget_num_chunks(d, all.id, &allocated) < 0 || allocated != nchunks)
+    return damaged(0, "their values are not all stored (" + std::to_string(allocated) + " of " + std::to_string(nchunks) +
+                          " chunks: truncated or damaged)");
+  if (side_fd < 0) return damaged(0, "no temporary file to read them into");
+  m.offset = side_end;
+  m.side = true;
+  m.chunk_rows = 0;
+  Hid fsp(H5Dget_space(d), H5Sclose);
+  std::vector<double> buf;
+  for (std::uint64_t r0 = 0; r0 < m.rows; r0 += kChunkRows) {
+    const hsize_t start[2] = {r0, 0}, count[2] = {std::min<std::uint64_t>(kChunkRows, m.rows - r0), m.ncol};
+    buf.resize(count[0] * count[1]);
+    Hid mem(H5Screate_simple(2, count, nullptr), H5Sclose);
+    if (!fsp || H5Sselect_hyperslab(fsp.id, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
+        H5Dread(d, H5T_IEEE_F64LE, mem.id, fsp.id, H5P_DEFAULT, buf.data()) < 0)
+      return damaged(r0, "cannot read (the file is truncated or damaged)");
+    const char* p = reinterpret_cast<const char*>(buf.data());
+    std::size_t left = buf.size() * sizeof(double);
+    while (left > 0) {
+      const ssize_t n = ::pwrite(side_fd, p, left, static_cast<off_t>(side_end));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return damaged(r0, std::string("cannot hold the values in a temporary file: ") + std::strerror(errno));
+      p += n;
+      left -= static_cast<std::size_t>(n);
+      side_end += static_cast<std::uint64_t>(n);
+    }
+  }
+  return m;
+}
+
 // In the child: one table, checked as the format says. Errors are returned, not thrown.
-TableMeta survey_table(hid_t file, const std::string& name, std::uintmax_t file_size) {
+TableMeta survey_table(hid_t file, const std::string& name, std::uintmax_t file_size, int side_fd, std::uint64_t& side_end) {
   TableMeta m;
   const std::string ds = "/" + name;
   auto fail = [&](const std::string& field, const std::string& msg) {
@@ -268,6 +320,7 @@ TableMeta survey_table(hid_t file, const std::string& name, std::uintmax_t file_
     if (H5Pget_chunk(dcpl.id, 2, cd) != 2 || cd[1] != m.ncol || cd[0] == 0 || cd[0] * m.ncol > (hsize_t{1} << 25))
       return fail(ds, "dataset " + ds + " has the wrong chunk shape: expected chunks of whole rows (every column), at most 2^25 values each");
     m.chunk_rows = cd[0];
+    if ((m.rows + m.chunk_rows - 1) / m.chunk_rows > kMaxLocatedChunks) return read_to_side(d.id, m, ds, side_fd, side_end);
     for (std::uint64_t r0 = 0; r0 < m.rows; r0 += m.chunk_rows) {
       const hsize_t at[2] = {r0, 0};
       unsigned mask = 0;
@@ -293,7 +346,7 @@ nlohmann::json to_json(const FileMeta& f) {
   for (const auto& [name, m] : f.tables)
     j["tables"][name] = {{"present", m.present}, {"error_field", m.error_field}, {"error", m.error}, {"rows", m.rows},
                          {"ncol", m.ncol}, {"chunk_rows", m.chunk_rows}, {"offset", m.offset}, {"columns", m.columns},
-                         {"comments", m.comments}, {"chunk_addr", m.chunk_addr}};
+                         {"comments", m.comments}, {"chunk_addr", m.chunk_addr}, {"side", m.side}};
   return j;
 }
 
@@ -312,13 +365,14 @@ FileMeta from_json(const nlohmann::json& j) {
     m.columns = t.at("columns").get<std::vector<std::string>>();
     m.comments = t.at("comments").get<std::vector<std::string>>();
     m.chunk_addr = t.at("chunk_addr").get<std::vector<std::uint64_t>>();
+    m.side = t.at("side").get<bool>();
     f.tables[name] = std::move(m);
   }
   return f;
 }
 
 // In the child: the whole file.
-FileMeta survey_file(const fs::path& file) {
+FileMeta survey_file(const fs::path& file, int side_fd) {
   FileMeta f;
   quiet_hdf5();
   const std::string p = file.string();
@@ -333,7 +387,8 @@ FileMeta survey_file(const fs::path& file) {
     f.error = "cannot open as HDF5 (damaged or truncated file)";
     return f;
   }
-  for (const char* t : kRecordingTables) f.tables[t] = survey_table(h.id, t, size);
+  std::uint64_t side_end = 0;
+  for (const char* t : kRecordingTables) f.tables[t] = survey_table(h.id, t, size, side_fd, side_end);
   return f;
 }
 
@@ -372,6 +427,11 @@ const FileMeta& survey(const fs::path& file) {
   std::lock_guard<std::mutex> lk(m);
   const auto it = done.find(key);
   if (it != done.end()) return it->second;
+  // The side file (kMaxLocatedChunks): unnamed, in TMPDIR, gone when closed.
+  std::shared_ptr<std::FILE> side(std::tmpfile(), [](std::FILE* p) {
+    if (p) std::fclose(p);
+  });
+  const int side_fd = side ? ::fileno(side.get()) : -1;
   int fds[2];
   if (::pipe(fds) != 0) throw std::runtime_error(std::string("cannot make a pipe: ") + std::strerror(errno));
   pid_t pid = -1;
@@ -389,7 +449,7 @@ const FileMeta& survey(const fs::path& file) {
     new (&h5_mutex()) std::recursive_mutex();
     std::string out;
     try {
-      out = to_json(survey_file(file)).dump();
+      out = to_json(survey_file(file, side_fd)).dump();
     } catch (...) {
       ::_exit(3);
     }
@@ -426,6 +486,7 @@ const FileMeta& survey(const fs::path& file) {
   } catch (const std::exception& e) {
     throw std::runtime_error(file.string() + ": the HDF5 survey's answer is unreadable: " + e.what());
   }
+  f.side = std::move(side);
   return done[key] = std::move(f);
 }
 
@@ -446,7 +507,12 @@ class Hdf5Table final : public TableSource {
   Hdf5Table(const fs::path& file, const std::string& dataset, bool digest)
       : path_(file.string()), ds_(lower_dataset(dataset)), t_(table_meta(file, dataset)) {
     slot_of_col_.assign(t_.ncol, -1);
-    fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (t_.side) {  // the values as the survey read them (kMaxLocatedChunks)
+      side_ = survey(file).side;
+      fd_ = side_ ? ::dup(::fileno(side_.get())) : -1;
+    } else {
+      fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+    }
     if (fd_ < 0) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
     struct stat st {};
     file_size_ = ::fstat(fd_, &st) == 0 ? static_cast<std::uint64_t>(st.st_size) : 0;
@@ -478,6 +544,7 @@ class Hdf5Table final : public TableSource {
       if (c == name) return true;
     return false;
   }
+  const std::vector<std::string>& columns() const override { return t_.columns; }
   void set_time_slot(int slot) override { time_slot_ = slot; }
   bool next() override {
     if (row_ >= t_.rows) {
@@ -495,10 +562,7 @@ class Hdf5Table final : public TableSource {
     if (time_slot_ >= 0) {
       const double tv = values_[static_cast<std::size_t>(time_slot_)];
       const std::string& name = t_.columns[cols_[static_cast<std::size_t>(time_slot_)]];
-      if (row_ > 1) {
-        if (tv == last_time_) fail_at(name, "duplicated time " + number_text(tv));
-        if (tv < last_time_) fail_at(name, "time goes backwards");
-      }
+      plausible::check_row_time(*this, name, tv, row_ > 1, last_time_);
       last_time_ = tv;
     }
     return true;
@@ -551,6 +615,7 @@ class Hdf5Table final : public TableSource {
 
   std::string path_, ds_;
   TableMeta t_;
+  std::shared_ptr<std::FILE> side_;  // the side file, when t_.side
   int fd_ = -1;
   std::uint64_t file_size_ = 0;
   std::vector<int> slot_of_col_;
@@ -579,6 +644,14 @@ bool recording_has_table(const fs::path& dir, const std::string& name) {
   } catch (const InputError&) {
     return false;  // a damaged file: its reader says so
   }
+}
+
+bool hdf5_has_dataset(const fs::path& file, const std::string& name) {
+  if (!fs::exists(file)) throw InputError(file.string(), 0, "", "cannot open: no such file");
+  const FileMeta& fm = survey(file);
+  if (!fm.error.empty()) throw InputError(file.string(), 0, "", fm.error);
+  const auto it = fm.tables.find(name);
+  return it != fm.tables.end() && it->second.present;
 }
 
 fs::path table_file(const fs::path& dir, const std::string& name) {

@@ -25,6 +25,9 @@ inline constexpr const char* kRecordingTables[] = {"imu", "reference", "gnss"};
 // file however many of its tables ask.
 std::unique_ptr<TableSource> open_hdf5_table(const std::filesystem::path& file, const std::string& dataset, bool digest = false);
 
+// Does recording.h5 `file` hold dataset `name`? A file that cannot be read at all (not HDF5, cut
+// short, damaged) is an InputError naming it, not a file without datasets.
+bool hdf5_has_dataset(const std::filesystem::path& file, const std::string& name);
 // Does the recording folder hold table `name` ("imu", "reference", "gnss"), as name.csv or as a
 // dataset of recording.h5?
 bool recording_has_table(const std::filesystem::path& dir, const std::string& name);

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "bench/io/verify_recording.hpp"
 #include "common/input_error.hpp"
 #include "common/json_parse.hpp"
 
@@ -69,6 +70,14 @@ void write_text_atomic(const std::filesystem::path& file, const std::string& tex
   }
   ::fsync(fd);
   ::close(fd);
+  try {  // renamed into place only once it reads back as written
+    TextTally tally;
+    tally.add(text);
+    verify_written_text(tmp, tally);
+  } catch (...) {
+    ::unlink(tmp.c_str());
+    throw;
+  }
   if (::rename(tmp.c_str(), file.c_str()) != 0) {
     ::unlink(tmp.c_str());
     throw std::runtime_error(file.string() + ": rename failed: " + std::strerror(errno));

@@ -10,7 +10,8 @@ namespace calbench {
 
 // Parse a JSON file; syntax errors become InputError with the line and column.
 nlohmann::json read_json_file(const std::filesystem::path& file);
-// Atomic write: temporary file in the same folder, fsync, rename.
+// Atomic write: temporary file in the same folder, fsync, read back and compared with `text`
+// (verify_written_text), rename.
 // An output file can be written there: not a folder, its folder exists and takes new files (InputError
 // naming it).
 // Commands call it before long work so that a typo costs nothing.

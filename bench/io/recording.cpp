@@ -11,9 +11,11 @@
 
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/sha256.hpp"
+#include "bench/io/verify_recording.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
+#include "bench/io/plausible.hpp"
 
 namespace calbench {
 
@@ -39,8 +41,9 @@ RecordingMeta read_meta(const fs::path& dir) {
   m.device.serial = serial.is_number_integer() ? std::to_string(serial.get<long long>()) : jstr(serial, f, "device.serial");
   m.imu_rate_hz = jnum(jreq(j, "imu_rate_hz", f, ""), f, "imu_rate_hz");
   if (m.imu_rate_hz <= 0) throw InputError(f, 0, "imu_rate_hz", "must be positive");
-  if (m.imu_rate_hz > 1e6)  // an IMU's output rate; 1e300 passed and broke the step checks that use 1/rate
-    throw InputError(f, 0, "imu_rate_hz", number_text(m.imu_rate_hz) + " Hz is not an IMU rate (at most 1000000 Hz)");
+  if (m.imu_rate_hz > plausible::kMaxImuRate_Hz)  // 1e300 passed and broke the step checks that use 1/rate
+    throw InputError(f, 0, "imu_rate_hz", number_text(m.imu_rate_hz) + " Hz is not an IMU rate (at most " +
+                                              number_text(plausible::kMaxImuRate_Hz) + " Hz)");
   if (j.contains("site") || m.kind == RecordingKind::bench) {
     const auto& s = jreq(j, "site", f, "");
     Site site;
@@ -48,6 +51,10 @@ RecordingMeta read_meta(const fs::path& dir) {
     site.lon_deg = jnum(jreq(s, "lon_deg", f, "site"), f, "site.lon_deg");
     site.h_m = jnum(jreq(s, "h_m", f, "site"), f, "site.h_m");
     if (std::abs(site.lat_deg) > 90) throw InputError(f, 0, "site.lat_deg", "latitude outside ±90°");
+    if (std::abs(site.lon_deg) > 360) throw InputError(f, 0, "site.lon_deg", "longitude outside ±360°");
+    if (std::abs(site.h_m) > plausible::kMaxAbsHeight_m)
+      throw InputError(f, 0, "site.h_m", "height " + number_text(site.h_m) + " m is not plausible (at most ±" +
+                                             number_text(plausible::kMaxAbsHeight_m) + " m)");
     m.site = site;
   }
   if (j.contains("mounting") || m.kind == RecordingKind::drive) {
@@ -55,6 +62,15 @@ RecordingMeta read_meta(const fs::path& dir) {
     Mounting mt;
     mt.rpy_deg = jvec3(jreq(mo, "rpy_deg", f, "mounting"), f, "mounting.rpy_deg");
     mt.lever_arm_m = jvec3(jreq(mo, "lever_arm_m", f, "mounting"), f, "mounting.lever_arm_m");
+    if (!(mt.lever_arm_m.norm() <= plausible::kMaxLeverArm_m))
+      throw InputError(f, 0, "mounting.lever_arm_m",
+                       "lever arm of " + number_text(mt.lever_arm_m.norm()) + " m is not plausible (|r| at most " +
+                           number_text(plausible::kMaxLeverArm_m) + " m)");
+    for (int i = 0; i < 3; ++i)
+      if (!(std::abs(mt.rpy_deg(i)) <= plausible::kMaxMountingAngle_deg))
+        throw InputError(f, 0, "mounting.rpy_deg[" + std::to_string(i) + "]",
+                         number_text(mt.rpy_deg(i)) + "° is not a mounting angle (at most ±" +
+                             number_text(plausible::kMaxMountingAngle_deg) + "°)");
     m.mounting = mt;
   }
   if (j.contains("notes") && j["notes"].is_string()) m.notes = j["notes"].get<std::string>();
@@ -114,14 +130,14 @@ ImuReader::ImuReader(const fs::path& file, double nominal_rate_hz, bool digest)
     form_ = ImuForm::rates;
     const char* g[] = {"gx_rad_s", "gy_rad_s", "gz_rad_s"};
     const char* a[] = {"ax_m_s2", "ay_m_s2", "az_m_s2"};
-    for (int i = 0; i < 3; ++i) g_[i] = c.require(g[i]);
-    for (int i = 0; i < 3; ++i) a_[i] = c.require(a[i]);
+    for (int i = 0; i < 3; ++i) g_[i] = c.require(g_name_[i] = g[i]);
+    for (int i = 0; i < 3; ++i) a_[i] = c.require(a_name_[i] = a[i]);
   } else {
     form_ = ImuForm::increments;
     const char* g[] = {"dax_rad", "day_rad", "daz_rad"};
     const char* a[] = {"dvx_m_s", "dvy_m_s", "dvz_m_s"};
-    for (int i = 0; i < 3; ++i) g_[i] = c.require(g[i]);
-    for (int i = 0; i < 3; ++i) a_[i] = c.require(a[i]);
+    for (int i = 0; i < 3; ++i) g_[i] = c.require(g_name_[i] = g[i]);
+    for (int i = 0; i < 3; ++i) a_[i] = c.require(a_name_[i] = a[i]);
   }
   temp_ = c.optional("temp_c");
   seq_ = c.optional("seq");
@@ -155,11 +171,24 @@ void ImuReader::produce() {
         ImuRecord& r = b->rows.emplace_back();
         r.t = c.value(t_);
         r.dt = first ? nominal_dt_ : r.t - last_t;
+        if (!first && r.dt > plausible::kMaxImuInterval_s)
+          c.fail_at("t_s", number_text(r.dt) + " s after the row before: not an IMU interval (at most " +
+                               number_text(plausible::kMaxImuInterval_s) + " s; split the recording at the gap)");
         first = false;
         last_t = r.t;
+        // Rates, or increments over dt (as rates): far beyond any IMU's range is not a measurement.
+        const double per = form_ == ImuForm::rates ? 1.0 : 1.0 / r.dt;
         for (int i = 0; i < 3; ++i) {
           r.gyro(i) = c.value(g_[i]);
           r.accel(i) = c.value(a_[i]);
+          if (!(std::abs(r.gyro(i)) * per <= plausible::kMaxAngularRate_rad_s))
+            c.fail_at(g_name_[i], "angular rate " + number_text(r.gyro(i) * per) +
+                                                          " rad/s is not plausible (at most " +
+                                                          number_text(plausible::kMaxAngularRate_rad_s) + " rad/s)");
+          if (!(std::abs(r.accel(i)) * per <= plausible::kMaxSpecificForce_m_s2))
+            c.fail_at(a_name_[i], "specific force " + number_text(r.accel(i) * per) +
+                                                          " m/s² is not plausible (at most " +
+                                                          number_text(plausible::kMaxSpecificForce_m_s2) + " m/s²)");
         }
         r.temp_c = temp_ >= 0 ? c.value(temp_) : std::numeric_limits<double>::quiet_NaN();
         r.seq = seq_ >= 0 ? c.value(seq_) : -1;
@@ -319,24 +348,27 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingMeta meta, ImuFor
   else ic.insert(ic.end(), {"dax_rad", "day_rad", "daz_rad", "dvx_m_s", "dvy_m_s", "dvz_m_s"});
   if (temp_) ic.push_back("temp_c");
   if (seq_) ic.push_back("seq");
-  imu_ = std::make_unique<CsvWriter>((dir_ / "imu.csv").string(), ic, "MEMS IMU output, IMU axes");
+  // Each table's rows are tallied as they are written (tally_: imu, reference[, gnss]); finish()
+  // reads the folder back against the tally before it marks the recording complete.
+  const auto table = [&](const char* name, std::vector<std::string> cols, const char* comment) {
+    tally_.emplace_back(name, cols);
+    return std::make_unique<CsvWriter>((dir_ / (std::string(name) + ".csv")).string(), cols, comment);
+  };
+  imu_ = table("imu", ic, "MEMS IMU output, IMU axes");
   if (meta_.kind == RecordingKind::bench) {
-    ref_ = std::make_unique<CsvWriter>((dir_ / "reference.csv").string(),
-                                       std::vector<std::string>{"t_s", "wx_rad_s", "wy_rad_s", "wz_rad_s", "fx_m_s2",
-                                                                "fy_m_s2", "fz_m_s2", "step", "angle_deg"},
-                                       "what the table says the IMU experienced (nominal bench model)");
+    ref_ = table("reference",
+                 {"t_s", "wx_rad_s", "wy_rad_s", "wz_rad_s", "fx_m_s2", "fy_m_s2", "fz_m_s2", "step", "angle_deg"},
+                 "what the table says the IMU experienced (nominal bench model)");
   } else {
-    ref_ = std::make_unique<CsvWriter>((dir_ / "reference.csv").string(),
-                                       std::vector<std::string>{"t_s", "lat_deg", "lon_deg", "h_m", "vn_m_s", "ve_m_s",
-                                                                "vd_m_s", "roll_deg", "pitch_deg", "yaw_deg",
-                                                                "sigma_pos_m", "sigma_vel_m_s", "sigma_att_deg"},
-                                       "reference inertial-satellite system");
+    ref_ = table("reference",
+                 {"t_s", "lat_deg", "lon_deg", "h_m", "vn_m_s", "ve_m_s", "vd_m_s", "roll_deg", "pitch_deg", "yaw_deg",
+                  "sigma_pos_m", "sigma_vel_m_s", "sigma_att_deg"},
+                 "reference inertial-satellite system");
     if (with_gnss)
-      gnss_ = std::make_unique<CsvWriter>((dir_ / "gnss.csv").string(),
-                                          std::vector<std::string>{"t_s", "lat_deg", "lon_deg", "h_m", "vn_m_s",
-                                                                   "ve_m_s", "vd_m_s", "sigma_h_m", "sigma_v_m",
-                                                                   "sigma_vel_m_s"},
-                                          "GNSS antenna fixes");
+      gnss_ = table("gnss",
+                    {"t_s", "lat_deg", "lon_deg", "h_m", "vn_m_s", "ve_m_s", "vd_m_s", "sigma_h_m", "sigma_v_m",
+                     "sigma_vel_m_s"},
+                    "GNSS antenna fixes");
   }
 }
 
@@ -358,21 +390,28 @@ void RecordingWriter::imu(const ImuRecord& r) {
   if (temp_) v[n++] = r.temp_c;
   if (seq_) v[n++] = r.seq;
   imu_->row(v, n);
+  tally_[0].add(v, n);
 }
 
 void RecordingWriter::bench_ref(const BenchRefRow& r) {
-  ref_->row({r.t, r.w(0), r.w(1), r.w(2), r.f(0), r.f(1), r.f(2), static_cast<double>(r.step), r.angle_deg});
+  const double v[] = {r.t, r.w(0), r.w(1), r.w(2), r.f(0), r.f(1), r.f(2), static_cast<double>(r.step), r.angle_deg};
+  ref_->row(v, std::size(v));
+  tally_[1].add(v, std::size(v));
 }
 
 void RecordingWriter::drive_ref(const DriveRefRow& r) {
-  ref_->row({r.t, r.lat_deg, r.lon_deg, r.h_m, r.v_ned(0), r.v_ned(1), r.v_ned(2), r.rpy_deg(0), r.rpy_deg(1),
-             r.rpy_deg(2), r.sigma_pos_m, r.sigma_vel_m_s, r.sigma_att_deg});
+  const double v[] = {r.t, r.lat_deg, r.lon_deg, r.h_m, r.v_ned(0), r.v_ned(1), r.v_ned(2), r.rpy_deg(0), r.rpy_deg(1),
+                      r.rpy_deg(2), r.sigma_pos_m, r.sigma_vel_m_s, r.sigma_att_deg};
+  ref_->row(v, std::size(v));
+  tally_[1].add(v, std::size(v));
 }
 
 void RecordingWriter::gnss(const GnssRow& r) {
   if (!gnss_) throw std::logic_error("RecordingWriter: gnss.csv was not requested");
   const Vec3 v = r.v_ned.value_or(Vec3::Zero());
-  gnss_->row({r.t, r.lat_deg, r.lon_deg, r.h_m, v(0), v(1), v(2), r.sigma_h_m, r.sigma_v_m, r.sigma_vel_m_s});
+  const double row[] = {r.t, r.lat_deg, r.lon_deg, r.h_m, v(0), v(1), v(2), r.sigma_h_m, r.sigma_v_m, r.sigma_vel_m_s};
+  gnss_->row(row, std::size(row));
+  tally_[2].add(row, std::size(row));
 }
 
 void RecordingWriter::flush() {
@@ -385,6 +424,7 @@ void RecordingWriter::finish() {
   imu_->close();
   ref_->close();
   if (gnss_) gnss_->close();
+  verify_written_recording(dir_, tally_);  // read back as written, or not complete
   meta_.complete = true;
   write_meta(dir_, meta_);
   finished_ = true;

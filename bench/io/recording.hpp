@@ -10,6 +10,7 @@
 #include <string>
 
 #include "bench/io/csv.hpp"
+#include "bench/io/verify_recording.hpp"
 #include "calibration/bench_plan.hpp"
 #include "common/sensor_model.hpp"
 
@@ -83,6 +84,8 @@ class ImuReader {
   std::unique_ptr<TableSource> tab_;
   ImuForm form_ = ImuForm::rates;
   int t_, g_[3], a_[3], temp_, seq_;
+  const char* g_name_[3] = {};  // the columns of g_ and a_, for messages
+  const char* a_name_[3] = {};
   double nominal_dt_;
   std::unique_ptr<Queue> q_;
   std::unique_ptr<Batch> cur_;
@@ -151,7 +154,7 @@ class GnssReader {
 };
 
 // Writes a recording folder. meta.json is written first with status "incomplete" and rewritten
-// as "complete" by finish(). Rows are buffered and flushed every `flush_every` seconds of data.
+// as "complete" by finish(), once the tables read back as written (verify_written_recording). Rows are buffered and flushed every `flush_every` seconds of data.
 class RecordingWriter {
  public:
   RecordingWriter(const fs::path& dir, RecordingMeta meta, ImuForm form = ImuForm::rates,
@@ -171,6 +174,7 @@ class RecordingWriter {
   ImuForm form_;
   bool temp_, seq_;
   std::unique_ptr<CsvWriter> imu_, ref_, gnss_;
+  std::vector<TableTally> tally_;
   bool finished_ = false;
 };
 

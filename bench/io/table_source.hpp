@@ -18,6 +18,8 @@ class TableSource {
   virtual int require(std::string_view name) = 0;
   virtual int optional(std::string_view name) = 0;  // −1 if absent
   virtual bool has(std::string_view name) const = 0;
+  // Every column's name, in the order of the file.
+  virtual const std::vector<std::string>& columns() const = 0;
   // Enforce strictly increasing values in this slot (time).
   virtual void set_time_slot(int slot) = 0;
   // The next row; false at the end. The first call fails if there is no row.

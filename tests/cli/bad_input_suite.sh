@@ -367,6 +367,82 @@ printf '0 1.00 95.5 114 20 0 0 0 0 0 0\n' > badlat.nav
 LEFT="kf" t import-truth-latitude 2 "badlat\.nav:1: 'column 3': latitude \(deg\) 95\.5 outside \[-90, 90\]" "$CALBENCH" import kf-gins --imu imu.txt --truth badlat.nav --out kf
 t import-out-is-file 2 "empty\.txt: is a file, not a folder" "$CALBENCH" import kf-gins --imu imu.txt --truth truth.nav --out empty.txt
 
+# ---------------------------------------------------------------------------------- issue 35
+# convert: a recording.h5 that cannot be read fully is refused, nothing written (it once gave a
+# folder of meta.json "complete" and no tables, exit 0).
+ok "$CALBENCH" convert rec --to h5 --out rech5
+mkdir trunc zero && cp rech5/meta.json rech5/truth.json trunc/ && cp rech5/meta.json rech5/truth.json zero/
+head -c $(( $(stat -c %s rech5/recording.h5) / 2 )) rech5/recording.h5 > trunc/recording.h5
+: > zero/recording.h5
+LEFT="tc .tc.partial-*" t convert-h5-truncated 2 "^calbench: error: trunc/recording\.h5: cannot open as HDF5 \(damaged or truncated file\)$" "$CALBENCH" convert trunc --to csv --out tc
+LEFT="tc .tc.partial-*" t convert-h5-empty 2 "^calbench: error: zero/recording\.h5: not an HDF5 file" "$CALBENCH" convert zero --to csv --out tc
+# convert checks time order as every reader does: backwards or repeated stamps in each table.
+n=0
+for tab in imu reference gnss; do
+  for how in back dup; do
+    n=$((n + 1))
+    mkrec "o$n"
+    # Data line 6 (after the '#' comment and the header: line 8 of the file) gets the time of line
+    # 7 (dup) or a time before it (back).
+    t7=$(sed -n 7p "o$n/$tab.csv" | cut -d, -f1)
+    [ $how = dup ] && t8=$t7 || t8=$(echo "$t7 - 0.5" | bc -l)
+    sed -i "8s/^[^,]*,/$t8,/" "o$n/$tab.csv"
+    [ $how = dup ] && msg="duplicated time" || msg="time goes backwards"
+    LEFT="oc .oc.partial-*" t "convert-$tab-$how" 2 "o$n/$tab\.csv:8: 't_s': $msg" "$CALBENCH" convert "o$n" --to h5 --out oc
+  done
+done
+# '+-1' was read as -1 by every CSV reader and by the KF-GINS importer (exit 0): one sign at most.
+for num in '+-1' '-+1' '++1' '--1'; do
+  mkrec pm
+  sed -i "10s/^\([^,]*\),[^,]*,/\1,$num,/" pm/imu.csv
+  re=$(printf '%s' "$num" | sed 's/+/\\+/g')
+  LEFT="r.json" t "fit-drive-number-$num" 2 "^calbench: error: pm/imu\.csv:10: 'gx_rad_s': not a number: '$re'$" "$CALBENCH" fit drive pm --out r.json
+  LEFT="pmc .pmc.partial-*" t "convert-number-$num" 2 "pm/imu\.csv:10: 'gx_rad_s': not a number: '$re'$" "$CALBENCH" convert pm --to h5 --out pmc
+  printf '1.00 0 0 0 0 0 0\n1.01 0 %s 0 0 0 0\n1.02 0 0 0 0 0 0\n' "$num" > imu-sign.txt
+  LEFT="kf" t "import-number-$num" 2 "^calbench: error: imu-sign\.txt:2: 'column 3': not a number: '$re" "$CALBENCH" import kf-gins --imu imu-sign.txt --truth truth.nav --out kf
+done
+printf '1.00 0 0 0 0 0 0\n1.7e308 0 0 0 0 0 0\n' > imu-time.txt
+LEFT="kf" t import-time-1.7e308 2 "^calbench: error: imu-time\.txt:2: 'time': time 1\.7e\+308 s is not plausible \(at most 1e\+10 s\)$" "$CALBENCH" import kf-gins --imu imu-time.txt --truth truth.nav --out kf
+# Options and --inject values through the same parser (common/number_parse.hpp).
+LEFT="r.json" t fit-drive-window-plus-minus 2 "--window: expected T0:T1 \(finite seconds\), got '\+-1:5'" "$CALBENCH" fit drive rec --out r.json --window +-1:5
+LEFT="s2" t sim-drive-inject-plus-minus 2 "'value': not a number: '\+-1'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --inject time_offset:value=+-1 --until 1 --out s2
+LEFT="s2" t sim-drive-until-plus-minus 2 "--until: expected a finite number > 0, got '\+-1'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --until +-1 --out s2
+mkrec pm && sed -i "10s/^\([^,]*\),[^,]*,/\1,+1e-3,/" pm/imu.csv  # one '+' is a sign: read
+t convert-number-plus-one 0 NONE "$CALBENCH" convert pm --to h5 --out pmc
+rm -rf pmc
+# Absurd but finite input is bad input (exit 2, the field), not "filter broke down" (exit 1).
+mkrec lever
+python3 -c "import json; m = json.load(open('lever/meta.json')); m['mounting']['lever_arm_m'] = [1e15, 0, 0]; json.dump(m, open('lever/meta.json', 'w'))"
+LEFT="r.json" t fit-drive-lever-1e15 2 "lever/meta\.json: 'mounting\.lever_arm_m': lever arm of 1e\+15 m is not plausible \(\|r\| at most 100 m\)" "$CALBENCH" fit drive lever --out r.json
+mkrec rpy
+python3 -c "import json; m = json.load(open('rpy/meta.json')); m['mounting']['rpy_deg'] = [0, 1e9, 0]; json.dump(m, open('rpy/meta.json', 'w'))"
+LEFT="r.json" t fit-drive-mounting-1e9 2 "rpy/meta\.json: 'mounting\.rpy_deg\[1\]': 1000000000° is not a mounting angle \(at most ±360°\)" "$CALBENCH" fit drive rpy --out r.json
+mkrec tbig
+last=$(tail -n 1 tbig/imu.csv); echo "1.7e308,${last#*,}" >> tbig/imu.csv
+LEFT="r.json" t fit-drive-time-1.7e308 2 "tbig/imu\.csv:$(wc -l < tbig/imu.csv): 't_s': time 1\.7e\+308 s is not plausible \(at most 1e\+10 s\)" "$CALBENCH" fit drive tbig --out r.json
+mkrec tgap
+last=$(tail -n 1 tgap/imu.csv); echo "9000,${last#*,}" >> tgap/imu.csv
+LEFT="r.json" t fit-drive-imu-gap 2 "tgap/imu\.csv:$(wc -l < tgap/imu.csv): 't_s': [0-9.]+ s after the row before: not an IMU interval \(at most 3600 s" "$CALBENCH" fit drive tgap --out r.json
+mkrec wbig && sed -i "12s/^\([^,]*\),[^,]*,/\1,-2e4,/" wbig/imu.csv
+LEFT="r.json" t fit-drive-rate-2e4 2 "wbig/imu\.csv:12: 'gx_rad_s': angular rate -20000 rad/s is not plausible \(at most 10000 rad/s\)" "$CALBENCH" fit drive wbig --out r.json
+mkrec fbig && sed -i "12s/^\(\([^,]*,\)\{6\}\)[^,]*/\11e6/" fbig/imu.csv
+LEFT="r.json" t fit-drive-force-1e6 2 "fbig/imu\.csv:12: 'az_m_s2': specific force 1000000 m/s² is not plausible \(at most 100000 m/s²\)" "$CALBENCH" fit drive fbig --out r.json
+# A multi-unit fit in which every unit fails leaves nothing: no OUT/units.json, no slot folders.
+ok "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 4 --until 12 --units 2 --out mu
+sed -i '30s/^\([^,]*\),[^,]*,/\1,x,/' mu/1/imu.csv mu/2/imu.csv
+LEFT="muo" t fit-drive-units-all-fail 2 "unit 2: mu/2/imu\.csv:30: 'gx_rad_s': not a number: 'x'.*|no unit fitted: nothing written under muo" "$CALBENCH" fit drive mu --out muo
+grep -q "no unit fitted: nothing written under muo" "$T/err.txt" || FAILED+=("fit-drive-units-all-fail: no 'nothing written' line")
+mkdir muo2
+t fit-drive-units-all-fail-existing 2 "no unit fitted: nothing written under muo2" "$CALBENCH" fit drive mu --out muo2
+[ -z "$(ls -A muo2)" ] || FAILED+=("fit-drive-units-all-fail-existing: left $(ls -A muo2 | tr '\n' ' ')in muo2")
+# fit drive on a cut imu.csv (item 7): the truncation said once, what to do, and no '--from'.
+mkrec tcsv
+{ head -n 3000 rec/imu.csv; printf '15.0,0.01'; } > tcsv/imu.csv  # cut in its last line; the reference goes on
+t fit-drive-cut-imu 0 "tcsv/imu\.csv:3001: last line has no line end: treated as truncated and not used .*if the file was cut short by a copy, copy it again" "$CALBENCH" fit drive tcsv --out r.json
+[ "$(grep -c "last line has no line end" "$T/err.txt")" = 1 ] || FAILED+=("fit-drive-cut-imu: the truncation warning is not said exactly once")
+grep -q -- "--from" "$T/err.txt" && FAILED+=("fit-drive-cut-imu: names --from, an option never given")
+rm -f r.json
+
 # ---------------------------------------------------------------------------------- read-only --out
 # A folder nobody may write to: permissions where they hold (not root), else a read-only tmpfs.
 mkdir ro

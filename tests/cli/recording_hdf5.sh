@@ -122,6 +122,67 @@ ls -a | grep -q "partial" && fail "a failed conversion left a partial folder"
 expect2 "--out: .*exists" "$CALBENCH" convert drive --to h5 --out drive-h5
 expect2 "--to: " "$CALBENCH" convert drive --to hdf5
 
+# A source that cannot be read fully is refused, nothing written (issue 35): a recording.h5 cut
+# in half or of 0 bytes once converted to a folder of meta.json alone, marked complete.
+mkdir half zero
+cp drive-h5/meta.json drive-h5/truth.json half/ && cp drive-h5/meta.json zero/
+head -c $(( $(stat -c %s drive-h5/recording.h5) / 2 )) drive-h5/recording.h5 > half/recording.h5
+: > zero/recording.h5
+expect2 "^calbench: error: half/recording\.h5: .*(truncated|damaged|cut short)" "$CALBENCH" convert half --to csv --out half-csv
+expect2 "^calbench: error: zero/recording\.h5: not an HDF5 file" "$CALBENCH" convert zero --to csv --out zero-csv
+test ! -e half-csv && test ! -e zero-csv || fail "a refused conversion left its output"
+ls -a | grep -q "partial" && fail "a refused conversion left a partial folder"
+
+# Time order is checked converting either way (issue 35), as every reader checks it.
+$PY - <<'PY'
+import h5py, shutil, os
+for name, row, how in (("imu", 40, "back"), ("reference", 7, "dup"), ("gnss", 3, "back")):
+    d = f"order-{name}"
+    os.makedirs(d); shutil.copy("drive-h5/meta.json", d); shutil.copy("drive-h5/recording.h5", d)
+    with h5py.File(f"{d}/recording.h5", "r+") as f:
+        t = f[name][row - 2, 0]
+        f[name][row - 1, 0] = t if how == "dup" else t - 1.0
+PY
+expect2 "order-imu/recording\.h5: 't_s': dataset /imu, row 40: time goes backwards" "$CALBENCH" convert order-imu --to csv --out o1
+expect2 "order-reference/recording\.h5: 't_s': dataset /reference, row 7: duplicated time" "$CALBENCH" convert order-reference --to csv --out o2
+expect2 "order-gnss/recording\.h5: 't_s': dataset /gnss, row 3: time goes backwards" "$CALBENCH" convert order-gnss --to csv --out o3
+test ! -e o1 && test ! -e o2 && test ! -e o3 || fail "a conversion refused for its time order left its output"
+
+# One row per chunk (h5py chunks=(1, n)): read in one chunk-index walk, not one per chunk (issue
+# 35: 75,807 rows took 79 s in fit bench; 40,000 rows of imu and reference 36.7 s in convert). The
+# values read equal the CSV's; 30,000 rows in well under the 20 s the quadratic walk took.
+$PY - <<'PY'
+import h5py, numpy as np, csv, os, shutil
+os.makedirs("chunks1"); shutil.copy("bench/meta.json", "chunks1")
+with h5py.File("chunks1/recording.h5", "w") as f:
+    for name in ("imu", "reference"):
+        rows = list(csv.reader(l for l in open(f"bench/{name}.csv") if not l.startswith("#")))
+        a = np.array([[float(v) for v in r] for r in rows[1:30001]])
+        d = f.create_dataset(name, data=a, chunks=(1, a.shape[1]), maxshape=(None, a.shape[1]))
+        d.attrs["columns"] = np.array(rows[0], dtype="S")
+PY
+start=$(date +%s.%N)
+"$CALBENCH" convert chunks1 --to csv --out chunks1-csv > /dev/null
+took=$(echo "$(date +%s.%N) - $start" | bc)
+echo "1-row chunks, 2 x 30,000 rows: convert in $took s"
+[ "$(echo "$took < 8" | bc)" = 1 ] || fail "1-row chunks: convert took $took s (quadratic in the chunks?)"
+for t in imu reference; do
+  diff <(grep -v '^#' bench/$t.csv | head -n 30001) <(grep -v '^#' chunks1-csv/$t.csv) > /dev/null || fail "1-row chunks: $t values differ"
+done
+
+# Many small chunks, one never written (h5py leaves it unallocated): refused, not read as zeros.
+$PY - <<'PY'
+import h5py, numpy as np, shutil, os
+os.makedirs("sparse"); shutil.copy("drive-h5/meta.json", "sparse")
+with h5py.File("sparse/recording.h5", "w") as f:
+    a = np.zeros((1100, 7)); a[:, 0] = np.arange(1100) * 0.01; a[:, 6] = -9.8
+    d = f.create_dataset("imu", shape=a.shape, chunks=(1, 7), dtype="f8")
+    d[:1000] = a[:1000]; d[1001:] = a[1001:]
+    d.attrs["columns"] = np.array(["t_s", "gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"], dtype="S")
+PY
+expect2 "sparse/recording\.h5: '/imu': dataset /imu, rows from 1: their values are not all stored \(1099 of 1100 chunks" "$CALBENCH" convert sparse --to csv --out sparse-csv
+test ! -e sparse-csv || fail "a refused conversion left sparse-csv"
+
 # Interrupted: SIGTERM while converting leaves neither the output nor a partial folder.
 "$CALBENCH" simulate drive --route "$SRC/bench/routes/gnss_1h.toml" --truth random --seed 8 --until 2400 --out long >/dev/null
 "$CALBENCH" convert long --to h5 --out long-h5 & pid=$!

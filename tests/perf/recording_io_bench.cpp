@@ -6,10 +6,14 @@
 //   BM_FitDrive/<rate>/<obs>/<form>: `calbench fit drive DIR --obs OBS --out RESULT.json` end to end
 //     from files (QC and digests included), the executable run on one core (taskset -c 0) as a
 //     user runs it: wall seconds, ns per IMU epoch, the child's peak RSS.
+//   BM_Read_Imu_OneRowChunks/<rows>: the IMU reader on a recording.h5 whose imu dataset has one
+//     row per chunk (h5py's chunks=(1, n)), as issue 35's mutation run made it (75,807 rows took
+//     79 s in `fit bench`: one chunk-index walk per chunk); such a dataset is read in one walk since.
 //   With CALBENCH_BASELINE=/path/to/an/older/calbench, BM_FitDrive_Baseline/... runs that binary
 //     on the CSV recording side by side (before -> after on the same machine).
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
+#include <hdf5.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -105,6 +109,64 @@ void BM_Read_Reference(benchmark::State& state) {
   state.counters["MB_per_s"] = benchmark::Counter(mb, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Read_Reference)->Arg(0)->Arg(1)->ArgNames({"h5"})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(5);
+
+// DIR/recording.h5 with an imu dataset of `rows` rows in chunks of one row (rates form, synthetic
+// values at 200 Hz), made once per process.
+fs::path one_row_chunks(long rows) {
+  static std::map<long, fs::path> made;
+  if (made.count(rows)) return made[rows];
+  const fs::path dir = fs::temp_directory_path() / ("calbench-perf-io-" + std::to_string(::getpid())) / ("chunks1-" + std::to_string(rows));
+  fs::create_directories(dir);
+  const std::vector<std::string> cols = {"t_s", "gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"};
+  const hsize_t ncol = cols.size(), dims[2] = {static_cast<hsize_t>(rows), ncol}, chunk[2] = {1, ncol};
+  std::vector<double> v(static_cast<std::size_t>(rows) * ncol);
+  for (long k = 0; k < rows; ++k) {
+    double* r = &v[static_cast<std::size_t>(k) * ncol];
+    r[0] = 0.005 * static_cast<double>(k);
+    r[1] = 1e-4, r[2] = -2e-4, r[3] = 3e-4, r[4] = 0.01, r[5] = -0.02, r[6] = -9.8;
+  }
+  const hid_t f = H5Fcreate((dir / kHdf5RecordingFile).c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  const hid_t sp = H5Screate_simple(2, dims, nullptr), pl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(pl, 2, chunk);
+  const hid_t d = H5Dcreate2(f, "/imu", H5T_IEEE_F64LE, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
+  H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  std::size_t len = 0;
+  for (const auto& c : cols) len = std::max(len, c.size());
+  std::vector<char> names(len * ncol, '\0');
+  for (std::size_t i = 0; i < ncol; ++i) std::copy(cols[i].begin(), cols[i].end(), names.begin() + static_cast<long>(i * len));
+  const hid_t st = H5Tcopy(H5T_C_S1);
+  H5Tset_size(st, len);
+  const hid_t asp = H5Screate_simple(1, &ncol, nullptr), a = H5Acreate2(d, "columns", st, asp, H5P_DEFAULT, H5P_DEFAULT);
+  H5Awrite(a, st, names.data());
+  H5Aclose(a);
+  H5Sclose(asp);
+  H5Tclose(st);
+  H5Dclose(d);
+  H5Pclose(pl);
+  H5Sclose(sp);
+  H5Fclose(f);
+  return made[rows] = dir;
+}
+
+void BM_Read_Imu_OneRowChunks(benchmark::State& state) {
+  const long want = state.range(0);
+  const fs::path dir = one_row_chunks(want);
+  long rows = 0;
+  for (auto _ : state) {
+    // A new modification time: the file's structure is surveyed again (not the process's cache).
+    fs::last_write_time(dir / kHdf5RecordingFile, fs::file_time_type::clock::now());
+    ImuReader r(dir / "imu.csv", 200);
+    ImuRecord rec;
+    rows = 0;
+    while (r.next(rec)) ++rows;
+    benchmark::DoNotOptimize(rec);
+  }
+  if (rows != want) state.SkipWithError("rows read differ from rows written");
+  state.SetLabel("imu dataset of recording.h5, 1-row chunks");
+  state.counters["rows_per_s"] = benchmark::Counter(static_cast<double>(rows), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["rows"] = static_cast<double>(rows);
+}
+BENCHMARK(BM_Read_Imu_OneRowChunks)->Arg(10000)->Arg(75807)->ArgNames({"rows"})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(3);
 
 // Runs argv, returns wall seconds and the child's peak RSS (kB); -1 on failure.
 double run_child(const std::vector<std::string>& args, long& rss_kb) {
