@@ -16,7 +16,12 @@ constexpr const char* kFormatPrefix = "calbench-inmotion-result/";
 constexpr const char* kTyped[] = {"format",       "device",           "recording",     "reference_system", "window_s",
                                   "observations", "smoothed",         "coefficients",  "correction",       "mounting_rpy_deg",
                                   "determined_by", "priors",          "consistency",   "qc"};
-constexpr const char* kRecordingTyped[] = {"path", "sha256", "sha256_reference", "sha256_meta", "sha256_gnss", "format", "device"};
+constexpr const char* kRecordingTyped[] = {"path", "sha256", "sha256_reference", "sha256_meta", "sha256_gnss", "format", "device",
+                                           "uri", "digest_sha256"};
+
+bool is_sha256_hex(const std::string& s) {
+  return s.size() == 64 && s.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos;
+}
 
 template <std::size_t N>
 bool one_of(const std::string& k, const char* const (&names)[N]) {
@@ -410,12 +415,18 @@ DriveResult drive_result_from_json(const json& j, const std::string& f) {
       throw InputError(f, 0, "recording.device.serial",
                        "the drive was recorded by unit '" + rs + "', the result is filed under unit '" + r.device.serial + "'");
   }
-  if (r.recording.sha256.size() != 64 || r.recording.sha256.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
+  if (!is_sha256_hex(r.recording.sha256))
     throw InputError(f, 0, "recording.sha256", "expected 64 hexadecimal digits");
   r.recording.sha256_reference = opt_string(rec, "sha256_reference", f, "recording");
   r.recording.sha256_meta = opt_string(rec, "sha256_meta", f, "recording");
   r.recording.sha256_gnss = opt_string(rec, "sha256_gnss", f, "recording");
   r.recording.format = opt_string(rec, "format", f, "recording");
+  r.recording.uri = opt_string(rec, "uri", f, "recording");
+  if (r.recording.uri && r.recording.uri->rfind("file://", 0) != 0)
+    throw InputError(f, 0, "recording.uri", "expected file://HOST/absolute/path, got '" + *r.recording.uri + "'");
+  r.recording.digest = opt_string(rec, "digest_sha256", f, "recording");
+  if (r.recording.digest && !is_sha256_hex(*r.recording.digest))
+    throw InputError(f, 0, "recording.digest_sha256", "expected 64 hexadecimal digits");
   for (auto it = rec.begin(); it != rec.end(); ++it)
     if (!one_of(it.key(), kRecordingTyped) || (it.key() == "device" && !r.recording.device)) r.recording.extra[it.key()] = it.value();
   // the reference system: a text (older results: "reference", or recording.reference, any JSON)
@@ -472,6 +483,12 @@ json drive_result_to_json(const DriveResult& r) {
   if (r.recording.sha256_gnss) rec["sha256_gnss"] = *r.recording.sha256_gnss;
   if (r.recording.format) rec["format"] = *r.recording.format;
   if (r.recording.device) rec["device"] = {{"model", r.recording.device->model}, {"serial", r.recording.device->serial}};
+  // A result written now says where its recording is (older results read without it are never rewritten).
+  if (!r.recording.uri || !r.recording.digest)
+    throw InputError("RESULT.json", 0, !r.recording.uri ? "recording.uri" : "recording.digest_sha256",
+                     "a result is written with its recording's URI and digest (issue 35 item 8)");
+  rec["uri"] = *r.recording.uri;
+  rec["digest_sha256"] = *r.recording.digest;
   j["recording"] = rec;
   if (!r.reference_system.empty()) j["reference_system"] = r.reference_system;
   if (r.window_s) j["window_s"] = {r.window_s->first, r.window_s->second};

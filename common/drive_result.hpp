@@ -47,6 +47,11 @@ struct DriveRecording {
   std::optional<std::string> sha256_meta, sha256_gnss;
   std::optional<std::string> format;  // "hdf5": the digests are of recording.h5
   std::optional<DeviceId> device;     // the unit that drove (must be the result's unit)
+  // Where the recording is, for a central store (issue 35 item 8; docs/database.md "recording
+  // locations"): file://HOST/absolute/path and the SHA-256 of all its files, as for bench runs.
+  // Required on write (drive_result_to_json refuses a result without them); nullopt when reading
+  // an older result that has none.
+  std::optional<std::string> uri, digest;
   nlohmann::json extra = nlohmann::json::object();  // other keys, kept
 };
 

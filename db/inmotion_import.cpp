@@ -197,6 +197,8 @@ InMotionResult parse_inmotion_result(const std::string& text, const std::string&
   r.device.model = d.device.model;
   r.recording_path = d.recording.path;
   r.recording_sha256 = d.recording.sha256;
+  r.recording_uri = d.recording.uri.value_or("");
+  r.recording_digest = d.recording.digest.value_or("");
   r.reference_system = d.reference_system;
   r.coefficients = stored_block(d.coefficients, f, "coefficients");
   if (d.correction) r.correction = stored_block(*d.correction, f, "correction");

@@ -34,6 +34,9 @@ std::optional<DeterminedBy> parse_determined_by(const std::string& result_json, 
 struct InMotionResult {
   DeviceInfo device;
   std::string recording_path, recording_sha256, reference_system;
+  // file://HOST/absolute/path and SHA-256 of all its files ("" in results written before them);
+  // stored inside result_json (kept as given), read back by Store::inmotion_run.
+  std::string recording_uri, recording_digest;
   ParsedCoefficients coefficients;
   std::optional<ParsedCoefficients> correction;
   std::array<double, 3> mounting_rpy_deg{}, mounting_sigma_deg{};  // σ +inf when not given

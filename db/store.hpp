@@ -122,6 +122,9 @@ struct InMotionRun {
   std::string recording_path, recording_sha256, reference_system;
   std::array<double, 3> mounting_rpy_deg{}, mounting_sigma_deg{};
   std::string consistency_json, qc_json, result_json, created_at;
+  // Where the drive recording is, as bench_runs.recording_uri / recording_digest: read from
+  // result_json's recording.uri and recording.digest_sha256 ("" for results written before them).
+  std::string recording_uri, recording_digest;
 };
 
 struct CoefficientSetRecord {

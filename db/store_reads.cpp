@@ -1,6 +1,8 @@
 // Store reads: devices, sets with their values, runs, QC results, provisioning, audit and the fleet.
 #include <cmath>
 
+#include "common/drive_result.hpp"
+#include "common/input_error.hpp"
 #include "db/input_errors.hpp"
 #include "db/store.hpp"
 
@@ -152,6 +154,15 @@ std::optional<InMotionRun> Store::inmotion_run(std::int64_t id) {
   r.qc_json = st.text(12);
   r.result_json = st.text(13);
   r.created_at = st.text(14);
+  // The recording's URI and digest live in the stored RESULT.json (no column of their own): read
+  // through the one codec; a stored result it no longer reads leaves them "".
+  const auto j = nlohmann::json::parse(r.result_json, nullptr, false);
+  if (!j.is_discarded()) try {
+      const DriveResult d = drive_result_from_json(j, "inmotion_runs.result_json");
+      r.recording_uri = d.recording.uri.value_or("");
+      r.recording_digest = d.recording.digest.value_or("");
+    } catch (const InputError&) {
+    }
   return r;
 }
 

@@ -197,6 +197,11 @@ void cmd_history(const DbArgs& a) {
         if (const auto r = s->bench_run(e.entity_id))
           j["recording"] = {{"path", r->recording_path}, {"uri", r->recording_uri}, {"digest_sha256", r->recording_digest},
                             {"imu_csv_sha256", r->recording_sha256}};
+      // An in-motion run: the same for its drive recording ("" in results written before them).
+      if (e.entity == "inmotion_run")
+        if (const auto r = s->inmotion_run(e.entity_id))
+          j["recording"] = {{"path", r->recording_path}, {"uri", r->recording_uri}, {"digest_sha256", r->recording_digest},
+                            {"imu_csv_sha256", r->recording_sha256}};
       arr.push_back(j);
     }
     print_json(json{{"serial", d.serial}, {"authenticated", auth}, {"history", arr}}.dump(2));
@@ -209,6 +214,9 @@ void cmd_history(const DbArgs& a) {
               << "\n";
     if (e.entity == "bench_run")
       if (const auto r = s->bench_run(e.entity_id); r && !r->recording_uri.empty())
+        std::cout << "    recording " << r->recording_uri << "  SHA-256 of its files " << r->recording_digest << "\n";
+    if (e.entity == "inmotion_run")
+      if (const auto r = s->inmotion_run(e.entity_id); r && !r->recording_uri.empty())
         std::cout << "    recording " << r->recording_uri << "  SHA-256 of its files " << r->recording_digest << "\n";
   }
 }

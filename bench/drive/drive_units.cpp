@@ -124,9 +124,19 @@ std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nl
     slot_existed.push_back(fs::exists(out / u.slot));
     fs::create_directories(out / u.slot);
   }
+  // A unit that fails leaves no result in its slot, nor one from an earlier run into the same OUT
+  // (units.json says it failed): this run's outputs there go, and the slot folder when this run
+  // made it or nothing else is left in it.
   const auto remove_made = [&](std::size_t k) {
     std::error_code ec;
-    if (!slot_existed[k]) fs::remove_all(out / du.units[k].slot, ec);
+    const fs::path slot = out / du.units[k].slot;
+    if (!slot_existed[k]) {
+      fs::remove_all(slot, ec);
+      return;
+    }
+    fs::remove(args[k].out, ec);
+    if (!args[k].series.empty()) fs::remove(args[k].series, ec);
+    if (fs::is_empty(slot, ec) && !ec) fs::remove(slot, ec);
   };
 
   std::vector<UnitFit> fits(du.units.size());
@@ -178,9 +188,10 @@ std::vector<UnitFit> fit_drive_units(const FitDriveArgs& a, unsigned threads, nl
                       {"threads", threads},
                       {"units", units}};
   if (any_fitted) write_text_atomic(out / "units.json", s.dump(2) + "\n");
-  else if (!out_existed) {
+  else {  // every unit failed: nothing made stays, and no units.json of an earlier run names results gone
     std::error_code ec;
-    fs::remove_all(out, ec);
+    if (!out_existed) fs::remove_all(out, ec);
+    else fs::remove(out / "units.json", ec);
   }
   if (summary) *summary = s;
   return fits;

@@ -20,6 +20,7 @@
 #include "bench/io/input_warning.hpp"
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
+#include "bench/io/recording_location.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/identification/standstill_noise.hpp"
@@ -670,6 +671,10 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   if (h5) r.recording.format = "hdf5";
   if (gnss) r.recording.sha256_gnss = h5 ? imu_digest : digest(st.aiding_sha256(), table_file(dir, "gnss"));
   r.recording.device = meta.device;  // the unit that drove
+  // Where it is for a central store, as for bench runs (docs/database.md "recording locations"):
+  // file://HOST/absolute/path and the SHA-256 of all its files.
+  r.recording.uri = file_uri(dir);
+  r.recording.digest = folder_digest(dir);
   j["device_class"] = unit["device_class"];
   j["white_noise"] = unit["white_noise"];
   r.reference_system = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);

@@ -50,15 +50,6 @@ struct SimUnit {
   Vec3 true_rpy_deg, nominal_rpy_deg, lever;
 };
 
-// Replaces `link` by a hard link to `target` (the same file, no second copy), or a copy where the
-// file system has no hard links.
-void share_file(const fs::path& target, const fs::path& link) {
-  std::error_code ec;
-  fs::remove(link, ec);
-  fs::create_hard_link(target, link, ec);
-  if (ec) fs::copy_file(target, link, fs::copy_options::overwrite_existing);
-}
-
 }  // namespace
 
 SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
@@ -206,15 +197,19 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     ++sum.gnss_rows;
   };
   drivesim::simulate_drive(cfg, sinks, a.until_s);
-  for (auto& wr : writers) wr->finish();
+  w.finish();
   if (several) {
     // The drive's reference once: out/reference.csv (and gnss.csv), the same file in every unit's
-    // folder, so that each folder is a whole recording of the interchange format.
+    // folder, so that each folder is a whole recording of the interchange format. Each unit is
+    // marked complete only after the check of what its folder finally holds, the shared files included.
     nlohmann::json units = nlohmann::json::array();
-    for (const char* f : {"reference.csv", "gnss.csv"}) {
-      if (!fs::exists(out / sim.front().slot / f)) continue;
-      share_file(out / sim.front().slot / f, out / f);
-      for (std::size_t k = 1; k < sim.size(); ++k) share_file(out / f, out / sim[k].slot / f);
+    for (const char* f : {"reference", "gnss"})
+      if (fs::exists(out / sim.front().slot / (std::string(f) + ".csv")))
+        link_or_copy(out / sim.front().slot / (std::string(f) + ".csv"), out / (std::string(f) + ".csv"));
+    for (std::size_t k = 1; k < sim.size(); ++k) {
+      writers[k]->share_table(w, "reference");
+      if (with_gnss) writers[k]->share_table(w, "gnss");
+      writers[k]->finish();
     }
     for (const SimUnit& u : sim) units.push_back({{"slot", u.slot}, {"dir", u.slot}, {"serial", u.truth.device.serial}});
     nlohmann::json uj = {{"format", "calbench-drive-units/1"}, {"reference", "reference.csv"}, {"units", units},

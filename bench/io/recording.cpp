@@ -1,5 +1,6 @@
 #include "bench/io/recording.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
@@ -428,6 +429,27 @@ void RecordingWriter::finish() {
   meta_.complete = true;
   write_meta(dir_, meta_);
   finished_ = true;
+}
+
+void RecordingWriter::share_table(const RecordingWriter& from, const std::string& name) {
+  if (finished_ || !from.finished_)
+    throw std::logic_error("RecordingWriter::share_table: '" + name + "' shared from an unfinished recording or into a finished one");
+  std::unique_ptr<CsvWriter>& own = name == "reference" ? ref_ : name == "gnss" ? gnss_ : imu_;
+  const auto is = [&](const TableTally& t) { return t.name() == name; };
+  const auto mine = std::find_if(tally_.begin(), tally_.end(), is);
+  const auto theirs = std::find_if(from.tally_.begin(), from.tally_.end(), is);
+  if (name == "imu" || !own || mine == tally_.end() || theirs == from.tally_.end())
+    throw std::logic_error("RecordingWriter::share_table: no shareable table '" + name + "'");
+  own->close();
+  link_or_copy(from.dir_ / (name + ".csv"), dir_ / (name + ".csv"));
+  *mine = theirs->finished_copy();
+}
+
+void link_or_copy(const fs::path& target, const fs::path& link) {
+  std::error_code ec;
+  fs::remove(link, ec);
+  fs::create_hard_link(target, link, ec);
+  if (ec) fs::copy_file(target, link, fs::copy_options::overwrite_existing);
 }
 
 void sha256_add_file(Sha256& h, const fs::path& file) {

@@ -166,6 +166,10 @@ class RecordingWriter {
   void gnss(const GnssRow& r);
   void flush();
   void finish();  // close files, mark complete
+  // Units of one drive share its reference (and GNSS) file: before finish(), this recording's
+  // table `name` ("reference" or "gnss") becomes the file `from` wrote (link_or_copy; `from` has
+  // finished), and finish() checks what this folder then holds against what `from` wrote.
+  void share_table(const RecordingWriter& from, const std::string& name);
   const fs::path& dir() const { return dir_; }
 
  private:
@@ -177,6 +181,10 @@ class RecordingWriter {
   std::vector<TableTally> tally_;
   bool finished_ = false;
 };
+
+// Replaces `link` by a hard link to `target` (the same file, no second copy), or by a copy where the
+// file system has no hard links.
+void link_or_copy(const fs::path& target, const fs::path& link);
 
 // SHA-256 of a file, hex; sha256_add_file feeds a file's bytes into a digest being computed.
 std::string sha256_file(const fs::path& file);

@@ -25,6 +25,15 @@ const std::string& TableTally::sha256() {
   return hex_;
 }
 
+TableTally TableTally::finished_copy() const {
+  if (digest_) throw std::logic_error("TableTally::finished_copy: table '" + name_ + "' is still being written");
+  TableTally t(name_, columns_);
+  t.rows_ = rows_;
+  t.digest_.reset();
+  t.hex_ = hex_;
+  return t;
+}
+
 void TextTally::add(std::string_view text) {
   digest_->update(text.data(), text.size());
   bytes_ += text.size();

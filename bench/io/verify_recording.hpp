@@ -24,6 +24,9 @@ class TableTally {
   const std::vector<std::string>& columns() const { return columns_; }
   std::size_t rows() const { return rows_; }
   const std::string& sha256();  // of the values tallied; finishes the tally (add() may not follow)
+  // The same table as tallied, for a file shared with another recording (std::logic_error unless
+  // finished: the copy's figures must not move).
+  TableTally finished_copy() const;
 
  private:
   std::string name_;

@@ -44,12 +44,13 @@ std::string run_table(const InMotionRun& r, const DriveResult& res) {
   std::string dig = "imu.csv " + digest(r.recording_sha256);
   for (const auto& [d, file] : {std::pair{&res.recording.sha256_reference, "reference.csv"}, std::pair{&res.recording.sha256_meta, "meta.json"}})
     if (*d) dig += "<br>" + std::string(file) + " " + digest(**d);
+  if (!r.recording_digest.empty()) dig += "<br>all its files " + digest(r.recording_digest);  // as for bench runs
   std::string window = "not recorded";
   if (res.window_s) window = num(res.window_s->first) + " – " + num(res.window_s->second) + " s";
   std::string mount;
   for (std::size_t i = 0; i < 3; ++i)
     mount += (i ? " / " : "") + pm(r.mounting_rpy_deg[i], r.mounting_sigma_deg[i], 1.0);
-  return "<table class=\"run\">" + row("drive recording", html_escape(r.recording_path)) +
+  return "<table class=\"run\">" + row("drive recording", html_escape(r.recording_uri.empty() ? r.recording_path : r.recording_uri)) +
          row("SHA-256 of the files", dig) +
          row("reference system",
              r.reference_system.empty()

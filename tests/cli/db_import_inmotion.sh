@@ -76,4 +76,46 @@ PY
 # Without a stored parent that composes (fit on raw data elsewhere): stored as in-motion, with a note.
 "$CALBENCH" db import-inmotion notcomposed.json | grep -q "note: the fit started from a coefficient set that is not in the database" || fail "no-parent note"
 [ "$(sqlite3 "$CALBENCH_DB" "SELECT source||','||IFNULL(parent_id,'-') FROM coefficient_sets WHERE id = 3")" = "in-motion,-" ] || fail "no-parent source"
+# Issue 35 item 8: a result of `fit drive` says where its recording is (file://HOST/absolute/path)
+# and carries the digest of all its files (docs/database.md "recording locations", computed here
+# independently by tests/support/folder_digest.py); the import stores them (in the stored result)
+# and `db history` (text and --json) and the device report show them, as for bench runs.
+"$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 2 --until 30 --out rec > /dev/null
+"$CALBENCH" fit drive rec --window 0:20 --qc-horizon 5 --out fitted.json > /dev/null || fail "fit drive"
+want_uri="file://$(hostname)$(cd rec && pwd -P)"
+want_digest=$(python3 "$SRC/tests/support/folder_digest.py" rec)
+[ ${#want_digest} = 64 ] || fail "independent digest"
+python3 - "$want_uri" "$want_digest" <<'PY' || fail "RESULT.json recording uri/digest"
+import json, os, sys
+rec = json.load(open("fitted.json"))["recording"]
+assert rec["uri"] == sys.argv[1], (rec["uri"], sys.argv[1])
+host, path = rec["uri"][len("file://"):].split("/", 1)
+assert host and "/" + path == os.path.realpath("rec"), rec["uri"]  # host present, path absolute
+assert rec["digest_sha256"] == sys.argv[2], (rec["digest_sha256"], sys.argv[2])
+PY
+export CALBENCH_DB="$T/loc.db"
+"$CALBENCH" db init > /dev/null
+"$CALBENCH" db store-bench --coeffs rec/truth.json > /dev/null
+"$CALBENCH" db import-inmotion fitted.json > /dev/null || fail "import of fit drive's result"
+serial=$(python3 -c 'import json; print(json.load(open("rec/meta.json"))["device"]["serial"])')
+"$CALBENCH" db history "$serial" > hist.txt
+grep -q "^    recording $want_uri  SHA-256 of its files $want_digest\$" hist.txt || { cat hist.txt; fail "history: no in-motion recording line"; }
+[ "$(grep -c "^    recording " hist.txt)" = 1 ] || { cat hist.txt; fail "history: a recording line for the bench set stored without a recording"; }
+"$CALBENCH" db history "$serial" --json > hist.json
+python3 - "$want_uri" "$want_digest" <<'PY' || fail "history --json"
+import json, sys
+h = [e for e in json.load(open("hist.json"))["history"] if e["entity"] == "inmotion_run"]
+assert len(h) == 1 and h[0]["recording"]["uri"] == sys.argv[1] and h[0]["recording"]["digest_sha256"] == sys.argv[2], h
+assert h[0]["recording"]["path"] == json.load(open("fitted.json"))["recording"]["path"], h
+PY
+"$CALBENCH" report "$serial" --html report.html > /dev/null
+grep -q "$want_uri" report.html && grep -q "$want_digest" report.html || fail "device report: no recording URI or digest"
+# A result written before them (no uri, no digest) still imports; nothing is invented for it.
+python3 - <<'PY'
+import json
+j = json.load(open("fitted.json")); del j["recording"]["uri"]; del j["recording"]["digest_sha256"]
+json.dump(j, open("older.json", "w"))
+PY
+"$CALBENCH" db import-inmotion older.json > /dev/null || fail "older result refused"
+[ "$("$CALBENCH" db history "$serial" | grep -c "^    recording ")" = 1 ] || fail "older result shows a recording line"
 echo "db_import_inmotion: ok"

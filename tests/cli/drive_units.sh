@@ -60,6 +60,33 @@ for k in 1 2 3 4; do "$CALBENCH" db store-bench --coeffs "$T/d/$k/truth.json" --
 [ "$(grep -c "^unit [1-4]: stored in-motion run" "$T/imp.txt")" = 4 ] || { cat "$T/imp.txt"; fail "import"; }
 [ "$(sqlite3 "$T/s.db" "SELECT count(DISTINCT device_id) FROM inmotion_runs")" = 4 ] || fail "one in-motion run per device"
 
+# A unit that fails in a rerun into the same OUT (issue 35 item 1): its slot keeps no RESULT.json of
+# the earlier run (units.json says it failed); the units that fitted hold this run's result.
+cp -a "$T/d" "$T/d2" && cp -a "$T/f" "$T/f2"
+sed -i '60s/^[^,]*,/x,/' "$T/d2/2/imu.csv"
+rc=0; "$CALBENCH" fit drive "$T/d2" --out "$T/f2" --window 0:60 --qc-horizon 30 > /dev/null 2> "$T/err.txt" || rc=$?
+[ "$rc" = 2 ] && grep -q "unit 2: .*imu.csv" "$T/err.txt" || { cat "$T/err.txt"; fail "rerun with a bad unit: exit $rc"; }
+[ ! -e "$T/f2/2/RESULT.json" ] || fail "a failed unit's slot keeps the earlier run's RESULT.json"
+python3 - "$T/f2" <<'PY' || fail "rerun: units.json and results"
+import json, sys
+u = {x["slot"]: x for x in json.load(open(sys.argv[1] + "/units.json"))["units"]}
+assert not u["2"]["ok"] and "result" not in u["2"], u["2"]
+for k in "134":
+    assert u[k]["ok"], u[k]
+    assert json.load(open(sys.argv[1] + "/" + u[k]["result"]))["window_s"][1] <= 60, k  # this run's, not the earlier
+PY
+# Every unit fails in a rerun: no result and no units.json of the earlier run stays.
+for k in 1 3 4; do sed -i '60s/^[^,]*,/x,/' "$T/d2/$k/imu.csv"; done
+rc=0; "$CALBENCH" fit drive "$T/d2" --out "$T/f2" --window 0:60 > /dev/null 2> "$T/err.txt" || rc=$?
+[ "$rc" = 2 ] || { cat "$T/err.txt"; fail "rerun with every unit bad: exit $rc"; }
+[ ! -e "$T/f2/units.json" ] && [ -z "$(find "$T/f2" -name RESULT.json)" ] || fail "every unit failed: earlier results stay"
+
+# simulate drive --units: each unit is complete with the drive's shared reference and GNSS in it.
+for k in 2 3 4; do
+  python3 -c 'import json,sys; assert json.load(open(sys.argv[1]))["status"] == "complete"' "$T/d/$k/meta.json" || fail "unit $k not complete"
+  [ "$(stat -c %i "$T/d/gnss.csv")" = "$(stat -c %i "$T/d/$k/gnss.csv")" ] || fail "unit $k: gnss.csv not the shared file"
+done
+
 # One unit: today's recording (no units.json).
 "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 5 --units 1 --until 20 --out "$T/one" >/dev/null
 [ -s "$T/one/meta.json" ] && [ ! -e "$T/one/units.json" ] || fail "--units 1 is not a one-unit recording"

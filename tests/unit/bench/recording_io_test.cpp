@@ -109,43 +109,53 @@ TEST(RecordingIo, BenchRoundTripIsBitExact) {
   }
 }
 
-TEST(RecordingIo, DriveIncrementsRoundTripWithGnss) {
-  TempDir d;
+// Row k of a drive recording: IMU increments and, with `aiding`, a reference row and a GNSS fix.
+void write_drive_row(RecordingWriter& w, int k, bool aiding) {
+  ImuRecord r;
+  r.t = k * 0.01;
+  r.gyro = Vec3(1e-4 * k, -2e-5, 3.3e-6);
+  r.accel = Vec3(0.098, 0.001 * k, -0.0981);
+  w.imu(r);
+  if (!aiding) return;
+  DriveRefRow ref;
+  ref.t = r.t;
+  ref.lat_deg = 34.123456789012345;
+  ref.lon_deg = 111.98765432109876;
+  ref.h_m = 172.5;
+  ref.v_ned = Vec3(11.5, -0.6, 0.25);
+  ref.rpy_deg = Vec3(1.4, -3.1, 359.5);
+  ref.sigma_pos_m = 0.05;
+  ref.sigma_vel_m_s = 0.01;
+  ref.sigma_att_deg = 0.01;
+  w.drive_ref(ref);
+  GnssRow g;
+  g.t = r.t;
+  g.lat_deg = ref.lat_deg;
+  g.lon_deg = ref.lon_deg;
+  g.h_m = 170;
+  g.v_ned = ref.v_ned;
+  g.sigma_h_m = 1;
+  g.sigma_v_m = 2;
+  g.sigma_vel_m_s = 0.1;
+  w.gnss(g);
+}
+
+// The meta.json of a 100 Hz drive recording of unit `serial`.
+RecordingMeta drive_meta(const std::string& serial, const Vec3& rpy_deg, const Vec3& lever_m) {
   RecordingMeta m;
   m.kind = RecordingKind::drive;
-  m.device = {"ADIS16488A", "A9"};
+  m.device = {"ADIS16488A", serial};
   m.imu_rate_hz = 100;
-  m.mounting = Mounting{Vec3(180, 0, 90), Vec3(0.1, -0.2, 0.3)};
+  m.mounting = Mounting{rpy_deg, lever_m};
+  return m;
+}
+
+TEST(RecordingIo, DriveIncrementsRoundTripWithGnss) {
+  TempDir d;
+  const RecordingMeta m = drive_meta("A9", Vec3(180, 0, 90), Vec3(0.1, -0.2, 0.3));
   {
     RecordingWriter w(d.path(), m, ImuForm::increments, false, false, true);
-    for (int k = 1; k <= 50; ++k) {
-      ImuRecord r;
-      r.t = k * 0.01;
-      r.gyro = Vec3(1e-4 * k, -2e-5, 3.3e-6);
-      r.accel = Vec3(0.098, 0.001 * k, -0.0981);
-      w.imu(r);
-      DriveRefRow ref;
-      ref.t = r.t;
-      ref.lat_deg = 34.123456789012345;
-      ref.lon_deg = 111.98765432109876;
-      ref.h_m = 172.5;
-      ref.v_ned = Vec3(11.5, -0.6, 0.25);
-      ref.rpy_deg = Vec3(1.4, -3.1, 359.5);
-      ref.sigma_pos_m = 0.05;
-      ref.sigma_vel_m_s = 0.01;
-      ref.sigma_att_deg = 0.01;
-      w.drive_ref(ref);
-      GnssRow g;
-      g.t = r.t;
-      g.lat_deg = ref.lat_deg;
-      g.lon_deg = ref.lon_deg;
-      g.h_m = 170;
-      g.v_ned = ref.v_ned;
-      g.sigma_h_m = 1;
-      g.sigma_v_m = 2;
-      g.sigma_vel_m_s = 0.1;
-      w.gnss(g);
-    }
+    for (int k = 1; k <= 50; ++k) write_drive_row(w, k, true);
     w.finish();
   }
   const auto m2 = read_meta(d.path());
@@ -351,6 +361,48 @@ TEST(SensorModel, ComposeEqualsCorrectingTwice) {
   EXPECT_LT((c.measure(truth) - raw).norm(), 1e-14);
   EXPECT_LT((c.correct(raw) - truth).norm(), 1e-13);
   EXPECT_LT((b.correct(a.correct(raw)) - truth).norm(), 1e-13);
+}
+
+// Issue 35 item 1 (multi-unit `simulate drive`): a unit whose reference and GNSS are the drive's
+// shared files is marked complete only after its check of the files it finally holds; a shared
+// file that no longer holds what the first unit wrote leaves the unit incomplete.
+TEST(RecordingIo, AUnitSharingTheDrivesReferenceIsCheckedAgainstTheSharedFiles) {
+  TempDir d;
+  RecordingMeta m = drive_meta("S1", Vec3::Zero(), Vec3::Zero());
+  RecordingWriter first(d.path() / "1", m, ImuForm::increments, false, false, true);
+  for (int k = 1; k <= 30; ++k) write_drive_row(first, k, true);
+  EXPECT_THROW(RecordingWriter(d.path() / "x", m, ImuForm::increments, false, false, true).share_table(first, "reference"),
+               std::logic_error);  // from a recording still being written
+  first.finish();
+
+  m.device.serial = "S2";
+  RecordingWriter second(d.path() / "2", m, ImuForm::increments, false, false, true);
+  for (int k = 1; k <= 30; ++k) write_drive_row(second, k, false);
+  second.share_table(first, "reference");
+  second.share_table(first, "gnss");
+  second.finish();
+  EXPECT_TRUE(read_meta(d.path() / "2").complete);
+  for (const char* f : {"reference.csv", "gnss.csv"})
+    EXPECT_TRUE(fs::equivalent(d.path() / "1" / f, d.path() / "2" / f) ||
+                fs::file_size(d.path() / "1" / f) == fs::file_size(d.path() / "2" / f))
+        << f;
+  DriveRefReader rr(d.path() / "2" / "reference.csv");
+  std::size_t rows = 0;
+  for (DriveRefRow r; rr.next(r);) ++rows;
+  EXPECT_EQ(rows, 30u);
+
+  // A shared reference that lost its last rows (a lost write): the next unit is not complete.
+  m.device.serial = "S3";
+  RecordingWriter third(d.path() / "3", m, ImuForm::increments, false, false, true);
+  for (int k = 1; k <= 30; ++k) write_drive_row(third, k, false);
+  third.share_table(first, "gnss");
+  fs::copy_file(d.path() / "1" / "reference.csv", d.path() / "ref_short.csv");
+  fs::resize_file(d.path() / "ref_short.csv", fs::file_size(d.path() / "ref_short.csv") / 2);
+  third.share_table(first, "reference");
+  fs::remove(d.path() / "3" / "reference.csv");
+  fs::copy_file(d.path() / "ref_short.csv", d.path() / "3" / "reference.csv");
+  EXPECT_ANY_THROW(third.finish());
+  EXPECT_FALSE(read_meta(d.path() / "3").complete);
 }
 
 }  // namespace

@@ -49,7 +49,9 @@ json sample() {
             {"sha256_reference", nullptr},
             {"sha256_meta", std::string(64, 'c')},
             {"sha256_gnss", std::string(64, 'd')},
-            {"device", {{"model", "ADIS16488A"}, {"serial", "U7"}}}}},
+            {"device", {{"model", "ADIS16488A"}, {"serial", "U7"}}},
+            {"uri", "file://station1/drives/d1"},
+            {"digest_sha256", std::string(64, 'e')}}},
           {"reference_system", "GNSS fixes (gnss.csv)"},
           {"window_s", {0.5, 135.25}},
           {"observations", "pos,vel"},
@@ -247,6 +249,34 @@ TEST(DriveResultCodec, ReadsTheOlderFormsTheStoreHasAlwaysTaken) {
   EXPECT_EQ(r.reference_system, R"({"name":"FOG INS"})");
 }
 
+// Issue 35 item 8: where the recording is (URI) and the digest of all its files, typed, required on
+// write; a result written before them still reads, and is never written back without them.
+TEST(DriveResultCodec, TheRecordingsUriAndDigestAreTypedRequiredOnWriteOptionalOnRead) {
+  const DriveResult r = drive_result_from_json(sample(), "R.json");
+  EXPECT_EQ(r.recording.uri.value_or(""), "file://station1/drives/d1");
+  EXPECT_EQ(r.recording.digest.value_or(""), std::string(64, 'e'));
+  EXPECT_TRUE(r.recording.extra.empty()) << r.recording.extra.dump();
+  json old = sample();
+  old["recording"].erase("uri");
+  old["recording"].erase("digest_sha256");
+  DriveResult o = drive_result_from_json(old, "old.json");
+  EXPECT_FALSE(o.recording.uri);
+  EXPECT_FALSE(o.recording.digest);
+  try {
+    (void)drive_result_to_json(o);
+    ADD_FAILURE() << "a result without its recording's URI was written";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "recording.uri");
+  }
+  o.recording.uri = "file://h/x";
+  try {
+    (void)drive_result_to_json(o);
+    ADD_FAILURE() << "a result without its recording's digest was written";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "recording.digest_sha256");
+  }
+}
+
 // The refusal's field, checking that it names the file; "" when the input was accepted.
 std::string refused_field(const json& j) {
   try {
@@ -271,6 +301,9 @@ TEST(DriveResultCodec, MalformedInputIsRefusedNamingTheFileAndTheKey) {
   EXPECT_EQ(refused_field(with([](json& j) { j.erase("recording"); })), "recording");
   EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["sha256"] = "abc"; })), "recording.sha256");
   EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["path"] = 1; })), "recording.path");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["uri"] = "/drives/d1"; })), "recording.uri");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["uri"] = 1; })), "recording.uri");
+  EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["digest_sha256"] = "abc"; })), "recording.digest_sha256");
   EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["sha256_meta"] = 1; })), "recording.sha256_meta");
   EXPECT_EQ(refused_field(with([](json& j) { j["recording"]["device"]["serial"] = "U8"; })), "recording.device.serial");
   EXPECT_EQ(refused_field(with([](json& j) { j.erase("coefficients"); })), "coefficients");
