@@ -128,11 +128,7 @@ Thresholds parse_thresholds(const std::string& text, const std::string& f) {
 }
 
 Thresholds load_thresholds(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, "", "cannot open the thresholds file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_thresholds(ss.str(), path);
+  return parse_thresholds(read_json_text(path), path);
 }
 
 ApprovalCheck check_approval(const CoefficientSetRecord& set, const std::vector<QcResult>& qc, const Thresholds& t,

@@ -2,6 +2,7 @@
 
 #include <cctype>
 
+#include "common/utf8.hpp"
 #include "db/input_errors.hpp"
 
 namespace calbench::db {
@@ -9,14 +10,19 @@ namespace calbench::db {
 std::string normalized_name(const std::string& name) {
   std::string out;
   bool space = false;
-  for (unsigned char c : name) {
-    if (std::isspace(c)) {
+  for (std::size_t i = 0; i < name.size();) {
+    unsigned cp = 0;
+    std::size_t len = utf8::decode(name, i, cp);
+    if (len == 0) len = 1, cp = static_cast<unsigned char>(name[i]);  // kept as it is (refused as a name anyway)
+    if ((cp < 0x80 && std::isspace(static_cast<int>(cp))) || utf8::space_like(cp)) {  // NBSP and the like are spaces
       space = !out.empty();
-      continue;
+    } else {
+      if (space) out += ' ';
+      space = false;
+      if (cp < 0x80) out += static_cast<char>(std::tolower(static_cast<int>(cp)));
+      else out.append(name, i, len);
     }
-    if (space) out += ' ';
-    space = false;
-    out += static_cast<char>(std::tolower(c));
+    i += len;
   }
   return out;
 }

@@ -10,7 +10,9 @@
 
 namespace calbench::db {
 
-// `name` lower-cased (ASCII), trimmed, with every run of whitespace made one space.
+// `name` lower-cased (ASCII), trimmed, with every run of whitespace, Unicode spaces (U+00A0 ...)
+// included, made one space. Invisible characters and mixed-script words are refused before
+// (operator_name_problem, db/store.cpp), so look-alike names compare equal or are refused.
 std::string normalized_name(const std::string& name);
 bool same_person(const std::string& a, const std::string& b);
 

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "common/input_error.hpp"
+#include "common/utf8.hpp"
 #include "db/input_errors.hpp"
 #include "db/postgres/pg_connection.hpp"
 #include "db/postgres/pg_schema.hpp"
@@ -54,12 +55,40 @@ std::string operator_name_problem(const std::string& name) {
   const std::string n = "operator name '" + name + "' ";
   if (name.empty() || name.size() > 64) return n + "must be 1 to 64 characters";
   if (name.find('@') != std::string::npos) return n + "must not contain '@' (the station is recorded beside it)";
+  // Names are compared to tell people apart (four-eyes), so nothing may make two names look alike
+  // and differ: invisible characters and invalid UTF-8 are refused, Unicode spaces count as spaces
+  // (normalized_name), and one word must not mix Latin, Greek and Cyrillic letters (the UTS #39
+  // mixed-script rule: "Tеss" with a Cyrillic е).
   bool printable = false;
-  for (unsigned char c : name) {
-    if (c < 0x20 || c == 0x7f) return n + "contains control characters";
-    if (c != ' ') printable = true;
+  utf8::Script word_script = utf8::Script::none;
+  std::size_t word_start = 0;
+  bool edge_space = false;  // the first or the last character is a space (ASCII or Unicode)
+  for (std::size_t i = 0; i < name.size();) {
+    unsigned cp = 0;
+    const std::size_t len = utf8::decode(name, i, cp);
+    if (len == 0) return n + "is not valid UTF-8 (byte " + std::to_string(i + 1) + ")";
+    if (cp < 0x20 || cp == 0x7f) return n + "contains control characters (" + utf8::code_point_name(cp) + ")";
+    if (utf8::invisible(cp))
+      return n + "contains the invisible or format character " + utf8::code_point_name(cp) + " (type the name plainly)";
+    const bool space = cp == ' ' || utf8::space_like(cp);
+    if (space && (i == 0 || i + len == name.size())) edge_space = true;
+    if (space) {
+      word_script = utf8::Script::none, word_start = i + len;
+    } else {
+      printable = true;
+      const utf8::Script s = utf8::script_of(cp);
+      if (s != utf8::Script::none && word_script != utf8::Script::none && s != word_script) {
+        std::size_t end = name.find(' ', i);
+        return n + "mixes " + utf8::script_name(word_script) + " and " + utf8::script_name(s) + " letters in the word '" +
+               name.substr(word_start, end == std::string::npos ? std::string::npos : end - word_start) + "' (" +
+               utf8::code_point_name(cp) + "): one script per word";
+      }
+      if (s != utf8::Script::none) word_script = s;
+    }
+    i += len;
   }
-  if (!printable || name.front() == ' ' || name.back() == ' ') return n + "must not be blank or start or end with a space";
+  if (!printable || edge_space)
+    return n + "must not be blank or start or end with a space";
   return {};
 }
 

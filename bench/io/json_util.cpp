@@ -14,15 +14,7 @@
 
 namespace calbench {
 
-nlohmann::json read_json_file(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), 0, "", std::string("cannot open: ") + std::strerror(errno));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
-  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(file.string(), 1, "", "empty file");
-  return parse_json_text(text, file.string());
-}
+nlohmann::json read_json_file(const std::filesystem::path& file) { return parse_json_text(read_json_text(file), file.string()); }
 
 void check_output_path(const std::filesystem::path& file) {
   // Named by the path the user gave (the temporary file beside it is an implementation detail).

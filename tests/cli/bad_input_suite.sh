@@ -190,6 +190,8 @@ mkdir -p b4 && cp bench/imu.csv bench/reference.csv b4/ && cp garbage.bin b4/met
 LEFT="c.json" t fit-bench-meta-binary 2 "b4/meta\.json" "$CALBENCH" fit bench b4 --out c.json
 mkdir -p b7 && cp bench/imu.csv bench/reference.csv b7/ && sed 's/"imu_rate_hz": *[0-9.e+]*/"imu_rate_hz": 1e300/' bench/meta.json > b7/meta.json
 LEFT="c.json" t fit-bench-meta-rate 2 "b7/meta\.json: 'imu_rate_hz': 1e\+300 Hz is not an IMU rate" "$CALBENCH" fit bench b7 --out c.json
+mkdir -p b8 && cp bench/imu.csv bench/reference.csv b8/ && python3 -c "import sys; t = open('bench/meta.json').read(); b = t.rindex('}'); open('b8/meta.json', 'w').write(t[:b].rstrip() + ',\n  \"imu_rate_hz\": 1\n}\n')"
+LEFT="c.json" t fit-bench-meta-duplicate-key 2 "b8/meta\.json: 'imu_rate_hz': duplicate key 'imu_rate_hz'" "$CALBENCH" fit bench b8 --out c.json
 t fit-bench-out-missing-folder 2 "nowhere/c\.json: cannot write: the folder nowhere does not exist" "$CALBENCH" fit bench bench --out nowhere/c.json
 t fit-bench-out-is-folder 2 "folder: is a folder" "$CALBENCH" fit bench bench --out folder
 LEFT="c.json" t fit-bench-effects-binary 2 "garbage\.bin" "$CALBENCH" fit bench bench --effects garbage.bin --out c.json
@@ -290,6 +292,13 @@ t db-approve-unknown-set 2 "no coefficient set 99" "$CALBENCH" db approve 99 --d
 t db-approve-thresholds-binary 2 "garbage\.bin" "$CALBENCH" db approve 1 --db d.db --thresholds garbage.bin
 echo '{"gyro": {"max_abs_bias_dph": "high"}}' > th-bad.json
 t db-approve-thresholds-field 2 "th-bad\.json: 'gyro\.max_abs_bias_dph'" "$CALBENCH" db approve 1 --db d.db --thresholds th-bad.json
+# Issue 35 tryout: a key twice in one object (the last would win, loosening a limit), a number beyond
+# a double, a folder given as the file.
+printf '{"bench": {"max_chi2_dof": {"gyro": 3,\n "gyro": 1000}}}\n' > th-dup.json
+t db-approve-thresholds-duplicate-key 2 "th-dup\.json: 'bench\.max_chi2_dof\.gyro': duplicate key 'gyro'" "$CALBENCH" db approve 1 --db d.db --thresholds th-dup.json --operator qc-anna
+printf '{"gyro": {\n "max_abs_bias_dph": 1e999}}\n' > th-big.json
+t db-approve-thresholds-overflow 2 "th-big\.json:2: 'gyro\.max_abs_bias_dph': number out of range" "$CALBENCH" db approve 1 --db d.db --thresholds th-big.json --operator qc-anna
+t db-approve-thresholds-folder 2 "folder: is a folder, not a JSON file" "$CALBENCH" db approve 1 --db d.db --thresholds folder --operator qc-anna
 t db-revoke-unknown 2 "no coefficient set 42" "$CALBENCH" db revoke 42 --db d.db
 t db-revoke-reason-control 2 "reason.*control" "$CALBENCH" db revoke 1 --db d.db --reason $'bad\x01reason'
 LEFT="e.json" t db-export-unknown 2 "no coefficient set 77" "$CALBENCH" db export 77 --db d.db --out e.json

@@ -31,6 +31,22 @@ run env CALBENCH_OPERATOR=" " "$CALBENCH" db approve 1
 [ "$rc" = 2 ] && grep -q "CALBENCH_OPERATOR: operator name ' ' must not be blank" err.txt || { cat err.txt; fail "blank CALBENCH_OPERATOR: exit $rc"; }
 run "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --db s.db --out run9 --operator ""
 [ "$rc" = 2 ] && grep -q -- "--operator: operator name .. must be 1 to 64 characters" err.txt || { cat err.txt; fail "empty --operator for a station: exit $rc"; }
+# Issue 35 tryout: names that look like the storer's. Invisible characters and a Cyrillic letter among
+# Latin ones are bad input (exit 2, naming the option and the code point); a no-break space is a space,
+# so the same person (four-eyes, exit 1). Nothing is approved by any of them.
+run "$CALBENCH" db approve 1 --operator "$(printf 'Sam\xe2\x80\x8b Station')"
+[ "$rc" = 2 ] && grep -q -- "--operator: operator name .* contains the invisible or format character U+200B" err.txt || { cat err.txt; fail "zero-width space in a name: exit $rc"; }
+run "$CALBENCH" db approve 1 --operator "$(printf 'Sam Station\xe2\x80\x8b')"
+[ "$rc" = 2 ] && grep -q -- "--operator: operator name .* contains the invisible or format character U+200B" err.txt || { cat err.txt; fail "trailing zero-width space: exit $rc"; }
+run "$CALBENCH" db approve 1 --operator "Sаm Station"  # Cyrillic а (U+0430)
+[ "$rc" = 2 ] && grep -q -- "--operator: operator name .* mixes Latin and Cyrillic letters in the word 'Sаm' (U+0430)" err.txt || { cat err.txt; fail "mixed-script name: exit $rc"; }
+run env CALBENCH_OPERATOR="$(printf 'Sam\xc2\xadStation')" "$CALBENCH" db approve 1
+[ "$rc" = 2 ] && grep -q "CALBENCH_OPERATOR: operator name .* U+00AD" err.txt || { cat err.txt; fail "soft hyphen in CALBENCH_OPERATOR: exit $rc"; }
+run "$CALBENCH" db approve 1 --operator "$(printf 'Sam\xc2\xa0Station')"
+[ "$rc" = 1 ] && grep -q "four-eyes: set 1 was stored by 'Sam Station'" err.txt || { cat err.txt; fail "no-break space taken for another person: exit $rc"; }
+run "$CALBENCH" db approve 1 --operator "$(printf 'Sam\xffStation')"
+[ "$rc" = 2 ] && LC_ALL=C grep -aq -- "--operator: operator name .* is not valid UTF-8" err.txt || { cat err.txt; fail "invalid UTF-8 name: exit $rc"; }
+[ "$(sqlite3 s.db "SELECT status FROM coefficient_sets WHERE id = 1")" = draft ] || fail "a look-alike name approved the set"
 # Another, named operator signs: approved; the audit log names signer and storer.
 "$CALBENCH" db approve 1 --operator "Quinn QC" > out.txt || { cat out.txt; fail "signed approval refused"; }
 "$CALBENCH" db history 1001 > hist.txt

@@ -236,5 +236,55 @@ TEST(DbApproval, OperatorNamesAreChecked) {
     EXPECT_THROW(check_operator_name(bad, "--operator"), InputError) << bad;
 }
 
+// Issue 35 tryout: names that look like another's and differ only in invisible characters, Unicode
+// spaces or a letter from another script must not pass four-eyes as a second person.
+TEST(DbApproval, LookAlikeOperatorNamesAreRefusedOrSamePerson) {
+  auto problem = [](const std::string& name) { return operator_name_problem(name); };
+  // One script per name, non-ASCII included: valid.
+  for (const std::string& ok : {"J\u00fcrgen Wei\u00df", "\u0141ukasz", "\u0410\u043d\u043d\u0430 \u041f\u0435\u0442\u0440\u043e\u0432\u0430",
+                                 "\u0391\u03bd\u03bd\u03b1", "Anna \u0410\u043d\u043d\u0430"})
+    EXPECT_EQ(problem(ok), "") << ok;
+  // Invisible and format characters: refused naming the code point.
+  const std::vector<std::pair<std::string, std::string>> invisible = {
+      {"Tess\u200b Tuck", "U+200B"}, {"Tess Tuck\u200b", "U+200B"}, {"Tess\u00adTuck", "U+00AD"},
+      {"Tess\u202eTuck", "U+202E"},  {"Tess\u2060Tuck", "U+2060"},  {"\ufeffTess Tuck", "U+FEFF"},
+      {"Tess\u200dTuck", "U+200D"}};
+  for (const auto& [name, cp] : invisible) {
+    const std::string p = problem(name);
+    EXPECT_NE(p.find("invisible or format character " + cp), std::string::npos) << p;
+  }
+  // Invalid UTF-8 (a lone continuation byte, a truncated sequence, an overlong '/').
+  for (const std::string& bad : {std::string("Tess\x80Tuck"), std::string("Tess \xc3"), std::string("Tess\xc0\xafTuck")})
+    EXPECT_NE(problem(bad).find("not valid UTF-8"), std::string::npos) << problem(bad);
+  // A Cyrillic е (U+0435) or Greek ο (U+03BF) among Latin letters of one word.
+  EXPECT_NE(problem("T\u0435ss Tuck").find("mixes Latin and Cyrillic letters in the word 'T\u0435ss' (U+0435)"), std::string::npos)
+      << problem("T\u0435ss Tuck");
+  EXPECT_NE(problem("Tess T\u03bfck").find("mixes Latin and Greek letters"), std::string::npos);
+  // Unicode spaces are spaces: the same person as with an ASCII space; at an edge, refused as a space.
+  for (const std::string& sp : {"\u00a0", "\u1680", "\u2002", "\u2009", "\u200a", "\u202f", "\u205f", "\u3000"}) {
+    EXPECT_EQ(problem("Tess" + sp + "Tuck"), "") << sp;
+    EXPECT_TRUE(same_person("Tess" + sp + "Tuck", "tess tuck")) << sp;
+    EXPECT_NE(problem("Tess Tuck" + sp).find("start or end with a space"), std::string::npos) << sp;
+  }
+  EXPECT_EQ(normalized_name("  J\u00dcRGEN\u00a0\u00a0 Wei\u00df "), "j\u00dcrgen wei\u00df");
+  EXPECT_FALSE(same_person("J\u00fcrgen", "Jurgen"));
+}
+
+// Four-eyes on SQLite with the tryout's look-alike names: each is refused as input before anything
+// is approved, or (a Unicode space) taken for the same person.
+TEST(DbApproval, FourEyesHoldsAgainstLookAlikeNames) {
+  test::TempDir t;
+  Store tess(t.db(), test::create_opts(), Actor{"Tess Tuck", "line-7", "--operator", "tessos"});
+  const auto id =
+      tess.store_bench({"ADIS16488A", "S1", ""}, test::bench_run(), test::payload("S1", test::random_errors(4))).set_id;
+  for (const std::string& look_alike : {"Tess\u200b Tuck", "Tess Tuck\u200b", "T\u0435ss Tuck"})
+    EXPECT_THROW(check_operator_name(look_alike, "--operator"), InputError) << look_alike;
+  Store nbsp(t.db(), {}, Actor{"Tess\u00a0Tuck", "qc-desk", "--operator", "otheros"});
+  const ApprovalCheck r = approve_checked(nbsp, id, default_thresholds());
+  EXPECT_FALSE(r.ok);
+  EXPECT_TRUE(has_reason(r, "four-eyes: set " + std::to_string(id) + " was stored by 'Tess Tuck'"));
+  EXPECT_EQ(nbsp.get_set(id).status, SetStatus::draft);
+}
+
 }  // namespace
 }  // namespace calbench::db
