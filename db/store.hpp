@@ -97,7 +97,7 @@ struct BenchRunInput {
   std::string station;          // station name; created on first use
   std::string plan;             // plan name or path
   std::string recording_path;   // the bench recording folder, as given
-  std::string recording_sha256; // SHA-256 of imu.csv (or of the recording as the station defines it)
+  std::string recording_sha256; // SHA-256 of the IMU table's file: imu.csv, or recording.h5 (or as the station defines it)
   std::string recording_uri;    // file://HOST/absolute/path of the folder (HOST: the station's host name)
   std::string recording_digest; // SHA-256 of every file of the folder (bench/io/recording_location.hpp)
   std::string started_at, ended_at;  // ISO 8601 UTC

@@ -11,6 +11,7 @@
 
 #include "bench/approval_thresholds.hpp"
 #include "bench/cli/db_args.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/cli/operator_option.hpp"
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
@@ -196,7 +197,12 @@ void cmd_history(const DbArgs& a) {
       if (e.entity == "bench_run")
         if (const auto r = s->bench_run(e.entity_id))
           j["recording"] = {{"path", r->recording_path}, {"uri", r->recording_uri}, {"digest_sha256", r->recording_digest},
-                            {"imu_csv_sha256", r->recording_sha256}};
+                            // The key predates HDF5 recordings: the SHA-256 of the IMU table's file, named by
+                            // imu_table_file (null when the recording is not at hand).
+                            {"imu_csv_sha256", r->recording_sha256},
+                            {"imu_table_file", imu_table_file_name(r->recording_path).empty()
+                                                   ? json(nullptr)
+                                                   : json(imu_table_file_name(r->recording_path))}};
       // An in-motion run: the same for its drive recording ("" in results written before them).
       if (e.entity == "inmotion_run")
         if (const auto r = s->inmotion_run(e.entity_id))
@@ -213,8 +219,12 @@ void cmd_history(const DbArgs& a) {
               << e.action << (e.detail.empty() ? "" : "  " + e.detail) << (note.empty() ? "" : "  [" + note + "]")
               << "\n";
     if (e.entity == "bench_run")
-      if (const auto r = s->bench_run(e.entity_id); r && !r->recording_uri.empty())
-        std::cout << "    recording " << r->recording_uri << "  SHA-256 of its files " << r->recording_digest << "\n";
+      if (const auto r = s->bench_run(e.entity_id)) {
+        if (!r->recording_uri.empty())
+          std::cout << "    recording " << r->recording_uri << "  SHA-256 of its files " << r->recording_digest << "\n";
+        if (!r->recording_sha256.empty())
+          std::cout << "    SHA-256 of " << imu_table_file_label(r->recording_path) << " " << r->recording_sha256 << "\n";
+      }
     if (e.entity == "inmotion_run")
       if (const auto r = s->inmotion_run(e.entity_id); r && !r->recording_uri.empty())
         std::cout << "    recording " << r->recording_uri << "  SHA-256 of its files " << r->recording_digest << "\n";
@@ -223,7 +233,8 @@ void cmd_history(const DbArgs& a) {
 
 void cmd_approve(const DbArgs& a) {
   auto s = open_store(a);
-  const Thresholds t = approval_thresholds(a.thresholds);
+  // Without a file, the defaults of the set's device class (its model).
+  const Thresholds t = approval_thresholds(a.thresholds, a.thresholds.empty() ? s->get_set(a.set).model : "");
   const ApprovalCheck r = approve_checked(*s, a.set, t);
   if (a.json)
     print_json(json{{"set", a.set}, {"approved", r.ok}, {"already_approved", r.already}, {"reasons", r.reasons}, {"thresholds", t.source}}
@@ -383,7 +394,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   auto* appr = leaf(db, "approve", "approve a draft set if it passes the QC thresholds (else list why not, exit 1)", a,
                     cmd_approve);
   appr->add_option("SET", a->set, "coefficient set id")->required()->check(set_id());
-  appr->add_option("--thresholds", a->thresholds, "thresholds config (JSON; default: built-in ADIS16488A limits)");
+  appr->add_option("--thresholds", a->thresholds, "thresholds config (JSON; default: the built-in limits of the set's device class, bench/imu_classes/*.toml; ADIS16488A limits for a model of no class)");
   appr->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(appr, *a);
   appr->footer("The approval is signed: a named operator (--operator or CALBENCH_OPERATOR) other than the one who\n"
@@ -429,7 +440,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
                  "with a PostgreSQL --db: the local journal written first (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   sb->add_option("--coeffs", a->coeffs, "coefficients.json of the bench fit")->required();
   sb->add_option("--recording", a->recording, "bench recording folder (its imu.csv is hashed)");
-  sb->add_option("--sha256", a->sha256, "SHA-256 of the recording (instead of hashing --recording)")
+  sb->add_option("--sha256", a->sha256, "SHA-256 of the IMU table's file (imu.csv, or recording.h5 for an HDF5 recording) instead of hashing it from --recording")
       ->check(CLI::Validator(
           [](const std::string& v) -> std::string {
             if (v.size() == 64 && v.find_first_not_of("0123456789abcdefABCDEF") == std::string::npos) return {};

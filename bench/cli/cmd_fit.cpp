@@ -2,6 +2,7 @@
 //   [--effects IMPROVED.json]   (catalogue terms held fixed, docs/diagnosis.md)
 #include <iostream>
 
+#include "bench/approval_thresholds.hpp"
 #include "bench/bench_recording.hpp"
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
@@ -11,6 +12,7 @@
 #include "bench/io/json_util.hpp"
 #include "bench/io/plan_toml.hpp"
 #include "calibration/bench_fit_effects.hpp"
+#include "db/approval_quality.hpp"
 
 namespace calbench::cli {
 namespace {
@@ -20,6 +22,25 @@ struct FitBenchArgs {
   double block_s = 1.0;
   bool json = false;
 };
+
+// The fit's quality judged as db approve will judge the set (db::fit_quality_reasons, the limits
+// of the device class's built-in thresholds): one warning line per failing figure, and that the
+// approval will refuse it (issue 35 sign-off: "coefficients written" said nothing of χ²/dof 80).
+void print_fit_quality_warnings(const CoefficientSet& c) {
+  const db::Thresholds t = approval_thresholds("", c.device.model);
+  db::CoefficientSetRecord set;
+  set.serial = c.device.serial;
+  set.model = c.device.model;
+  set.source = db::SetSource::bench;
+  set.errors = c.errors;
+  db::FitEvidence ev;
+  ev.bench = c.fit_quality;
+  const std::vector<std::string> why = db::fit_quality_reasons(set, ev, t.quality);
+  for (const auto& w : why) std::cout << "warning: " << w << "\n";
+  if (!why.empty())
+    std::cout << "warning: db approve will refuse this set (" << why.size() << " fit-quality figure(s) outside the "
+              << t.source << "; another file: db approve --thresholds FILE)\n";
+}
 
 // --effects: the catalogue terms of a coefficient set (e.g. diagnose's IMPROVED.json) are held
 // fixed: their predicted output is removed at 0.05 s resolution before the fit of b and M, and the
@@ -51,6 +72,7 @@ void run_fit_bench_effects(const FitBenchArgs& a, BenchFitOptions opt) {
               << " IMU rows\ncatalogue terms held fixed (from " << a.effects << "):";
     for (const auto& id : ids) std::cout << " " << id;
     std::cout << "\n" << bench_result_text(r);
+    print_fit_quality_warnings(c);
     if (!a.out.empty()) std::cout << "coefficients written to " << a.out << " (with the catalogue keys)\n";
   }
 }
@@ -78,6 +100,7 @@ void run_fit_bench(const FitBenchArgs& a) {
     std::cout << "bench fit (" << a.method << ", model " << a.model << ") of " << a.dir << ": " << data.imu_rows
               << " IMU rows\n"
               << bench_result_text(r);
+    print_fit_quality_warnings(c);
     if (!a.out.empty()) std::cout << "coefficients written to " << a.out << "\n";
   }
 }

@@ -25,7 +25,7 @@ namespace {
 
 // The console summary of a RESULT.json (common/drive_result.hpp): the typed parts from r, the
 // free-form sections of the writer from r.extra.
-void print_summary(const DriveResult& r) {
+void print_summary(const DriveResult& r, const std::string& out) {
   const nlohmann::json& j = r.extra;
   using namespace units;
   // value ± σ: σ to two significant digits and the value to the same decimal place (six digits of σ
@@ -192,7 +192,7 @@ void print_summary(const DriveResult& r) {
                 << qc["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
                 << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
   if (qc.contains("outages")) print_outage_summary(qc["outages"], std::cout);
-  if (j.contains("approval_preview")) std::cout << approval_preview_text(j["approval_preview"]);
+  if (j.contains("approval_preview")) std::cout << approval_preview_text(j["approval_preview"], out);
   std::cout << std::flush;
 }
 
@@ -240,6 +240,9 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "IMU device class: a class file (bench/imu_classes/<name>.toml or your own, docs/in-motion.md \"Device "
                  "classes\") or the name or alias of a built-in class; default: the class of meta.json device.model "
                  "(an unknown model is bad input). Its noise, drift, raw priors and stability allowances are the fit's");
+  d->add_option("--thresholds", a->thresholds,
+                 "approval thresholds (JSON, the file of `db approve --thresholds`) the approval preview judges the "
+                 "result by; default: the built-in limits of the recording's device class (meta.json device.model)");
   d->add_flag("!--no-noise-scan", a->measure_noise,
               "do not measure the white noise on the recording's standstills (default: measured, and used where it "
               "differs from the class by more than 2x)");
@@ -330,7 +333,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
         if (*json) all["units"][k]["RESULT"] = drive_result_to_json(f.result);
         else {
           std::cout << "unit " << f.slot << " (" << f.out.string() << "): ";
-          print_summary(f.result);
+          print_summary(f.result, f.out.string());
         }
       }
       if (*json) print_json(all.dump(2));
@@ -350,7 +353,7 @@ const bool registered = add_command(31, [](CLI::App& app) {
                        "(coefficients.json or RESULT.json)");
     const DriveResult r = fit_drive(*a);
     if (*json) print_json(drive_result_to_json(r).dump(2));
-    else print_summary(r);
+    else print_summary(r, a->out);
   });
 });
 

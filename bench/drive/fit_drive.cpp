@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/approval_thresholds.hpp"
 #include "bench/drive/approval_preview.hpp"
 #include "bench/drive/drive_series.hpp"
 #include "bench/drive/drive_stream.hpp"
@@ -387,6 +388,7 @@ nlohmann::json vehicle_constraints_json(const inmotion::InMotionConfig& cfg, con
 }  // namespace
 
 DriveResult fit_drive(const FitDriveArgs& a) {
+  if (!a.thresholds.empty()) approval_thresholds(a.thresholds);  // a bad file is bad input before the fit
   using namespace units;
   const auto [t0, t1] = parse_window(a.window);
   if (a.write_out) check_output_path(a.out);
@@ -874,7 +876,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   }
   r.qc = qj;
   read_typed_sections(r, "fit drive result");
-  r.extra["approval_preview"] = approval_preview(r, bench);  // what db approve will say (issue 35 item 6)
+  r.extra["approval_preview"] = approval_preview(r, bench, a.thresholds);  // what db approve will say (issue 35 item 6)
   if (a.write_out) write_text_atomic(a.out, drive_result_to_json(r).dump(2) + "\n");
   return r;
 }

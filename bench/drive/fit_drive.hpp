@@ -28,6 +28,9 @@ struct FitDriveArgs {
   // The device class (bench/imu_classes, docs/in-motion.md "Device classes"): a class file, or the
   // name or alias of a built-in class; "" = from meta.json device.model (unknown: bad input).
   std::string device_class;
+  // The approval preview's thresholds file (as `db approve --thresholds`); "" = the built-in
+  // defaults of the recording's device class (meta.json device.model).
+  std::string thresholds;
   // Measure the white noise on the recording's standstills and use it where it differs from the
   // class by more than 2x (docs/in-motion.md, "White noise measured on standstills").
   bool measure_noise = true;

@@ -206,6 +206,12 @@ nlohmann::json run_outage_qc(const std::filesystem::path& dir, const std::vector
 void print_outage_summary(const nlohmann::json& o, std::ostream& os) {
   os << "  outage QC (" << o["sample"].get<std::string>() << "): " << o["outages"].size() << " simulated GNSS outage(s)";
   if (!o["not_placed"].empty()) os << ", " << o["not_placed"].size() << " not placed (" << o["not_placed"][0]["reason"].get<std::string>() << ")";
+  std::size_t rows = 0;
+  for (const auto& s : o["sets"]) rows += s["per_length"].size();
+  if (rows == 0) {  // nothing to list: say so instead of ending the line with an empty list
+    os << "; no outage placed, so no horizontal error to report\n";
+    return;
+  }
   os << "; horizontal error at the antenna, median / largest of the per-outage maxima:\n";
   for (const auto& s : o["sets"])
     for (const auto& p : s["per_length"])

@@ -98,6 +98,7 @@ ConvertResult convert_recording(const fs::path& dir, const std::string& to, fs::
     std::vector<std::string> comments;
     if (from == "csv") {
       auto csv = std::make_unique<CsvReader>((dir / (std::string(t) + ".csv")).string());
+      csv->refuse_cut_last_line();  // a copy is complete or not made (issue 35 sign-off)
       comments = csv->comments();
       src = std::move(csv);
     } else {

@@ -145,6 +145,12 @@ bool CsvReader::read_line(std::string_view& out) {
   // that stopped): its last field may be a cut number. It is dropped, with a warning, never used.
   if (!trim(carry_).empty()) {
     const std::string_view t = trim(carry_);
+    if (t.front() != '#' && refuse_cut_)
+      throw InputError(path_, line_no_ + 1, "",
+                       "last line has no line end: the file was cut short (" + std::to_string(t.size()) +
+                           " characters of a row); a copy must not pass it on as complete: remove the partial last line (or copy"
+                           " the file again), or let fit/diagnose read it as it is (they drop that line with a"
+                           " warning)");
     if (t.front() != '#')
       input_warning(path_, line_no_ + 1,
                     "last line has no line end: treated as truncated and not used ('" +

@@ -46,8 +46,12 @@ class CsvReader final : public TableSource {
   // '#' comment lines before the header, without the '#' and one following blank.
   const std::vector<std::string>& comments() const { return comments_; }
   std::size_t rows() const { return rows_; }
+  // A last line without its line end (a file cut while written or copied) is an InputError
+  // instead of a warning: for a copy (convert), which must not pass a cut table on as complete.
+  void refuse_cut_last_line() { refuse_cut_ = true; }
 
  private:
+  bool refuse_cut_ = false;
   bool read_line(std::string_view& out);
   bool parse_row(std::string_view t);
   void refill();

@@ -654,6 +654,21 @@ bool hdf5_has_dataset(const fs::path& file, const std::string& name) {
   return it != fm.tables.end() && it->second.present;
 }
 
+std::string imu_table_file_name(const fs::path& dir) {
+  try {
+    if (dir.empty()) return "";
+    const fs::path f = table_file(dir, "imu");
+    return fs::is_regular_file(f) ? f.filename().string() : "";
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+std::string imu_table_file_label(const fs::path& dir) {
+  const std::string n = imu_table_file_name(dir);
+  return n.empty() ? "the IMU table's file (imu.csv, or recording.h5 for an HDF5 recording)" : n;
+}
+
 fs::path table_file(const fs::path& dir, const std::string& name) {
   const fs::path csv = dir / (name + ".csv");
   if (fs::exists(csv) || !fs::exists(dir / kHdf5RecordingFile)) return csv;

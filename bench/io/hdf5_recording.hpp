@@ -34,6 +34,11 @@ bool recording_has_table(const std::filesystem::path& dir, const std::string& na
 // The file a table is read from: dir/name.csv if present, else dir/recording.h5 if it holds the
 // dataset, else dir/name.csv (which then does not exist: the reader says so).
 std::filesystem::path table_file(const std::filesystem::path& dir, const std::string& name);
+// The file the IMU digest of a stored run is of: "imu.csv" or "recording.h5" (table_file of "imu"),
+// or "" when the recording folder is not at hand (moved, another machine) or unreadable.
+std::string imu_table_file_name(const std::filesystem::path& dir);
+// How a report names that file: imu_table_file_name(), or both choices when it is not at hand.
+std::string imu_table_file_label(const std::filesystem::path& dir);
 
 // Writes recording.h5 table by table. create() makes the file (root attributes: format and the
 // meta.json text); table() streams one dataset, appending rows in chunks.

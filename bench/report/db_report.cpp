@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/input_error.hpp"
+#include "bench/io/hdf5_recording.hpp"
 #include "bench/report/bench_fit_section.hpp"
 #include "bench/report/gnuplot.hpp"
 #include "bench/report/html_parts.hpp"
@@ -276,8 +277,8 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
       << "<tr><th class=\"l\">station</th><td class=\"l\">" << html_escape(r->station) << "</td></tr>"
       << "<tr><th class=\"l\">plan</th><td class=\"l\">" << html_escape(r->plan) << "</td></tr>"
       << "<tr><th class=\"l\">recording</th><td class=\"l\">"
-      << html_escape(r->recording_uri.empty() ? r->recording_path : r->recording_uri) << "<br>SHA-256 of imu.csv "
-      << digest(r->recording_sha256)
+      << html_escape(r->recording_uri.empty() ? r->recording_path : r->recording_uri) << "<br>SHA-256 of "
+      << html_escape(imu_table_file_label(r->recording_path)) << " " << digest(r->recording_sha256)
       << (r->recording_digest.empty() ? std::string() : "<br>SHA-256 of all its files " + digest(r->recording_digest))
       << "</td></tr>"
       << "<tr><th class=\"l\">time</th><td class=\"l\">" << html_escape(r->started_at) << " – " << html_escape(r->ended_at) << "</td></tr>"

@@ -416,6 +416,12 @@ LEFT="kf" t import-time-1.7e308 2 "^calbench: error: imu-time\.txt:2: 'time': ti
 LEFT="r.json" t fit-drive-window-plus-minus 2 "--window: expected T0:T1 \(finite seconds\), got '\+-1:5'" "$CALBENCH" fit drive rec --out r.json --window +-1:5
 LEFT="s2" t sim-drive-inject-plus-minus 2 "'value': not a number: '\+-1'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --inject time_offset:value=+-1 --until 1 --out s2
 LEFT="s2" t sim-drive-until-plus-minus 2 "--until: expected a finite number > 0, got '\+-1'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --until +-1 --out s2
+# convert copies a recording: an imu.csv whose last line has no line end (cut by a copy) is refused,
+# naming file and line and what to do, nothing written (it once warned, exited 0 and wrote a
+# "complete" recording; --json said nothing). fit reads the same file with a warning.
+mkrec cut && n=$(wc -l < cut/imu.csv) && head -c -7 cut/imu.csv > cut/imu.cut && mv cut/imu.cut cut/imu.csv
+LEFT="cutc .cutc.partial-*" t convert-csv-cut-last-line 2 "^calbench: error: cut/imu\.csv:$n: last line has no line end: .*remove the partial last line.*fit/diagnose read it" "$CALBENCH" convert cut --to h5 --out cutc
+LEFT="cutc .cutc.partial-*" t convert-csv-cut-last-line-json 2 "cut/imu\.csv:$n: last line has no line end" "$CALBENCH" convert cut --to h5 --out cutc --json
 mkrec pm && sed -i "10s/^\([^,]*\),[^,]*,/\1,+1e-3,/" pm/imu.csv  # one '+' is a sign: read
 t convert-number-plus-one 0 NONE "$CALBENCH" convert pm --to h5 --out pmc
 rm -rf pmc

@@ -21,8 +21,17 @@ expect() {  # expect RC PATTERN CMD...: exit RC and stderr matches PATTERN
 "$CALBENCH" simulate bench --plan "$SRC/bench/plans/factory.toml" --truth random --seed 1 --serial GOOD1 --out good >/dev/null
 "$CALBENCH" simulate bench --plan "$SRC/bench/plans/factory.toml" --truth random --seed 1 --serial GSENS1 --out gsens \
   --inject g_sensitivity:axis=x,f=y,value=1.6e-4 >/dev/null
-"$CALBENCH" fit bench good --out good.json >/dev/null
-"$CALBENCH" fit bench gsens --out gsens.json >/dev/null
+"$CALBENCH" fit bench good --out good.json > good.txt
+"$CALBENCH" fit bench gsens --out gsens.json > gsens.txt
+# The text output says what db approve will say of the fit (issue 35 sign-off): one warning per
+# failing figure, then that approval will refuse it; nothing of the kind for the good unit.
+grep -q "^warning: bench fit gyro x: χ²/dof = .* exceeds 3 " gsens.txt || { cat gsens.txt; fail "fit bench: no χ²/dof warning"; }
+grep -q "^warning: bench fit gyro: largest systematic residual of the static positions" gsens.txt \
+  || { cat gsens.txt; fail "fit bench: no systematic residual warning"; }
+grep -q "^warning: db approve will refuse this set (. fit-quality figure(s) outside the built-in defaults of device class ADIS16488A" gsens.txt \
+  || { cat gsens.txt; fail "fit bench: does not say db approve will refuse"; }
+[ "$(grep -c '^warning: bench fit' gsens.txt)" -ge 2 ] || fail "fit bench: one warning per failing figure"
+grep -q "warning" good.txt && { cat good.txt; fail "fit bench warns about a good fit"; }
 python3 - <<'PY' || fail "fit_quality in COEFFS.json"
 import json
 for f in ("good.json", "gsens.json"):

@@ -127,4 +127,28 @@ sqlite3 s.db "UPDATE coefficient_sets SET status = 'approved' WHERE id = 3"
 "$CALBENCH" report 1001 --html r2.html > /dev/null
 grep -q 'data-verdict="FAIL"' r2.html && grep -q "set 3 is approved but the audit log holds no signed approval of it" r2.html \
   || fail "a hand-made approval passed the report"
+# The IMU digest names the file it is of (issue 35 sign-off: an HDF5 recording's was called "SHA-256
+# of imu.csv" although it is of recording.h5): history text and --json, and the device report.
+"$CALBENCH" convert run/recording --to h5 --out rech5 > /dev/null
+rm -f h.db
+for rec in run/recording rech5; do
+  CALBENCH_OPERATOR="Olga Solo" "$CALBENCH" db store-bench --db h.db --coeffs run/COEFFS.json --recording "$rec" \
+    --qc residual=0.1:1 > /dev/null
+done
+"$CALBENCH" db history 1001 --db h.db > hist.txt
+csv_sum=$(sha256sum run/recording/imu.csv | cut -d' ' -f1); h5_sum=$(sha256sum rech5/recording.h5 | cut -d' ' -f1)
+grep -q "^    SHA-256 of imu.csv $csv_sum$" hist.txt && grep -q "^    SHA-256 of recording.h5 $h5_sum$" hist.txt \
+  || { cat hist.txt; fail "history does not name the hashed IMU file"; }
+"$CALBENCH" db history 1001 --db h.db --json | python3 -c '
+import json, sys
+runs = [e["recording"] for e in json.load(sys.stdin)["history"] if e["entity"] == "bench_run"]
+got = sorted((r["imu_table_file"], r["imu_csv_sha256"]) for r in runs)
+assert got == sorted([("imu.csv", sys.argv[1]), ("recording.h5", sys.argv[2])]), got' "$csv_sum" "$h5_sum" \
+  || fail "history --json does not name the hashed IMU file"
+"$CALBENCH" report 1001 --db h.db --html h.html > /dev/null
+grep -q "SHA-256 of recording.h5" h.html && grep -q "SHA-256 of imu.csv" h.html || fail "report does not name the hashed IMU file"
+# Moved away: the file cannot be told, and the report says so instead of guessing.
+mv rech5 gone && "$CALBENCH" db history 1001 --db h.db > hist.txt
+grep -q "^    SHA-256 of the IMU table's file (imu.csv, or recording.h5 for an HDF5 recording) $h5_sum$" hist.txt \
+  || { cat hist.txt; fail "history guesses the file of a recording not at hand"; }
 echo "db_signatures: ok"

@@ -94,6 +94,45 @@ assert sorted(r.replace("input set", "parent set 1") for r in p["reasons"]) == s
 PY
 grep -q "approval preview db approve will REFUSE this result" fit.txt && grep -q "combined gyro.M.xx: σ grew" fit.txt \
   || { cat fit.txt; fail "fit drive did not end with the approval preview"; }
+# The preview (issue 35 sign-off): a one-line summary with the counts by group and the thresholds
+# (the recording's device class), the reasons under their group, how to use another thresholds
+# file, an unclipped "not checked" line, then where RESULT.json is and the next command.
+python3 - <<'PY' || { cat fit.txt; fail "approval preview layout"; }
+import json, re
+p = json.load(open("r.json"))["approval_preview"]
+assert p["thresholds"] == "built-in defaults of device class ADIS16488A (adis16488a.toml)", p["thresholds"]
+groups = {g["group"]: g["reasons"] for g in p["groups"]}
+assert sorted(sum(groups.values(), [])) == sorted(p["reasons"]), p
+assert "combined" in groups and all(r.startswith("combined") for r in groups["combined"]), groups
+counts = ", ".join("%d %s" % (len(g["reasons"]), g["group"]) for g in p["groups"])
+assert p["summary"] == "%d reason(s): %s" % (len(p["reasons"]), counts), p["summary"]
+t = open("fit.txt").read()
+assert "approval preview db approve will REFUSE this result (%s; thresholds: %s)" % (p["summary"], p["thresholds"]) in t, t
+assert "    combined (%d):\n      - combined " % len(groups["combined"]) in t, t
+assert "other thresholds: fit drive --thresholds FILE" in t, t
+nc = [l for l in t.splitlines() if "not checked here:" in l][0]
+assert nc.endswith("(it must be approved first)"), nc
+assert t.endswith("RESULT.json written to r.json\nnext: calbench db import-inmotion r.json --db DB --operator NAME"
+                  " (stores it as a draft; db approve will refuse it as above)\n"), t[-400:]
+PY
+# --thresholds FILE: the preview judges by that file (the one db approve --thresholds reads).
+echo '{"combined": {"max_sigma_growth": 100}}' > accept.json
+"$CALBENCH" fit drive rec --coeffs bench.json --window 0:150 --thresholds accept.json --out acc.json > acc.txt
+python3 -c '
+import json; p = json.load(open("acc.json"))["approval_preview"]
+assert p["thresholds"] == "accept.json", p
+assert not any(": σ grew from" in r for r in p["reasons"]), p["reasons"]' || { cat acc.txt; fail "fit drive --thresholds"; }
+# A drive of another device class is judged by that class's built-in limits (the tryout saw an
+# ICM-42688-P drive judged by "built-in ADIS16488A defaults"): bias limit 5x its 0.5 deg/s spread.
+"$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 5 --device-class ICM-42688-P \
+  --until 60 --out icm >/dev/null
+"$CALBENCH" fit drive icm --out icm.json > icm.txt
+python3 -c '
+import json; p = json.load(open("icm.json"))["approval_preview"]
+assert p["thresholds"] == "built-in defaults of device class ICM-42688-P (icm42688p.toml)", p["thresholds"]
+assert not any("exceeds ±3600 °/h" in r for r in p["reasons"]), p["reasons"]' || { cat icm.txt; fail "ICM drive not judged by its class"; }
+set +e; "$CALBENCH" fit drive rec --thresholds nope.json --out x.json > /dev/null 2> err.txt; rc=$?; set -e
+[ "$rc" = 2 ] && grep -q "nope.json" err.txt && [ ! -e x.json ] || { cat err.txt; fail "fit drive --thresholds missing file: exit $rc"; }
 # A coefficient moved beyond sqrt(σ_parent² + allowance²): a parent whose gyro z scale is 2000 ppm off.
 python3 -c '
 import json; b = json.load(open("bench.json")); b["gyro"]["M"][2][2] += 2e-3; json.dump(b, open("moved.json", "w"))'
