@@ -486,7 +486,11 @@ const FileMeta& survey(const fs::path& file) {
   } catch (const std::exception& e) {
     throw std::runtime_error(file.string() + ": the HDF5 survey's answer is unreadable: " + e.what());
   }
-  f.side = std::move(side);
+  // The side file stays open (with the survey, for the tables read from it) only when a table was
+  // read into it; otherwise it is closed here.
+  bool used = false;
+  for (const auto& t : f.tables) used = used || t.second.side;
+  if (used) f.side = std::move(side);
   return done[key] = std::move(f);
 }
 
