@@ -420,10 +420,40 @@ std::shared_future<std::string> file_digest(const fs::path& file) {
   return it->second;
 }
 
+// The surveys of this process, by file_key(). An entry whose tables were read into a side file holds
+// that file open until the last table reading from it is gone (release_side()).
+struct SurveyCache {
+  std::mutex m;
+  std::map<std::string, FileMeta> done;
+};
+SurveyCache& survey_cache() {
+  static SurveyCache c;
+  return c;
+}
+
+void release_side(const std::string& key) {
+  SurveyCache& c = survey_cache();
+  std::lock_guard<std::mutex> lk(c.m);
+  const auto it = c.done.find(key);
+  if (it != c.done.end() && it->second.side && it->second.side.use_count() == 1) c.done.erase(it);  // the cache's own
+}
+
+}  // namespace
+
+void hdf5_drop_unused_surveys() {
+  SurveyCache& c = survey_cache();
+  std::lock_guard<std::mutex> lk(c.m);
+  for (auto it = c.done.begin(); it != c.done.end();)
+    it = !it->second.side || it->second.side.use_count() == 1 ? c.done.erase(it) : std::next(it);
+}
+
+namespace {
+
 const FileMeta& survey(const fs::path& file) {
   const std::string key = file_key(file);
-  static std::mutex m;
-  static std::map<std::string, FileMeta> done;
+  SurveyCache& cache = survey_cache();
+  std::mutex& m = cache.m;
+  std::map<std::string, FileMeta>& done = cache.done;
   std::lock_guard<std::mutex> lk(m);
   const auto it = done.find(key);
   if (it != done.end()) return it->second;
@@ -512,6 +542,7 @@ class Hdf5Table final : public TableSource {
       : path_(file.string()), ds_(lower_dataset(dataset)), t_(table_meta(file, dataset)) {
     slot_of_col_.assign(t_.ncol, -1);
     if (t_.side) {  // the values as the survey read them (kMaxLocatedChunks)
+      side_key_ = file_key(file);
       side_ = survey(file).side;
       fd_ = side_ ? ::dup(::fileno(side_.get())) : -1;
     } else {
@@ -524,6 +555,10 @@ class Hdf5Table final : public TableSource {
   }
   ~Hdf5Table() override {
     if (fd_ >= 0) ::close(fd_);
+    if (side_) {  // the last table of a side file closes it (the survey is redone if the file is read again)
+      side_.reset();
+      release_side(side_key_);
+    }
     // No hashing thread outlives the tables that asked for it (at exit, OpenSSL is torn down).
     if (digest_.valid()) digest_.wait();
   }
@@ -620,6 +655,7 @@ class Hdf5Table final : public TableSource {
   std::string path_, ds_;
   TableMeta t_;
   std::shared_ptr<std::FILE> side_;  // the side file, when t_.side
+  std::string side_key_;              // its survey's key (release_side())
   int fd_ = -1;
   std::uint64_t file_size_ = 0;
   std::vector<int> slot_of_col_;

@@ -71,5 +71,10 @@ struct Hdf5TableInfo {
   std::size_t rows = 0;
 };
 Hdf5TableInfo hdf5_table_info(const std::filesystem::path& file, const std::string& dataset);
+// Forget the cached surveys no table is reading from (their side files are closed). The readers
+// keep a file's survey for the process, and a side file (a dataset of many small chunks read into
+// an unnamed temporary file) open while a table reads from it; the fuzz harness calls this before
+// counting open descriptors.
+void hdf5_drop_unused_surveys();
 
 }  // namespace calbench
