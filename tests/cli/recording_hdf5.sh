@@ -48,8 +48,8 @@ print("h5py: datasets equal the CSV files")
 PY
 
 # Every reading command: the same answer from either form.
-# Lines that name the folder or its digests, and timings.
-IGNORE='"path"\|sha256\|"format": "hdf5"\|cpu_s\|wall_s\|"dir"\|"input": "drive'
+# Lines that name the folder (path, URI) or its digests, and timings.
+IGNORE='"path"\|"uri"\|sha256\|"format": "hdf5"\|cpu_s\|wall_s\|"dir"\|"input": "drive'
 same() {  # what, then the command with @ for the recording folder
   local what=$1
   shift
