@@ -6,6 +6,7 @@
 #include "bench/bench_recording.hpp"
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
+#include "bench/multipos/fit_multipos_run.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "common/input_error.hpp"
@@ -106,7 +107,7 @@ void run_fit_bench(const FitBenchArgs& a) {
 }
 
 const bool registered = add_command(30, [](CLI::App& app) {
-  auto* fit = app.add_subcommand("fit", "Estimate calibration coefficients from a recording (bench; drive)");
+  auto* fit = app.add_subcommand("fit", "Estimate calibration coefficients from a recording (bench; drive; multipos)");
   fit->require_subcommand(1);
   auto a = std::make_shared<FitBenchArgs>();
   auto* b = fit->add_subcommand("bench", "Factory calibration from a bench recording: gyro drift, skews, scale; "
@@ -126,6 +127,27 @@ const bool registered = add_command(30, [](CLI::App& app) {
       ->check(CLI::ExistingFile);
   b->add_flag("--json", a->json, "print the result as JSON on stdout");
   b->callback([a] { run_fit_bench(*a); });
+
+  auto m = std::make_shared<FitMultiposArgs>();
+  auto* mp = fit->add_subcommand("multipos",
+                                 "Calibration without a rate table, from a multipos recording (a unit turned by hand or on "
+                                 "a fixture through static poses): accelerometer bias, scale, skews from the gravity "
+                                 "magnitude; gyro bias, scale, skews from the rotations between poses; each with its 1σ");
+  mp->add_option("dir", m->dir, "multipos recording folder (meta.json kind \"multipos\", imu.csv)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  mp->add_option("--out", m->out, "write the coefficients here (coefficients.json schema, with a \"multipos\" key)");
+  mp->add_option("--plot", m->plot, "write an SVG plot of the static poses found and the motion between them");
+  mp->add_option("--device-class", m->device_class,
+                 "device class file (or built-in class name) when meta.json device.model is not a known class");
+  mp->add_option("--exclude-pose", m->exclude_poses, "leave static pose K (0-based, as listed) out of the accelerometer fit; repeatable")
+      ->check(CLI::NonNegativeNumber);
+  mp->add_option("--exclude-rotation", m->exclude_rotations, "leave rotation K (between poses K and K+1) out of the gyro fit; repeatable")
+      ->check(CLI::NonNegativeNumber);
+  mp->add_flag("--earth-rate", m->earth_rate,
+               "remove the vertical Earth rate from the static gyro means (needs meta.json site.lat_deg and a gyro that resolves 15 °/h)");
+  mp->add_flag("--json", m->json, "print the coefficients and the fit's details as JSON on stdout");
+  mp->callback([m] { run_fit_multipos(*m, std::cout); });
 });
 
 }  // namespace

@@ -4,6 +4,8 @@
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/import_kfgins.hpp"
+#include "bench/multipos/import_imutk.hpp"
+#include "common/input_error.hpp"
 
 namespace calbench::cli {
 namespace {
@@ -40,6 +42,58 @@ const bool registered = add_command(95, [](CLI::App& app) {
     const ImportSummary s = import_kf_gins(*a);
     std::cout << "imported " << s.imu_rows << " IMU rows (" << s.rate_hz << " Hz), " << s.ref_rows << " reference rows, "
               << s.gnss_rows << " GNSS fixes into " << a->out << std::endl;
+  });
+
+  // IMU-TK text files -> multipos recording.
+  auto t = std::make_shared<ImportImuTkArgs>();
+  auto conv = std::make_shared<std::vector<std::vector<double>>>(4);
+  auto gravity = std::make_shared<double>(0), lat = std::make_shared<double>(1000), h = std::make_shared<double>(0);
+  auto* it = imp->add_subcommand("imu-tk", "IMU-TK text files (accelerometer and gyro, rows: t x y z) -> multipos recording");
+  it->add_option("acc", t->acc, "accelerometer file (t x y z)")->required()->check(CLI::ExistingFile);
+  it->add_option("gyro", t->gyro, "gyro file (t x y z, same time stamps)")->required()->check(CLI::ExistingFile);
+  it->add_option("--out", t->out, "recording folder to write")->required();
+  static const char* const names[4] = {"--acc-offset", "--acc-scale", "--gyro-offset", "--gyro-scale"};
+  static const char* const help[4] = {"accelerometer counts at zero input: one value or x,y,z (default 0: the file is SI)",
+                         "accelerometer m/s² per count: one value or x,y,z (default 1)",
+                         "gyro counts at zero input: one value or x,y,z (default 0)",
+                         "gyro rad/s per count: one value or x,y,z (default 1)"};
+  for (int k = 0; k < 4; ++k)
+    it->add_option(names[k], (*conv)[k], help[k])->delimiter(',')->expected(1, 3)->check(finite_number(-1e9, 1e9));
+  it->add_option("--time-unit", t->time_unit, "unit of the files' time column: s, ms, us or ns (default s)")
+      ->check(CLI::IsMember({"s", "ms", "us", "ns"}));
+  it->add_option("--rate", t->rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
+  it->add_option("--model", t->model, "device model for meta.json (a device class name, see docs/in-motion.md)");
+  it->add_option("--serial", t->serial, "device serial for meta.json");
+  it->add_option("--gravity", *gravity, "local gravity, m/s² (meta.json gravity_m_s2)")->check(finite_number(9.7, 9.9));
+  it->add_option("--site-lat", *lat, "site latitude, deg (meta.json site: normal gravity and the Earth rate)")
+      ->check(finite_number(-90, 90));
+  it->add_option("--site-h", *h, "site height, m (with --site-lat)")->check(finite_number(-1e4, 1e5));
+  it->add_flag("--force", t->force, "overwrite an existing recording in --out");
+  it->callback([t, conv, gravity, lat, h, it] {
+    CountsConversion* cc[4] = {&t->acc_counts, &t->acc_counts, &t->gyro_counts, &t->gyro_counts};
+    for (int k = 0; k < 4; ++k) {
+      const auto& v = (*conv)[k];
+      if (v.empty()) continue;
+      if (v.size() == 2) throw InputError(names[k], 0, "", "give one value or three (x,y,z), not two");
+      const Vec3 x = v.size() == 1 ? Vec3::Constant(v[0]) : Vec3(v[0], v[1], v[2]);
+      if (k % 2 == 0) cc[k]->offset = x;
+      else {
+        if ((x.array() == 0).any()) throw InputError(names[k], 0, "", "a scale of 0 maps every count to zero");
+        cc[k]->scale = x;
+      }
+      cc[k]->given = true;
+    }
+    t->time_scale = t->time_unit == "ms" ? 1e-3 : t->time_unit == "us" ? 1e-6 : t->time_unit == "ns" ? 1e-9 : 1.0;
+    if (it->count("--gravity")) t->gravity_m_s2 = *gravity;
+    if (it->count("--site-lat")) {
+      t->lat_deg = *lat;
+      t->h_m = *h;
+    } else if (it->count("--site-h")) {
+      throw InputError("--site-h", 0, "", "needs --site-lat");
+    }
+    const ImportImuTkSummary s = import_imu_tk(*t);
+    std::cout << "imported " << s.rows << " rows (" << s.rate_hz << " Hz) into " << t->out << " (kind multipos)"
+              << std::endl;
   });
 });
 

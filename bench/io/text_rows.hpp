@@ -1,0 +1,77 @@
+// Whitespace- (or comma-) separated numeric text rows, as peer tools write them (KF-GINS, IMU-TK):
+// '#' and '%' start comments, blank lines are skipped; every field must be a finite number.
+// Errors name the file, line and column.
+#pragma once
+#include <cmath>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bench/io/message_text.hpp"
+#include "common/input_error.hpp"
+#include "common/number_parse.hpp"
+#include "bench/io/plausible.hpp"
+
+namespace calbench {
+
+class TextRows {
+ public:
+  TextRows(std::string path, std::size_t min_cols) : path_(std::move(path)), in_(path_), min_(min_cols) {
+    if (!in_) throw InputError(path_, 0, "", "cannot open file");
+  }
+  bool next(std::vector<double>& v) {
+    std::string s;
+    while (std::getline(in_, s)) {
+      ++line_;
+      const auto p = s.find_first_not_of(" \t\r");
+      if (p == std::string::npos || s[p] == '#' || s[p] == '%') continue;
+      v.clear();
+      const char* c = s.data();
+      const char* e = c + s.size();
+      while (c < e) {
+        while (c < e && (*c == ' ' || *c == '\t' || *c == '\r' || *c == ',')) ++c;
+        if (c >= e) break;
+        double x = 0;
+        const char* start = c;
+        const char* end = parse_number(c, e, x);
+        if (!end || (end < e && !(*end == ' ' || *end == '\t' || *end == '\r' || *end == ',')))
+          throw InputError(path_, line_, "column " + std::to_string(v.size() + 1),
+                           "not a number: '" + field_text(std::string_view(start, static_cast<std::size_t>(e - start)), 20) + "'");
+        if (!std::isfinite(x)) throw InputError(path_, line_, "column " + std::to_string(v.size() + 1), "NaN or infinity");
+        v.push_back(x);
+        c = end;
+      }
+      if (v.size() < min_)
+        throw InputError(path_, line_, "", "expected at least " + std::to_string(min_) + " columns, found " + std::to_string(v.size()));
+      return true;
+    }
+    return false;
+  }
+  std::size_t line() const { return line_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::size_t min_;
+  std::size_t line_ = 0;
+};
+
+// Range checks before a value reaches the recording (a latitude of 1e308 is a number, not a place).
+inline void check_range(const TextRows& r, std::size_t col, double v, double lo, double hi, const char* what) {
+  if (!(v >= lo && v <= hi))
+    throw InputError(r.path(), r.line(), "column " + std::to_string(col + 1),
+                     std::string(what) + " " + number_text(v) + " outside [" + number_text(lo) + ", " + number_text(hi) + "]");
+}
+
+inline void check_time(const TextRows& r, double t, double& last, bool& first) {
+  if (!(std::abs(t) <= plausible::kMaxAbsTime_s))  // the bound every reader of the recording applies
+    throw InputError(r.path(), r.line(), "time",
+                     "time " + number_text(t) + " s is not plausible (at most " + number_text(plausible::kMaxAbsTime_s) + " s)");
+  if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
+  first = false;
+  last = t;
+}
+
+}  // namespace calbench

@@ -1,0 +1,219 @@
+#include "bench/multipos/fit_multipos_run.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "bench/io/coefficients_json.hpp"
+#include "bench/io/imu_class_toml.hpp"
+#include "bench/io/json_util.hpp"
+#include "bench/io/message_text.hpp"
+#include "bench/io/recording.hpp"
+#include "bench/report/svg_plot.hpp"
+#include "calibration/earth.hpp"
+#include "common/input_error.hpp"
+#include "common/units.hpp"
+
+namespace calbench {
+namespace {
+
+using namespace units;
+
+nlohmann::json vec_json(const Vec3& v, double k = 1) { return {v(0) * k, v(1) * k, v(2) * k}; }
+
+std::string plot_svg(const multipos::MultiposInput& in, const multipos::MultiposFit& fit) {
+  report::PlotCurve gyro{"|ω| (°/s)", {}, {}}, acc{"|f| − g (m/s²) × 10", {}, {}}, stat{"static pose (detected)", {}, {}};
+  const std::size_t step = std::max<std::size_t>(1, in.t.size() / 4000);
+  std::vector<char> is_static(in.t.size(), 0);
+  for (const auto& s : fit.statics)
+    for (std::size_t i = s.i0; i < s.i1; ++i) is_static[i] = 1;
+  for (std::size_t i = 0; i < in.t.size(); i += step) {
+    gyro.x.push_back(in.t[i]);
+    gyro.y.push_back(in.gyro[i].norm() / kDeg);
+    acc.x.push_back(in.t[i]);
+    acc.y.push_back(10 * (in.accel[i].norm() - in.gravity));
+    stat.x.push_back(in.t[i]);
+    stat.y.push_back(is_static[i] ? 0.0 : std::nan(""));
+  }
+  report::PlotSpec spec;
+  spec.title = "Static poses found (" + std::to_string(fit.statics.size()) + ") and the motion between them";
+  spec.x_label = "t [s]";
+  spec.y_label = "|ω| [°/s]; (|f| − g)·10 [m/s²]";
+  spec.width = 900;
+  return report::svg_line_plot({gyro, acc, stat}, spec);
+}
+
+nlohmann::json fit_json(const MultiposRecording& rec, const multipos::MultiposFit& fit) {
+  nlohmann::json j;
+  j["method"] = "gravity magnitude (accelerometer) and gravity direction after each rotation (gyro); docs/multipos.md";
+  j["frame"] = "x along the accelerometer x axis, y in the accelerometer x-y plane";
+  j["gauge_fixed"] = {"accel.M[0][1]", "accel.M[0][2]", "accel.M[1][2]"};
+  j["gravity_m_s2"] = rec.input.gravity;
+  j["gravity_source"] = rec.gravity_source;
+  j["device_class"] = rec.device_class;
+  auto noise = [](const multipos::NoiseLevel& n, double k) {
+    return nlohmann::json{{"class_per_sample", n.class_sigma * k}, {"measured_per_sample", n.measured_sigma * k},
+                          {"used_per_sample", n.used_sigma * k}, {"differs_2x", n.differs}};
+  };
+  j["noise"] = {{"gyro_deg_s", noise(fit.gyro_noise, 1 / kDeg)}, {"accel_m_s2", noise(fit.accel_noise, 1)}};
+  j["static_test"] = {{"window_samples", fit.window_samples}, {"chi2_factor", fit.threshold_factor}, {"alpha", 1e-4}};
+  nlohmann::json st = nlohmann::json::array();
+  for (std::size_t k = 0; k < fit.statics.size(); ++k) {
+    const auto& s = fit.statics[k];
+    st.push_back({{"pose", k}, {"t0_s", s.t0}, {"t1_s", s.t1}, {"samples", s.i1 - s.i0}, {"used", s.used},
+                  {"f_mean_m_s2", vec_json(s.f_mean)}, {"w_mean_deg_h", vec_json(s.w_mean, 1 / kDegPerHour)},
+                  {"g_residual_raw_m_s2", s.g_residual_raw}, {"g_residual_m_s2", s.g_residual}});
+  }
+  j["statics"] = st;
+  nlohmann::json rt = nlohmann::json::array();
+  for (std::size_t k = 0; k < fit.rotations.size(); ++k) {
+    const auto& r = fit.rotations[k];
+    rt.push_back({{"rotation", k}, {"from_pose", r.from}, {"to_pose", r.to}, {"t0_s", r.t0}, {"t1_s", r.t1},
+                  {"used", r.used}, {"angle_raw_deg", vec_json(r.angle_raw, 1 / kDeg)},
+                  {"residual_deg", r.residual_rad / kDeg}});
+  }
+  j["rotations"] = rt;
+  j["accel_chi2_dof"] = fit.accel_chi2_dof;
+  j["accel_dof"] = fit.accel_dof;
+  j["gyro_chi2_dof"] = fit.gyro_chi2_dof;
+  j["gyro_dof"] = fit.gyro_dof;
+  j["g_spread_raw_m_s2"] = fit.g_spread_raw;
+  j["g_spread_m_s2"] = fit.g_spread;
+  j["rotation_rms_deg"] = fit.rotation_rms_rad / kDeg;
+  j["notes"] = fit.notes;
+  return j;
+}
+
+std::string coeff_text(const SensorErrors& e) {
+  std::ostringstream os;
+  os << std::fixed;
+  auto triad = [&](const char* name, const TriadErrors& t, double kb, const char* ub) {
+    os << "  " << name << " bias [" << ub << "]:";
+    for (int i = 0; i < 3; ++i) os << " " << std::setprecision(2) << t.bias(i) * kb << " ± " << t.sigma_bias(i) * kb;
+    os << "\n  " << name << " M [ppm] (row i: axis i towards x, y, z):\n";
+    for (int i = 0; i < 3; ++i) {
+      os << "   ";
+      for (int j = 0; j < 3; ++j) {
+        if (t.sigma_M(i, j) == 0 && t.M(i, j) == 0) os << "  " << std::setw(20) << "0 (frame)";
+        else
+          os << "  " << std::setw(9) << std::setprecision(0) << t.M(i, j) * 1e6 << " ± " << std::setw(6)
+             << t.sigma_M(i, j) * 1e6;
+      }
+      os << "\n";
+    }
+  };
+  triad("gyro", e.gyro, 1 / kDegPerHour, "°/h");
+  triad("accel", e.accel, 1 / kMilliG, "mg");
+  return os.str();
+}
+
+}  // namespace
+
+MultiposRecording read_multipos_recording(const std::string& dir, const std::string& device_class_option) {
+  MultiposRecording r;
+  const fs::path d(dir);
+  const RecordingMeta meta = read_meta(d);
+  const std::string mf = (d / "meta.json").string();
+  if (meta.kind != RecordingKind::multipos)
+    throw InputError(mf, 0, "kind", std::string("expected a multipos recording, got \"") + kind_name(meta.kind) +
+                                        "\" (fit bench / fit drive read those)");
+  r.device = meta.device;
+  const ImuClassChoice cls = choose_imu_class(device_class_option, meta.device.model, mf);
+  r.device_class = imu_class_json(cls);
+  auto& in = r.input;
+  in.rate_hz = meta.imu_rate_hz;
+  in.gyro_density = cls.cls.noise.gyro.white_density;
+  in.accel_density = cls.cls.noise.accel.white_density;
+  if (meta.extra.contains("gravity_m_s2")) {
+    const auto& g = meta.extra["gravity_m_s2"];
+    if (!g.is_number() || !(g.get<double>() >= 9.7 && g.get<double>() <= 9.9))
+      throw InputError(mf, 0, "gravity_m_s2", "must be a number within 9.7–9.9 m/s² (gravity on Earth)");
+    in.gravity = g.get<double>();
+    r.gravity_source = "meta.json gravity_m_s2";
+  } else if (meta.site) {
+    in.gravity = normal_gravity_ned(meta.site->lat_deg * kDeg, meta.site->h_m).norm();
+    r.gravity_source = "meta.json site (WGS-84 normal gravity)";
+  } else {
+    in.gravity = 9.80665;
+    r.gravity_source = "standard gravity 9.80665 m/s² (meta.json has neither site nor gravity_m_s2)";
+  }
+  if (meta.site) in.lat_rad = meta.site->lat_deg * kDeg;
+  ImuReader imu(d / "imu.csv", meta.imu_rate_hz);
+  ImuRecord rec;
+  while (imu.next(rec)) {
+    if (!in.t.empty() && !(rec.t > in.t.back()))
+      throw InputError(imu.path(), imu.line(), "t_s", "time does not increase");
+    in.t.push_back(rec.t);
+    if (imu.form() == ImuForm::increments) {
+      if (!(rec.dt > 0)) throw InputError(imu.path(), imu.line(), "t_s", "increment over a non-positive interval");
+      in.gyro.push_back(rec.gyro / rec.dt);
+      in.accel.push_back(rec.accel / rec.dt);
+    } else {
+      in.gyro.push_back(rec.gyro);
+      in.accel.push_back(rec.accel);
+    }
+  }
+  return r;
+}
+
+void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
+  const MultiposRecording rec = read_multipos_recording(a.dir, a.device_class);
+  multipos::MultiposOptions opt;
+  opt.earth_rate = a.earth_rate;
+  opt.exclude_poses = a.exclude_poses;
+  opt.exclude_rotations = a.exclude_rotations;
+  multipos::MultiposFit fit;
+  try {
+    fit = multipos::fit_multipos(rec.input, opt);
+  } catch (const multipos::MultiposRefusal& e) {
+    throw InputError((fs::path(a.dir) / "imu.csv").string(), 0, "", std::string("cannot calibrate from this recording: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw InputError(a.dir, 0, "", e.what());
+  }
+  CoefficientSet c;
+  c.device = rec.device;
+  c.errors = fit.coeffs;
+  c.extra["source"] = {{"kind", "multipos"}, {"recording", a.dir}};
+  c.extra["multipos"] = fit_json(rec, fit);
+  if (!a.out.empty()) {
+    write_coefficients(a.out, c);
+    const CoefficientSet back = read_coefficients(a.out);  // complete only once it reads back as written
+    for (const auto& name : coefficient_names())
+      if (coefficient_value(back.errors, name) != coefficient_value(c.errors, name))
+        throw std::runtime_error(a.out + ": " + name + " reads back differently from what was written");
+  }
+  if (!a.plot.empty()) write_text_atomic(a.plot, plot_svg(rec.input, fit) + "\n");
+  if (a.json) {
+    nlohmann::json j = coefficients_to_json(c);
+    out << j.dump(2) << "\n";
+    return;
+  }
+  const auto& m = c.extra["multipos"];
+  out << "multi-position fit of " << a.dir << " (" << rec.input.t.size() << " samples, " << rec.input.rate_hz
+      << " Hz; class " << rec.device_class.value("name", std::string("?")) << ")\n";
+  out << "gravity " << rec.input.gravity << " m/s² from " << rec.gravity_source << "\n";
+  out << std::fixed << std::setprecision(4);
+  out << "static test: " << fit.window_samples << "-sample windows, variance below σ²·" << std::setprecision(3)
+      << fit.threshold_factor << " (α = 1e-4 per window and axis); noise per sample: gyro "
+      << fit.gyro_noise.used_sigma / kDeg << " °/s (measured " << fit.gyro_noise.measured_sigma / kDeg << "), accel "
+      << fit.accel_noise.used_sigma << " m/s² (measured " << fit.accel_noise.measured_sigma << ")\n";
+  out << fit.statics.size() << " static poses:";
+  for (std::size_t k = 0; k < fit.statics.size(); ++k)
+    out << (k % 6 == 0 ? "\n " : "") << " #" << k << " " << std::setprecision(1) << fit.statics[k].t0 << "–"
+        << fit.statics[k].t1 << " s" << (fit.statics[k].used ? "" : " (left out)");
+  out << "\n" << fit.rotations.size() << " rotations between consecutive poses\n";
+  out << std::setprecision(2) << "gravity magnitude over the poses (RMS of |f| − g): raw " << fit.g_spread_raw * 1e3
+      << " mm/s² → calibrated " << fit.g_spread * 1e3 << " mm/s²; χ²/dof " << fit.accel_chi2_dof << " ("
+      << fit.accel_dof << " dof)\n";
+  out << "gravity direction after each rotation: RMS error " << std::setprecision(3) << fit.rotation_rms_rad / kDeg
+      << "°; χ²/dof " << std::setprecision(2) << fit.gyro_chi2_dof << " (" << fit.gyro_dof << " dof)\n";
+  out << coeff_text(fit.coeffs);
+  out << "frame: " << m["frame"].get<std::string>() << " (accel M[0][1], M[0][2], M[1][2] are 0 by that definition)\n";
+  if (std::max(fit.accel_chi2_dof, fit.gyro_chi2_dof) > 1)
+    out << "σ scaled by √(χ²/dof) where χ²/dof > 1: the residual exceeds what the static noise explains\n";
+  for (const auto& n : fit.notes) out << "note: " << n << "\n";
+  if (!a.out.empty()) out << "coefficients written to " << a.out << "\n";
+  if (!a.plot.empty()) out << "plot written to " << a.plot << "\n";
+}
+
+}  // namespace calbench

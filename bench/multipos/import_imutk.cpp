@@ -1,0 +1,115 @@
+#include "bench/multipos/import_imutk.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "bench/io/json_util.hpp"
+#include "bench/io/message_text.hpp"
+#include "bench/io/recording.hpp"
+#include "bench/io/staging_folder.hpp"
+#include "bench/io/text_rows.hpp"
+#include "common/input_error.hpp"
+
+namespace calbench {
+namespace {
+
+nlohmann::json counts_json(const CountsConversion& c) {
+  return {{"offset", {c.offset(0), c.offset(1), c.offset(2)}}, {"scale", {c.scale(0), c.scale(1), c.scale(2)}}};
+}
+
+// The two files advance together, row by row, with the same time stamps (IMU-TK's format).
+struct PairReader {
+  TextRows acc, gyro;
+  std::vector<double> va, vg;
+  PairReader(const ImportImuTkArgs& a) : acc(a.acc, 4), gyro(a.gyro, 4) {}
+  bool next(const ImportImuTkArgs& a, double& t, Vec3& f, Vec3& w) {
+    const bool ha = acc.next(va), hg = gyro.next(vg);
+    if (ha != hg) {
+      const TextRows& shorter = ha ? gyro : acc;
+      throw InputError(shorter.path(), shorter.line(), "",
+                       "ends before " + (ha ? acc : gyro).path() + " (line " + std::to_string((ha ? acc : gyro).line()) +
+                           "): the two files must have the same rows");
+    }
+    if (!ha) return false;
+    t = va[0] * a.time_scale;
+    const double tg = vg[0] * a.time_scale;
+    if (!(std::abs(t - tg) <= 1e-6 * std::max(1.0, std::abs(t))))
+      throw InputError(gyro.path(), gyro.line(), "column 1",
+                       "time " + number_text(tg) + " s differs from " + acc.path() + " line " + std::to_string(acc.line()) +
+                           " (" + number_text(t) + " s): the two files must share their time stamps");
+    for (int i = 0; i < 3; ++i) {
+      f(i) = (va[1 + i] - a.acc_counts.offset(i)) * a.acc_counts.scale(i);
+      w(i) = (vg[1 + i] - a.gyro_counts.offset(i)) * a.gyro_counts.scale(i);
+    }
+    for (int i = 0; i < 3; ++i) {
+      check_range(acc, 1 + i, f(i), -1e4, 1e4, "specific force (m/s², after the conversion)");
+      check_range(gyro, 1 + i, w(i), -1e3, 1e3, "angular rate (rad/s, after the conversion)");
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
+  ImportImuTkSummary sum;
+  fs::path out(a.out);
+  if (out.filename().empty()) out = out.parent_path();
+  if (fs::exists(out / "meta.json") && !a.force)
+    throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
+  check_output_folder(out);
+  if (a.gravity_m_s2 && !(*a.gravity_m_s2 >= 9.7 && *a.gravity_m_s2 <= 9.9))
+    throw InputError("--gravity", 0, "", number_text(*a.gravity_m_s2) + " m/s² is not gravity on Earth (9.7–9.9)");
+  double rate = a.rate_hz;
+  {
+    PairReader r(a);
+    double t = 0, last = 0;
+    bool first = true;
+    Vec3 f, w;
+    std::vector<double> dts;
+    while (r.next(a, t, f, w)) {
+      if (!first) dts.push_back(t - last);
+      check_time(r.acc, t, last, first);
+      ++sum.rows;
+    }
+    if (sum.rows < 2) throw InputError(a.acc, 0, "", "needs at least two rows");
+    if (!(rate > 0)) {
+      std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+      rate = 1.0 / dts[dts.size() / 2];
+    }
+  }
+  sum.rate_hz = rate;
+  RecordingMeta meta;
+  meta.kind = RecordingKind::multipos;
+  meta.device = DeviceId{a.model, a.serial};
+  meta.imu_rate_hz = rate;
+  if (a.lat_deg) {
+    meta.site = Site{*a.lat_deg, 0.0, a.h_m.value_or(0.0)};
+    meta.site_has_lon = false;
+  }
+  if (a.gravity_m_s2) meta.extra["gravity_m_s2"] = *a.gravity_m_s2;
+  if (a.acc_counts.given || a.gyro_counts.given)
+    meta.extra["source_counts"] = {{"gyro", counts_json(a.gyro_counts)}, {"accel", counts_json(a.acc_counts)}};
+  meta.notes = "imported from IMU-TK text files: accelerometer " + a.acc + ", gyro " + a.gyro + " (time unit " +
+               a.time_unit + ")";
+  fs::create_directories(out.has_parent_path() ? out.parent_path() : fs::path("."));
+  StagingFolder staging(out, "importing");
+  {
+    RecordingWriter wr(staging.path(), meta, ImuForm::rates, false, false, false);
+    PairReader r(a);
+    ImuRecord rec;
+    while (r.next(a, rec.t, rec.accel, rec.gyro)) wr.imu(rec);
+    wr.finish();  // read back against what was written before "complete"
+  }
+  if (!fs::exists(out)) {
+    fs::rename(staging.path(), out);
+    staging.keep();
+  } else {
+    for (const char* f : {"imu.csv", "meta.json"})
+      if (fs::exists(staging.path() / f)) fs::rename(staging.path() / f, out / f);
+  }
+  return sum;
+}
+
+}  // namespace calbench

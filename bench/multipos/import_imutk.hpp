@@ -1,0 +1,39 @@
+// calbench import imu-tk: IMU-TK's text files (one per triad, rows `t x y z`) into a multipos
+// recording (../shared/spec/recording-format.md, kind "multipos"). Values are taken as SI and time
+// in seconds unless a counts conversion and time unit are given; the conversion is recorded in
+// meta.json `source_counts`, not re-applied by readers.
+#pragma once
+#include <optional>
+#include <string>
+
+#include "common/sensor_model.hpp"
+
+namespace calbench {
+
+struct CountsConversion {
+  Vec3 offset = Vec3::Zero();     // counts at zero input
+  Vec3 scale = Vec3::Ones();      // SI per count (rad/s or m/s²)
+  bool given = false;             // false: the files are SI already
+};
+
+struct ImportImuTkArgs {
+  std::string acc, gyro, out;
+  CountsConversion acc_counts, gyro_counts;
+  double time_scale = 1.0;        // seconds per time unit of the files
+  std::string time_unit = "s";
+  std::string model = "unknown", serial = "unknown";
+  double rate_hz = 0;             // 0: from the median interval
+  std::optional<double> gravity_m_s2;
+  std::optional<double> lat_deg, h_m;
+  bool force = false;
+};
+
+struct ImportImuTkSummary {
+  std::size_t rows = 0;
+  double rate_hz = 0;
+};
+
+// InputError naming file, line and column on anything malformed; nothing is written then.
+ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a);
+
+}  // namespace calbench
