@@ -273,16 +273,22 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
       up_max = up_max.cwiseMax(u);
       up_min = up_min.cwiseMin(u);
     }
-    for (int i = 0; i < 3; ++i) {
-      if (up_max(i) < 0.5) missing.push_back(std::string("no pose with the ") + axis_name(i) + " axis pointing up (within 60° of up)");
-      if (up_min(i) > -0.5) missing.push_back(std::string("no pose with the ") + axis_name(i) + " axis pointing down (within 60° of down)");
-    }
+    // Bias and scale of axis i separate only when its share of gravity takes clearly different
+    // values over the poses: a spread of at least 1 (e.g. down and level, or ±30°).
+    for (int i = 0; i < 3; ++i)
+      if (up_max(i) - up_min(i) < 1.0) {
+        std::ostringstream os;
+        os << "the " << axis_name(i) << " axis's share of gravity spans only " << std::lround(100 * up_min(i)) << "…"
+           << std::lround(100 * up_max(i)) << " % over the poses (at least 100 % apart needed): add poses with the "
+           << axis_name(i) << " axis pointing " << (up_max(i) < 0.5 ? "up" : "down");
+        missing.push_back(os.str());
+      }
   }
   if (!missing.empty()) {
     std::ostringstream os;
     os << "the poses do not determine the accelerometer coefficients:";
     for (const auto& m : missing) os << "\n  - " << m;
-    os << "\n  add static poses (≥ " << opt.min_static_s << " s still each) so that every axis points up and down at least once";
+    os << "\n  add static poses (≥ " << opt.min_static_s << " s still each); best: every axis up and down at least once";
     throw MultiposRefusal(os.str());
   }
 

@@ -1,0 +1,453 @@
+#!/usr/bin/env python3
+"""Side by side: calbench `fit multipos` and IMU-TK (Tedaldi, Pretto & Menegatti, ICRA 2014) on the
+same multi-position recording, scored on held-out data by one scorer that knows neither estimator
+(issue 37 item 3; docs/validation/peer-imu-tk.md is this script's output).
+
+  bench/multipos/peer_imu_tk.py --calbench build/calbench --driver build-peer/imu_tk/build/imu_tk_driver \
+      [--data ../shared/data/imu_tk-xsens-multipos] [--sim-seeds 101,102,103] [--peer 'Kyle-ak/imu_tk 7780270'] \
+      [--out docs/validation/peer-imu-tk.md]
+
+The driver is built by scripts/peer-imu-tk. Both tools read the same two text files (IMU-TK's format,
+raw counts); calbench through `import imu-tk` with a nominal conversion (counts offset 32768, IMU-TK's
+own 1/6258 rad/s per count, 0.0027 m/s² per count), IMU-TK with its own example's settings. IMU-TK's
+result (calibrated = T·K·(raw − b)) is converted to calbench's convention measured = (I + M)·true + b
+on the SI values: I + M = S·K⁻¹·T⁻¹, b = S·(b_raw − offset), S the nominal scale.
+
+One segmentation for scoring: the static poses and rotations calbench finds on the whole recording
+(the scorer needs pose means and rotation spans; both tools' coefficients are applied to the same ones).
+Held-out metrics:
+  * gravity magnitude, leave one pose out: each pose k is removed (calbench --exclude-pose k; IMU-TK:
+    the pose's samples cut from its input, with 1 s on each side) and |‖A⁻¹(f̄_k − b)‖ − g| is scored
+    on it. Poses inside IMU-TK's 50-s initial interval are not left out (IMU-TK needs it).
+  * gravity direction after a held-out rotation: IMU-TK cannot leave one rotation out, so both tools
+    are fitted on each half of the recording (split at a long static pose near the middle, which both
+    halves keep) and scored on the rotations of the other half: the gravity direction of the start pose,
+    carried through the rotation by the corrected gyros, against the end pose's measured direction.
+    calbench's leave-one-rotation-out (--exclude-rotation k) is listed as well.
+"""
+import argparse
+import datetime
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+
+OFFSET = 32768.0
+ACC_SCALE = 0.0027          # m/s² per count (nominal)
+GYRO_SCALE = 1.0 / 6258.0   # rad/s per count (IMU-TK's example)
+G_XSENS = 9.81744
+
+
+# ---------------------------------------------------------------- small linear algebra (3×3)
+def mat_mul(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def mat_vec(a, v):
+    return [sum(a[i][k] * v[k] for k in range(3)) for i in range(3)]
+
+
+def mat_inv(a):
+    (p, q, r), (s, t, u), (v, w, x) = a
+    det = p * (t * x - u * w) - q * (s * x - u * v) + r * (s * w - t * v)
+    return [[(t * x - u * w) / det, (r * w - q * x) / det, (q * u - r * t) / det],
+            [(u * v - s * x) / det, (p * x - r * v) / det, (r * s - p * u) / det],
+            [(s * w - t * v) / det, (q * v - p * w) / det, (p * t - q * s) / det]]
+
+
+def norm(v):
+    return math.sqrt(sum(x * x for x in v))
+
+
+def unit(v):
+    n = norm(v)
+    return [x / n for x in v]
+
+
+class Triad:
+    """A triad's correction true = A⁻¹(measured − b) in calbench's convention."""
+
+    def __init__(self, M, b):
+        self.Ainv = mat_inv([[(1.0 if i == j else 0.0) + M[i][j] for j in range(3)] for i in range(3)])
+        self.b = b
+
+    def __call__(self, v):
+        return mat_vec(self.Ainv, [v[i] - self.b[i] for i in range(3)])
+
+
+def from_calbench(coeffs_file):
+    c = json.load(open(coeffs_file))
+    return Triad(c["accel"]["M"], c["accel"]["bias"]), Triad(c["gyro"]["M"], c["gyro"]["bias"])
+
+
+def from_imutk_triad(t, scale):
+    # true = T·K·(raw − b_raw), raw = ours/s + offset  ⇒  I + M = S·K⁻¹·T⁻¹, b = S·(b_raw − offset)
+    S = [[scale if i == j else 0.0 for j in range(3)] for i in range(3)]
+    A = mat_mul(mat_mul(S, mat_inv(t["K"])), mat_inv(t["T"]))
+    M = [[A[i][j] - (1.0 if i == j else 0.0) for j in range(3)] for i in range(3)]
+    return Triad(M, [scale * (t["b"][i] - OFFSET) for i in range(3)])
+
+
+# ---------------------------------------------------------------- data
+def read_imu_csv(folder):
+    t, g, a = [], [], []
+    with open(os.path.join(folder, "imu.csv")) as f:
+        cols = None
+        for line in f:
+            if line.startswith("#"):
+                continue
+            if cols is None:
+                cols = line.strip().split(",")
+                continue
+            v = [float(x) for x in line.split(",")]
+            row = dict(zip(cols, v))
+            t.append(row["t_s"])
+            g.append([row["gx_rad_s"], row["gy_rad_s"], row["gz_rad_s"]])
+            a.append([row["ax_m_s2"], row["ay_m_s2"], row["az_m_s2"]])
+    return t, g, a
+
+
+def qmul(p, q):
+    a1, b1, c1, d1 = p
+    a2, b2, c2, d2 = q
+    return (a1 * a2 - b1 * b2 - c1 * c2 - d1 * d2, a1 * b2 + b1 * a2 + c1 * d2 - d1 * c2,
+            a1 * c2 - b1 * d2 + c1 * a2 + d1 * b2, a1 * d2 + b1 * c2 - c1 * b2 + d1 * a2)
+
+
+def qexp(phi):
+    a = norm(phi)
+    if a < 1e-12:
+        return (1.0, 0.5 * phi[0], 0.5 * phi[1], 0.5 * phi[2])
+    s = math.sin(a / 2) / a
+    return (math.cos(a / 2), phi[0] * s, phi[1] * s, phi[2] * s)
+
+
+def qrot_inv(q, v):
+    """Rᵀ·v for the rotation R of unit quaternion q (body(end) → body(start))."""
+    w, x, y, z = q
+    R = [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
+    return [sum(R[k][i] * v[k] for k in range(3)) for i in range(3)]
+
+
+class Segmentation:
+    def __init__(self, fit_json, t):
+        m = json.load(open(fit_json))["multipos"]
+        self.poses = []
+        for s in m["statics"]:
+            i0 = next(i for i, x in enumerate(t) if x >= s["t0_s"] - 1e-9)
+            i1 = next(i for i, x in enumerate(t) if x >= s["t1_s"] - 1e-9) + 1
+            self.poses.append((i0, i1, s["t0_s"], s["t1_s"]))
+        self.rotations = [(r["from_pose"], r["to_pose"]) for r in m["rotations"]]
+
+
+def pose_mean(a, i0, i1):
+    n = i1 - i0
+    return [sum(a[i][k] for i in range(i0, i1)) / n for k in range(3)]
+
+
+def magnitude_error(acc, fbar, g):
+    return abs(norm(acc(fbar)) - g)
+
+
+def rotation_error_deg(acc, gyro, seg, t, g_data, fbars, k):
+    p, q = seg.rotations[k]
+    i1, i0 = seg.poses[p][1], seg.poses[q][0]
+    quat = (1.0, 0.0, 0.0, 0.0)
+    for j in range(i1, i0):
+        dt = t[j] - t[j - 1]
+        w = gyro(g_data[j])
+        quat = qmul(quat, qexp([w[0] * dt, w[1] * dt, w[2] * dt]))
+        n = math.sqrt(sum(x * x for x in quat))
+        quat = tuple(x / n for x in quat)
+    up0, up1 = unit(acc(fbars[p])), unit(acc(fbars[q]))
+    pred = qrot_inv(quat, up0)
+    return math.degrees(math.acos(max(-1.0, min(1.0, sum(pred[i] * up1[i] for i in range(3)) / norm(pred)))))
+
+
+def rms(v):
+    return math.sqrt(sum(x * x for x in v) / len(v)) if v else float("nan")
+
+
+def median(v):
+    s = sorted(v)
+    n = len(s)
+    return float("nan") if n == 0 else (s[n // 2] if n % 2 else 0.5 * (s[n // 2 - 1] + s[n // 2]))
+
+
+# ---------------------------------------------------------------- tools
+def run(cmd, **kw):
+    r = subprocess.run(cmd, capture_output=True, text=True, **kw)
+    if r.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}")
+    return r
+
+
+def write_rows(src, dst, keep):
+    with open(src) as f, open(dst, "w") as o:
+        for line in f:
+            s = line.split()
+            if s and keep(float(s[0])):
+                o.write(line)
+
+
+class Case:
+    def __init__(self, a, work, acc_file, gyro_file, gravity, init_static, model):
+        self.a, self.work, self.acc_file, self.gyro_file = a, work, acc_file, gyro_file
+        self.g, self.init_static, self.model = gravity, init_static, model
+
+    def calbench(self, acc_file, gyro_file, name, extra=()):
+        rec = os.path.join(self.work, name)
+        if not os.path.exists(os.path.join(rec, "meta.json")):
+            run([self.a.calbench, "import", "imu-tk", acc_file, gyro_file, "--out", rec, "--acc-offset", str(OFFSET),
+                 "--acc-scale", str(ACC_SCALE), "--gyro-offset", str(OFFSET), "--gyro-scale", repr(GYRO_SCALE),
+                 "--gravity", str(self.g), "--model", self.model])
+        out = os.path.join(self.work, name + "-" + "-".join(x.strip("-") for x in extra) + ".json")
+        run([self.a.calbench, "fit", "multipos", rec, "--out", out, *extra])
+        return out
+
+    def imutk(self, acc_file, gyro_file, name, init_static=None, acc_only=False):
+        out = os.path.join(self.work, name + "-imutk.json")
+        cmd = [self.a.driver, acc_file, gyro_file, out, "--init-static", str(init_static or self.init_static),
+               "--gravity", str(self.g), "--acc-bias-init", str(OFFSET), "--gyro-scale-init", repr(GYRO_SCALE)]
+        if acc_only:
+            cmd.append("--acc-only")
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        j = json.load(open(out)) if os.path.exists(out) else {"ok": False}
+        if not j.get("ok"):
+            return None
+        acc = from_imutk_triad(j["acc"], ACC_SCALE)
+        gyro = from_imutk_triad(j["gyro"], GYRO_SCALE) if "gyro" in j else None
+        return acc, gyro
+
+    def evaluate(self, loro=True):
+        a = self.a
+        full = self.calbench(self.acc_file, self.gyro_file, "full")
+        rec = os.path.join(self.work, "full")
+        t, gd, ad = read_imu_csv(rec)
+        seg = Segmentation(full, t)
+        fbars = [pose_mean(ad, p[0], p[1]) for p in seg.poses]
+        res = {"poses": len(seg.poses), "rotations": len(seg.rotations), "duration": t[-1] - t[0]}
+        cb = from_calbench(full)
+        it = self.imutk(self.acc_file, self.gyro_file, "full")
+        if it is None:
+            raise RuntimeError("IMU-TK found no calibration on the whole recording")
+        for tool, (acc, gyro) in (("calbench", cb), ("IMU-TK", it)):
+            res[tool] = {"in_mag": [magnitude_error(acc, f, self.g) for f in fbars],
+                         "in_rot": [rotation_error_deg(acc, gyro, seg, t, gd, fbars, k) for k in range(len(seg.rotations))],
+                         "coeffs": (acc, gyro)}
+        # Leave one pose out (accelerometer).
+        lo = [k for k, p in enumerate(seg.poses) if p[2] > self.init_static + 1.0]
+        res["lopo_poses"] = lo
+        for tool in ("calbench", "IMU-TK"):
+            res[tool]["lopo"] = []
+        for k in lo:
+            c = self.calbench(self.acc_file, self.gyro_file, "full", ("--exclude-pose", str(k)))
+            res["calbench"]["lopo"].append(magnitude_error(from_calbench(c)[0], fbars[k], self.g))
+            t0, t1 = seg.poses[k][2] - 1.0, seg.poses[k][3] + 1.0
+            ca, cg = (os.path.join(self.work, f"cut{k}-{x}.txt") for x in ("acc", "gyro"))
+            write_rows(self.acc_file, ca, lambda x: not (t0 <= x <= t1))
+            write_rows(self.gyro_file, cg, lambda x: not (t0 <= x <= t1))
+            r = self.imutk(ca, cg, f"cut{k}", acc_only=True)
+            res["IMU-TK"]["lopo"].append(magnitude_error(r[0], fbars[k], self.g) if r else float("nan"))
+        # Halves: split at the longest pose in the middle third.
+        mid = [(p[3] - p[2], k) for k, p in enumerate(seg.poses) if t[-1] / 3 < p[2] < 2 * t[-1] / 3]
+        ks = max(mid)[1]
+        ts0, ts1 = seg.poses[ks][2], seg.poses[ks][3]
+        res["split"] = (ks, ts0, ts1)
+        fold_files = {}
+        for name, keep in (("A", lambda x: x <= ts1), ("B", lambda x: x >= ts0)):
+            fa, fg = (os.path.join(self.work, f"half{name}-{x}.txt") for x in ("acc", "gyro"))
+            write_rows(self.acc_file, fa, keep)
+            write_rows(self.gyro_file, fg, keep)
+            fold_files[name] = (fa, fg)
+        rot_a = [k for k, (p, q) in enumerate(seg.rotations) if q <= ks]
+        rot_b = [k for k, (p, q) in enumerate(seg.rotations) if p >= ks]
+        res["rot_folds"] = (len(rot_a), len(rot_b))
+        for tool in ("calbench", "IMU-TK"):
+            res[tool]["halves"] = []
+            res[tool]["halves_mag"] = []
+        for fit_on, score_on, poses_on in (("A", rot_b, range(ks + 1, len(seg.poses))), ("B", rot_a, range(0, ks))):
+            fa, fg = fold_files[fit_on]
+            c = from_calbench(self.calbench(fa, fg, "half" + fit_on))
+            init = self.init_static if fit_on == "A" else (ts1 - ts0)
+            i = self.imutk(fa, fg, "half" + fit_on, init_static=init)
+            for tool, cal in (("calbench", c), ("IMU-TK", i)):
+                if cal is None:
+                    res[tool]["halves"] += [float("nan")] * len(score_on)
+                    continue
+                res[tool]["halves"] += [rotation_error_deg(cal[0], cal[1], seg, t, gd, fbars, k) for k in score_on]
+                res[tool]["halves_mag"] += [magnitude_error(cal[0], fbars[k], self.g) for k in poses_on]
+        if loro:
+            res["calbench"]["loro"] = []
+            for k in range(len(seg.rotations)):
+                c = from_calbench(self.calbench(self.acc_file, self.gyro_file, "full", ("--exclude-rotation", str(k))))
+                res["calbench"]["loro"].append(rotation_error_deg(c[0], c[1], seg, t, gd, fbars, k))
+        return res
+
+
+# ---------------------------------------------------------------- simulation (independent of both tools)
+def simulate(seed, folder):
+    """A hand-turned unit: 50 s opening static, then 30 poses (3–6 s) reached by turns of 1.5–3 s about
+    random body axes (a (1 − cos) rate profile), sampled at 100 Hz; errors measured = (I+M)·true + b
+    with a raw-counts ADC (offset 32768 ± spread, nominal scale ± a few %), white noise at an Xsens
+    MTi's densities. Written as IMU-TK text files in counts; the truth in calbench's convention on
+    the nominal SI values. No code of either estimator is used."""
+    rnd = random.Random(seed)
+    rate, g = 100.0, 9.80665
+    dt = 1 / rate
+    truth = {}
+    for name, sc, bias_si, skew in (("gyro", GYRO_SCALE, 0.02, 0.01), ("accel", ACC_SCALE, 0.3, 0.01)):
+        M = [[(rnd.gauss(0, 0.03) if i == j else rnd.gauss(0, skew)) for j in range(3)] for i in range(3)]
+        b = [rnd.gauss(0, bias_si) for _ in range(3)]
+        truth[name] = {"M": M, "bias": b}
+    sg, sa = 0.05 * math.pi / 180 * 10, 0.002 * 10  # per sample at 100 Hz
+    C = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]  # body → level
+    acc_rows, gyro_rows = [], []
+    t = 0.0
+
+    def emit(w):
+        nonlocal t
+        f = [C[2][i] * g for i in range(3)]  # up (level z) in body axes, times g
+        for rows, true, name, s, sig in ((gyro_rows, w, "gyro", GYRO_SCALE, sg), (acc_rows, f, "accel", ACC_SCALE, sa)):
+            e = truth[name]
+            m = [sum(((1.0 if i == j else 0.0) + e["M"][i][j]) * true[j] for j in range(3)) + e["bias"][i] + rnd.gauss(0, sig)
+                 for i in range(3)]
+            rows.append("%.5f %.3f %.3f %.3f\n" % (t, *(OFFSET + m[i] / s for i in range(3))))
+        t += dt
+
+    def still(sec):
+        for _ in range(int(sec * rate)):
+            emit([0.0, 0.0, 0.0])
+
+    still(50.0)
+    for _ in range(30):
+        ax = unit([rnd.gauss(0, 1) for _ in range(3)])
+        theta = math.radians(rnd.uniform(60, 150)) * rnd.choice((-1, 1))
+        T = rnd.uniform(1.5, 3.0)
+        n = int(T * rate)
+        for k in range(1, n + 1):
+            tau = k * dt
+            r = theta / T * (1 - math.cos(2 * math.pi * tau / T))
+            a1 = theta * (tau / T - math.sin(2 * math.pi * tau / T) / (2 * math.pi))
+            a0 = theta * ((tau - dt) / T - math.sin(2 * math.pi * (tau - dt) / T) / (2 * math.pi))
+            d = a1 - a0  # rotate the body about ax by d: C ← C·Rot(ax, d)
+            c, s = math.cos(d), math.sin(d)
+            x, y, z = ax
+            R = [[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+                 [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
+                 [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]]
+            C = mat_mul(C, R)
+            emit([r * ax[0], r * ax[1], r * ax[2]])
+        still(rnd.uniform(3.0, 6.0))
+    os.makedirs(folder, exist_ok=True)
+    open(os.path.join(folder, "acc.txt"), "w").writelines(acc_rows)
+    open(os.path.join(folder, "gyro.txt"), "w").writelines(gyro_rows)
+    json.dump(truth, open(os.path.join(folder, "truth.json"), "w"))
+    return g
+
+
+def truth_score(est_acc, est_gyro, truth, g):
+    """Frame-invariant checks of a tool against the truth: errors of the gravity magnitude and of a
+    rotation's action predicted from the coefficients, on a fixed set of test vectors."""
+    ta = Triad(truth["accel"]["M"], truth["accel"]["bias"])
+    tg = Triad(truth["gyro"]["M"], truth["gyro"]["bias"])
+    worst_mag = 0.0
+    rnd = random.Random(7)
+    for _ in range(200):
+        u = unit([rnd.gauss(0, 1) for _ in range(3)])
+        true_f = [g * x for x in u]
+        # measured from the truth: invert ta's correction
+        A = mat_inv(ta.Ainv)
+        meas = [sum(A[i][j] * true_f[j] for j in range(3)) + ta.b[i] for i in range(3)]
+        worst_mag = max(worst_mag, abs(norm(est_acc(meas)) - g))
+    return worst_mag
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--calbench", required=True)
+    ap.add_argument("--driver", required=True, help="imu_tk_driver built by scripts/peer-imu-tk")
+    ap.add_argument("--data", default=os.path.join(os.path.dirname(__file__), "../../../shared/data/imu_tk-xsens-multipos"))
+    ap.add_argument("--sim-seeds", default="101,102,103")
+    ap.add_argument("--peer", default="Kyle-ak/imu_tk")
+    ap.add_argument("--out", help="write the markdown table here (default: stdout)")
+    ap.add_argument("--no-loro", action="store_true", help="skip calbench's leave-one-rotation-out")
+    a = ap.parse_args()
+    for p in (a.calbench, a.driver):
+        if not os.access(p, os.X_OK):
+            sys.exit(f"peer_imu_tk.py: {p}: not an executable")
+    lines = []
+    rev = run(["git", "-C", os.path.dirname(os.path.abspath(__file__)), "rev-parse", "--short", "HEAD"]).stdout.strip()
+    lines.append("# Side by side: calbench `fit multipos` and IMU-TK on multi-position recordings (issue 37 item 3)\n")
+    lines.append("Generated by its command; not edited by hand and not rerun by `scripts/check-docs` (too long for CI);")
+    lines.append("docs/multipos.md says how to read it.\n")
+    lines.append(f"measured at {rev} ({datetime.date.today()}) · command: `bench/multipos/peer_imu_tk.py --calbench "
+                 f"build/calbench --driver build-peer/imu_tk/build/imu_tk_driver --sim-seeds {a.sim_seeds} --peer '{a.peer}'`\n")
+    lines.append(f"Peer: IMU-TK ({a.peer}), its calibration core built unchanged with Debian's Ceres 2.1 by "
+                 "`scripts/peer-imu-tk`, run by `tests/peer/imu_tk/driver.cpp` with the settings of its own "
+                 "example (initial static 50 s, accelerometer bias 32768 counts, gyro scale 1/6258 rad/s per count). "
+                 "calbench: `import imu-tk` with counts offset 32768, 0.0027 m/s² and 1/6258 rad/s per count, then "
+                 "`fit multipos` with defaults. The scorer (this script) applies either tool's coefficients to the "
+                 "same poses and rotations (calbench's segmentation of the whole recording).\n")
+    with tempfile.TemporaryDirectory() as work:
+        cases = [("real: IMU-TK's xsens recording", Case(a, os.path.join(work, "xs"), os.path.join(a.data, "xsens_acc.mat"),
+                                                         os.path.join(a.data, "xsens_gyro.mat"), G_XSENS, 50.0, "Xsens MTi"), None)]
+        for s in [int(x) for x in a.sim_seeds.split(",") if x]:
+            d = os.path.join(work, f"sim{s}")
+            g = simulate(s, d)
+            cases.append((f"simulated, seed {s}", Case(a, os.path.join(d, "w"), os.path.join(d, "acc.txt"),
+                                                       os.path.join(d, "gyro.txt"), g, 50.0, "Xsens MTi"),
+                          json.load(open(os.path.join(d, "truth.json")))))
+        rows = []
+        for title, case, truth in cases:
+            os.makedirs(case.work, exist_ok=True)
+            r = case.evaluate(loro=not a.no_loro)
+            r["title"], r["truth"] = title, truth
+            rows.append(r)
+            print(f"{title}: done", file=sys.stderr)
+    mm = lambda v: 1e3 * v
+    lines.append("## Held-out quality\n")
+    lines.append("| recording | tool | poses / rotations | gravity magnitude, in-sample RMS (mm/s²) | leave-one-pose-out RMS (mm/s²) "
+                 "| max (mm/s²) | gravity direction after a rotation, in-sample RMS (°) | held-out half: RMS (°) | median (°) "
+                 "| max (°) | leave-one-rotation-out RMS (°) |")
+    lines.append("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        for tool in ("calbench", "IMU-TK"):
+            x = r[tool]
+            lo = [v for v in x["lopo"] if v == v]
+            hv = [v for v in x["halves"] if v == v]
+            failed = len(x["lopo"]) - len(lo)
+            lines.append(f"| {r['title']} | {tool} | {r['poses']} / {r['rotations']} | {mm(rms(x['in_mag'])):.2f} | "
+                         f"{mm(rms(lo)):.2f}{f' ({failed} folds found no calibration)' if failed else ''} | "
+                         f"{mm(max(lo)) if lo else float('nan'):.2f} | {rms(x['in_rot']):.3f} | {rms(hv):.3f} | {median(hv):.3f} | "
+                         f"{max(hv) if hv else float('nan'):.3f} | "
+                         f"{rms(x['loro']) if 'loro' in x else float('nan'):.3f} |".replace("nan", "—"))
+    lines.append("")
+    lines.append("Left-out poses: every pose after IMU-TK's 50-s initial interval; halves split at the longest pose of the "
+                 "middle third (both halves keep it; IMU-TK's initial interval for the second half is that pose).\n")
+    sims = [r for r in rows if r["truth"]]
+    if sims:
+        lines.append("## Simulated recordings: against the truth\n")
+        lines.append("Largest error of the calibrated gravity magnitude over 200 directions, the unit's true errors "
+                     "applied (frame-invariant; IMU-TK and calbench fix the frame differently). calbench's σ: see "
+                     "`tests/unit/calibration/multipos_fit_test.cpp` (coefficients within 3σ on simulated units).\n")
+        lines.append("| recording | calbench (mm/s²) | IMU-TK (mm/s²) |")
+        lines.append("|---|---:|---:|")
+        for r in sims:
+            lines.append(f"| {r['title']} | {mm(truth_score(r['calbench']['coeffs'][0], r['calbench']['coeffs'][1], r['truth'], 9.80665)):.2f} | "
+                         f"{mm(truth_score(r['IMU-TK']['coeffs'][0], r['IMU-TK']['coeffs'][1], r['truth'], 9.80665)):.2f} |")
+        lines.append("")
+    text = "\n".join(lines) + "\n"
+    if a.out:
+        open(a.out, "w").write(text)
+    else:
+        sys.stdout.write(text)
+
+
+if __name__ == "__main__":
+    main()
