@@ -20,7 +20,9 @@
 
 namespace calbench {
 
-const char* kind_name(RecordingKind k) { return k == RecordingKind::bench ? "bench" : "drive"; }
+const char* kind_name(RecordingKind k) {
+  return k == RecordingKind::bench ? "bench" : k == RecordingKind::drive ? "drive" : "multipos";
+}
 
 RecordingMeta read_meta(const fs::path& dir) {
   const fs::path file = dir / "meta.json";
@@ -35,7 +37,8 @@ RecordingMeta read_meta(const fs::path& dir) {
   const std::string kind = jstr(jreq(j, "kind", f, ""), f, "kind");
   if (kind == "bench") m.kind = RecordingKind::bench;
   else if (kind == "drive") m.kind = RecordingKind::drive;
-  else throw InputError(f, 0, "kind", "must be \"bench\" or \"drive\", got '" + kind + "'");
+  else if (kind == "multipos") m.kind = RecordingKind::multipos;
+  else throw InputError(f, 0, "kind", "must be \"bench\", \"drive\" or \"multipos\", got '" + kind + "'");
   const auto& dev = jreq(j, "device", f, "");
   m.device.model = jstr(jreq(dev, "model", f, "device"), f, "device.model");
   const auto& serial = jreq(dev, "serial", f, "device");
@@ -49,7 +52,8 @@ RecordingMeta read_meta(const fs::path& dir) {
     const auto& s = jreq(j, "site", f, "");
     Site site;
     site.lat_deg = jnum(jreq(s, "lat_deg", f, "site"), f, "site.lat_deg");
-    site.lon_deg = jnum(jreq(s, "lon_deg", f, "site"), f, "site.lon_deg");
+    if (m.kind == RecordingKind::multipos && !s.contains("lon_deg")) m.site_has_lon = false;  // only g and Ω·sin φ matter
+    else site.lon_deg = jnum(jreq(s, "lon_deg", f, "site"), f, "site.lon_deg");
     site.h_m = jnum(jreq(s, "h_m", f, "site"), f, "site.h_m");
     if (std::abs(site.lat_deg) > 90) throw InputError(f, 0, "site.lat_deg", "latitude outside ±90°");
     if (std::abs(site.lon_deg) > 360) throw InputError(f, 0, "site.lon_deg", "longitude outside ±360°");
@@ -88,7 +92,10 @@ void write_meta(const fs::path& dir, const RecordingMeta& m) {
   j["format"] = "calbench-recording/1";
   j["kind"] = kind_name(m.kind);
   j["device"] = {{"model", m.device.model}, {"serial", m.device.serial}};
-  if (m.site) j["site"] = {{"lat_deg", m.site->lat_deg}, {"lon_deg", m.site->lon_deg}, {"h_m", m.site->h_m}};
+  if (m.site) {
+    j["site"] = {{"lat_deg", m.site->lat_deg}, {"h_m", m.site->h_m}};
+    if (m.site_has_lon) j["site"]["lon_deg"] = m.site->lon_deg;
+  }
   j["imu_rate_hz"] = m.imu_rate_hz;
   if (m.mounting) j["mounting"] = {{"rpy_deg", to_json(m.mounting->rpy_deg)}, {"lever_arm_m", to_json(m.mounting->lever_arm_m)}};
   j["notes"] = m.notes;
@@ -356,7 +363,9 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingMeta meta, ImuFor
     return std::make_unique<CsvWriter>((dir_ / (std::string(name) + ".csv")).string(), cols, comment);
   };
   imu_ = table("imu", ic, "MEMS IMU output, IMU axes");
-  if (meta_.kind == RecordingKind::bench) {
+  if (meta_.kind == RecordingKind::multipos) {
+    // no reference table: the poses are found in the data
+  } else if (meta_.kind == RecordingKind::bench) {
     ref_ = table("reference",
                  {"t_s", "wx_rad_s", "wy_rad_s", "wz_rad_s", "fx_m_s2", "fy_m_s2", "fz_m_s2", "step", "angle_deg"},
                  "what the table says the IMU experienced (nominal bench model)");
@@ -395,12 +404,14 @@ void RecordingWriter::imu(const ImuRecord& r) {
 }
 
 void RecordingWriter::bench_ref(const BenchRefRow& r) {
+  if (meta_.kind != RecordingKind::bench) throw std::logic_error("RecordingWriter: not a bench recording");
   const double v[] = {r.t, r.w(0), r.w(1), r.w(2), r.f(0), r.f(1), r.f(2), static_cast<double>(r.step), r.angle_deg};
   ref_->row(v, std::size(v));
   tally_[1].add(v, std::size(v));
 }
 
 void RecordingWriter::drive_ref(const DriveRefRow& r) {
+  if (meta_.kind != RecordingKind::drive) throw std::logic_error("RecordingWriter: not a drive recording");
   const double v[] = {r.t, r.lat_deg, r.lon_deg, r.h_m, r.v_ned(0), r.v_ned(1), r.v_ned(2), r.rpy_deg(0), r.rpy_deg(1),
                       r.rpy_deg(2), r.sigma_pos_m, r.sigma_vel_m_s, r.sigma_att_deg};
   ref_->row(v, std::size(v));
@@ -417,13 +428,13 @@ void RecordingWriter::gnss(const GnssRow& r) {
 
 void RecordingWriter::flush() {
   imu_->flush();
-  ref_->flush();
+  if (ref_) ref_->flush();
   if (gnss_) gnss_->flush();
 }
 
 void RecordingWriter::finish() {
   imu_->close();
-  ref_->close();
+  if (ref_) ref_->close();
   if (gnss_) gnss_->close();
   verify_written_recording(dir_, tally_);  // read back as written, or not complete
   meta_.complete = true;

@@ -18,7 +18,8 @@ namespace calbench {
 
 namespace fs = std::filesystem;
 
-enum class RecordingKind { bench, drive };
+// multipos: a unit turned between static poses, no reference (spec, kind "multipos").
+enum class RecordingKind { bench, drive, multipos };
 
 struct Mounting {
   Vec3 rpy_deg = Vec3::Zero();      // MEMS IMU frame -> reference body frame
@@ -28,7 +29,8 @@ struct Mounting {
 struct RecordingMeta {
   RecordingKind kind = RecordingKind::bench;
   DeviceId device;
-  std::optional<Site> site;          // required for bench
+  std::optional<Site> site;          // required for bench; multipos: lat/h only (lon optional)
+  bool site_has_lon = true;          // false for a multipos site given without lon_deg
   double imu_rate_hz = 0;
   std::optional<Mounting> mounting;  // required for drive
   std::string notes;
