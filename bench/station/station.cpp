@@ -489,7 +489,7 @@ Result Station::run() {
                     "; no coefficients written or stored";
       for (const auto& u : units_)
         if (u->failed) res.message += "; " + u->label() + " failed: " + u->why;
-      res.summary.erase("coefficients");
+      if (res.summary.is_object()) res.summary.erase("coefficients");
       res.summary["fit"] = "not available in this build";
     }
   } catch (const std::exception& e) {
