@@ -15,6 +15,28 @@
 #include <vector>
 
 namespace calbench::devices {
+
+namespace {
+// Does this request write MODE_OF_OPERATION = rate on an axis? (Function codes 0x06 write single
+// register, 0x10 write multiple, 0x17 write/read multiple; big-endian on the wire.)
+bool selects_rate_mode(const std::uint8_t* q, int h, int len) {
+  auto u16 = [&](int at) { return at + 1 < len ? static_cast<int>(q[at] << 8 | q[at + 1]) : -1; };
+  int addr = -1, qty = 0, values = 0;
+  switch (q[h]) {
+    case 0x06: addr = u16(h + 1), qty = 1, values = h + 3; break;
+    case 0x10: addr = u16(h + 1), qty = u16(h + 3), values = h + 6; break;
+    case 0x17: addr = u16(h + 5), qty = u16(h + 7), values = h + 10; break;
+    default: return false;
+  }
+  const int rate = static_cast<std::uint16_t>(static_cast<std::int16_t>(table::Mode::rate));
+  for (int a = 0; a < table::kAxes; ++a) {
+    const int k = table::address(a, table::reg("MODE_OF_OPERATION")) - addr;
+    if (addr >= 0 && k >= 0 && k < qty && u16(values + 2 * k) == rate) return true;
+  }
+  return false;
+}
+}  // namespace
+
 namespace {
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr double kTwoPi = 6.283185307179586;
@@ -137,7 +159,11 @@ void TableEmulator::run() {
         listen_fd_ = -1;
         return;
       }
-      if (rc > 0) {
+      if (rc > 0 && cfg_.position_only && selects_rate_mode(q.data(), modbus_get_header_length(ctx), rc)) {
+        modbus_reply_exception(ctx, q.data(), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        ++requests_;
+        ++it;
+      } else if (rc > 0) {
         std::lock_guard lk(mu_);
         advance_locked(clock_->now());
         publish_locked(t_);

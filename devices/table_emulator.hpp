@@ -39,6 +39,10 @@ struct TableEmulatorConfig {
   // dies at this emulated time (≥ 0): the first request from then on goes unanswered, every
   // connection is closed and no new one is accepted.
   double kill_at_s = -1;
+  // Capability: a position-only fixture (a positioner or indexing head without rate mode). A write
+  // that selects rate mode (MODE_OF_OPERATION = rate, either axis) is refused with the Modbus
+  // exception ILLEGAL DATA VALUE and changes nothing (`calbench emulate table --position-only`).
+  bool position_only = false;
 };
 
 class TableEmulator {

@@ -27,6 +27,7 @@ struct EmulateArgs {
   std::string order = "abcd";
   double speed = 1.0;
   std::string port_file;
+  bool position_only = false;
   bool json = false;
 };
 
@@ -51,15 +52,17 @@ void run_table(const EmulateArgs& a) {
     throw InputError("--order", 0, "order", e.what());
   }
   cfg.watchdog_s = a.watchdog_s;
+  cfg.position_only = a.position_only;
   devices::TableEmulator emu(cfg, std::make_shared<devices::WallClock>(a.speed));
   emu.start();
   if (!a.port_file.empty()) write_text_atomic(a.port_file, std::to_string(emu.port()) + "\n");
   if (a.json) {
-    nlohmann::json j{{"uri", emu.uri()}, {"port", emu.port()}, {"watchdog_s", cfg.watchdog_s}, {"speed", a.speed}};
+    nlohmann::json j{{"uri", emu.uri()}, {"port", emu.port()}, {"watchdog_s", cfg.watchdog_s}, {"speed", a.speed},
+                     {"position_only", cfg.position_only}};
     print_json(j.dump());
   } else {
     std::cout << "table emulator listening on " << emu.uri() << " (watchdog " << cfg.watchdog_s
-              << " s, speed " << a.speed << "x); Ctrl-C to stop" << std::endl;
+              << " s, speed " << a.speed << "x" << (cfg.position_only ? ", position only: rate mode refused" : "") << "); Ctrl-C to stop" << std::endl;
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -82,6 +85,9 @@ const bool registered = add_command(25, [](CLI::App& app) {
       ->capture_default_str();
   t->add_option("--speed", args->speed, "emulated clock speed relative to real time")->capture_default_str()->check(finite_positive());
   t->add_option("--port-file", args->port_file, "write the bound port number to this file");
+  t->add_flag("--position-only", args->position_only,
+              "a position-only fixture (positioner, indexing head): a write selecting rate mode is refused with the "
+              "Modbus exception ILLEGAL DATA VALUE");
   t->add_flag("--json", args->json, "print the listening URI as JSON");
   t->callback([args] { run_table(*args); });
 });

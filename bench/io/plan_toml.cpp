@@ -26,15 +26,20 @@ struct Ctx : TomlReader {
 
 }  // namespace
 
-BenchPlan load_plan(const std::filesystem::path& file) {
+StationPlan load_plan(const std::filesystem::path& file) {
   using namespace units;
   Ctx c{{file.string()}};
   const toml::table root = parse_toml_file(file);
   c.check_keys(root, "", {"plan", "site", "table", "step", "temperature"});
-  BenchPlan p;
+  StationPlan p;
   int repeat = 1;
   if (const auto* t = root["plan"].as_table()) {
-    c.check_keys(*t, "plan.", {"name", "description", "repeat", "fixture"});
+    c.check_keys(*t, "plan.", {"name", "description", "repeat", "fixture", "kind"});
+    const std::string pk = c.str(*t, "plan.", "kind", std::string("rates"));
+    if (pk != "rates" && pk != "positions")
+      c.fail(t->get("kind"), "plan.kind",
+             "must be \"rates\" (a rate table) or \"positions\" (a position-only table: static steps only)");
+    p.position_only = pk == "positions";
     p.name = c.str(*t, "plan.", "name", std::string(file.stem()));
     p.description = c.str(*t, "plan.", "description", std::string());
     // A multi-unit fixture (bench/fixtures/*.toml), relative to the plan's folder; read by the station.
@@ -84,6 +89,10 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     st.line = static_cast<int>(s->source().begin.line);
     const std::string kind = c.str(*s, pre, "kind", std::nullopt);
     st.dwell_s = c.num(*s, pre, "dwell_s", std::nullopt, 0.1, 86400);
+    if (kind == "rate" && p.position_only)
+      c.fail(s->get("kind"), pre + "kind",
+             "a rate step in a positions plan ([plan] kind = \"positions\"): a position-only table has no rate "
+             "mode; give static steps only");
     if (kind == "rate") {
       st.kind = StepKind::rate;
       if (!s->get("axis")) c.fail(*s, pre + "axis", "missing key (IMU axis of the rotation: x, y or z)");
@@ -125,6 +134,11 @@ BenchPlan load_plan(const std::filesystem::path& file) {
     } else {
       c.fail(s->get("kind"), pre + "kind", "must be \"static\" or \"rate\"");
     }
+    // A positions plan is one continuous recording whose fit integrates the gyros between poses: a
+    // re-mount by hand between steps is a rotation nobody records.
+    if (p.position_only && i > 0 && st.mount != mount)
+      c.fail(s->get("mount"), pre + "mount",
+             "a positions plan keeps one mount (a re-mount between poses is a rotation the recording misses)");
     st.label = c.str(*s, pre, "label", kind + " " + std::to_string(i + 1));
     mount = st.mount;
     p.steps.push_back(st);

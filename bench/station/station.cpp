@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <optional>
 #include <ostream>
 #include <vector>
 
@@ -49,6 +50,18 @@ std::string iso_utc(std::chrono::system_clock::time_point tp) {
   return b;
 }
 
+// The fit of a positions plan's recording (kind "multipos"): the one place the station calls the
+// multi-position estimator. After the merge of calibration/multipos/ the integrator points this at
+// fit_multipos (bench/multipos/fit_multipos_run.hpp: read_multipos_recording, then fit_multipos) and
+// returns its coefficient set with the fit's report in `report`. Until then there is no fit in this
+// build: nothing is returned, and the station stops after recording (no stub coefficients, no set
+// stored).
+std::optional<CoefficientSet> fit_positions_recording(const fs::path& rec_dir, nlohmann::json& report) {
+  (void)rec_dir;
+  report = "fit multipos not available in this build";
+  return std::nullopt;
+}
+
 // The station: setup (fixture, units, table, checks before anything moves), the plan through its step
 // runner, the fit and store of each unit, and every path out — which stops the table.
 class Station {
@@ -63,7 +76,7 @@ class Station {
   void setup();
   void make_units();
   void connect_unit(Unit& u);
-  void finish_unit(Unit& u);
+  bool finish_unit(Unit& u);  // false: recorded, not fitted (a positions plan without the multipos fit)
   void record_aborted(Unit& u, const std::string& outcome, const std::string& why, Result& res);
   RunFacts facts() const {
     return {fixture_, fixture_mode_, units_, o_.out_dir, plan_.steps.size(), run_id_,
@@ -80,7 +93,7 @@ class Station {
   const Options& o_;
   std::ostream& log_;
   const std::atomic<bool>& stop_;
-  BenchPlan plan_;
+  StationPlan plan_;
   Fixture fixture_;
   bool fixture_mode_ = false;             // a fixture (file or --units): one folder per slot
   std::string run_id_ = db::new_uid();    // ties the units of one table cycle
@@ -209,7 +222,8 @@ void Station::setup() {
     TableEmulatorConfig tc;
     tc.watchdog_s = 0.5;
     tc.max_rate = std::max(tc.max_rate, plan_.table.max_rate * 1.2);
-    tc.kill_at_s = o_.inject.table_kill_at_s;  // injected: the controller dies at this emulated time
+    tc.kill_at_s = o_.inject.table_kill_at_s;
+    tc.position_only = plan_.position_only;  // a positions plan: the emulated table has no rate mode  // injected: the controller dies at this emulated time
     table_emu_ = std::make_unique<TableEmulator>(tc, clock_);
     table_emu_->start();
     table_uri = table_emu_->uri();
@@ -260,8 +274,10 @@ void Station::setup() {
   for (auto& u : units_) connect_unit(*u);
   if (live_units(units_) == 0) throw Aborted("no unit passed identification and self-test");
   for (int a = 0; a < 2; ++a) {
-    table_->set_limits(a, plan_.table.max_accel, a == kInner ? std::max(plan_.table.max_rate, plan_.table.slew_rate)
-                                                             : plan_.table.slew_rate);
+    // A positions plan moves both axes at the slew rate (the rotations the gyros must follow).
+    table_->set_limits(a, plan_.table.max_accel,
+                       a == kInner && !plan_.position_only ? std::max(plan_.table.max_rate, plan_.table.slew_rate)
+                                                           : plan_.table.slew_rate);
     table_->set_mode(a, table::Mode::position);
     table_->command_position(a, table_->status(a).position);
     table_->enable(a);
@@ -346,15 +362,25 @@ db::BenchRunInput Station::bench_run_record(const Unit& u, const db::Store& stor
 }
 
 // After the table cycle: the unit's recording is closed, fitted, its coefficients written and stored.
-void Station::finish_unit(Unit& u) {
+bool Station::finish_unit(Unit& u) {
   nlohmann::json& js = u.summary;
   u.writer->finish();
   u.writer.reset();
-  BenchFitOptions fo;
-  fo.table = plan_.table;
-  const BenchRecordingData data = load_bench_blocks(u.rec_dir, 1.0);
-  const BenchFitResult fr = fit_bench(data.blocks, fo);
-  const CoefficientSet cs = bench_result_to_coefficients(fr, fo, data.meta, u.rec_dir.string());
+  CoefficientSet cs;
+  nlohmann::json fit_report;
+  if (plan_.position_only) {
+    std::optional<CoefficientSet> fitted = fit_positions_recording(u.rec_dir, fit_report);
+    js["fit"] = fit_report;
+    if (!fitted) return false;
+    cs = std::move(*fitted);
+  } else {
+    BenchFitOptions fo;
+    fo.table = plan_.table;
+    const BenchRecordingData data = load_bench_blocks(u.rec_dir, 1.0);
+    const BenchFitResult fr = fit_bench(data.blocks, fo);
+    cs = bench_result_to_coefficients(fr, fo, data.meta, u.rec_dir.string());
+    fit_report = bench_result_json(fr, cs);
+  }
   write_coefficients(u.out / "COEFFS.json", cs);
   if (!o_.db.empty()) {  // the coefficient store: bench run + draft set, one transaction
     const std::unique_ptr<db::Store> store = open_store();
@@ -379,7 +405,8 @@ void Station::finish_unit(Unit& u) {
     write_coefficients(u.out / "EMULATED_TRUTH.json", t);
   }
   js["coefficients"] = (u.out / "COEFFS.json").string();
-  js["fit"] = bench_result_json(fr, cs);
+  js["fit"] = fit_report;
+  return true;
 }
 
 // A run that did not give the unit coefficients is part of its history: recorded (with why) once the
@@ -413,7 +440,8 @@ Result Station::run() {
       if (u.failed) continue;
       fs::create_directories(u.out);
       RecordingMeta meta;
-      meta.kind = RecordingKind::bench;
+      // A positions plan: no reference (the table's angles are nominal only); spec kind "multipos".
+      meta.kind = plan_.position_only ? RecordingKind::multipos : RecordingKind::bench;
       meta.device = DeviceId{"ADIS16488A", u.imu->identity().serial_string()};
       meta.site = plan_.site;
       meta.imu_rate_hz = u.imu->identity().output_rate_hz;
@@ -436,13 +464,13 @@ Result Station::run() {
     table_done = true;
     runner_->stop_readers();
     // Fit (the spine's bench fit) and store, unit by unit.
-    std::size_t done = 0;
+    std::size_t done = 0, recorded_only = 0;
     for (auto& up : units_) {
       Unit& u = *up;
       if (u.failed) continue;
       try {
-        finish_unit(u);
-        ++done;
+        if (finish_unit(u)) ++done;
+        else ++recorded_only;
       } catch (const std::exception& e) {
         if (!fixture_mode_) throw;
         runner_->fail_unit(u, std::string("fit or store: ") + e.what());
@@ -453,7 +481,17 @@ Result Station::run() {
         runner_->keep_partial(*up);
         record_aborted(*up, "fail", up->why, res);
       }
-    complete_run(res, facts(), done);
+    complete_run(res, facts(), done + recorded_only);
+    if (recorded_only > 0) {  // a positions plan in a build without the multipos fit: said, not pretended
+      res.message = "recorded; fit multipos not available in this build: " + std::to_string(plan_.steps.size()) +
+                    " steps, " + std::to_string(recorded_only) + " multipos recording" + (recorded_only > 1 ? "s" : "") +
+                    " in " + (fixture_mode_ ? (o_.out_dir / "SLOT" / "recording").string() : units_.front()->rec_dir.string()) +
+                    "; no coefficients written or stored";
+      for (const auto& u : units_)
+        if (u->failed) res.message += "; " + u->label() + " failed: " + u->why;
+      if (res.summary.is_object()) res.summary.erase("coefficients");
+      res.summary["fit"] = "not available in this build";
+    }
   } catch (const std::exception& e) {
     // Safety first: stop and disable the table (best effort, bounded time), keep the partial recordings.
     bool stopped = table_done;

@@ -15,7 +15,7 @@ using namespace devices;
 constexpr int kOuter = 0, kInner = 1;
 }  // namespace
 
-StepRunner::StepRunner(const Options& o, std::ostream& log, const std::atomic<bool>& stop, const BenchPlan& plan,
+StepRunner::StepRunner(const Options& o, std::ostream& log, const std::atomic<bool>& stop, const StationPlan& plan,
                        const SiteEarth& earth, Units& units, bool fixture_mode, std::shared_ptr<VirtualClock> clock,
                        std::chrono::steady_clock::time_point wall0)
     : o_(o), log_(log), stop_(stop), plan_(plan), earth_(earth), units_(units), fixture_mode_(fixture_mode),
@@ -56,20 +56,27 @@ void StepRunner::run_step(const PlanStep& s) {
     if (u->live()) pending.push_back(u.get());
   int attempt = 0;
   for (;; ++attempt) {
-    command_step(s);
-    wait_settled(s, 600);
-    wait_for(plan_.table.settle_s);
-    record_step(static_cast<int>(step_index_), s, pending);
+    const int k = static_cast<int>(step_index_);
+    if (plan_.position_only) {
+      // A positions plan: the move to the pose, its settling and the dwell in one piece (the multipos
+      // fit integrates the gyros across each rotation between two poses).
+      begin_record(k, s, pending, std::numeric_limits<double>::infinity());
+      command_step(s);
+      wait_settled(s, 600);
+      wait_for(plan_.table.settle_s + s.dwell_s);
+      end_record(pending);
+    } else {
+      command_step(s);
+      wait_settled(s, 600);
+      wait_for(plan_.table.settle_s);
+      record_step(k, s, pending);
+    }
     std::vector<Unit*> again;
     for (Unit* u : pending) {
       if (u->failed) continue;
       const std::string why = step_check(*u);
       if (why.empty()) {
-        for (std::size_t i = 0; i < u->imu_rows.size(); ++i) {
-          u->writer->imu(u->imu_rows[i]);
-          u->writer->bench_ref(u->ref_rows[i]);
-        }
-        u->writer->flush();
+        write_rows(*u, false);
         u->steps.push_back({{"step", step_index_}, {"label", s.label}, {"samples", u->imu_rows.size()}, {"repeats", attempt}});
         u->imu_rows.clear();
         u->ref_rows.clear();
@@ -303,6 +310,17 @@ void StepRunner::progress(const std::string& what, bool line) {
 
 // Records one step on the given units at once: each takes the step's dwell from its own first sample.
 void StepRunner::record_step(int k, const PlanStep& s, const std::vector<Unit*>& units) {
+  begin_record(k, s, units, s.dwell_s);
+  auto busy = [&] {
+    for (const Unit* u : units)
+      if (u->recording) return true;
+    return false;
+  };
+  while (busy()) pump();
+  end_record(units);
+}
+
+void StepRunner::begin_record(int k, const PlanStep& s, const std::vector<Unit*>& units, double dwell_s) {
   poll(true);
   // Reference: the plan's angles for static steps (the table's position accuracy is in the plan), the
   // commanded rate and the encoder's inner angle at the start for rate steps.
@@ -310,7 +328,7 @@ void StepRunner::record_step(int k, const PlanStep& s, const std::vector<Unit*>&
   rec_inner0_ = s.kind == StepKind::rate ? st_[kInner].position : s.inner;
   rec_rate_ = s.kind == StepKind::rate ? s.rate : 0.0;
   rec_t_poll_ = now();
-  rec_dwell_ = s.dwell_s;
+  rec_dwell_ = dwell_s;
   rec_step_ = k;
   rec_mount_ = s.mount;
   for (Unit* u : units) {
@@ -321,14 +339,12 @@ void StepRunner::record_step(int k, const PlanStep& s, const std::vector<Unit*>&
     u->t0 = -1;
     u->recording = !u->failed;
   }
-  auto busy = [&] {
-    for (const Unit* u : units)
-      if (u->recording) return true;
-    return false;
-  };
-  while (busy()) pump();
+}
+
+void StepRunner::end_record(const std::vector<Unit*>& units) {
   rec_step_ = -1;
   for (Unit* u : units) {
+    u->recording = false;
     u->samples += u->imu_rows.size();
     u->lost += u->step_lost;
     u->error_samples += u->step_errors;
@@ -345,18 +361,25 @@ std::string StepRunner::step_check(const Unit& u) const {
 // Nothing captured is lost: the step in progress did not pass its check (or was cut short), so its
 // samples are kept with step −1 (outside any plan step: a fit will not use them); meta.json stays
 // "incomplete".
+// The unit's rows of a step into its recording (a positions plan's multipos recording has no reference
+// table); `partial`: as step −1.
+void StepRunner::write_rows(Unit& u, bool partial) {
+  for (std::size_t i = 0; i < u.imu_rows.size() && i < u.ref_rows.size(); ++i) {
+    u.writer->imu(u.imu_rows[i]);
+    if (plan_.position_only) continue;
+    BenchRefRow r = u.ref_rows[i];
+    if (partial) r.step = -1;
+    u.writer->bench_ref(r);
+  }
+  u.imu_rows.clear();
+  u.ref_rows.clear();
+  u.writer->flush();
+}
+
 void StepRunner::keep_partial(Unit& u) {
   if (!u.writer) return;
   try {
-    for (std::size_t i = 0; i < u.imu_rows.size() && i < u.ref_rows.size(); ++i) {
-      u.writer->imu(u.imu_rows[i]);
-      BenchRefRow r = u.ref_rows[i];
-      r.step = -1;
-      u.writer->bench_ref(r);
-    }
-    u.imu_rows.clear();
-    u.ref_rows.clear();
-    u.writer->flush();
+    write_rows(u, true);
   } catch (const std::exception& w) {
     log_ << "could not keep the partial step" << (fixture_mode_ ? " of " + u.label() : "") << ": " << w.what() << "\n";
   }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/io/plan_toml.hpp"
 #include "bench/station/station.hpp"
 #include "bench/station/unit.hpp"
 #include "calibration/bench_plan.hpp"
@@ -25,7 +26,7 @@ class StepRunner {
  public:
   // `clock`: emulated time (the table's; several units: the slowest unit's), else null (real time:
   // a reader thread per unit). Every reference must outlive the runner.
-  StepRunner(const Options& o, std::ostream& log, const std::atomic<bool>& stop, const BenchPlan& plan,
+  StepRunner(const Options& o, std::ostream& log, const std::atomic<bool>& stop, const StationPlan& plan,
              const SiteEarth& earth, Units& units, bool fixture_mode, std::shared_ptr<devices::VirtualClock> clock,
              std::chrono::steady_clock::time_point wall0);
 
@@ -52,7 +53,10 @@ class StepRunner {
   void take(Unit& u, const devices::ImuSample& x);  // one sample of a unit: recorded when its step records
   void wait_settled(const PlanStep& s, double timeout_s);
   void wait_for(double seconds);          // keep streaming (and polling) for this long
-  void record_step(int k, const PlanStep& s, const std::vector<Unit*>& units);
+  void record_step(int k, const PlanStep& s, const std::vector<Unit*>& units);  // begin, dwell, end
+  void begin_record(int k, const PlanStep& s, const std::vector<Unit*>& units, double dwell_s);
+  void end_record(const std::vector<Unit*>& units);
+  void write_rows(Unit& u, bool partial);  // the step's rows into the unit's recording
   std::string step_check(const Unit& u) const;  // empty: the step's data passed
   void command_step(const PlanStep& s);
   void progress(const std::string& what, bool line = false);
@@ -64,7 +68,7 @@ class StepRunner {
   const Options& o_;
   std::ostream& log_;
   const std::atomic<bool>& stop_;
-  const BenchPlan& plan_;
+  const StationPlan& plan_;
   const SiteEarth& earth_;
   Units& units_;
   const bool fixture_mode_;               // a fixture (file or --units): units named by slot

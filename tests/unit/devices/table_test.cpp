@@ -219,6 +219,36 @@ TEST_F(Table, ExceptionRepliesAreNotRetried) {
   EXPECT_EQ(cli->retries_used(), r0);
 }
 
+// A position-only fixture (capability position_only): selecting rate mode is refused with an
+// exception reply that changes nothing; position moves work as on a rate table.
+TEST_F(Table, PositionOnlyTableRefusesRateModeAndStillPositions) {
+  cfg.position_only = true;
+  start();
+  cli->start_heartbeat(0.01);
+  cli->set_limits(1, 100 * kDeg, 30 * kDeg);
+  cli->set_mode(1, table::Mode::position);
+  cli->command_position(1, 0.0);
+  cli->enable(1);
+  const auto r0 = cli->retries_used();
+  for (int axis : {0, 1}) {
+    try {
+      cli->set_mode(axis, table::Mode::rate);
+      FAIL() << "rate mode accepted on axis " << axis;
+    } catch (const TableError& e) {
+      EXPECT_NE(std::string(e.what()).find("Illegal data value"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(cli->retries_used(), r0);  // an exception reply: not retried
+  cli->command_rate(1, 50 * kDeg);     // a rate set-point alone selects nothing
+  cli->command_position(1, 20 * kDeg);
+  AxisStatus s;
+  ASSERT_TRUE(wait_for(1, [](const AxisStatus& x) { return x.settled() && std::abs(x.position - 20 * kDeg) < 1e-3 * kDeg; },
+                       3.0, &s));
+  EXPECT_EQ(s.mode, table::Mode::position);
+  EXPECT_NEAR(emu->axis_state(1, emu->clock().now()).rate, 0.0, 1e-9);
+  cli->stop_heartbeat();
+}
+
 TEST_F(Table, WordOrderIsConfigurable) {
   TearDown();
   start(table::WordOrder::cdab);
