@@ -124,6 +124,7 @@ MultiposRecording read_multipos_recording(const std::string& dir, const std::str
   in.rate_hz = meta.imu_rate_hz;
   in.gyro_density = cls.cls.noise.gyro.white_density;
   in.accel_density = cls.cls.noise.accel.white_density;
+  in.gyro_bias_stability = cls.cls.noise.gyro.drift_sigma;
   if (meta.extra.contains("gravity_m_s2")) {
     const auto& g = meta.extra["gravity_m_s2"];
     if (!g.is_number() || !(g.get<double>() >= 9.7 && g.get<double>() <= 9.9))
@@ -156,25 +157,31 @@ MultiposRecording read_multipos_recording(const std::string& dir, const std::str
   return r;
 }
 
-void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
-  const MultiposRecording rec = read_multipos_recording(a.dir, a.device_class);
+MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
+  MultiposSetResult r{read_multipos_recording(a.dir, a.device_class), {}, {}};
   multipos::MultiposOptions opt;
   opt.earth_rate = a.earth_rate;
   opt.exclude_poses = a.exclude_poses;
   opt.exclude_rotations = a.exclude_rotations;
-  multipos::MultiposFit fit;
   try {
-    fit = multipos::fit_multipos(rec.input, opt);
+    r.fit = multipos::fit_multipos(r.rec.input, opt);
   } catch (const multipos::MultiposRefusal& e) {
     throw InputError((fs::path(a.dir) / "imu.csv").string(), 0, "", std::string("cannot calibrate from this recording: ") + e.what());
   } catch (const std::invalid_argument& e) {
     throw InputError(a.dir, 0, "", e.what());
   }
-  CoefficientSet c;
-  c.device = rec.device;
-  c.errors = fit.coeffs;
-  c.extra["source"] = {{"kind", "multipos"}, {"recording", a.dir}};
-  c.extra["multipos"] = fit_json(rec, fit);
+  r.set.device = r.rec.device;
+  r.set.errors = r.fit.coeffs;
+  r.set.extra["source"] = {{"kind", "multipos"}, {"recording", a.dir}};
+  r.set.extra["multipos"] = fit_json(r.rec, r.fit);
+  return r;
+}
+
+void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
+  const MultiposSetResult r = fit_multipos_set(a);
+  const MultiposRecording& rec = r.rec;
+  const multipos::MultiposFit& fit = r.fit;
+  const CoefficientSet& c = r.set;
   if (!a.out.empty()) {
     write_coefficients(a.out, c);
     const CoefficientSet back = read_coefficients(a.out);  // complete only once it reads back as written

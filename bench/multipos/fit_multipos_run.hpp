@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "calibration/multipos/multipos_fit.hpp"
+#include "common/coefficients_codec.hpp"
 
 namespace calbench {
 
@@ -28,6 +29,16 @@ struct MultiposRecording {
   DeviceId device;
 };
 MultiposRecording read_multipos_recording(const std::string& dir, const std::string& device_class_option);
+
+// The fit of a multipos recording as a coefficient set (the spec's coefficients.json with a
+// "multipos" key): what `fit multipos` writes and the station stores for a positions plan.
+// InputError when the recording does not determine the coefficients (which poses to add).
+struct MultiposSetResult {
+  MultiposRecording rec;
+  multipos::MultiposFit fit;
+  CoefficientSet set;
+};
+MultiposSetResult fit_multipos_set(const FitMultiposArgs& a);
 
 // Runs the fit and prints text (or --json); writes --out and --plot atomically. A recording that
 // does not determine the coefficients is an InputError saying which poses or rotations to add.

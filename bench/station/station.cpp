@@ -1,4 +1,5 @@
 #include "bench/station/station.hpp"
+#include "bench/multipos/fit_multipos_run.hpp"
 #include "common/noise_spec.hpp"
 
 #include <chrono>
@@ -51,15 +52,22 @@ std::string iso_utc(std::chrono::system_clock::time_point tp) {
 }
 
 // The fit of a positions plan's recording (kind "multipos"): the one place the station calls the
-// multi-position estimator. After the merge of calibration/multipos/ the integrator points this at
-// fit_multipos (bench/multipos/fit_multipos_run.hpp: read_multipos_recording, then fit_multipos) and
-// returns its coefficient set with the fit's report in `report`. Until then there is no fit in this
-// build: nothing is returned, and the station stops after recording (no stub coefficients, no set
-// stored).
-std::optional<CoefficientSet> fit_positions_recording(const fs::path& rec_dir, nlohmann::json& report) {
-  (void)rec_dir;
-  report = "fit multipos not available in this build";
-  return std::nullopt;
+// multi-position estimator (fit_multipos_set, bench/multipos/fit_multipos_run.hpp; docs/multipos.md).
+// A recording whose poses do not determine the coefficients is an InputError naming what to add.
+CoefficientSet fit_positions_recording(const fs::path& rec_dir, nlohmann::json& report) {
+  FitMultiposArgs a;
+  a.dir = rec_dir.string();
+  MultiposSetResult r = fit_multipos_set(a);
+  const auto& m = r.set.extra["multipos"];
+  report = {{"method", "multipos"},
+            {"poses", m["statics"].size()},
+            {"rotations", m["rotations"].size()},
+            {"g_spread_raw_m_s2", m["g_spread_raw_m_s2"]},
+            {"g_spread_m_s2", m["g_spread_m_s2"]},
+            {"rotation_rms_deg", m["rotation_rms_deg"]},
+            {"accel_chi2_dof", m["accel_chi2_dof"]},
+            {"gyro_chi2_dof", m["gyro_chi2_dof"]}};
+  return std::move(r.set);
 }
 
 // The station: setup (fixture, units, table, checks before anything moves), the plan through its step
@@ -76,7 +84,7 @@ class Station {
   void setup();
   void make_units();
   void connect_unit(Unit& u);
-  bool finish_unit(Unit& u);  // false: recorded, not fitted (a positions plan without the multipos fit)
+  void finish_unit(Unit& u);
   void record_aborted(Unit& u, const std::string& outcome, const std::string& why, Result& res);
   RunFacts facts() const {
     return {fixture_, fixture_mode_, units_, o_.out_dir, plan_.steps.size(), run_id_,
@@ -362,17 +370,15 @@ db::BenchRunInput Station::bench_run_record(const Unit& u, const db::Store& stor
 }
 
 // After the table cycle: the unit's recording is closed, fitted, its coefficients written and stored.
-bool Station::finish_unit(Unit& u) {
+void Station::finish_unit(Unit& u) {
   nlohmann::json& js = u.summary;
   u.writer->finish();
   u.writer.reset();
   CoefficientSet cs;
   nlohmann::json fit_report;
   if (plan_.position_only) {
-    std::optional<CoefficientSet> fitted = fit_positions_recording(u.rec_dir, fit_report);
+    cs = fit_positions_recording(u.rec_dir, fit_report);
     js["fit"] = fit_report;
-    if (!fitted) return false;
-    cs = std::move(*fitted);
   } else {
     BenchFitOptions fo;
     fo.table = plan_.table;
@@ -406,7 +412,6 @@ bool Station::finish_unit(Unit& u) {
   }
   js["coefficients"] = (u.out / "COEFFS.json").string();
   js["fit"] = fit_report;
-  return true;
 }
 
 // A run that did not give the unit coefficients is part of its history: recorded (with why) once the
@@ -464,13 +469,13 @@ Result Station::run() {
     table_done = true;
     runner_->stop_readers();
     // Fit (the spine's bench fit) and store, unit by unit.
-    std::size_t done = 0, recorded_only = 0;
+    std::size_t done = 0;
     for (auto& up : units_) {
       Unit& u = *up;
       if (u.failed) continue;
       try {
-        if (finish_unit(u)) ++done;
-        else ++recorded_only;
+        finish_unit(u);
+        ++done;
       } catch (const std::exception& e) {
         if (!fixture_mode_) throw;
         runner_->fail_unit(u, std::string("fit or store: ") + e.what());
@@ -481,17 +486,7 @@ Result Station::run() {
         runner_->keep_partial(*up);
         record_aborted(*up, "fail", up->why, res);
       }
-    complete_run(res, facts(), done + recorded_only);
-    if (recorded_only > 0) {  // a positions plan in a build without the multipos fit: said, not pretended
-      res.message = "recorded; fit multipos not available in this build: " + std::to_string(plan_.steps.size()) +
-                    " steps, " + std::to_string(recorded_only) + " multipos recording" + (recorded_only > 1 ? "s" : "") +
-                    " in " + (fixture_mode_ ? (o_.out_dir / "SLOT" / "recording").string() : units_.front()->rec_dir.string()) +
-                    "; no coefficients written or stored";
-      for (const auto& u : units_)
-        if (u->failed) res.message += "; " + u->label() + " failed: " + u->why;
-      if (res.summary.is_object()) res.summary.erase("coefficients");
-      res.summary["fit"] = "not available in this build";
-    }
+    complete_run(res, facts(), done);
   } catch (const std::exception& e) {
     // Safety first: stop and disable the table (best effort, bounded time), keep the partial recordings.
     bool stopped = table_done;

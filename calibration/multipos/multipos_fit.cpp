@@ -209,6 +209,30 @@ std::vector<StaticInterval> detect_statics(const MultiposInput& in, const Multip
       Vec3::Constant(lv[1].used_sigma * lv[1].used_sigma * factor);
   std::vector<char> quiet(n, 0);
   for (std::size_t c = h; c + h < n; ++c) quiet[c] = (window_var(c).array() <= limit.array()).all();
+  // A steady rotation (a table slewing at constant rate) has a quiet variance too: a still window's
+  // mean rate must also be the gyro bias — the median over the quiet windows — within 5σ of a
+  // window mean plus 3× the class's in-run bias stability (floor 0.05 °/s).
+  {
+    auto window_mean = [&](std::size_t c) {
+      return Vec3((s1[c + h + 1] - s1[c - h]).head<3>() / double(w) + mean.head<3>());
+    };
+    std::vector<double> m[3];
+    for (std::size_t c = h; c + h < n; c += h)
+      if (quiet[c]) {
+        const Vec3 v = window_mean(c);
+        for (int i = 0; i < 3; ++i) m[i].push_back(v(i));
+      }
+    if (!m[0].empty()) {
+      Vec3 bias;
+      for (int i = 0; i < 3; ++i) {
+        std::nth_element(m[i].begin(), m[i].begin() + m[i].size() / 2, m[i].end());
+        bias(i) = m[i][m[i].size() / 2];
+      }
+      const double tol = std::max(5 * lv[0].used_sigma / std::sqrt(double(w)) + 3 * in.gyro_bias_stability, 0.05 * units::kDeg);
+      for (std::size_t c = h; c + h < n; ++c)
+        if (quiet[c] && (window_mean(c) - bias).cwiseAbs().maxCoeff() > tol) quiet[c] = 0;
+    }
+  }
   const std::size_t min_len = std::max<std::size_t>(w, static_cast<std::size_t>(std::lround(opt.min_static_s * in.rate_hz)));
   std::vector<StaticInterval> out;
   for (std::size_t i = 0; i < n;) {

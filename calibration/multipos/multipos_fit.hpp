@@ -33,6 +33,9 @@ struct MultiposInput {
   std::optional<double> lat_rad;  // site latitude, for the Earth rate
   // The device class's white noise densities (rad/s/√Hz, m/s²/√Hz); 0 = unknown (measured only).
   double gyro_density = 0, accel_density = 0;
+  // The class's in-run gyro bias stability (rad/s; 0 = unknown): how far a still unit's mean rate
+  // may stray from the statics' median bias.
+  double gyro_bias_stability = 0;
 };
 
 struct MultiposOptions {

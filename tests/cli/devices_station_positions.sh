@@ -3,7 +3,9 @@
 # position-only table (issue 37):
 #  - two emulated units: one multipos recording each (meta.json kind multipos with site, imu.csv SI,
 #    no reference.csv), complete and read back; in the data each of the 18 poses is static (|accel|
-#    ≈ g, gyro ≈ 0 but for its bias) and the moves between them turn; no coefficients (this build has no multipos fit: said so);
+#    ≈ g, gyro ≈ 0 but for its bias) and the moves between them turn; each unit fitted by the
+#    multi-position estimator (COEFFS.json with its "multipos" key) and stored with --db: the
+#    coefficients within 3σ of the emulated unit's truth (expressed in the fit's frame);
 #  - a rate step in a positions plan is refused naming file, line and field (exit 2);
 #  - `calbench emulate table --position-only` refuses a write selecting rate mode (Modbus exception 3)
 #    and accepts position mode;
@@ -17,11 +19,10 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 # The shipped plan with shorter dwells (the poses and moves as shipped).
 sed 's/^dwell_s = .*/dwell_s = 1.5/' "$SRC/bench/plans/multipos.toml" >"$tmp/plan.toml"
 set +e
-"$CALBENCH" station run --plan "$tmp/plan.toml" --emulated --units 2 --out "$tmp/run" --json >"$tmp/run.json" 2>"$tmp/run.log"
+"$CALBENCH" station run --plan "$tmp/plan.toml" --emulated --units 2 --out "$tmp/run" --db "$tmp/s.db" --json >"$tmp/run.json" 2>"$tmp/run.log"
 rc=$?
 set -e
 [ "$rc" = 0 ] || { cat "$tmp/run.log" "$tmp/run.json"; fail "positions plan: exit $rc"; }
-grep -q "recorded; fit multipos not available in this build" "$tmp/run.json" || fail "no 'fit not available' message"
 python3 - "$tmp/run" "$tmp/plan.toml" <<'PY'
 import csv, json, math, os, sys
 run, plan = sys.argv[1], sys.argv[2]
@@ -35,7 +36,39 @@ for s in slots:
     assert meta.get("status") == "complete", "recording not complete"
     assert abs(meta["site"]["lat_deg"] - 55.75) < 1e-9 and "h_m" in meta["site"], meta["site"]
     assert not os.path.exists(os.path.join(rec, "reference.csv")), "a multipos recording has no reference.csv"
-    assert not os.path.exists(os.path.join(run, s, "COEFFS.json")), "coefficients written without a fit"
+    c = json.load(open(os.path.join(run, s, "COEFFS.json")))
+    truth = json.load(open(os.path.join(run, s, "EMULATED_TRUTH.json")))
+    m = c["multipos"]
+    assert m["g_spread_m_s2"] < 0.2 * m["g_spread_raw_m_s2"], (m["g_spread_raw_m_s2"], m["g_spread_m_s2"])
+    # The truth in the fit's frame (x along the accelerometer x axis, y in its x-y plane): (I + M_a) = L·Q
+    # with L lower triangular, and the gyros (I + M_g)·Qᵀ — Gram–Schmidt on the rows of (I + M_a).
+    A = [[(1.0 if i == j else 0.0) + truth["accel"]["M"][i][j] for j in range(3)] for i in range(3)]
+    Q = []
+    for i in range(3):
+        v = A[i][:]
+        for q in Q:
+            d = sum(a * b for a, b in zip(A[i], q))
+            v = [a - d * b for a, b in zip(v, q)]
+        n = math.sqrt(sum(a * a for a in v))
+        Q.append([a / n for a in v])
+    L = [[sum(A[i][k] * Q[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    G = [[(1.0 if i == j else 0.0) + truth["gyro"]["M"][i][j] for j in range(3)] for i in range(3)]
+    GQt = [[sum(G[i][k] * Q[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    within = total = 0
+    worst = (0, "")
+    for name, Mt in (("accel", [[L[i][j] - (i == j) for j in range(3)] for i in range(3)]),
+                     ("gyro", [[GQt[i][j] - (i == j) for j in range(3)] for i in range(3)])):
+        e = c[name]
+        pairs = [(e["bias"][i], truth[name]["bias"][i], e["sigma_bias"][i], f"{name}.bias[{i}]") for i in range(3)]
+        pairs += [(e["M"][i][j], Mt[i][j], e["sigma_M"][i][j], f"{name}.M[{i}][{j}]") for i in range(3) for j in range(3)
+                  if not (name == "accel" and j > i)]
+        for est, tru, sig, what in pairs:
+            z = abs(est - tru) / sig
+            total += 1
+            within += z <= 3
+            worst = max(worst, (z, what))
+    assert within >= 0.9 * total, (s, within, total, worst)
+    print(f"slot {s}: {within}/{total} coefficients within 3σ of the truth (worst {worst[1]} {worst[0]:.1f}σ)")
     rows = [r for r in csv.reader(l for l in open(os.path.join(rec, "imu.csv")) if not l.startswith("#"))]
     head, rows = rows[0], [[float(x) for x in r] for r in rows[1:]]
     c = {k: head.index(k) for k in head}
@@ -60,6 +93,8 @@ for s in slots:
     assert segs.count("M") >= 20, ("no moves recorded between the poses", segs)
     print(f"slot {s}: {len(rows)} samples, {len(static_runs)} static poses, {segs.count('M')} turning windows")
 PY
+# Both sets stored as drafts.
+"$CALBENCH" db devices --db "$tmp/s.db" | grep -c "draft" | grep -qx 2 || { "$CALBENCH" db devices --db "$tmp/s.db"; fail "two draft sets expected in the store"; }
 
 # A rate step in a positions plan: refused, file, line and field named, nothing run.
 cat "$tmp/plan.toml" >"$tmp/bad.toml"
@@ -134,7 +169,7 @@ meta = json.load(open(os.path.join(d, "recording", "meta.json")))
 assert meta["kind"] == "multipos" and meta.get("status") == "incomplete", meta
 n = sum(1 for l in open(os.path.join(d, "recording", "imu.csv")) if l[0].isdigit() or l[0] == "-")
 assert n > 20000, n
-assert not os.path.exists(os.path.join(d, "reference.csv")) and not os.path.exists(os.path.join(d, "COEFFS.json"))
+assert not os.path.exists(os.path.join(d, "reference.csv")) and not os.path.exists(os.path.join(d, "COEFFS.json"))  # aborted: not fitted
 print(f"aborted: table stopped, {n} samples kept")
 PY
 echo "OK"
