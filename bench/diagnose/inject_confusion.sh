@@ -21,7 +21,7 @@ inj="$here/bench/diagnose/inject_effects.py"
 seeds=${INJECT_SEEDS:-5}
 work=$(mktemp -d /tmp/inject_confusion.XXXXXX)
 trap 'rm -rf "$work"' EXIT
-runs="$work/runs.tsv"
+runs="${INJECT_RUNS:-$work/runs.tsv}"
 : > "$runs"
 score() {  # ROW JSON -> one TSV line: row, established names, partial names, unexplained axes
   python3 - "$1" "$2" >> "$runs" <<'PY'
