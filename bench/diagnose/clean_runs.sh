@@ -20,7 +20,6 @@ read -r -a plans <<< "${CLEAN_PLANS:-diagnose factory wedge}"
 read -r -a routes <<< "${CLEAN_ROUTES:-tests/data/drive_diag_route.toml tests/data/drive_diag_level.toml bench/routes/short.toml}"
 read -r -a classes <<< "${CLEAN_CLASSES:-adis16488a adis16465-1 icm42688p}"
 log="${CLEAN_RUNS:-$work/runs.tsv}"
-: > "$log"
 one() {  # KIND SOURCE SEED DIR [diagnose args]
   local kind=$1 src=$2 seed=$3 dir=$4 t0 t1
   shift 4
@@ -37,6 +36,9 @@ une = [f"{u['sensor']} {u['axis']}" for u in d["unexplained"]]
 print("\t".join([kind, src, seed, f"{float(sec):.1f}", str(len(est)), str(len(par)), str(len(une)), "; ".join(est + [p + " (partial)" for p in par] + [u + " unexplained" for u in une])]))
 PY
 }
+# CLEAN_TABLE_ONLY=1: no new runs, the table from the per-run file already there (a run stopped early).
+if [ -z "${CLEAN_TABLE_ONLY:-}" ]; then
+: > "$log"
 for i in $(seq 0 $((${CLEAN_BENCH:-100} - 1))); do
   plan=${plans[$((i % ${#plans[@]}))]}
   t0=$(date +%s.%N)
@@ -49,6 +51,7 @@ for i in $(seq 0 $((${CLEAN_DRIVE:-100} - 1))); do
   "$cb" simulate drive --route "$here/$route" --device-class "$class" --truth random --seed $((6000 + i)) --out "$work/rec" --force >/dev/null
   one drive "$(basename "$route") $class" $((6000 + i)) "$work/rec"
 done
+fi
 md="$work/table.md"
 python3 - "$log" > "$md" <<'PY'
 import sys, collections

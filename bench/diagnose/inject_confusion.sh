@@ -22,7 +22,6 @@ seeds=${INJECT_SEEDS:-5}
 work=$(mktemp -d /tmp/inject_confusion.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 runs="${INJECT_RUNS:-$work/runs.tsv}"
-: > "$runs"
 score() {  # ROW JSON -> one TSV line: row, established names, partial names, unexplained axes
   python3 - "$1" "$2" >> "$runs" <<'PY'
 import json, sys
@@ -45,6 +44,9 @@ drive_classes=(
   "speed-dependent bias gyro z, 1 °/h per m/s|speed --sensor gyro --axis z --k 1"
   "turn-on bias shift gyro x, 30 °/h|shift --sensor gyro --axis x --bias 30"
 )
+# INJECT_TABLE_ONLY=1: no new runs, the table from the per-run file already there (a run stopped early).
+if [ -z "${INJECT_TABLE_ONLY:-}" ]; then
+: > "$runs"
 for plan in ${INJECT_PLANS:-diagnose}; do
   for s in $(seq 1 "$seeds"); do
     "$cb" simulate bench --plan "$here/bench/plans/$plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
@@ -73,6 +75,7 @@ for s in $(seq 1 "$seeds"); do
     score "$row" "$work/out.json"
   done
 done
+fi
 md="$work/table.md"
 python3 - "$runs" > "$md" <<'PY'
 import sys, collections
