@@ -61,7 +61,7 @@ TEST(DiagnoseDecisionRules, ClippedGyroNamesNoEstablishedScaleTerm) {
   const BenchPlan plan = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/diagnose.toml");
   BenchSimOptions so;
   so.seed = 3601;
-  so.noise.gyro.range = 250 * kDeg;
+  so.noise.gyro.range = 250 * units::kDeg;
   const DiagInput in = simulate_diag_input(plan, draw_random_unit(3601), so);
   const DiagRun r = run_diagnosis(in, nullptr, plan.table);
   std::string all;
