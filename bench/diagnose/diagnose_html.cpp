@@ -93,7 +93,7 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
   o << "<h2>Findings</h2>\n";
   if (r.findings.empty()) o << "<p>No finding: the residual is consistent with the model and the sensor's noise.</p>\n";
   for (const auto& f : r.findings) {
-    o << "<h3>" << effect_name(f.term.effect) << "</h3><p>" << report::html_escape(finding_sentence(f)) << "</p>\n";
+    o << "<h3>" << effect_name(f.term.effect) << " (" << f.status << ")</h3><p>" << report::html_escape(finding_sentence(f)) << "</p>\n";
     o << "<p>Evidence: Δχ² " << fmt(f.delta_chi2) << ", ΔBIC " << fmt(f.delta_bic) << ", held-out Δχ² "
       << fmt(f.heldout_delta_chi2) << ".</p>\n";
     const int a = finding_axis_index(f, r);

@@ -72,7 +72,13 @@ nlohmann::json correlations_json(const std::vector<ConditionCorrelation>& c, std
 
 // A finding the recording cannot tell from an alternative is not established: no σ, as if it were.
 void not_established(const DiagFinding& f, nlohmann::json& j) {
-  j["established"] = f.alternatives.empty();
+  // Issue 36: established only when told apart, cutting ≥ established_cut of its axis's systematic
+  // residual and leaving a noise-like remainder; "partial" findings carry the fraction they explain.
+  const bool established = f.alternatives.empty() && std::string(f.status) == "established";
+  j["established"] = established;
+  j["status"] = established || f.alternatives.empty() ? f.status : "not told apart";
+  j["explained_fraction"] = f.explained_fraction;
+  j["remainder_is_noise"] = f.remainder_is_noise;
   if (!f.alternatives.empty()) j["sigma"] = nullptr;
 }
 

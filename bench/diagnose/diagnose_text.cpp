@@ -180,6 +180,10 @@ std::string finding_sentence(const DiagFinding& f) {
   if (x.shape == EffectShape::noise) o << ", τ ≈ " << drift_tau_text(f);
   o << "; systematic residual " << human_rms(rs, f.rms_before) << " → " << human_rms(rs, f.rms_after);
   o << alternatives_text(f);
+  if (std::string(f.status) == "partial")
+    o << "; partial, not established: the model cuts this axis's systematic residual by "
+      << fmt(100 * f.explained_fraction) << " %"
+      << (f.remainder_is_noise ? "" : " and the axis's remainder is unexplained (see Unexplained)");
   if (f.versus_drift.tested) {
     const DisplayUnit& du = noise_effect_spec().bench_display;
     const int k = f.term.sensor == 1 ? 1 : 0;

@@ -216,6 +216,16 @@ void finding_condition(const Term& t, DiagFinding& f) {
 
 }  // namespace
 
+void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOptions& opt) {
+  f.explained_fraction = f.rms_before > 0 ? 1 - f.rms_after / f.rms_before : 1.0;
+  f.remainder_is_noise = true;
+  for (const auto& u : res.unexplained)
+    if (u.sensor == f.report_sensor && (f.report_axis < 0 || u.axis == f.report_axis)) f.remainder_is_noise = false;
+  f.status = !f.alternatives.empty()                                                       ? "not told apart"
+             : f.explained_fraction >= opt.established_cut && f.remainder_is_noise ? "established"
+                                                                                         : "partial";
+}
+
 DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current, const EffectTerms& carried,
                               const DiagnoseOptions& opt) {
   DiagnoseResult res;
@@ -387,6 +397,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     u.worst_steps = diag::worst_windows(st, 1.0);
     res.unexplained.push_back(u);
   }
+  for (auto& f : res.findings) finding_status(f, res, opt);
   return res;
 }
 

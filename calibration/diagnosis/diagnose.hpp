@@ -37,6 +37,11 @@ struct DiagnoseOptions {
   // (DiagAlternative::regressor_correlation), however large the Δχ².
   double ambiguity_chi2 = 10;
   double ambiguity_correlation = 0.99;
+  // Issue 36, explained fraction: a finding is established only when the accepted model cuts the
+  // systematic residual of the axis it is reported on by at least this fraction (amplitude,
+  // 1 − rms_after/rms_before, the sweep's own "cut ≥ 80 %" criterion) and that axis's remainder is
+  // consistent with its noise model; otherwise it is "partial" (docs/diagnosis.md, "Decision rules").
+  double established_cut = 0.8;
 };
 
 struct AxisStats {
@@ -98,6 +103,14 @@ struct DiagFinding {
   double noise_tau_s = 0;                // correlated_drift only
   DriftInterval noise_interval;          // correlated_drift only: profile intervals of σ, τ and K
   std::vector<DiagAlternative> alternatives;  // best first; empty = the effect is told apart
+  // Issue 36: the fraction of its axis's systematic residual the accepted model removes
+  // (1 − rms_after/rms_before; 1 when nothing systematic was measurable before), whether that
+  // axis's remainder is consistent with noise, and the status these give: "established",
+  // "partial" (cut below DiagnoseOptions::established_cut or the axis left unexplained) or
+  // "not told apart" (an alternative explains it as well).
+  double explained_fraction = 1;
+  bool remainder_is_noise = true;
+  const char* status = "established";
   // A temperature-driven term against a correlated drift of its triad (the search redone with the
   // triad's temperature terms banned, the drift free to grow): that model's penalised −2 ln L minus
   // this one's (> 0: the temperature term explains the record better), and the drift it needed.
@@ -178,6 +191,10 @@ struct DiagnoseResult {
   int parents = 0, subs = 0;
   double data_s = 0;
 };
+
+// Issue 36's explained-fraction rule: fills f.explained_fraction, f.remainder_is_noise and f.status
+// from its systematic residual before/after and the result's unexplained axes.
+void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOptions& opt);
 
 // `current`: coefficients to test (b, M) and the extra terms they already carry.
 DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current, const EffectTerms& carried,
