@@ -32,11 +32,7 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
 
 ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
   ImportSummary sum;
-  fs::path out(a.out);
-  if (out.filename().empty()) out = out.parent_path();  // "rec/"
-  if (fs::exists(out / "meta.json") && !a.force)
-    throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
-  check_output_folder(out);
+  const fs::path out = import_output_folder(a.out, a.force);
   std::vector<double> v;
   // IMU rate: given, or the median interval of the first rows.
   double rate = a.rate_hz;
@@ -50,8 +46,7 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
       check_time(r, v[I::t], last, first);
     }
     if (dts.empty()) throw InputError(a.imu, 0, "", "needs at least two IMU rows");
-    std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
-    rate = 1.0 / dts[dts.size() / 2];
+    rate = rate_from_intervals(dts);
   }
   sum.rate_hz = rate;
   RecordingMeta meta;
@@ -63,17 +58,9 @@ ImportSummary import_kf_gins(const ImportKfGinsArgs& a) {
                (a.gnss.empty() ? std::string() : ", GNSS " + a.gnss);
   // Written into a folder beside --out and renamed into place at the end: an import that fails
   // (bad input, a full disk) or is killed leaves no half-written recording under --out.
-  fs::create_directories(out.has_parent_path() ? out.parent_path() : fs::path("."));
   StagingFolder staging(out, "importing");
-  const fs::path& tmp = staging.path();
-  write_recording(a, meta, tmp, sum, v);
-  if (!fs::exists(out)) {
-    fs::rename(tmp, out);
-    staging.keep();
-  } else {  // --force into an existing folder: replace the recording's files, meta.json last; keep the rest
-    for (const char* f : {"imu.csv", "reference.csv", "gnss.csv", "meta.json"})
-      if (fs::exists(tmp / f)) fs::rename(tmp / f, out / f);
-  }
+  write_recording(a, meta, staging.path(), sum, v);
+  place_staged_recording(staging, out, {"imu.csv", "reference.csv", "gnss.csv", "meta.json"});
   return sum;
 }
 

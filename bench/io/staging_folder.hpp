@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <initializer_list>
 #include <string>
 
 namespace calbench {
@@ -34,5 +35,13 @@ class StagingFolder {
   std::filesystem::path path_;
   bool kept_ = false;
 };
+
+// An importer's output folder: `out` as given ("rec/" → "rec"), refused when it already holds a
+// recording unless `force`, its parent created.
+std::filesystem::path import_output_folder(const std::string& out, bool force);
+// The importer's last step: the staged recording becomes `out`; with --force into an existing folder
+// the recording's `files` replace those there (meta.json last, so it is listed last), the rest kept.
+void place_staged_recording(StagingFolder& staging, const std::filesystem::path& out,
+                            std::initializer_list<const char*> files);
 
 }  // namespace calbench

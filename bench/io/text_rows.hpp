@@ -2,6 +2,7 @@
 // '#' and '%' start comments, blank lines are skipped; every field must be a finite number.
 // Errors name the file, line and column.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -72,6 +73,12 @@ inline void check_time(const TextRows& r, double t, double& last, bool& first) {
   if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
   first = false;
   last = t;
+}
+
+// The nominal rate of a text file's rows: 1 / the median interval between time stamps.
+inline double rate_from_intervals(std::vector<double>& dts) {
+  std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
+  return 1.0 / dts[dts.size() / 2];
 }
 
 }  // namespace calbench

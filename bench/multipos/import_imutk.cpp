@@ -54,11 +54,7 @@ struct PairReader {
 
 ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
   ImportImuTkSummary sum;
-  fs::path out(a.out);
-  if (out.filename().empty()) out = out.parent_path();
-  if (fs::exists(out / "meta.json") && !a.force)
-    throw InputError(a.out, 0, "", "already holds a recording (use --force to overwrite)");
-  check_output_folder(out);
+  const fs::path out = import_output_folder(a.out, a.force);
   if (a.gravity_m_s2 && !(*a.gravity_m_s2 >= 9.7 && *a.gravity_m_s2 <= 9.9))
     throw InputError("--gravity", 0, "", number_text(*a.gravity_m_s2) + " m/s² is not gravity on Earth (9.7–9.9)");
   double rate = a.rate_hz;
@@ -74,10 +70,7 @@ ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
       ++sum.rows;
     }
     if (sum.rows < 2) throw InputError(a.acc, 0, "", "needs at least two rows");
-    if (!(rate > 0)) {
-      std::nth_element(dts.begin(), dts.begin() + static_cast<long>(dts.size() / 2), dts.end());
-      rate = 1.0 / dts[dts.size() / 2];
-    }
+    if (!(rate > 0)) rate = rate_from_intervals(dts);
   }
   sum.rate_hz = rate;
   RecordingMeta meta;
@@ -93,7 +86,6 @@ ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
     meta.extra["source_counts"] = {{"gyro", counts_json(a.gyro_counts)}, {"accel", counts_json(a.acc_counts)}};
   meta.notes = "imported from IMU-TK text files: accelerometer " + a.acc + ", gyro " + a.gyro + " (time unit " +
                a.time_unit + ")";
-  fs::create_directories(out.has_parent_path() ? out.parent_path() : fs::path("."));
   StagingFolder staging(out, "importing");
   {
     RecordingWriter wr(staging.path(), meta, ImuForm::rates, false, false, false);
@@ -102,13 +94,7 @@ ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
     while (r.next(a, rec.t, rec.accel, rec.gyro)) wr.imu(rec);
     wr.finish();  // read back against what was written before "complete"
   }
-  if (!fs::exists(out)) {
-    fs::rename(staging.path(), out);
-    staging.keep();
-  } else {
-    for (const char* f : {"imu.csv", "meta.json"})
-      if (fs::exists(staging.path() / f)) fs::rename(staging.path() / f, out / f);
-  }
+  place_staged_recording(staging, out, {"imu.csv", "meta.json"});
   return sum;
 }
 

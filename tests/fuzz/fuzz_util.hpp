@@ -94,4 +94,21 @@ inline std::vector<std::string_view> split_files(const std::uint8_t* data, std::
   return parts;
 }
 
+// A finding of a harness's own (beyond crashes and unexpected exceptions): said on stderr, aborts.
+[[noreturn]] inline void finding(const char* harness, const char* what, const std::string& detail) {
+  std::fprintf(stderr, "%s harness: %s: %s\n", harness, what, detail.c_str());
+  std::abort();
+}
+
+// An importer's refusal must leave nothing in the output folder's place under `dir`: neither the
+// folder `out_name` nor its staging folder (".OUT.importing-PID").
+inline void check_refused_import_left_nothing(const std::filesystem::path& dir, const std::string& out_name,
+                                              const char* harness, const std::string& why) {
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name == out_name || name.rfind("." + out_name + ".importing-", 0) == 0)
+      finding(harness, "refused import left output behind", name + " after: " + why);
+  }
+}
+
 }  // namespace calbench::fuzz

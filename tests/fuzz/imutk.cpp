@@ -14,12 +14,6 @@
 
 using namespace calbench;
 
-namespace {
-[[noreturn]] void finding(const char* what, const std::string& detail) {
-  std::fprintf(stderr, "imutk harness: %s: %s\n", what, detail.c_str());
-  std::abort();
-}
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const fuzz::FdCheck fds;
@@ -35,11 +29,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     import_imu_tk(a);
   } catch (const InputError& e) {
-    for (const auto& entry : fs::directory_iterator(dir)) {
-      const std::string name = entry.path().filename().string();
-      if (name == "out" || name.rfind(".out.importing-", 0) == 0)
-        finding("refused import left output behind", name + " after: " + e.what());
-    }
+    fuzz::check_refused_import_left_nothing(dir, "out", "imutk", e.what());
     fds.verify();
     return 0;
   }
@@ -50,7 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } catch (const multipos::MultiposRefusal&) {
     }
   } catch (const InputError& e) {
-    finding("the imported recording is refused by calbench's reader", e.what());
+    fuzz::finding("imutk", "the imported recording is refused by calbench's reader", e.what());
   }
   fds.verify();
   return 0;

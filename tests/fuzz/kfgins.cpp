@@ -13,12 +13,6 @@
 
 using namespace calbench;
 
-namespace {
-[[noreturn]] void finding(const char* what, const std::string& detail) {
-  std::fprintf(stderr, "kfgins harness: %s: %s\n", what, detail.c_str());
-  std::abort();
-}
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const fuzz::FdCheck fds;
@@ -37,11 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     import_kf_gins(a);
   } catch (const InputError& e) {
-    for (const auto& entry : fs::directory_iterator(dir)) {
-      const std::string name = entry.path().filename().string();
-      if (name == "out" || name.rfind(".out.importing-", 0) == 0)
-        finding("refused import left output behind", name + " after: " + e.what());
-    }
+    fuzz::check_refused_import_left_nothing(dir, "out", "kfgins", e.what());
     fds.verify();
     return 0;
   }
@@ -62,7 +52,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     }
   } catch (const InputError& e) {
-    finding("the imported recording is refused by calbench's readers", e.what());
+    fuzz::finding("kfgins", "the imported recording is refused by calbench's readers", e.what());
   }
   fds.verify();
   return 0;
