@@ -70,7 +70,11 @@ ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
       ++sum.rows;
     }
     if (sum.rows < 2) throw InputError(a.acc, 0, "", "needs at least two rows");
-    if (!(rate > 0)) rate = rate_from_intervals(dts);
+    const double from_stamps = rate_from_intervals(dts);
+    if (!(rate > 0)) rate = from_stamps;
+    else if (std::abs(rate - from_stamps) > 0.01 * from_stamps)
+      throw InputError("--rate", 0, "", number_text(rate) + " Hz contradicts the files' time stamps (median interval: " +
+                                           number_text(from_stamps) + " Hz; is --time-unit right?)");
   }
   sum.rate_hz = rate;
   RecordingMeta meta;

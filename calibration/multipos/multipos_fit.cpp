@@ -287,6 +287,23 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
 
   // --- Observability of the accelerometer fit: enough poses, every axis both up and down.
   std::vector<std::string> missing;
+  if (st.empty())
+    throw MultiposRefusal("no static pose found (the unit never held still for " + std::to_string(opt.min_static_s) +
+                          " s by the static test): check that the accelerometer and gyro files are not swapped and that "
+                          "the counts conversion gives SI units; the test's noise per sample: gyro " +
+                          std::to_string(fit.gyro_noise.used_sigma) + " rad/s, accelerometer " +
+                          std::to_string(fit.accel_noise.used_sigma) + " m/s²");
+  {  // A still unit measures gravity: a median |f̄| far from g is a wrong conversion, not a calibration.
+    std::vector<double> mags;
+    for (const auto& s : st) mags.push_back(s.f_mean.norm());
+    std::nth_element(mags.begin(), mags.begin() + mags.size() / 2, mags.end());
+    const double ratio = mags[mags.size() / 2] / in.gravity;
+    if (!(ratio > 0.5 && ratio < 2.0))
+      throw MultiposRefusal("the static poses measure |f| = " + std::to_string(mags[mags.size() / 2]) +
+                            " m/s² (median), " + std::to_string(ratio) + "× gravity (" + std::to_string(in.gravity) +
+                            " m/s²): the accelerometer values are not in m/s² — check the counts conversion "
+                            "(import imu-tk --acc-offset / --acc-scale)");
+  }
   if (used.size() < opt.min_poses)
     missing.push_back(std::to_string(used.size()) + " static poses found, at least " + std::to_string(opt.min_poses) +
                       " needed (9 accelerometer parameters; 12 or more recommended)");
@@ -304,7 +321,7 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
         std::ostringstream os;
         os << "the " << axis_name(i) << " axis's share of gravity spans only " << std::lround(100 * up_min(i)) << "…"
            << std::lround(100 * up_max(i)) << " % over the poses (at least 100 % apart needed): add poses with the "
-           << axis_name(i) << " axis pointing " << (up_max(i) < 0.5 ? "up" : "down");
+           << axis_name(i) << " axis pointing " << (1 - up_min(i) >= up_max(i) + 1 ? "up" : "down");
         missing.push_back(os.str());
       }
   }

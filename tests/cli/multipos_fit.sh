@@ -78,4 +78,16 @@ cat > "$tmp/bench/meta.json" <<'JS'
  "site": {"lat_deg": 55.75, "lon_deg": 37.62, "h_m": 150.0}, "imu_rate_hz": 100.0}
 JS
 expect_fail "expected a multipos recording" "$CALBENCH" fit multipos "$tmp/bench"
+# The tryout's traps: the accelerometer scale left at 1 (counts read as m/s²), the files swapped,
+# --rate against the time stamps, a --plot path that cannot be written (nothing written then).
+"$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/noscale" --acc-offset 32768 \
+  --gyro-offset 32768 --gyro-scale 1.5979e-4 --model "Xsens MTi" > /dev/null
+expect_fail "not in m/s²" "$CALBENCH" fit multipos "$tmp/noscale"
+grep -q "acc-scale" "$tmp/err"
+"$CALBENCH" import imu-tk "$D/xsens_gyro.mat" "$D/xsens_acc.mat" --out "$tmp/swapped" "${conv[@]}" --model "Xsens MTi" > /dev/null
+expect_fail "not swapped" "$CALBENCH" fit multipos "$tmp/swapped"
+expect_fail "contradicts the files' time stamps" "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/r50" --rate 50 "${conv[@]}"
+[ ! -e "$tmp/r50" ]
+expect_fail "" "$CALBENCH" fit multipos "$tmp/xs" --out "$tmp/never.json" --plot "$tmp/no/such/dir/p.svg"
+[ ! -e "$tmp/never.json" ] || { echo "--out written although --plot failed"; exit 1; }
 echo "multipos fit: ok"
