@@ -90,6 +90,15 @@ LmResult levenberg_marquardt(VecX p, const std::function<void(const VecX&, VecX&
   return {p, J.transpose() * J, chi2, it};
 }
 
+// The fit's covariance, scaled by χ²/dof when above 1 (Birge ratio); a singular normal matrix is a
+// refusal with `why`.
+MatX covariance_or_refuse(const LmResult& r, double chi2_dof, const std::string& why) {
+  Eigen::JacobiSVD<MatX> svd(r.JtJ);
+  const auto& sv = svd.singularValues();
+  if (!(sv(sv.size() - 1) > 1e-12 * sv(0))) throw MultiposRefusal(why);
+  return r.JtJ.inverse() * std::max(1.0, chi2_dof);
+}
+
 // Accelerometer parameters: b (3), then M00, M11, M22, M10, M20, M21 (lower triangle).
 constexpr int kAccelParams = 9;
 TriadErrors accel_from(const VecX& p) {
@@ -358,14 +367,9 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   fit.accel_iterations = ar.iterations;
   fit.accel_dof = static_cast<int>(used.size()) - kAccelParams;
   fit.accel_chi2_dof = fit.accel_dof > 0 ? ar.chi2 / fit.accel_dof : 0;
-  {
-    Eigen::JacobiSVD<MatX> svd(ar.JtJ);
-    const auto& sv = svd.singularValues();
-    if (sv(sv.size() - 1) <= 1e-12 * sv(0))
-      throw MultiposRefusal("the poses do not determine the accelerometer coefficients (the fit's normal matrix is singular): "
-                            "add poses with each axis tilted between up, level and down");
-  }
-  const MatX Ca = ar.JtJ.inverse() * std::max(1.0, fit.accel_chi2_dof);
+  const MatX Ca = covariance_or_refuse(ar, fit.accel_chi2_dof,
+                                       "the poses do not determine the accelerometer coefficients (the fit's normal "
+                                       "matrix is singular): add poses with each axis tilted between up, level and down");
   fit.coeffs.accel = accel_from(ar.p);
   accel_sigmas(Ca, fit.coeffs.accel);
   const TriadCorrector acorr(fit.coeffs.accel);
@@ -491,14 +495,11 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   fit.gyro_iterations = gr.iterations;
   fit.gyro_dof = 2 * static_cast<int>(rused.size()) + 3 - kGyroParams;
   fit.gyro_chi2_dof = fit.gyro_dof > 0 ? gr.chi2 / fit.gyro_dof : 0;
-  {
-    Eigen::JacobiSVD<MatX> svd(gr.JtJ);
-    const auto& sv = svd.singularValues();
-    if (sv(sv.size() - 1) <= 1e-12 * sv(0))
-      throw MultiposRefusal("the rotations do not determine the gyro coefficients (the fit's normal matrix is singular): "
-                            "turn the unit about each of its axes between static poses");
-  }
-  const MatX Cg = gr.JtJ.inverse() * std::max(1.0, fit.gyro_chi2_dof);
+  const MatX Cg = covariance_or_refuse(gr, fit.gyro_chi2_dof,
+                                       "the rotations do not determine the gyro coefficients (the fit's normal matrix is "
+                                       "singular): turn the unit about each of its axes between static poses — or, with "
+                                       "rotations enough, a gyro axis's sign or scale in the counts conversion is wrong "
+                                       "(import imu-tk --gyro-scale)");
   fit.coeffs.gyro = gyro_from(gr.p);
   for (int i = 0; i < 3; ++i) fit.coeffs.gyro.sigma_bias(i) = std::sqrt(Cg(i, i));
   for (int i = 0; i < 3; ++i)
