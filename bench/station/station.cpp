@@ -378,7 +378,6 @@ void Station::finish_unit(Unit& u) {
   nlohmann::json fit_report;
   if (plan_.position_only) {
     cs = fit_positions_recording(u.rec_dir, fit_report);
-    js["fit"] = fit_report;
   } else {
     BenchFitOptions fo;
     fo.table = plan_.table;
