@@ -14,7 +14,7 @@ conv=(--acc-offset 32768 --acc-scale 0.0026808 --gyro-offset 32768 --gyro-scale 
 # The same rows as a logger writes them: ms, deg/s, g; semicolons; extra columns; columns in another order.
 python3 - "$tmp/xs/imu.csv" "$tmp" <<'PY'
 import csv, math, sys
-rows = [r for r in csv.DictReader(l for l in open(sys.argv[1]) if not l.startswith('#'))]
+rows = [{k.split('_')[0]: v for k, v in r.items()} for r in csv.DictReader(l for l in open(sys.argv[1]) if not l.startswith('#'))]
 out = sys.argv[2]
 g0 = 9.80665
 with open(out + '/semi.csv', 'w') as f:
