@@ -1,14 +1,44 @@
 // calbench import kf-gins --imu IMU.txt --truth truth.nav [--gnss GNSS.pos] --out DIR
+#include <algorithm>
 #include <iostream>
 
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/import_kfgins.hpp"
+#include "bench/multipos/import_csv.hpp"
 #include "bench/multipos/import_imutk.hpp"
 #include "common/input_error.hpp"
 
 namespace calbench::cli {
 namespace {
+
+// The options every multipos importer has (--out, device, rate, gravity or site, --force); finish()
+// in the callback checks and copies the site.
+struct TargetOptions {
+  double gravity = 0, lat = 1000, h = 0;
+  CLI::App* app = nullptr;
+  void add(CLI::App* a, MultiposTarget& t) {
+    app = a;
+    a->add_option("--out", t.out, "recording folder to write")->required();
+    a->add_option("--rate", t.rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
+    a->add_option("--model", t.model, "device model for meta.json (a device class name, see docs/in-motion.md)");
+    a->add_option("--serial", t.serial, "device serial for meta.json");
+    a->add_option("--gravity", gravity, "local gravity, m/s² (meta.json gravity_m_s2)")->check(finite_number(9.7, 9.9));
+    a->add_option("--site-lat", lat, "site latitude, deg (meta.json site: normal gravity and the Earth rate)")
+        ->check(finite_number(-90, 90));
+    a->add_option("--site-h", h, "site height, m (with --site-lat)")->check(finite_number(-1e4, 1e5));
+    a->add_flag("--force", t.force, "overwrite an existing recording in --out");
+  }
+  void finish(MultiposTarget& t) const {
+    if (app->count("--gravity")) t.gravity_m_s2 = gravity;
+    if (app->count("--site-lat")) {
+      t.lat_deg = lat;
+      t.h_m = h;
+    } else if (app->count("--site-h")) {
+      throw InputError("--site-h", 0, "", "needs --site-lat");
+    }
+  }
+};
 
 const bool registered = add_command(95, [](CLI::App& app) {
   CLI::App* imp = app.add_subcommand("import", "Convert other data formats into the recording interchange format");
@@ -47,11 +77,9 @@ const bool registered = add_command(95, [](CLI::App& app) {
   // IMU-TK text files -> multipos recording.
   auto t = std::make_shared<ImportImuTkArgs>();
   auto conv = std::make_shared<std::vector<std::vector<double>>>(4);
-  auto gravity = std::make_shared<double>(0), lat = std::make_shared<double>(1000), h = std::make_shared<double>(0);
   auto* it = imp->add_subcommand("imu-tk", "IMU-TK text files (accelerometer and gyro, rows: t x y z) -> multipos recording");
   it->add_option("acc", t->acc, "accelerometer file (t x y z)")->required()->check(CLI::ExistingFile);
   it->add_option("gyro", t->gyro, "gyro file (t x y z, same time stamps)")->required()->check(CLI::ExistingFile);
-  it->add_option("--out", t->out, "recording folder to write")->required();
   static const char* const names[4] = {"--acc-offset", "--acc-scale", "--gyro-offset", "--gyro-scale"};
   static const char* const help[4] = {"accelerometer counts at zero input: one value or x,y,z (default 0: the file is SI)",
                          "accelerometer m/s² per count: one value or x,y,z (default 1)",
@@ -61,15 +89,9 @@ const bool registered = add_command(95, [](CLI::App& app) {
     it->add_option(names[k], (*conv)[k], help[k])->delimiter(',')->expected(1, 3)->check(finite_number(-1e9, 1e9));
   it->add_option("--time-unit", t->time_unit, "unit of the files' time column: s, ms, us or ns (default s)")
       ->check(CLI::IsMember({"s", "ms", "us", "ns"}));
-  it->add_option("--rate", t->rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
-  it->add_option("--model", t->model, "device model for meta.json (a device class name, see docs/in-motion.md)");
-  it->add_option("--serial", t->serial, "device serial for meta.json");
-  it->add_option("--gravity", *gravity, "local gravity, m/s² (meta.json gravity_m_s2)")->check(finite_number(9.7, 9.9));
-  it->add_option("--site-lat", *lat, "site latitude, deg (meta.json site: normal gravity and the Earth rate)")
-      ->check(finite_number(-90, 90));
-  it->add_option("--site-h", *h, "site height, m (with --site-lat)")->check(finite_number(-1e4, 1e5));
-  it->add_flag("--force", t->force, "overwrite an existing recording in --out");
-  it->callback([t, conv, gravity, lat, h, it] {
+  auto target = std::make_shared<TargetOptions>();
+  target->add(it, *t);
+  it->callback([t, conv, target] {
     CountsConversion* cc[4] = {&t->acc_counts, &t->acc_counts, &t->gyro_counts, &t->gyro_counts};
     for (int k = 0; k < 4; ++k) {
       const auto& v = (*conv)[k];
@@ -84,16 +106,49 @@ const bool registered = add_command(95, [](CLI::App& app) {
       cc[k]->given = true;
     }
     t->time_scale = t->time_unit == "ms" ? 1e-3 : t->time_unit == "us" ? 1e-6 : t->time_unit == "ns" ? 1e-9 : 1.0;
-    if (it->count("--gravity")) t->gravity_m_s2 = *gravity;
-    if (it->count("--site-lat")) {
-      t->lat_deg = *lat;
-      t->h_m = *h;
-    } else if (it->count("--site-h")) {
-      throw InputError("--site-h", 0, "", "needs --site-lat");
-    }
+    target->finish(*t);
     const ImportImuTkSummary s = import_imu_tk(*t);
     std::cout << "imported " << s.rows << " rows (" << s.rate_hz << " Hz) into " << t->out << " (kind multipos)"
               << std::endl;
+  });
+
+  // One CSV with a header line -> multipos recording.
+  auto c = std::make_shared<ImportCsvArgs>();
+  auto cols = std::make_shared<std::vector<std::vector<std::string>>>(2);
+  auto delim = std::make_shared<std::string>("auto");
+  auto kind = std::make_shared<std::string>();
+  auto* ic = imp->add_subcommand("csv", "one CSV with a header line (time, gyro xyz, accelerometer xyz) -> multipos recording");
+  ic->add_option("file", c->file, "the CSV file (a header line naming the columns, '.' decimal point)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  ic->add_option("--kind", *kind, "recording kind to write (multipos)")->required()->check(CLI::IsMember({"multipos"}));
+  ic->add_option("--time", c->time_col, "time column: header name or 1-based index (default t)");
+  ic->add_option("--gyro", (*cols)[0], "gyro columns x,y,z: header names or 1-based indices (default gx,gy,gz)")
+      ->delimiter(',')
+      ->expected(3);
+  ic->add_option("--accel", (*cols)[1], "accelerometer columns x,y,z: header names or 1-based indices (default ax,ay,az)")
+      ->delimiter(',')
+      ->expected(3);
+  ic->add_option("--gyro-unit", c->gyro_unit, "gyro unit: rad/s, deg/s or mdeg/s (rad, deg, mdeg with --increments; default rad/s)")
+      ->check(CLI::IsMember({"rad/s", "deg/s", "mdeg/s"}));
+  ic->add_option("--accel-unit", c->accel_unit, "accelerometer unit: m/s2, g or mg (times s with --increments; default m/s2)")
+      ->check(CLI::IsMember({"m/s2", "g", "mg"}));
+  ic->add_option("--time-unit", c->time_unit, "unit of the time column: s, ms, us or ns (default s)")
+      ->check(CLI::IsMember({"s", "ms", "us", "ns"}));
+  ic->add_flag("--increments", c->increments, "the gyro and accelerometer columns are increments per sample (angle, velocity), not rates");
+  ic->add_option("--delimiter", *delim, "field delimiter: auto (from the header line), comma, semicolon, tab or space (tab and space: runs of blanks)")
+      ->check(CLI::IsMember({"auto", "comma", "semicolon", "tab", "space"}));
+  auto ctarget = std::make_shared<TargetOptions>();
+  ctarget->add(ic, *c);
+  ic->callback([c, cols, delim, ctarget] {
+    for (int k = 0; k < 2; ++k)
+      if ((*cols)[k].size() == 3) std::copy_n((*cols)[k].begin(), 3, (k == 0 ? c->gyro_cols : c->accel_cols).begin());
+    c->delimiter = *delim == "comma" ? ',' : *delim == "semicolon" ? ';' : (*delim == "tab" || *delim == "space") ? ' ' : '\0';
+    ctarget->finish(*c);
+    const ImportCsvSummary s = import_csv(*c);
+    const char* dname = s.delimiter == ',' ? "comma" : s.delimiter == ';' ? "semicolon" : "blanks";
+    std::cout << "imported " << s.rows << " rows (" << s.rate_hz << " Hz, " << dname << "-separated) into " << c->out
+              << " (kind multipos)" << std::endl;
   });
 });
 

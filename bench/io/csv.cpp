@@ -32,7 +32,9 @@ std::string_view trim(std::string_view s) {
 }
 }  // namespace
 
-CsvReader::CsvReader(std::string path, bool digest) : path_(std::move(path)), buf_(kBufSize) {
+CsvReader::CsvReader(std::string path, bool digest, char delim) : delim_(delim), path_(std::move(path)), buf_(kBufSize) {
+  if (!(delim == 0 || delim == ',' || delim == ';' || delim == ' '))
+    throw InputError(path_, 0, "", "delimiter must be ',', ';' or blanks");
   file_.reset(std::fopen(path_.c_str(), "rb"));
   if (!file_) throw InputError(path_, 0, "", std::string("cannot open: ") + std::strerror(errno));
   if (digest) digest_ = std::make_unique<Sha256>();
@@ -46,12 +48,18 @@ CsvReader::CsvReader(std::string path, bool digest) : path_(std::move(path)), bu
       comments_.emplace_back(c);
       continue;
     }
-    std::size_t pos = 0;
-    while (true) {
-      const std::size_t c = t.find(',', pos);
-      header_.emplace_back(trim(t.substr(pos, c == std::string_view::npos ? t.npos : c - pos)));
-      if (c == std::string_view::npos) break;
-      pos = c + 1;
+    if (delim_ == 0) {
+      const auto n = [&](char c) { return std::count(t.begin(), t.end(), c); };
+      delim_ = n(';') > n(',') ? ';' : n(',') > 0 ? ',' : ' ';
+    }
+    const char* const e = t.data() + t.size();
+    for (const char* p = t.data();;) {
+      const char* c = field_end(p, e);
+      header_.emplace_back(trim(std::string_view(p, static_cast<std::size_t>(c - p))));
+      if (c == e) break;
+      p = c + 1;
+      if (delim_ == ' ')
+        while (p < e && (*p == ' ' || *p == '\t')) ++p;
     }
     slot_of_field_.assign(header_.size(), -1);
     return;
@@ -60,6 +68,15 @@ CsvReader::CsvReader(std::string path, bool digest) : path_(std::move(path)), bu
 }
 
 CsvReader::~CsvReader() = default;
+
+const char* CsvReader::field_end(const char* p, const char* e) const {
+  if (delim_ != ' ') {
+    const void* c = std::memchr(p, delim_, static_cast<std::size_t>(e - p));
+    return c ? static_cast<const char*>(c) : e;
+  }
+  while (p < e && *p != ' ' && *p != '\t') ++p;
+  return p;
+}
 
 std::optional<std::string> CsvReader::sha256() const {
   if (sha256_.empty()) return std::nullopt;
@@ -170,10 +187,12 @@ bool CsvReader::parse_row(std::string_view t) {
   while (field < max_field_) {
     const int slot = slot_of_field_[field];
     if (slot < 0) {
-      const void* c = std::memchr(p, ',', static_cast<std::size_t>(e - p));
+      const char* c = field_end(p, e);
       ++field;
-      if (!c) break;
-      p = static_cast<const char*>(c) + 1;
+      if (c == e) break;
+      p = c + 1;
+      if (delim_ == ' ')
+        while (p < e && (*p == ' ' || *p == '\t')) ++p;
       continue;
     }
     const char* q = p;
@@ -182,11 +201,11 @@ bool CsvReader::parse_row(std::string_view t) {
     const char* const num_end = parse_number(q, e, v);
     const char* end = num_end ? num_end : q;
     while (end < e && (*end == ' ' || *end == '\t')) ++end;
-    const bool bad = !num_end || (end < e && *end != ',');
+    // Blanks: the number ends at a blank or the line's end, and the blanks after it are the delimiter.
+    const bool bad = !num_end || (delim_ == ' ' ? (end == num_end && end < e) : (end < e && *end != delim_));
     if (bad || !std::isfinite(v)) {
       // The field as written, for the message.
-      const void* c = std::memchr(p, ',', static_cast<std::size_t>(e - p));
-      const auto f = trim(std::string_view(p, static_cast<std::size_t>((c ? static_cast<const char*>(c) : e) - p)));
+      const auto f = trim(std::string_view(p, static_cast<std::size_t>(field_end(delim_ == ' ' ? q : p, e) - p)));
       if (f.empty()) fail(slot_names_[slot], "empty field");
       if (bad) fail(slot_names_[slot], "not a number: '" + field_text(f) + "'");
       if (f.find_first_of("nNiI") != std::string_view::npos) fail(slot_names_[slot], "NaN or infinity is not allowed");
@@ -195,7 +214,7 @@ bool CsvReader::parse_row(std::string_view t) {
     values_[slot] = v;
     ++field;
     if (end == e) break;
-    p = end + 1;
+    p = delim_ == ' ' ? end : end + 1;
   }
   if (field < max_field_) {
     // Name the first selected column that is missing from this row.

@@ -22,7 +22,10 @@ using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 class CsvReader final : public TableSource {
  public:
   // digest: SHA-256 of the file's bytes as they are read (sha256() once read to the end).
-  explicit CsvReader(std::string path, bool digest = false);
+  // delim: ',' (the interchange format), ';', or ' ' for runs of blanks (spaces and tabs, as
+  // space- and tab-separated loggers write them); 0 picks one from the header line (the most
+  // frequent of ';' and ',', else blanks). Decimal point always '.'.
+  explicit CsvReader(std::string path, bool digest = false, char delim = ',');
   ~CsvReader() override;
   CsvReader(const CsvReader&) = delete;
   CsvReader& operator=(const CsvReader&) = delete;
@@ -43,6 +46,7 @@ class CsvReader final : public TableSource {
   [[noreturn]] void fail_at(const std::string& column, const std::string& msg) const override { fail(column, msg); }
   std::optional<std::string> sha256() const override;
   const std::vector<std::string>& header() const { return header_; }
+  char delimiter() const { return delim_; }
   // '#' comment lines before the header, without the '#' and one following blank.
   const std::vector<std::string>& comments() const { return comments_; }
   std::size_t rows() const { return rows_; }
@@ -52,6 +56,8 @@ class CsvReader final : public TableSource {
 
  private:
   bool refuse_cut_ = false;
+  char delim_ = ',';
+  const char* field_end(const char* p, const char* e) const;  // the delimiter ending the field at p, or e
   bool read_line(std::string_view& out);
   bool parse_row(std::string_view t);
   void refill();

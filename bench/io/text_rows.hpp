@@ -60,13 +60,16 @@ class TextRows {
 };
 
 // Range checks before a value reaches the recording (a latitude of 1e308 is a number, not a place).
-inline void check_range(const TextRows& r, std::size_t col, double v, double lo, double hi, const char* what) {
+// Reader: TextRows or CsvReader (anything with path() and line()); col is 0-based.
+template <class Reader>
+void check_range(const Reader& r, std::size_t col, double v, double lo, double hi, const char* what) {
   if (!(v >= lo && v <= hi))
     throw InputError(r.path(), r.line(), "column " + std::to_string(col + 1),
                      std::string(what) + " " + number_text(v) + " outside [" + number_text(lo) + ", " + number_text(hi) + "]");
 }
 
-inline void check_time(const TextRows& r, double t, double& last, bool& first) {
+template <class Reader>
+void check_time(const Reader& r, double t, double& last, bool& first) {
   if (!(std::abs(t) <= plausible::kMaxAbsTime_s))  // the bound every reader of the recording applies
     throw InputError(r.path(), r.line(), "time",
                      "time " + number_text(t) + " s is not plausible (at most " + number_text(plausible::kMaxAbsTime_s) + " s)");

@@ -7,7 +7,6 @@
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/recording.hpp"
-#include "bench/io/staging_folder.hpp"
 #include "bench/io/text_rows.hpp"
 #include "common/input_error.hpp"
 
@@ -54,51 +53,24 @@ struct PairReader {
 
 ImportImuTkSummary import_imu_tk(const ImportImuTkArgs& a) {
   ImportImuTkSummary sum;
-  const fs::path out = import_output_folder(a.out, a.force);
-  if (a.gravity_m_s2 && !(*a.gravity_m_s2 >= 9.7 && *a.gravity_m_s2 <= 9.9))
-    throw InputError("--gravity", 0, "", number_text(*a.gravity_m_s2) + " m/s² is not gravity on Earth (9.7–9.9)");
-  double rate = a.rate_hz;
+  const std::filesystem::path out = check_multipos_target(a);
+  std::vector<double> dts;
   {
     PairReader r(a);
-    double t = 0, last = 0;
-    bool first = true;
-    Vec3 f, w;
-    std::vector<double> dts;
-    while (r.next(a, t, f, w)) {
-      if (!first) dts.push_back(t - last);
-      check_time(r.acc, t, last, first);
-      ++sum.rows;
-    }
+    sum.rows = scan_rows([&](double& t, Vec3& f, Vec3& w) { return r.next(a, t, f, w); }, r.acc, dts);
     if (sum.rows < 2) throw InputError(a.acc, 0, "", "needs at least two rows");
-    const double from_stamps = rate_from_intervals(dts);
-    if (!(rate > 0)) rate = from_stamps;
-    else if (std::abs(rate - from_stamps) > 0.01 * from_stamps)
-      throw InputError("--rate", 0, "", number_text(rate) + " Hz contradicts the files' time stamps (median interval: " +
-                                           number_text(from_stamps) + " Hz; is --time-unit right?)");
   }
-  sum.rate_hz = rate;
-  RecordingMeta meta;
-  meta.kind = RecordingKind::multipos;
-  meta.device = DeviceId{a.model, a.serial};
-  meta.imu_rate_hz = rate;
-  if (a.lat_deg) {
-    meta.site = Site{*a.lat_deg, 0.0, a.h_m.value_or(0.0)};
-    meta.site_has_lon = false;
-  }
-  if (a.gravity_m_s2) meta.extra["gravity_m_s2"] = *a.gravity_m_s2;
+  sum.rate_hz = multipos_rate(a, dts);
+  RecordingMeta meta = multipos_meta(a, sum.rate_hz);
   if (a.acc_counts.given || a.gyro_counts.given)
     meta.extra["source_counts"] = {{"gyro", counts_json(a.gyro_counts)}, {"accel", counts_json(a.acc_counts)}};
   meta.notes = "imported from IMU-TK text files: accelerometer " + a.acc + ", gyro " + a.gyro + " (time unit " +
                a.time_unit + ")";
-  StagingFolder staging(out, "importing");
-  {
-    RecordingWriter wr(staging.path(), meta, ImuForm::rates, false, false, false);
+  write_multipos(out, meta, ImuForm::rates, [&](RecordingWriter& wr) {
     PairReader r(a);
     ImuRecord rec;
     while (r.next(a, rec.t, rec.accel, rec.gyro)) wr.imu(rec);
-    wr.finish();  // read back against what was written before "complete"
-  }
-  place_staged_recording(staging, out, {"imu.csv", "meta.json"});
+  });
   return sum;
 }
 

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "bench/multipos/multipos_import.hpp"
 #include "common/sensor_model.hpp"
 
 namespace calbench {
@@ -16,16 +17,11 @@ struct CountsConversion {
   bool given = false;             // false: the files are SI already
 };
 
-struct ImportImuTkArgs {
-  std::string acc, gyro, out;
+struct ImportImuTkArgs : MultiposTarget {
+  std::string acc, gyro;
   CountsConversion acc_counts, gyro_counts;
   double time_scale = 1.0;        // seconds per time unit of the files
   std::string time_unit = "s";
-  std::string model = "unknown", serial = "unknown";
-  double rate_hz = 0;             // 0: from the median interval
-  std::optional<double> gravity_m_s2;
-  std::optional<double> lat_deg, h_m;
-  bool force = false;
 };
 
 struct ImportImuTkSummary {

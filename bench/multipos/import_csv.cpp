@@ -1,0 +1,124 @@
+#include "bench/multipos/import_csv.hpp"
+
+#include <algorithm>
+#include <initializer_list>
+#include <utility>
+
+#include "bench/io/csv.hpp"
+#include "bench/io/message_text.hpp"
+#include "common/input_error.hpp"
+#include "common/units.hpp"
+
+namespace calbench {
+namespace {
+
+using units::kDeg;
+using units::kG0;
+using units::kMilliG;
+
+double unit_si(const char* option, const std::string& unit,
+               std::initializer_list<std::pair<const char*, double>> table) {
+  std::string names;
+  for (const auto& [name, si] : table) {
+    if (unit == name) return si;
+    names += names.empty() ? name : std::string(", ") + name;
+  }
+  throw InputError(option, 0, "", "unknown unit '" + field_text(unit) + "' (one of " + names + ")");
+}
+
+// The rows of the file, in SI, one at a time.
+class CsvRows {
+ public:
+  explicit CsvRows(const ImportCsvArgs& a)
+      : r_(a.file, false, a.delimiter),
+        gyro_si_(gyro_unit_si(a.gyro_unit)),
+        accel_si_(accel_unit_si(a.accel_unit)),
+        time_si_(time_unit_si(a.time_unit)) {
+    time_ = select("--time", a.time_col);
+    for (int i = 0; i < 3; ++i) {
+      gyro_[i] = select("--gyro", a.gyro_cols[static_cast<std::size_t>(i)]);
+      accel_[i] = select("--accel", a.accel_cols[static_cast<std::size_t>(i)]);
+    }
+  }
+  bool next(double& t, Vec3& f, Vec3& w) {
+    if (!r_.next()) return false;
+    t = r_.value(time_.slot) * time_si_;
+    for (int i = 0; i < 3; ++i) {
+      w(i) = r_.value(gyro_[i].slot) * gyro_si_;
+      f(i) = r_.value(accel_[i].slot) * accel_si_;
+      check_range(r_, gyro_[i].index, w(i), -1e3, 1e3, "gyro (rad/s or rad, after the unit)");
+      check_range(r_, accel_[i].index, f(i), -1e4, 1e4, "accelerometer (m/s² or m/s, after the unit)");
+    }
+    return true;
+  }
+  const CsvReader& reader() const { return r_; }
+
+ private:
+  struct Column {
+    int slot = -1;
+    std::size_t index = 0;  // 0-based, in the header
+  };
+  // By header name, or by 1-based index when the text is all digits.
+  Column select(const char* option, const std::string& col) {
+    const auto& h = r_.header();
+    std::size_t idx = h.size();
+    if (!col.empty() && std::all_of(col.begin(), col.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      idx = col.size() < 6 ? static_cast<std::size_t>(std::stoul(col)) : 0;
+      if (idx < 1 || idx > h.size())
+        throw InputError(r_.path(), r_.line(), option,
+                         "column " + field_text(col) + " does not exist (the header has " + std::to_string(h.size()) +
+                             " columns)");
+      --idx;
+    } else {
+      idx = static_cast<std::size_t>(std::find(h.begin(), h.end(), col) - h.begin());
+    }
+    Column c;
+    c.slot = r_.require(idx < h.size() ? h[idx] : col);
+    c.index = idx;
+    return c;
+  }
+  CsvReader r_;
+  double gyro_si_, accel_si_, time_si_;
+  Column time_, gyro_[3], accel_[3];
+};
+
+}  // namespace
+
+double gyro_unit_si(const std::string& u) {
+  return unit_si("--gyro-unit", u, {{"rad/s", 1.0}, {"deg/s", kDeg}, {"mdeg/s", 1e-3 * kDeg}});
+}
+double accel_unit_si(const std::string& u) {
+  return unit_si("--accel-unit", u, {{"m/s2", 1.0}, {"g", kG0}, {"mg", kMilliG}});
+}
+double time_unit_si(const std::string& u) {
+  return unit_si("--time-unit", u, {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}});
+}
+
+ImportCsvSummary import_csv(const ImportCsvArgs& a) {
+  ImportCsvSummary sum;
+  const std::filesystem::path out = check_multipos_target(a);
+  std::vector<double> dts;
+  {
+    CsvRows r(a);
+    sum.rows = scan_rows([&](double& t, Vec3& f, Vec3& w) { return r.next(t, f, w); }, r.reader(), dts);
+    if (sum.rows < 2) throw InputError(a.file, 0, "", "needs at least two data rows");
+    sum.delimiter = r.reader().delimiter();
+  }
+  sum.rate_hz = multipos_rate(a, dts);
+  RecordingMeta meta = multipos_meta(a, sum.rate_hz);
+  meta.notes = "imported from CSV " + a.file + " (gyro " + a.gyro_unit + (a.increments ? " increments" : "") +
+               ", accelerometer " + a.accel_unit + ", time " + a.time_unit + ")";
+  write_multipos(out, meta, a.increments ? ImuForm::increments : ImuForm::rates, [&](RecordingWriter& wr) {
+    CsvRows r(a);
+    ImuRecord rec;
+    double last = 0;
+    for (bool first = true; r.next(rec.t, rec.accel, rec.gyro); first = false) {
+      rec.dt = first ? 1.0 / sum.rate_hz : rec.t - last;
+      last = rec.t;
+      wr.imu(rec);
+    }
+  });
+  return sum;
+}
+
+}  // namespace calbench

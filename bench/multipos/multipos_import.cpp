@@ -1,0 +1,51 @@
+#include "bench/multipos/multipos_import.hpp"
+
+#include <cmath>
+
+#include "bench/io/message_text.hpp"
+#include "bench/io/staging_folder.hpp"
+#include "common/input_error.hpp"
+
+namespace calbench {
+
+std::filesystem::path check_multipos_target(const MultiposTarget& t) {
+  std::filesystem::path out = import_output_folder(t.out, t.force);
+  if (t.gravity_m_s2 && !(*t.gravity_m_s2 >= 9.7 && *t.gravity_m_s2 <= 9.9))
+    throw InputError("--gravity", 0, "", number_text(*t.gravity_m_s2) + " m/s² is not gravity on Earth (9.7–9.9)");
+  return out;
+}
+
+double multipos_rate(const MultiposTarget& t, std::vector<double>& dts) {
+  const double from_stamps = rate_from_intervals(dts);
+  if (!(t.rate_hz > 0)) return from_stamps;
+  if (std::abs(t.rate_hz - from_stamps) > 0.01 * from_stamps)
+    throw InputError("--rate", 0, "", number_text(t.rate_hz) + " Hz contradicts the time stamps (median interval: " +
+                                         number_text(from_stamps) + " Hz; is --time-unit right?)");
+  return t.rate_hz;
+}
+
+RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz) {
+  RecordingMeta meta;
+  meta.kind = RecordingKind::multipos;
+  meta.device = DeviceId{t.model, t.serial};
+  meta.imu_rate_hz = rate_hz;
+  if (t.lat_deg) {
+    meta.site = Site{*t.lat_deg, 0.0, t.h_m.value_or(0.0)};
+    meta.site_has_lon = false;
+  }
+  if (t.gravity_m_s2) meta.extra["gravity_m_s2"] = *t.gravity_m_s2;
+  return meta;
+}
+
+void write_multipos(const std::filesystem::path& out, const RecordingMeta& meta, ImuForm form,
+                    const std::function<void(RecordingWriter&)>& rows) {
+  StagingFolder staging(out, "importing");
+  {
+    RecordingWriter wr(staging.path(), meta, form, false, false, false);
+    rows(wr);
+    wr.finish();  // read back against what was written before "complete"
+  }
+  place_staged_recording(staging, out, {"imu.csv", "meta.json"});
+}
+
+}  // namespace calbench
