@@ -5,6 +5,7 @@
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/import_kfgins.hpp"
+#include "bench/io/imu_class_toml.hpp"
 #include "bench/multipos/import_csv.hpp"
 #include "bench/multipos/import_imutk.hpp"
 #include "common/input_error.hpp"
@@ -21,13 +22,25 @@ struct TargetOptions {
     app = a;
     a->add_option("--out", t.out, "recording folder to write")->required();
     a->add_option("--rate", t.rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
-    a->add_option("--model", t.model, "device model for meta.json (a device class name, see docs/in-motion.md)");
-    a->add_option("--serial", t.serial, "device serial for meta.json");
+    // Required: fit multipos takes the noise of the class named here, and the serial keys the unit's
+    // coefficient sets in the database ("unknown" would merge every unit's).
+    a->add_option("--model", t.model, "device model for meta.json: a device class name or alias (docs/in-motion.md, "
+                                      "'Device classes'); another name needs fit multipos --device-class FILE")
+        ->required();
+    a->add_option("--serial", t.serial, "device serial for meta.json (keys the unit's coefficient sets in the database)")
+        ->required();
     a->add_option("--gravity", gravity, "local gravity, m/s² (meta.json gravity_m_s2)")->check(finite_number(9.7, 9.9));
     a->add_option("--site-lat", lat, "site latitude, deg (meta.json site: normal gravity and the Earth rate)")
         ->check(finite_number(-90, 90));
     a->add_option("--site-h", h, "site height, m (with --site-lat)")->check(finite_number(-1e4, 1e5));
     a->add_flag("--force", t.force, "overwrite an existing recording in --out");
+  }
+  // After the import: a model no built-in class knows is fine, but fit multipos will ask for the class.
+  static void note_model(const MultiposTarget& t) {
+    for (const ImuClass& c : builtin_imu_classes())
+      if (imu_class_matches(c, t.model)) return;
+    std::cout << "note: no built-in device class is named '" << t.model << "'; give fit multipos --device-class FILE "
+              << "(bench/imu_classes/*.toml shows the format; known: " << known_imu_classes_text() << ")" << std::endl;
   }
   void finish(MultiposTarget& t) const {
     if (app->count("--gravity")) t.gravity_m_s2 = gravity;
@@ -110,6 +123,7 @@ const bool registered = add_command(95, [](CLI::App& app) {
     const ImportImuTkSummary s = import_imu_tk(*t);
     std::cout << "imported " << s.rows << " rows (" << s.rate_hz << " Hz) into " << t->out << " (kind multipos)"
               << std::endl;
+    TargetOptions::note_model(*t);
   });
 
   // One CSV with a header line -> multipos recording.
@@ -140,7 +154,7 @@ const bool registered = add_command(95, [](CLI::App& app) {
       ->check(CLI::IsMember({"auto", "comma", "semicolon", "tab", "space"}));
   auto ctarget = std::make_shared<TargetOptions>();
   ctarget->add(ic, *c);
-  ic->callback([c, cols, delim, ctarget] {
+  ic->callback([c, cols, delim, kind, ctarget] {  // kind: held here, or CLI11 writes into a freed string
     for (int k = 0; k < 2; ++k)
       if ((*cols)[k].size() == 3) std::copy_n((*cols)[k].begin(), 3, (k == 0 ? c->gyro_cols : c->accel_cols).begin());
     c->delimiter = *delim == "comma" ? ',' : *delim == "semicolon" ? ';' : (*delim == "tab" || *delim == "space") ? ' ' : '\0';
@@ -149,6 +163,7 @@ const bool registered = add_command(95, [](CLI::App& app) {
     const char* dname = s.delimiter == ',' ? "comma" : s.delimiter == ';' ? "semicolon" : "blanks";
     std::cout << "imported " << s.rows << " rows (" << s.rate_hz << " Hz, " << dname << "-separated) into " << c->out
               << " (kind multipos)" << std::endl;
+    TargetOptions::note_model(*c);
   });
 });
 

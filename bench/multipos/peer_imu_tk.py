@@ -206,7 +206,7 @@ class Case:
         if not os.path.exists(os.path.join(rec, "meta.json")):
             run([self.a.calbench, "import", "imu-tk", acc_file, gyro_file, "--out", rec, "--acc-offset", str(OFFSET),
                  "--acc-scale", str(ACC_SCALE), "--gyro-offset", str(OFFSET), "--gyro-scale", repr(GYRO_SCALE),
-                 "--gravity", str(self.g), "--model", self.model])
+                 "--gravity", str(self.g), "--model", self.model, "--serial", "xsens-imu-tk"])
         out = os.path.join(self.work, name + "-" + "-".join(x.strip("-") for x in extra) + ".json")
         run([self.a.calbench, "fit", "multipos", rec, "--out", out, *extra])
         return out

@@ -9,7 +9,7 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 D="$SHARED/data/imu_tk-xsens-multipos"
 [ -f "$D/xsens_acc.mat" ] || { echo "no $D: skipped"; exit 77; }
 conv=(--acc-offset 32768 --acc-scale 0.0026808 --gyro-offset 32768 --gyro-scale 1.5979e-4 --gravity 9.81744)
-"$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" "${conv[@]}" --model "Xsens MTi" > /dev/null
+"$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" "${conv[@]}" --model "Xsens MTi" --serial XS1 > /dev/null
 "$CALBENCH" fit multipos "$tmp/xs" --json > "$tmp/ref.json"
 # The same rows as a logger writes them: ms, deg/s, g; semicolons; extra columns; columns in another order.
 python3 - "$tmp/xs/imu.csv" "$tmp" <<'PY'
@@ -29,10 +29,10 @@ with open(out + '/tab.csv', 'w') as f:
         f.write('\t'.join(r[k] for k in ('t', 'gx', 'gy', 'gz', 'ax', 'ay', 'az')) + '\n')
 PY
 "$CALBENCH" import csv "$tmp/semi.csv" --kind multipos --out "$tmp/semi" --time time_ms --time-unit ms \
-  --gyro GYR_X,GYR_Y,GYR_Z --gyro-unit deg/s --accel 4,3,2 --accel-unit g --gravity 9.81744 --model "Xsens MTi" > "$tmp/imp.txt"
+  --gyro GYR_X,GYR_Y,GYR_Z --gyro-unit deg/s --accel 4,3,2 --accel-unit g --gravity 9.81744 --model "Xsens MTi" --serial XS1 > "$tmp/imp.txt"
 grep -q "imported 51175 rows (100 Hz, semicolon-separated)" "$tmp/imp.txt"
 "$CALBENCH" fit multipos "$tmp/semi" --json > "$tmp/semi.json"
-"$CALBENCH" import csv "$tmp/tab.csv" --kind multipos --out "$tmp/tab" --gravity 9.81744 > "$tmp/imp2.txt"
+"$CALBENCH" import csv "$tmp/tab.csv" --kind multipos --out "$tmp/tab" --gravity 9.81744 --model MTi --serial XS1 > "$tmp/imp2.txt"
 grep -q "blanks-separated" "$tmp/imp2.txt"
 "$CALBENCH" fit multipos "$tmp/tab" --json > "$tmp/tab.json"
 python3 - "$tmp/ref.json" "$tmp/semi.json" "$tmp/tab.json" "$tmp/semi/meta.json" <<'PY'
@@ -50,7 +50,7 @@ for other in (semi, tab):
 PY
 # Increments (per sample) give the same recording's rates back.
 printf 't,dth_x,dth_y,dth_z,dv_x,dv_y,dv_z\n0,0,0,0,0,0,0.0981\n0.01,0.0001,0,0,0,0,0.0981\n0.02,0,0,0,0,0.0981,0\n' > "$tmp/inc.csv"
-"$CALBENCH" import csv "$tmp/inc.csv" --kind multipos --out "$tmp/inc" --increments --time 1 --gyro 2,3,4 --accel 5,6,7 > /dev/null
+"$CALBENCH" import csv "$tmp/inc.csv" --kind multipos --out "$tmp/inc" --increments --time 1 --gyro 2,3,4 --accel 5,6,7 --model MTi --serial XS1 > /dev/null
 python3 - "$tmp/inc/meta.json" "$tmp/inc/imu.csv" <<'PY'
 import json, sys
 meta = json.load(open(sys.argv[1]))
@@ -61,7 +61,7 @@ PY
 bad() {  # name, expected message part, file content, options...
   local name=$1 want=$2 content=$3; shift 3
   printf "$content" > "$tmp/$name.csv"
-  set +e; "$CALBENCH" import csv "$tmp/$name.csv" --kind multipos --out "$tmp/$name" "$@" 2> "$tmp/$name.err"; rc=$?; set -e
+  set +e; "$CALBENCH" import csv "$tmp/$name.csv" --kind multipos --out "$tmp/$name" --model MTi --serial XS1 "$@" 2> "$tmp/$name.err"; rc=$?; set -e
   [ $rc -eq 2 ] || { echo "$name: exit $rc"; cat "$tmp/$name.err"; exit 1; }
   grep -q -- "$want" "$tmp/$name.err" || { echo "$name: wanted '$want'"; cat "$tmp/$name.err"; exit 1; }
   [ ! -e "$tmp/$name" ] || { echo "$name: wrote output"; exit 1; }
@@ -77,7 +77,7 @@ bad noindex "column 9 does not exist" "${H}0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n
 bad range "$tmp/range.csv:2.*outside" "${H}0,0,0,0,0,0,1e9\n0.01,0,0,0,0,0,9.8\n"
 bad onerow "needs at least two data rows" "${H}0,0,0,0,0,0,9.8\n"
 bad empty "no header line" ""
-set +e; "$CALBENCH" import csv "$tmp/inc.csv" --kind multipos --out "$tmp/u" --gyro-unit furlong/s 2> "$tmp/u.err"; rc=$?; set -e
+set +e; "$CALBENCH" import csv "$tmp/inc.csv" --kind multipos --out "$tmp/u" --model MTi --serial XS1 --gyro-unit furlong/s 2> "$tmp/u.err"; rc=$?; set -e
 [ $rc -ne 0 ] && grep -q "gyro-unit" "$tmp/u.err"
 "$CALBENCH" import csv --help | grep -q -- "--increments"
 echo ok

@@ -8,6 +8,7 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 D="$SHARED/data/imu_tk-xsens-multipos"
 [ -f "$D/xsens_acc.mat" ] || { echo "no $D: skipped"; exit 77; }
 conv=(--acc-offset 32768 --acc-scale 0.0026808 --gyro-offset 32768 --gyro-scale 1.5979e-4 --gravity 9.81744)
+dev=(--model "Xsens MTi" --serial XS1)
 "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" "${conv[@]}" --model "Xsens MTi" --serial XS1 > "$tmp/imp.txt"
 grep -q "imported 51175 rows" "$tmp/imp.txt"
 "$CALBENCH" fit multipos "$tmp/xs" --out "$tmp/c.json" --plot "$tmp/p.svg" > "$tmp/fit.txt"
@@ -53,23 +54,27 @@ expect_fail() {  # expect_fail PATTERN CMD...: exit 2 with PATTERN on stderr
 }
 # Import: rows that disagree, a non-number, a two-value offset, an existing output — nothing written.
 head -1000 "$D/xsens_acc.mat" > "$tmp/a.txt"; head -999 "$D/xsens_gyro.mat" > "$tmp/g.txt"
-expect_fail "g.txt:999.*ends before" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g.txt" --out "$tmp/bad1" "${conv[@]}"
+expect_fail "g.txt:999.*ends before" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g.txt" --out "$tmp/bad1" "${conv[@]}" "${dev[@]}"
 head -1000 "$D/xsens_gyro.mat" | sed '500s/3\.2[0-9]*e+04/abc/' > "$tmp/g2.txt"
-expect_fail "g2.txt:500.*not a number" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g2.txt" --out "$tmp/bad2" "${conv[@]}"
+expect_fail "g2.txt:500.*not a number" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g2.txt" --out "$tmp/bad2" "${conv[@]}" "${dev[@]}"
 head -1000 "$D/xsens_gyro.mat" | awk 'NR==300{$1=$1+0.5}1' > "$tmp/g3.txt"
-expect_fail "g3.txt:300.*share their time stamps" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g3.txt" --out "$tmp/bad3" "${conv[@]}"
-expect_fail "one value or three" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/a.txt" --acc-offset 1,2 --out "$tmp/bad4"
+expect_fail "g3.txt:300.*share their time stamps" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g3.txt" --out "$tmp/bad3" "${conv[@]}" "${dev[@]}"
+expect_fail "one value or three" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/a.txt" --acc-offset 1,2 --out "$tmp/bad4" "${dev[@]}"
 for b in bad1 bad2 bad3 bad4; do [ ! -e "$tmp/$b" ] || { echo "$b written"; exit 1; }; done
 [ -z "$(ls -A "$tmp" | grep importing || true)" ]
-expect_fail "already holds a recording" "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs"
+expect_fail "already holds a recording" "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" "${dev[@]}"
 # Fit: too few poses (the first 60 s: the opening static and two poses) is refused saying what to add.
 head -6000 "$D/xsens_acc.mat" > "$tmp/a6.txt"; head -6000 "$D/xsens_gyro.mat" > "$tmp/g6.txt"
-"$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/few" "${conv[@]}" --model "Xsens MTi" > /dev/null
+"$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/few" "${conv[@]}" --model "Xsens MTi" --serial XS1 > /dev/null
 expect_fail "static poses found, at least 9 needed" "$CALBENCH" fit multipos "$tmp/few" --out "$tmp/few.json"
 grep -q "add static poses" "$tmp/err"
 [ ! -e "$tmp/few.json" ]
 # An unknown model needs --device-class; a bench recording is not a multipos one.
-"$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/unk" "${conv[@]}" --model "Brand X" > /dev/null
+"$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/unk" "${conv[@]}" --model "Brand X" --serial XS1 > "$tmp/unk.txt"
+grep -q "note: no built-in device class is named 'Brand X'; give fit multipos --device-class FILE" "$tmp/unk.txt"
+# The model and the serial are required (the class's noise; the unit's key in the database).
+expect_fail "serial is required" "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/noserial" "${conv[@]}" --model MTi
+[ ! -e "$tmp/noserial" ]
 expect_fail "device.model" "$CALBENCH" fit multipos "$tmp/unk"
 expect_fail "exclude-pose 99" "$CALBENCH" fit multipos "$tmp/xs" --exclude-pose 99
 mkdir -p "$tmp/bench"
@@ -81,12 +86,12 @@ expect_fail "expected a multipos recording" "$CALBENCH" fit multipos "$tmp/bench
 # The tryout's traps: the accelerometer scale left at 1 (counts read as m/s²), the files swapped,
 # --rate against the time stamps, a --plot path that cannot be written (nothing written then).
 "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/noscale" --acc-offset 32768 \
-  --gyro-offset 32768 --gyro-scale 1.5979e-4 --model "Xsens MTi" > /dev/null
+  --gyro-offset 32768 --gyro-scale 1.5979e-4 "${dev[@]}" > /dev/null
 expect_fail "not in m/s²" "$CALBENCH" fit multipos "$tmp/noscale"
 grep -q "acc-scale" "$tmp/err"
-"$CALBENCH" import imu-tk "$D/xsens_gyro.mat" "$D/xsens_acc.mat" --out "$tmp/swapped" "${conv[@]}" --model "Xsens MTi" > /dev/null
+"$CALBENCH" import imu-tk "$D/xsens_gyro.mat" "$D/xsens_acc.mat" --out "$tmp/swapped" "${conv[@]}" --model "Xsens MTi" --serial XS1 > /dev/null
 expect_fail "not swapped" "$CALBENCH" fit multipos "$tmp/swapped"
-expect_fail "contradicts the files' time stamps" "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/r50" --rate 50 "${conv[@]}"
+expect_fail "contradicts the time stamps" "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/r50" --rate 50 "${conv[@]}" "${dev[@]}"
 [ ! -e "$tmp/r50" ]
 expect_fail "" "$CALBENCH" fit multipos "$tmp/xs" --out "$tmp/never.json" --plot "$tmp/no/such/dir/p.svg"
 [ ! -e "$tmp/never.json" ] || { echo "--out written although --plot failed"; exit 1; }
