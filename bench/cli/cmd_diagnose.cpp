@@ -9,6 +9,7 @@
 #include "bench/diagnose/drive_run.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/diagnose/gnss_run.hpp"
+#include "bench/diagnose/multipos_run.hpp"
 #include "common/input_error.hpp"
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/json_util.hpp"
@@ -82,10 +83,36 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
   }
 }
 
+// Multipos recordings (meta.json kind "multipos"): bench/diagnose/multipos_run.hpp, docs/diagnosis.md
+// "Multi-position recordings".
+void run_diagnose_multipos(const DiagnoseArgs& a) {
+  if (!a.plan.empty())
+    throw InputError("--plan", 0, "", a.dir + " is a multipos recording: --plan (the bench table's accuracy) applies to bench recordings");
+  if (a.no_innovations)
+    throw InputError("--no-innovations", 0, "", a.dir + " is a multipos recording: --no-innovations applies to drives");
+  if (!a.report.empty())
+    throw InputError("--report", 0, "", a.dir + " is a multipos recording: the HTML report covers bench and drive recordings; "
+                                            "use --json (per-pose residuals before/after) or fit multipos --plot");
+  const MultiposDiagRun run = run_multipos_diagnosis(a.dir, a.coeffs, a.device_class);
+  const bool write_out = !a.out.empty() && !run.result.core.findings.empty();
+  if (write_out) write_coefficients(a.out, run.improved);
+  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+  if (a.json) {
+    auto j = multipos_diagnosis_json(run);
+    j["recording"] = {{"path", a.dir}, {"kind", "multipos"}};
+    print_json(j.dump(2));
+  } else {
+    std::cout << "diagnosis of " << a.dir << " (multipos)\n" << multipos_diagnosis_text(run);
+    if (write_out) std::cout << "improved coefficients written to " << a.out << "\n";
+  }
+}
+
 void run_diagnose(const DiagnoseArgs& a) {
   for (const std::string* f : {&a.out, &a.report})  // before the work: a wrong path costs nothing
     if (!f->empty()) check_output_path(*f);
-  if (read_meta(a.dir).kind == RecordingKind::drive) return run_diagnose_drive(a);
+  const RecordingKind kind = read_meta(a.dir).kind;
+  if (kind == RecordingKind::drive) return run_diagnose_drive(a);
+  if (kind == RecordingKind::multipos) return run_diagnose_multipos(a);
   if (a.no_innovations)
     throw InputError("--no-innovations", 0, "", a.dir + " is a bench recording: --no-innovations (the in-motion filter runs) applies to drives");
   const DiagInput in = load_diag_input(a.dir);

@@ -120,6 +120,7 @@ MultiposRecording read_multipos_recording(const std::string& dir, const std::str
   r.device = meta.device;
   const ImuClassChoice cls = choose_imu_class(device_class_option, meta.device.model, mf);
   r.device_class = imu_class_json(cls);
+  r.noise = cls.cls.noise;
   auto& in = r.input;
   in.rate_hz = meta.imu_rate_hz;
   in.gyro_density = cls.cls.noise.gyro.white_density;

@@ -9,6 +9,7 @@
 
 #include "calibration/multipos/multipos_fit.hpp"
 #include "common/coefficients_codec.hpp"
+#include "common/noise_spec.hpp"
 
 namespace calbench {
 
@@ -26,6 +27,7 @@ struct MultiposRecording {
   multipos::MultiposInput input;
   std::string gravity_source;   // "meta.json gravity_m_s2", "site (WGS-84 normal gravity)", "standard gravity …"
   nlohmann::json device_class;  // what the report records of the class
+  NoiseSpec noise;              // the class noise (diagnose: the drift prior)
   DeviceId device;
 };
 MultiposRecording read_multipos_recording(const std::string& dir, const std::string& device_class_option);
