@@ -26,7 +26,10 @@ BenchRecordingData load_bench_blocks(const std::filesystem::path& dir, double bl
   BenchRecordingData d;
   d.meta = read_meta(dir);
   if (d.meta.kind != RecordingKind::bench)
-    throw InputError((dir / "meta.json").string(), 0, "kind", "this is a drive recording; `fit bench` needs kind \"bench\"");
+    throw InputError((dir / "meta.json").string(), 0, "kind",
+                     std::string("this is a ") + kind_name(d.meta.kind) + " recording; `fit bench` needs kind \"bench\"" +
+                         (d.meta.kind == RecordingKind::multipos ? " (a multipos recording: `fit multipos`)"
+                                                                 : " (a drive: `fit drive`)"));
   ImuReader imu(dir / "imu.csv", d.meta.imu_rate_hz);
   BenchRefReader ref(dir / "reference.csv");
   d.form = imu.form();

@@ -241,6 +241,14 @@ FitEvidence fit_evidence(Store& store, const CoefficientSetRecord& set) {
   try {
     const CoefficientSet c = coefficients_from_json(parse_json_text(set.payload_json, where), where);
     ev.bench = c.fit_quality;
+    if (const auto m = c.extra.find("multipos"); m != c.extra.end()) {
+      const auto num = [&](const char* k) {
+        if (!m->is_object() || !m->contains(k) || !(*m)[k].is_number() || !std::isfinite((*m)[k].get<double>()))
+          throw InputError(where, 0, std::string("multipos.") + k, "missing or not a finite number");
+        return (*m)[k].get<double>();
+      };
+      ev.multipos_chi2 = std::make_pair(num("accel_chi2_dof_class"), num("gyro_chi2_dof"));
+    }
   } catch (const InputError& e) {
     ev.problems.push_back(std::string("fit quality of the set unreadable: ") + e.what());
   }
@@ -260,8 +268,17 @@ FitEvidence fit_evidence(Store& store, const CoefficientSetRecord& set) {
 
 std::vector<std::string> fit_quality_reasons(const CoefficientSetRecord& set, const FitEvidence& ev, const FitQualityLimits& q) {
   std::vector<std::string> why = ev.problems;
+  if (ev.multipos_chi2) {
+    const auto [a, g] = *ev.multipos_chi2;
+    if (!(a <= q.max_chi2_dof_accel))
+      why.push_back("multipos fit: accelerometer χ²/dof " + fmt(a, 3) + " above " + fmt(q.max_chi2_dof_accel) +
+                    " (gravity-magnitude residuals beyond the class's noise and drift: diagnose the recording)");
+    if (!(g <= q.max_chi2_dof_gyro))
+      why.push_back("multipos fit: gyro χ²/dof " + fmt(g, 3) + " above " + fmt(q.max_chi2_dof_gyro) +
+                    " (gravity direction after the rotations beyond the noise: diagnose the recording)");
+  }
   if (ev.bench) bench_reasons(*ev.bench, q, why);
-  else if (q.require_fit_quality && set.source == SetSource::bench)
+  else if (q.require_fit_quality && set.source == SetSource::bench && !ev.multipos_chi2)
     why.push_back("bench fit quality not recorded with the set (no fit_quality in its coefficients: refit with calbench fit bench)");
   if (ev.nis) nis_reasons(*ev.nis, q, why);
   if (ev.parent && set.source == SetSource::combined) parent_reasons(set, *ev.parent, q, why);

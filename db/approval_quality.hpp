@@ -2,6 +2,8 @@
 // beside the coefficient and QC thresholds of db/approval.hpp (which holds them in its Thresholds
 // and runs them in check_verdict(), the one verdict of `db approve`, the device report and the
 // preview that `fit drive` ends with).
+//  - multipos (a bench-source set fitted without a rate table, `fit multipos`): the accelerometer's
+//    and the gyros' χ²/dof of that fit, by the same max_chi2_dof limits;
 //  - bench: the whitened χ²/dof of each triad axis, and per kind of plan step (static positions,
 //    rate steps) the largest systematic residual (the mean residual of a step), from the set's
 //    coefficients.json "fit_quality" (common/fit_quality.hpp, written by `fit bench`);
@@ -60,6 +62,10 @@ struct FitEvidence {
   std::optional<BenchFitQuality> bench;                      // the set's coefficients.json fit_quality
   std::optional<std::map<std::string, NisConsistency>> nis;  // the in-motion run's consistency
   std::optional<CoefficientSetRecord> parent;                // the set a combined set refines
+  // A set fitted from a multipos recording (payload "multipos"): χ²/dof of the gravity-magnitude
+  // residuals under the class's white noise and drift ("accel_chi2_dof_class") and of the rotations'
+  // gravity-direction residuals ("gyro_chi2_dof"), judged by the bench limits max_chi2_dof.
+  std::optional<std::pair<double, double>> multipos_chi2;    // accel, gyro
   std::vector<std::string> problems;                         // evidence that could not be read (refuses)
 };
 FitEvidence fit_evidence(Store& store, const CoefficientSetRecord& set);

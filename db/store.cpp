@@ -11,6 +11,8 @@
 #include <cstdlib>
 #include <random>
 
+#include <nlohmann/json.hpp>
+
 #include "common/input_error.hpp"
 #include "common/utf8.hpp"
 #include "db/input_errors.hpp"
@@ -28,6 +30,19 @@ std::string to_string(SetSource s) {
   }
   return "?";
 }
+std::string fit_kind(const CoefficientSetRecord& s) {
+  if (s.source != SetSource::bench) return "";
+  const nlohmann::json j = nlohmann::json::parse(s.payload_json, nullptr, false);
+  if (j.is_object() && j.contains("source") && j["source"].is_object() && j["source"].value("kind", "") == "multipos")
+    return "multipos";
+  return "";
+}
+
+std::string source_label(const CoefficientSetRecord& s) {
+  const std::string k = fit_kind(s);
+  return to_string(s.source) + (k.empty() ? "" : " (" + k + ")");
+}
+
 std::string to_string(SetStatus s) {
   switch (s) {
     case SetStatus::draft: return "draft";

@@ -167,6 +167,12 @@ struct DeviceSummary {
   std::string latest_status, latest_source;
 };
 
+// How a set is shown: its source, and for a bench-source set fitted from a multipos recording (no
+// rate table: payload "source": {"kind": "multipos"}) "bench (multipos)".
+std::string source_label(const CoefficientSetRecord& s);
+// "multipos" for such a set, else "" (the JSON's "fit_kind").
+std::string fit_kind(const CoefficientSetRecord& s);
+
 struct StoredSet {
   std::int64_t device_id = 0, run_id = 0, set_id = 0;
   int version = 0;

@@ -54,6 +54,7 @@ json set_json(const CoefficientSetRecord& s) {
             {"model", s.model},
             {"version", s.version},
             {"source", to_string(s.source)},
+            {"fit_kind", fit_kind(s).empty() ? json(nullptr) : json(fit_kind(s))},
             {"status", to_string(s.status)},
             {"parent", s.parent_id ? json(*s.parent_id) : json(nullptr)},
             {"bench_run", s.bench_run_id ? json(*s.bench_run_id) : json(nullptr)},
@@ -165,7 +166,7 @@ void cmd_show(const DbArgs& a) {
             << d.created_at << "\n";
   std::cout << "coefficient sets:\n";
   for (const auto& x : sets) {
-    std::cout << "  set " << x.id << "  v" << x.version << "  " << to_string(x.source) << "  " << to_string(x.status)
+    std::cout << "  set " << x.id << "  v" << x.version << "  " << source_label(x) << "  " << to_string(x.status)
               << (x.parent_id ? "  parent " + std::to_string(*x.parent_id) : std::string()) << "  " << x.created_at
               << "  by " << x.created_by << "\n";
     print_set_summary(x);

@@ -151,12 +151,26 @@ void cmd_store_bench(const DbArgs& a) {
   BenchRunInput run;
   run.station = a.station.empty() ? Actor::from_environment(a.op).station : a.station;
   run.plan = a.plan;
-  if (!a.recording.empty()) describe_recording(run, a.recording);  // absolute URI and digest of its files
+  if (!a.recording.empty()) {
+    check_same_unit(c.device, a.coeffs, a.recording);  // another unit's recording is not this set's run
+    describe_recording(run, a.recording);              // absolute URI and digest of its files
+  }
   run.recording_sha256 = a.sha256;
   if (run.recording_sha256.empty() && !a.recording.empty()) {
     const std::filesystem::path imu = table_file(a.recording, "imu");  // imu.csv, or recording.h5
     if (!std::filesystem::exists(imu)) throw InputError(imu.string(), 0, "", "recording has no imu.csv (and no recording.h5)");
     run.recording_sha256 = sha256_file(imu);
+  }
+  // A set that names the IMU table it was fitted from (fit multipos: "source": {"imu_sha256"}) is
+  // stored only with that recording.
+  if (const auto src = c.extra.find("source"); src != c.extra.end() && src->is_object() && src->contains("imu_sha256") &&
+                                               !run.recording_sha256.empty()) {
+    const auto& h = (*src)["imu_sha256"];
+    if (!h.is_string() || h.get<std::string>() != run.recording_sha256)
+      throw InputError(a.coeffs, 0, "source.imu_sha256",
+                       "the set was fitted from another recording (" + src->value("recording", std::string("?")) +
+                           "): its IMU table's SHA-256 differs from the one given (" +
+                           (a.recording.empty() ? std::string("--sha256") : a.recording) + ")");
   }
   run.started_at = a.started;
   run.ended_at = a.ended;

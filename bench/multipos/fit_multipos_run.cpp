@@ -8,6 +8,8 @@
 #include "bench/io/imu_class_toml.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/message_text.hpp"
+#include "bench/io/hdf5_recording.hpp"
+#include "calibration/diagnosis/multipos_diagnose.hpp"
 #include "bench/io/recording.hpp"
 #include "bench/report/svg_plot.hpp"
 #include "calibration/earth.hpp"
@@ -173,8 +175,19 @@ MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
   }
   r.set.device = r.rec.device;
   r.set.errors = r.fit.coeffs;
-  r.set.extra["source"] = {{"kind", "multipos"}, {"recording", a.dir}};
+  r.set.extra["source"] = {{"kind", "multipos"},
+                           {"recording", a.dir},
+                           {"imu_sha256", sha256_file(table_file(a.dir, "imu"))}};  // db store-bench checks it
   r.set.extra["multipos"] = fit_json(r.rec, r.fit);
+  // The statics under the class's whole noise model (its drift between poses too): what the
+  // approval judges (db/approval_quality.hpp); the fit's own χ²/dof weighs white noise only.
+  const MultiposNoiseCheck nc = multipos_noise_check(r.rec.input, r.fit, r.fit.coeffs, r.rec.noise);
+  r.set.extra["multipos"]["accel_chi2_dof_class"] = nc.accel_chi2_dof;
+  r.set.extra["multipos"]["gyro_static_chi2_dof_class"] = {nc.gyro_chi2_dof[0], nc.gyro_chi2_dof[1], nc.gyro_chi2_dof[2]};
+  r.set.extra["multipos"]["class_noise_note"] =
+      "accel_chi2_dof_class: gravity-magnitude residuals over the static poses (N - 9 dof) under white noise plus the "
+      "class's bias drift between poses; gyro_static_chi2_dof_class: each gyro's static mean rate (N - 1 dof) with the "
+      "Earth rate as noise (calibration/diagnosis/multipos_diagnose.hpp)";
   return r;
 }
 

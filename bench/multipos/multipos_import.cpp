@@ -17,6 +17,11 @@ std::filesystem::path check_multipos_target(const MultiposTarget& t) {
 
 double multipos_rate(const MultiposTarget& t, std::vector<double>& dts) {
   const double from_stamps = rate_from_intervals(dts);
+  // An IMU samples at 1 Hz … 50 kHz: outside, the time column's unit is wrong (ms read as s gives a
+  // tenth of a hertz), and the fit would refuse every pose later without saying why.
+  if (!(from_stamps >= 1.0 && from_stamps <= 5e4))
+    throw InputError("--time-unit", 0, "", "the time stamps give " + number_text(from_stamps) +
+                                               " Hz (median interval), not an IMU's rate (1 Hz – 50 kHz): is --time-unit right?");
   if (!(t.rate_hz > 0)) return from_stamps;
   if (std::abs(t.rate_hz - from_stamps) > 0.01 * from_stamps)
     throw InputError("--rate", 0, "", number_text(t.rate_hz) + " Hz contradicts the time stamps (median interval: " +

@@ -43,7 +43,8 @@ std::size_t scan_rows(Next next, const Reader& reader, std::vector<double>& dts)
 }
 
 // The rate: 1 / the median of the intervals (dts is reordered), or t.rate_hz when given and within 1 %
-// of it (else an InputError naming --rate: a wrong time unit is the usual cause).
+// of it (else an InputError naming --rate: a wrong time unit is the usual cause); a rate outside
+// 1 Hz – 50 kHz is an InputError naming --time-unit.
 double multipos_rate(const MultiposTarget& t, std::vector<double>& dts);
 
 RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz);

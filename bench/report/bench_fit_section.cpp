@@ -47,16 +47,57 @@ std::string residual_plot(const BenchFitQuality& q, bool gyro, const std::map<st
 }
 }  // namespace
 
+namespace {
+// A set fitted from a multipos recording (fit multipos, no rate table): the fit's poses, rotations,
+// χ²/dof against the approval's limits and its residual figures (docs/multipos.md).
+std::string multipos_fit_part(const db::CoefficientSetRecord& set, const nlohmann::json& m, const db::Thresholds& t) {
+  std::ostringstream h;
+  const auto num_of = [&](const char* k) { return m.contains(k) && m[k].is_number() ? m[k].get<double>() : NAN; };
+  const auto count_used = [&](const char* k) {
+    int n = 0;
+    if (m.contains(k) && m[k].is_array())
+      for (const auto& x : m[k]) n += x.is_object() && x.value("used", true);
+    return n;
+  };
+  const auto& L = t.quality;
+  const double ca = num_of("accel_chi2_dof_class"), cg = num_of("gyro_chi2_dof");
+  h << "<table class=\"multipos\" id=\"multipos-" << set.id << "\"><tr><th class=\"l\">multi-position fit (no rate table)</th>"
+       "<th>value</th><th>limit</th></tr>\n"
+    << "<tr><td class=\"l\">static poses used</td><td>" << count_used("statics") << "</td><td>–</td></tr>\n"
+    << "<tr><td class=\"l\">rotations used</td><td>" << count_used("rotations") << "</td><td>–</td></tr>\n"
+    << "<tr><td class=\"l\">accelerometer χ²/dof (gravity magnitude, class noise and drift)</td><td class=\"" << (ca <= L.max_chi2_dof_accel ? "pass" : "fail")
+    << "\">" << num(ca, 3) << "</td><td>" << num(L.max_chi2_dof_accel) << "</td></tr>\n"
+    << "<tr><td class=\"l\">gyro χ²/dof (gravity direction after rotations)</td><td class=\""
+    << (cg <= L.max_chi2_dof_gyro ? "pass" : "fail") << "\">" << num(cg, 3) << "</td><td>" << num(L.max_chi2_dof_gyro)
+    << "</td></tr>\n"
+    << "<tr><td class=\"l\">|f| − g RMS over the poses, before → after</td><td>" << num(num_of("g_spread_raw_m_s2") / kMilliG, 3)
+    << " → " << num(num_of("g_spread_m_s2") / kMilliG, 3) << " mg</td><td>–</td></tr>\n"
+    << "<tr><td class=\"l\">gravity direction after rotations, RMS</td><td>" << num(num_of("rotation_rms_deg"), 3)
+    << "°</td><td>–</td></tr>\n</table>\n";
+  if (m.contains("notes") && m["notes"].is_array())
+    for (const auto& n : m["notes"])
+      if (n.is_string()) h << "<p class=\"note\">" << html_escape(n.get<std::string>()) << "</p>\n";
+  h << "<p class=\"note\">The accelerometer's residual is the gravity magnitude on each static pose, the gyros' the "
+       "gravity direction after each rotation; χ²/dof ≈ 1 when the model and the noise measured on the statics fit. "
+       "<code>calbench diagnose</code> on the recording looks for what the 12 + 12 model leaves out.</p>\n";
+  return h.str();
+}
+}  // namespace
+
 std::string bench_fit_part(const db::CoefficientSetRecord& set, const db::Thresholds& t) {
   std::ostringstream h;
   h << "<h4>Fit residuals</h4>\n";
   std::optional<BenchFitQuality> q;
+  nlohmann::json mp;
   try {
     const std::string where = "set " + std::to_string(set.id);
-    q = coefficients_from_json(parse_json_text(set.payload_json, where), where).fit_quality;
+    const CoefficientSet c = coefficients_from_json(parse_json_text(set.payload_json, where), where);
+    q = c.fit_quality;
+    if (const auto m = c.extra.find("multipos"); m != c.extra.end() && m->is_object()) mp = *m;
   } catch (const InputError& e) {
     return h.str() + "<p class=\"fail\">unreadable: " + html_escape(e.what()) + "</p>\n";
   }
+  if (!mp.is_null()) return h.str() + multipos_fit_part(set, mp, t);
   if (!q) return h.str() + "<p class=\"muted\">not recorded with the set (a fit before calbench stored its residuals, or a set from elsewhere)</p>\n";
   const auto& L = t.quality;
   h << "<table class=\"chi2\" id=\"chi2-" << set.id << "\"><tr><th class=\"l\">triad</th><th>χ²/dof x</th><th>χ²/dof y</th>"

@@ -203,7 +203,7 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
   }
   b << "<div id=\"verdict\" class=\"verdict " << cls << "\" data-verdict=\"" << word << "\">" << word << "</div> ";
   if (current)
-    b << "current set " << current->id << " (v" << current->version << ", " << to_string(current->source) << ", "
+    b << "current set " << current->id << " (v" << current->version << ", " << source_label(*current) << ", "
       << to_string(current->status) << ")\n";
   // What the unit holds may be another set than the newest: say which, next to the verdict.
   const CoefficientSetRecord* in_unit = nullptr;
@@ -211,7 +211,7 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     if (s.status == SetStatus::provisioned) in_unit = &s;
   if (in_unit && in_unit != current)
     b << "<p id=\"in-unit\" class=\"note\"><b>The unit holds set " << in_unit->id << "</b> (v" << in_unit->version << ", "
-      << to_string(in_unit->source) << ", provisioned); the verdict above is on the newer set " << current->id
+      << source_label(*in_unit) << ", provisioned); the verdict above is on the newer set " << current->id
       << ", which is not in the unit.</p>\n";
   else if (in_unit)
     b << "<p id=\"in-unit\" class=\"note\">The unit holds this set (provisioned).</p>\n";
@@ -252,13 +252,13 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
     b << "<table><tr><th>set</th><th>version</th><th class=\"l\">source</th><th class=\"l\">status</th><th>parent</th>"
          "<th class=\"l\">created</th><th class=\"l\">by</th></tr>\n";
     for (const auto& s : sets)
-      b << "<tr><td>" << s.id << "</td><td>" << s.version << "</td><td class=\"l\">" << to_string(s.source)
+      b << "<tr><td>" << s.id << "</td><td>" << s.version << "</td><td class=\"l\">" << source_label(s)
         << "</td><td class=\"l " << (s.status == SetStatus::revoked ? "fail" : "") << "\">" << to_string(s.status)
         << "</td><td>" << (s.parent_id ? std::to_string(*s.parent_id) : "–") << "</td><td class=\"l t\">"
         << html_escape(s.created_at) << "</td><td class=\"l\">" << html_escape(s.created_by) << "</td></tr>\n";
     b << "</table>\n" << history_plot(sets);
     for (const auto& s : sets) {
-      b << "<h3>Set " << s.id << " (v" << s.version << ", " << to_string(s.source) << ", " << to_string(s.status)
+      b << "<h3>Set " << s.id << " (v" << s.version << ", " << source_label(s) << ", " << to_string(s.status)
         << ") — measured = (I + M)·true + b, value ± 1σ</h3>\n"
         << set_table(s.errors);
     }

@@ -285,6 +285,25 @@ double rms(const Eigen::VectorXd& r) { return r.size() ? std::sqrt(r.squaredNorm
 
 }  // namespace
 
+MultiposNoiseCheck multipos_noise_check(const multipos::MultiposInput& in, const multipos::MultiposFit& fit,
+                                        const SensorErrors& current, const NoiseSpec& noise) {
+  MultiposDiagnoseResult scratch;
+  const PoseDesign D = build_design(in, fit, current, EffectTerms{}, scratch);
+  const int N = static_cast<int>(D.parents.size());
+  const diag::DriftPrior prior = diag::drift_prior(noise);
+  std::vector<Dataset> sets;
+  for (int a = 0; a <= kMag; ++a) sets.push_back(build_dataset(D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
+  std::vector<const Dataset*> ptrs;
+  for (const auto& S : sets) ptrs.push_back(&S);
+  const FitOut f = fit_model(D, {}, ptrs);
+  MultiposNoiseCheck out;
+  out.accel_dof = N - 9;
+  out.gyro_dof = N - 1;
+  out.accel_chi2_dof = out.accel_dof > 0 ? f.chi2_axis[kMag] / out.accel_dof : 0.0;
+  for (int a = 0; a < 3; ++a) out.gyro_chi2_dof[a] = out.gyro_dof > 0 ? f.chi2_axis[a] / out.gyro_dof : 0.0;
+  return out;
+}
+
 MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, const multipos::MultiposFit& fit,
                                          const SensorErrors& current, const DiagnoseOptions& opt) {
   MultiposDiagnoseResult out;

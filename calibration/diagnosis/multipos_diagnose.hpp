@@ -41,6 +41,20 @@ struct MultiposDiagnoseResult {
   bool earth_vertical_removed = false;  // the site's latitude was known
 };
 
+// The base model's fit of the static poses under the full noise model (white noise, the class's
+// drift between poses, the Earth rate): χ²/dof of the gravity-magnitude residuals (N − 9 dof) and
+// of each gyro's static rate (N − 1). fit_multipos' own χ²/dof weighs white noise only, so a unit
+// whose bias wanders as its data sheet allows shows several there; these are ≈ 1 for such a unit.
+// What `fit multipos` records for the approval ("accel_chi2_dof_class").
+struct MultiposNoiseCheck {
+  double accel_chi2_dof = 0;
+  int accel_dof = 0;
+  double gyro_chi2_dof[3] = {0, 0, 0};
+  int gyro_dof = 0;
+};
+MultiposNoiseCheck multipos_noise_check(const multipos::MultiposInput& in, const multipos::MultiposFit& fit,
+                                        const SensorErrors& current, const NoiseSpec& noise);
+
 // `fit`: fit_multipos on `in` (its statics and noise levels); `current`: the coefficients tested
 // (fit.coeffs, or a given set); opt.noise: the class's drift prior. std::runtime_error when fewer
 // than 9 poses are used.

@@ -45,6 +45,13 @@ assert s["used"] is False and abs(s["g_residual_m_s2"]) < 0.01, s
 PY
 # The set goes into the store like a bench fit's.
 "$CALBENCH" db store-bench --db "$tmp/s.db" --coeffs "$tmp/c.json" --recording "$tmp/xs" --plan by-hand --operator "T Eng" | grep -q "XS1 v1, draft"
+# Shown as a multipos fit; the report gives that fit's figures; the approval judges its χ²/dof (the
+# raw Xsens's rotations: gyro χ²/dof far above 3 on this recording).
+"$CALBENCH" db show --db "$tmp/s.db" XS1 | grep -q "bench (multipos)"
+"$CALBENCH" report XS1 --db "$tmp/s.db" --html "$tmp/r.html" > /dev/null
+grep -q 'id="multipos-1"' "$tmp/r.html" && grep -q "gravity direction after rotations" "$tmp/r.html"
+set +e; "$CALBENCH" db approve 1 --db "$tmp/s.db" --operator "QC Two" > "$tmp/appr.txt" 2>&1; rc=$?; set -e
+[ $rc -eq 1 ] && grep -q "multipos fit: gyro χ²/dof" "$tmp/appr.txt" || { cat "$tmp/appr.txt"; exit 1; }
 
 expect_fail() {  # expect_fail PATTERN CMD...: exit 2 with PATTERN on stderr
   local pat="$1"; shift
@@ -52,6 +59,10 @@ expect_fail() {  # expect_fail PATTERN CMD...: exit 2 with PATTERN on stderr
   [ "$rc" = 2 ] || { echo "expected exit 2, got $rc: $*"; cat "$tmp/err"; exit 1; }
   grep -q -- "$pat" "$tmp/err" || { echo "expected '$pat' in:"; cat "$tmp/err"; exit 1; }
 }
+# store-bench: the set with another unit's recording, or with another recording of its unit.
+expect_fail "of unit 'XS1', the recording .* of unit 'XS2'" bash -c "mkdir -p '$tmp/other' && sed 's/\"XS1\"/\"XS2\"/' '$tmp/xs/meta.json' > '$tmp/other/meta.json' && cp '$tmp/xs/imu.csv' '$tmp/other/' && '$CALBENCH' db store-bench --db '$tmp/s.db' --coeffs '$tmp/c.json' --recording '$tmp/other' --operator 'T Eng'"
+mkdir -p "$tmp/xs2" && cp "$tmp/xs/meta.json" "$tmp/xs2/" && head -n 30000 "$tmp/xs/imu.csv" > "$tmp/xs2/imu.csv"
+expect_fail "fitted from another recording" "$CALBENCH" db store-bench --db "$tmp/s.db" --coeffs "$tmp/c.json" --recording "$tmp/xs2" --operator "T Eng"
 # Import: rows that disagree, a non-number, a two-value offset, an existing output — nothing written.
 head -1000 "$D/xsens_acc.mat" > "$tmp/a.txt"; head -999 "$D/xsens_gyro.mat" > "$tmp/g.txt"
 expect_fail "g.txt:999.*ends before" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g.txt" --out "$tmp/bad1" "${conv[@]}" "${dev[@]}"
@@ -93,6 +104,11 @@ grep -q "acc-scale" "$tmp/err"
 expect_fail "not swapped" "$CALBENCH" fit multipos "$tmp/swapped"
 expect_fail "contradicts the time stamps" "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/r50" --rate 50 "${conv[@]}" "${dev[@]}"
 [ ! -e "$tmp/r50" ]
+# Time in ms read as seconds (the default unit): 0.1 Hz is no IMU's rate; the import says --time-unit.
+awk '{ $1 = $1 * 1000; print }' "$tmp/a6.txt" > "$tmp/a6ms.txt"; awk '{ $1 = $1 * 1000; print }' "$tmp/g6.txt" > "$tmp/g6ms.txt"
+expect_fail "time-unit.*not an IMU's rate" "$CALBENCH" import imu-tk "$tmp/a6ms.txt" "$tmp/g6ms.txt" --out "$tmp/ms" "${conv[@]}" "${dev[@]}"
+[ ! -e "$tmp/ms" ]
+"$CALBENCH" import imu-tk "$tmp/a6ms.txt" "$tmp/g6ms.txt" --out "$tmp/ms" --time-unit ms "${conv[@]}" "${dev[@]}" > /dev/null
 expect_fail "" "$CALBENCH" fit multipos "$tmp/xs" --out "$tmp/never.json" --plot "$tmp/no/such/dir/p.svg"
 [ ! -e "$tmp/never.json" ] || { echo "--out written although --plot failed"; exit 1; }
 echo "multipos fit: ok"
