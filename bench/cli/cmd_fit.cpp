@@ -141,9 +141,9 @@ const bool registered = add_command(30, [](CLI::App& app) {
   mp->add_option("--device-class", m->device_class,
                  "device class file (or built-in class name) when meta.json device.model is not a known class");
   mp->add_option("--exclude-pose", m->exclude_poses, "leave static pose K (0-based, as listed) out of the accelerometer fit; repeatable")
-      ->check(CLI::NonNegativeNumber);
+      ->check(whole_number(0, 1000000));
   mp->add_option("--exclude-rotation", m->exclude_rotations, "leave rotation K (between poses K and K+1) out of the gyro fit; repeatable")
-      ->check(CLI::NonNegativeNumber);
+      ->check(whole_number(0, 1000000));
   mp->add_flag("--earth-rate", m->earth_rate,
                "remove the vertical Earth rate from the static gyro means (needs meta.json site.lat_deg and a gyro that resolves 15 °/h)");
   mp->add_flag("--json", m->json, "print the coefficients and the fit's details as JSON on stdout");

@@ -1,5 +1,6 @@
 // Whitespace- (or comma-) separated numeric text rows, as peer tools write them (KF-GINS, IMU-TK):
-// '#' and '%' start comments, blank lines are skipped; every field must be a finite number.
+// '#' and '%' start comments, blank lines are skipped; every field must be a finite number; a last
+// line without its line end is dropped with a warning (cut while being written).
 // Errors name the file, line and column.
 #pragma once
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/io/input_warning.hpp"
 #include "bench/io/message_text.hpp"
 #include "common/input_error.hpp"
 #include "common/number_parse.hpp"
@@ -27,6 +29,14 @@ class TextRows {
       ++line_;
       const auto p = s.find_first_not_of(" \t\r");
       if (p == std::string::npos || s[p] == '#' || s[p] == '%') continue;
+      // A last line without its line end was cut while being written (as bench/io/csv.cpp): its
+      // last number may be cut too ("12.3" of "12.345"). Dropped with a warning, never used.
+      if (in_.eof()) {
+        input_warning(path_, line_, "last line has no line end: treated as truncated and not used ('" +
+                                        field_text(std::string_view(s).substr(p), 40) +
+                                        "'); the rows before it are used: if the file was cut short by a copy, copy it again");
+        return false;
+      }
       v.clear();
       const char* c = s.data();
       const char* e = c + s.size();
