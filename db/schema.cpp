@@ -4,6 +4,20 @@
 
 namespace calbench::db {
 
+// ---- 7 (console part, issue 38): the web console's local accounts on a SQLite store (`calbench db
+//      user add LOGIN --name … --role …`): a person, a role and an argon2id password hash
+//      (libsodium crypto_pwhash_str). PostgreSQL has none: its logins are the database's roles. ----
+static const char* const schema7_console_accounts = R"SQL(
+CREATE TABLE console_accounts (
+  login         TEXT PRIMARY KEY CHECK (login <> ''),
+  name          TEXT NOT NULL CHECK (name <> ''),
+  role          TEXT NOT NULL CHECK (role IN ('qc', 'station', 'provisioning')),
+  password_hash TEXT NOT NULL CHECK (password_hash LIKE '$argon2id$%'),
+  added_at      TEXT NOT NULL,
+  added_by      TEXT NOT NULL
+);
+)SQL";
+
 const std::vector<const char*>& migrations() {
   static const std::vector<const char*> m = {
       // ---- 1: initial schema ----
@@ -188,6 +202,7 @@ ALTER TABLE audit_log ADD COLUMN db_role TEXT NOT NULL DEFAULT '';
 ALTER TABLE bench_runs ADD COLUMN recording_uri TEXT NOT NULL DEFAULT '';
 ALTER TABLE bench_runs ADD COLUMN recording_digest TEXT NOT NULL DEFAULT '';
 )SQL",
+      schema7_console_accounts,
   };
   return m;
 }

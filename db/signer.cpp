@@ -38,11 +38,21 @@ bool stored_by_signer(const Store& store, const CoefficientSetRecord& set) {
 
 std::string signature_note(const std::string& login, bool authenticated) {
   if (login.empty()) return {};
+  if (login.rfind(kConsoleLoginPrefix, 0) == 0)
+    return "console account " + login.substr(std::string(kConsoleLoginPrefix).size()) +
+           ", password checked by calbench serve (SQLite)";
   return authenticated ? "login " + login : "OS user " + login + ", not authenticated (SQLite)";
 }
 
-void Store::check_signer() {
-  if (conn_->dialect() != Dialect::postgres) return;  // SQLite: the typed name, the OS user beside it
+void Store::check_signer(const char* role) {
+  if (conn_->dialect() != Dialect::postgres) {  // SQLite: the typed name, the OS user beside it
+    if (!console_login_.empty() && console_role_ != role)  // a console account signs only as its role
+      throw PermissionError(0, conn_->path() + ": refused to console account '" + console_login_ + "' (role " +
+                                   console_role_ + "): only a " + role + " account may sign this (as only a login in calbench_" +
+                                   role + " may on PostgreSQL)",
+                            "42501");
+    return;
+  }
   const std::string who = login();
   auto st = conn_->prepare("SELECT name FROM calbench_users WHERE login = ?");
   st.bind(1, who);

@@ -25,6 +25,8 @@ std::string creator_name(const CoefficientSetRecord& set);
 
 // How a signature was made, for history and reports: "login anna" (PostgreSQL) or
 // "OS user tess, not authenticated (SQLite)"; "" when the login was not recorded (before schema 6).
+// A login "console:anna" is the web console's local account anna on a SQLite store.
+inline constexpr const char* kConsoleLoginPrefix = "console:";
 std::string signature_note(const std::string& login, bool authenticated);
 
 }  // namespace calbench::db

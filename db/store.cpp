@@ -16,6 +16,7 @@
 #include "common/input_error.hpp"
 #include "common/utf8.hpp"
 #include "db/input_errors.hpp"
+#include "db/signer.hpp"
 #include "db/postgres/pg_connection.hpp"
 #include "db/postgres/pg_schema.hpp"
 #include "db/schema.hpp"
@@ -264,6 +265,7 @@ void Store::migrate_postgres() {
 
 std::string Store::login() const {
   if (conn_->dialect() == Dialect::postgres) return static_cast<const PgConnection&>(*conn_).role();
+  if (!console_login_.empty()) return kConsoleLoginPrefix + console_login_;
   return actor_.os_user;
 }
 

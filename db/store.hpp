@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 6;
+inline constexpr int kSchemaVersion = 7;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -230,7 +230,16 @@ class Store {
   // The signer of an approval, revocation, setting change or provisioning (db/signer.cpp): on
   // PostgreSQL the login's person (db user add); an --operator that is not that person, or a login
   // mapped to nobody, is refused (InputError). Sets the actor's name to the person's.
-  void check_signer();
+  // `role`: the group that signs this kind of change ("qc": approvals, revocations, settings;
+  // "provisioning": provisioning). SQLite with a console account (set_console_account): an account
+  // of another role is refused here, as PostgreSQL's grants refuse the login.
+  void check_signer(const char* role = "qc");
+  // The web console's local account on a SQLite store (db/console_accounts.hpp), checked by its
+  // password: login() becomes "console:LOGIN" and check_signer() enforces the account's role.
+  void set_console_account(const std::string& login, const std::string& role) {
+    console_login_ = login;
+    console_role_ = role;
+  }
   // Who the next changes are by (forwarding from a journal writes as the operator who ran the station).
   void set_actor(Actor a) { actor_ = std::move(a); }
   // "" when this connection may record provisioning events and mark sets provisioned, else why not
@@ -289,6 +298,15 @@ class Store {
   std::vector<ProvisioningEvent> provisioning_of(std::int64_t device_id);
   std::vector<AuditEntry> audit_of_device(std::int64_t device_id);
   std::vector<FleetValue> fleet();
+  // The web console's reads (issue 38): the sets of one status, oldest first (the QC queue: drafts),
+  // and the audit log searched by device serial, login or typed name, action and date range
+  // (YYYY-MM-DD, inclusive; empty fields: any), newest first.
+  std::vector<CoefficientSetRecord> sets_with_status(SetStatus status, int limit);
+  struct AuditQuery {
+    std::string serial, who, action, from, to;
+    int limit = 200;
+  };
+  std::vector<AuditEntry> audit_search(const AuditQuery& q);
   std::int64_t count(const char* table);  // rows of a known table (for checks and tests)
 
   // Internal helpers shared by the import code.
@@ -310,6 +328,7 @@ class Store {
   std::unique_ptr<Connection> conn_;
   Actor actor_;
   std::function<void(const char*)> hook_;
+  std::string console_login_, console_role_;
 };
 
 }  // namespace calbench::db

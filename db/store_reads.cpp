@@ -228,6 +228,37 @@ std::vector<AuditEntry> Store::audit_of_device(std::int64_t device_id) {
   return out;
 }
 
+std::vector<CoefficientSetRecord> Store::sets_with_status(SetStatus status, int limit) {
+  std::vector<CoefficientSetRecord> out;
+  auto st = conn_->prepare(std::string(kSetColumns) + "WHERE s.status = ? ORDER BY s.id LIMIT ?");
+  st.bind(1, to_string(status)).bind(2, limit);
+  while (st.step()) out.push_back(read_set_row(st));
+  for (auto& r : out) load_values(*conn_, r);
+  return out;
+}
+
+std::vector<AuditEntry> Store::audit_search(const AuditQuery& q) {
+  for (const auto* d : {&q.from, &q.to})
+    if (!d->empty() && (d->size() != 10 || (*d)[4] != '-' || (*d)[7] != '-'))
+      throw arg_error(d == &q.from ? "from" : "to", "'" + *d + "' is not a date YYYY-MM-DD");
+  std::vector<AuditEntry> out;
+  auto st = conn_->prepare(
+      "SELECT a.id, a.at, a.\"user\", a.station, a.entity, a.entity_id, a.action, a.detail, a.db_role FROM audit_log a "
+      "LEFT JOIN devices d ON d.id = a.device_id "
+      "WHERE (CAST(? AS TEXT) = '' OR d.serial = CAST(? AS TEXT)) "
+      "AND (CAST(? AS TEXT) = '' OR a.db_role = CAST(? AS TEXT) OR lower(a.\"user\") = lower(CAST(? AS TEXT))) "
+      "AND (CAST(? AS TEXT) = '' OR a.action = CAST(? AS TEXT)) "
+      "AND (CAST(? AS TEXT) = '' OR substr(CAST(a.at AS TEXT), 1, 10) >= CAST(? AS TEXT)) "
+      "AND (CAST(? AS TEXT) = '' OR substr(CAST(a.at AS TEXT), 1, 10) <= CAST(? AS TEXT)) "
+      "ORDER BY a.id DESC LIMIT ?");
+  st.bind(1, q.serial).bind(2, q.serial).bind(3, q.who).bind(4, q.who).bind(5, q.who).bind(6, q.action)
+      .bind(7, q.action).bind(8, q.from).bind(9, q.from).bind(10, q.to).bind(11, q.to).bind(12, q.limit);
+  while (st.step())
+    out.push_back(AuditEntry{st.int64(0), st.text(1), st.text(2), st.text(3), st.text(4), st.int64(5), st.text(6),
+                             st.text(7), st.text(8)});
+  return out;
+}
+
 std::vector<FleetValue> Store::fleet() {
   std::vector<FleetValue> out;
   auto st = conn_->prepare(

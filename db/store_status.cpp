@@ -92,7 +92,7 @@ void Store::record_provisioning(std::int64_t set_id, const std::string& kind, co
                                 const std::string& readback_json, const std::string& message) {
   if (kind != "device" && kind != "export") throw arg_error("kind", "expected device or export");
   check_text(target, "target", true);
-  check_signer();
+  check_signer("provisioning");
   conn_->write_transaction([&] {
     auto st = conn_->prepare("SELECT device_id, status FROM coefficient_sets WHERE id = ?");
     st.bind(1, set_id);

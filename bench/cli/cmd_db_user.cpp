@@ -1,4 +1,8 @@
 // calbench db user add|list: who a PostgreSQL login is (db/users.hpp, issue 35).
+#include <termios.h>
+#include <unistd.h>
+
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -7,14 +11,44 @@
 #include "bench/cli/operator_option.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/json_util.hpp"
+#include "db/console_accounts.hpp"
 #include "db/users.hpp"
 
 namespace calbench::cli::dbcmd {
 namespace {
 using nlohmann::json;
 
+// The password of a console account: $CALBENCH_PASSWORD, else the first line of stdin (echo off on
+// a terminal). Never an argument (argv is visible to every user of the machine).
+std::string read_password() {
+  if (const char* p = std::getenv("CALBENCH_PASSWORD"); p && *p) return p;
+  const bool tty = ::isatty(STDIN_FILENO);
+  termios old{};
+  if (tty) {
+    std::cerr << "password for the console account: " << std::flush;
+    ::tcgetattr(STDIN_FILENO, &old);
+    termios quiet = old;
+    quiet.c_lflag &= ~static_cast<tcflag_t>(ECHO);
+    ::tcsetattr(STDIN_FILENO, TCSANOW, &quiet);
+  }
+  std::string pw;
+  std::getline(std::cin, pw);
+  if (tty) {
+    ::tcsetattr(STDIN_FILENO, TCSANOW, &old);
+    std::cerr << "\n";
+  }
+  if (!pw.empty() && pw.back() == '\r') pw.pop_back();
+  return pw;
+}
+
 void cmd_user_add(const DbArgs& a) {
   db::group_of_role(a.role);  // bad input before the server is asked
+  if (!db::is_postgres_uri(db_path(a))) {  // SQLite: a console account with a password
+    auto s = open_store(a);
+    const std::string said = db::add_console_account(*s, a.login, a.name, a.role, read_password());
+    std::cout << "console account " << a.login << " = " << a.name << " (" << a.role << "): " << said << "\n";
+    return;
+  }
   auto s = open_store(a);
   const std::string said = db::add_user(*s, a.login, a.name, a.role);
   std::cout << "login " << a.login << " = " << a.name << " (" << a.role << ", member of " << db::group_of_role(a.role)
@@ -23,6 +57,21 @@ void cmd_user_add(const DbArgs& a) {
 
 void cmd_user_list(const DbArgs& a) {
   auto s = open_store(a);
+  if (!db::is_postgres_uri(db_path(a))) {
+    const auto list = db::console_accounts(*s);
+    if (a.json) {
+      json arr = json::array();
+      for (const auto& u : list)
+        arr.push_back({{"login", u.login}, {"name", u.name}, {"role", u.role}, {"added_at", u.added_at}, {"added_by", u.added_by}});
+      print_json(json{{"accounts", arr}}.dump(2));
+      return;
+    }
+    for (const auto& u : list)
+      std::cout << std::left << std::setw(16) << u.login << std::setw(14) << u.role << u.name << "  (by " << u.added_by
+                << " at " << u.added_at << ")\n";
+    std::cout << list.size() << " console account(s)\n";
+    return;
+  }
   const auto list = db::users(*s);
   if (a.json) {
     json arr = json::array();
@@ -39,7 +88,8 @@ void cmd_user_list(const DbArgs& a) {
 }  // namespace
 
 void add_user_commands(CLI::App* db, const std::shared_ptr<DbArgs>& a) {
-  auto* user = db->add_subcommand("user", "PostgreSQL: who each login is (the person who signs with it)");
+  auto* user = db->add_subcommand("user", "PostgreSQL: who each login is (the person who signs with it); SQLite: the web "
+                                          "console's accounts");
   user->require_subcommand(1);
   const auto db_opt = [&](CLI::App* sub) {
     sub->add_option("--db", a->db, "the central store: postgresql://USER@HOST[:PORT]/DB (default: $CALBENCH_DB)");
@@ -52,7 +102,10 @@ void add_user_commands(CLI::App* db, const std::shared_ptr<DbArgs>& a) {
       ->required()
       ->check(CLI::IsMember({"qc", "station", "provisioning"}));
   add_operator_option(add, a->op, "who you are, recorded in the audit log (default: $CALBENCH_OPERATOR, else the OS user)");
-  add->footer("Run as an administrator (the database owner, or a role that may grant the groups). Once mapped, the login's\n"
+  add->footer("SQLite store: adds (or changes) a console account for `calbench serve`; the password is read from\n"
+              "$CALBENCH_PASSWORD, else from the first line of stdin (prompted, echo off, on a terminal), never from\n"
+              "the command line; 8 to 1024 characters; kept only as an argon2id hash.\n"
+              "PostgreSQL: run as an administrator (the database owner, or a role that may grant the groups). Once mapped, the login's\n"
               "person signs: --operator may only name that person or the login, and four-eyes compares logins.");
   add->callback([a] { cmd_user_add(*a); });
   auto* list = user->add_subcommand("list", "the logins mapped to people");

@@ -236,7 +236,13 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
 
 }  // namespace
 
+const char* report_css() { return kStyle; }
+
 std::string device_report_html(Store& store, const std::string& serial, const Thresholds& thresholds) {
+  return page("calbench report " + serial, device_report_body(store, serial, thresholds));
+}
+
+std::string device_report_body(Store& store, const std::string& serial, const Thresholds& thresholds) {
   const auto dev = store.find_device(serial);
   if (!dev) throw arg_error("SERIAL", "unknown device '" + serial + "' in " + store.connection().path());
   const auto sets = store.sets_of(dev->id);
@@ -317,7 +323,7 @@ std::string device_report_html(Store& store, const std::string& serial, const Th
       << "</td><td class=\"l\">" << html_escape(a.entity + " " + std::to_string(a.entity_id) + " " + a.action) << "</td><td class=\"l\">"
       << html_escape(a.detail) << "</td></tr>\n";
   b << "</table>\n";
-  return page("calbench report " + dev->serial, b.str());
+  return b.str();
 }
 
 // Which station calibrated what, and whether a station's units drift apart from the others'

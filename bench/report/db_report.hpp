@@ -15,5 +15,9 @@ namespace calbench::report {
 std::string device_report_html(db::Store& store, const std::string& serial,
                                const db::Thresholds& thresholds = db::default_thresholds());
 std::string fleet_report_html(db::Store& store);
+// The device report's sections without the page around them (the web console shows them inline,
+// bench/console/), and the report's style sheet.
+std::string device_report_body(db::Store& store, const std::string& serial, const db::Thresholds& thresholds);
+const char* report_css();
 
 }  // namespace calbench::report

@@ -9,6 +9,13 @@ namespace calbench::db {
 const char* pg_base_schema() { return generated::kPgSchemaSql; }
 const char* pg_roles_sql() { return generated::kPgRolesSql; }
 
+// ---- 7 (console part, issue 38): nothing to create. The web console's users on PostgreSQL are the
+//      database's own logins (each request runs as that role); the SQLite store's local accounts
+//      (db/schema.cpp, schema7_console_accounts) have no counterpart here. ----
+static const char* const pg_schema7_console_accounts = R"SQL(
+INSERT INTO schema_version(version) VALUES (7);
+)SQL";
+
 const std::vector<const char*>& pg_migrations() {
   static const std::vector<const char*> m = {
       // ---- 4: a stable id per run and set (forwarding from a station's journal is idempotent) ----
@@ -82,6 +89,7 @@ CREATE FUNCTION calbench_set_statuses(device bigint) RETURNS TABLE (id bigint, v
 $f$;
 INSERT INTO schema_version(version) VALUES (6);
 )SQL",
+      pg_schema7_console_accounts,
   };
   return m;
 }

@@ -1,0 +1,107 @@
+#include "db/console_accounts.hpp"
+
+#include <sodium.h>
+
+#include <stdexcept>
+
+#include "db/input_errors.hpp"
+#include "db/users.hpp"
+
+namespace calbench::db {
+namespace {
+
+void need_sodium() {
+  static const bool ok = sodium_init() >= 0;
+  if (!ok) throw std::runtime_error("libsodium could not be initialised");
+}
+
+std::string hash_password(const std::string& password) {
+  need_sodium();
+  char out[crypto_pwhash_STRBYTES];
+  if (crypto_pwhash_str_alg(out, password.data(), password.size(), crypto_pwhash_OPSLIMIT_INTERACTIVE,
+                            crypto_pwhash_MEMLIMIT_INTERACTIVE, crypto_pwhash_ALG_ARGON2ID13) != 0)
+    throw std::runtime_error("out of memory hashing a password (argon2id needs 64 MiB)");
+  return out;
+}
+
+bool verify_password(const std::string& hash, const std::string& password) {
+  need_sodium();
+  return crypto_pwhash_str_verify(hash.c_str(), password.data(), password.size()) == 0;
+}
+
+void check_login(const std::string& login) {
+  if (login.empty() || login.size() > 64) throw arg_error("LOGIN", "must be 1 to 64 characters");
+  for (char c : login)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '_' || c == '-'))
+      throw arg_error("LOGIN", "'" + login + "' may hold only letters, digits, '.', '_' and '-'");
+}
+
+}  // namespace
+
+std::string console_password_problem(const std::string& password) {
+  if (password.size() < 8) return "shorter than 8 characters";
+  if (password.size() > 1024) return "longer than 1024 characters";
+  for (unsigned char c : password)
+    if (c < 0x20 || c == 0x7f) return "contains control characters";
+  return {};
+}
+
+std::string add_console_account(Store& store, const std::string& login, const std::string& name,
+                                const std::string& role, const std::string& password) {
+  group_of_role(role);  // qc | station | provisioning, else bad input naming --role
+  check_login(login);
+  check_operator_name(name, "--name");  // the name signs as an operator name does
+  if (const std::string p = console_password_problem(password); !p.empty()) throw arg_error("password", p);
+  Connection& c = store.connection();
+  if (c.dialect() == Dialect::postgres)
+    throw arg_error("--db", "console accounts are for a SQLite store; on PostgreSQL the console logs in with the "
+                            "database's logins (db user add maps them to people)");
+  const std::string hash = hash_password(password);  // outside the transaction: it takes a while
+  std::string said;
+  c.write_transaction([&] {
+    auto before = c.prepare("SELECT name, role FROM console_accounts WHERE login = ?");
+    before.bind(1, login);
+    if (before.step()) {
+      said = "changed: " + before.text(0) + " (" + before.text(1) + ") -> " + name + " (" + role + "), password set";
+      auto up = c.prepare(std::string("UPDATE console_accounts SET name = ?, role = ?, password_hash = ?, added_at = ") +
+                          c.now_sql() + ", added_by = ? WHERE login = ?");
+      up.bind(1, name).bind(2, role).bind(3, hash).bind(4, store.actor().user).bind(5, login).run();
+    } else {
+      said = "added";
+      auto ins = c.prepare(std::string("INSERT INTO console_accounts(login, name, role, password_hash, added_at, added_by) "
+                                       "VALUES (?, ?, ?, ?, ") + c.now_sql() + ", ?)");
+      ins.bind(1, login).bind(2, name).bind(3, role).bind(4, hash).bind(5, store.actor().user).run();
+    }
+    store.audit_locked("account", 0, "map", login + " = " + name + " (" + role + ", console account): " + said);
+  });
+  return said;
+}
+
+std::vector<ConsoleAccount> console_accounts(Store& store) {
+  std::vector<ConsoleAccount> out;
+  auto st = store.connection().prepare("SELECT login, name, role, added_at, added_by FROM console_accounts ORDER BY login");
+  while (st.step()) out.push_back(ConsoleAccount{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4)});
+  return out;
+}
+
+std::optional<ConsoleAccount> check_console_password(Store& store, const std::string& login, const std::string& password) {
+  // A hash of a random password, checked when the login is unknown: the same work either way.
+  static const std::string decoy = [] {
+    need_sodium();
+    unsigned char r[16];
+    randombytes_buf(r, sizeof r);
+    return hash_password(std::string(reinterpret_cast<const char*>(r), sizeof r));
+  }();
+  auto st = store.connection().prepare(
+      "SELECT login, name, role, added_at, added_by, password_hash FROM console_accounts WHERE login = ?");
+  st.bind(1, login);
+  if (!st.step()) {
+    verify_password(decoy, password);
+    return std::nullopt;
+  }
+  ConsoleAccount a{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4)};
+  if (!verify_password(st.text(5), password)) return std::nullopt;
+  return a;
+}
+
+}  // namespace calbench::db
