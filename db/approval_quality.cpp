@@ -275,7 +275,9 @@ std::vector<std::string> fit_quality_reasons(const CoefficientSetRecord& set, co
                     " (gravity-magnitude residuals beyond the class's noise and drift: diagnose the recording)");
     if (!(g <= q.max_chi2_dof_gyro))
       why.push_back("multipos fit: gyro χ²/dof " + fmt(g, 3) + " above " + fmt(q.max_chi2_dof_gyro) +
-                    " (gravity direction after the rotations beyond the noise: diagnose the recording)");
+                    " (the gravity direction after the rotations is predicted worse than the noise allows: fit multipos --json "
+                    "lists each rotation's residual_deg; a bad turn can be left out with --exclude-rotation K, a wrong gyro "
+                    "conversion shows in every turn)");
   }
   if (ev.bench) bench_reasons(*ev.bench, q, why);
   else if (q.require_fit_quality && set.source == SetSource::bench && !ev.multipos_chi2)

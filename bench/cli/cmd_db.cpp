@@ -450,8 +450,8 @@ const bool registered = add_command(70, [](CLI::App& app) {
           "HEX64"));
   sb->add_option("--plan", a->plan, "bench plan name or path");
   sb->add_option("--station", a->station, "station name (default: $CALBENCH_STATION, else host name)");
-  sb->add_option("--started", a->started, "start time, ISO 8601 UTC");
-  sb->add_option("--ended", a->ended, "end time, ISO 8601 UTC");
+  sb->add_option("--started", a->started, "start time, ISO 8601 UTC (e.g. 2026-11-27T08:30:00Z)")->check(iso8601_utc());
+  sb->add_option("--ended", a->ended, "end time, ISO 8601 UTC")->check(iso8601_utc());
   sb->add_option("--outcome", a->outcome, "pass | fail | aborted")->check(CLI::IsMember({"pass", "fail", "aborted"}));
   sb->add_option("--firmware", a->firmware, "device firmware revision");
   sb->add_option("--qc", a->qc, "QC result NAME=VALUE[:THRESHOLD[:UNIT[:SAMPLE]]] (repeatable; SAMPLE in-sample, out-of-sample or \"not applicable\")");

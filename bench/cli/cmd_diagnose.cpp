@@ -143,15 +143,15 @@ const bool registered = add_command(60, [](CLI::App& app) {
   auto a = std::make_shared<DiagnoseArgs>();
   auto* d = app.add_subcommand("diagnose",
                                "Physics discovery: locate where recording and model disagree, name the missing effect, "
-                               "model it, show the fit improve (bench and drive recordings; a GNSS-only drive through the aided filter's "
+                               "model it, show the fit improve (bench, drive and multipos recordings; a GNSS-only drive through the aided filter's "
                                "innovations against the fixes: time offset, lever arm, scale with --coeffs)");
-  d->add_option("dir", a->dir, "recording folder (bench or drive; CSV or HDF5, docs/recording-hdf5.md); a drive without "
+  d->add_option("dir", a->dir, "recording folder (bench, drive or multipos; CSV or HDF5, docs/recording-hdf5.md); a drive without "
                 "reference.csv but with gnss.csv is diagnosed from the GNSS-aided filter's innovations (docs/diagnosis.md, GNSS-only drives)")->check(CLI::ExistingDirectory);
   d->add_flag("--list-effects", a->list_effects,
               "print the catalogue of effects (docs/diagnosis.md, generated from the effect registry) and exit; "
               "with --json as JSON");
   d->add_option("--coeffs", a->coeffs, "coefficients to test (default: fit them first with the bench fit; on a drive: b and M fitted on "
-                "the drive; a drive also takes an in-motion RESULT.json, mounting included)")
+                "the drive; a drive also takes an in-motion RESULT.json, mounting included; multipos: fit multipos)")
       ->check(CLI::ExistingFile);
   d->add_flag("--json", a->json, "print findings as JSON on stdout");
   d->add_option("--report", a->report, "write an HTML report with before/after plots (gnuplot)");
@@ -159,8 +159,9 @@ const bool registered = add_command(60, [](CLI::App& app) {
   d->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
   d->add_option("--device-class", a->device_class,
-                 "drives: the IMU device class of the in-motion filter runs (as fit drive --device-class: a class file "
-                 "or a built-in class name; default from meta.json device.model)");
+                 "drives: the IMU device class of the in-motion filter runs (as fit drive --device-class); multipos: the "
+                 "class whose noise and drift the poses are judged by (as fit multipos --device-class); a class file "
+                 "or a built-in class name; default from meta.json device.model");
   d->add_flag("--no-innovations", a->no_innovations,
               "drives: skip the in-motion filter runs whose innovation statistics are reported (before/after the "
               "new terms)");

@@ -24,13 +24,19 @@ struct TargetOptions {
     a->add_option("--rate", t.rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
     // Required: fit multipos takes the noise of the class named here, and the serial keys the unit's
     // coefficient sets in the database ("unknown" would merge every unit's).
+    const CLI::Validator non_empty(
+        [](std::string& v) { return v.find_first_not_of(" \t") == std::string::npos ? std::string("must not be empty") : std::string(); },
+        "TEXT");
     a->add_option("--model", t.model, "device model for meta.json: a device class name or alias (docs/in-motion.md, "
                                       "'Device classes'); another name needs fit multipos --device-class FILE")
-        ->required();
+        ->required()
+        ->check(non_empty);
     a->add_option("--serial", t.serial, "device serial for meta.json (keys the unit's coefficient sets in the database)")
-        ->required();
-    a->add_option("--gravity", gravity, "local gravity, m/s² (meta.json gravity_m_s2)")->check(finite_number(9.7, 9.9));
-    a->add_option("--site-lat", lat, "site latitude, deg (meta.json site: normal gravity and the Earth rate)")
+        ->required()
+        ->check(non_empty);
+    a->add_option("--gravity", gravity, "local gravity, m/s² (meta.json gravity_m_s2: overrides the site's normal gravity)")
+        ->check(finite_number(9.7, 9.9));
+    a->add_option("--site-lat", lat, "site latitude, deg (meta.json site: normal gravity unless --gravity, and the Earth rate)")
         ->check(finite_number(-90, 90));
     a->add_option("--site-h", h, "site height, m (with --site-lat)")->check(finite_number(-1e4, 1e5));
     a->add_flag("--force", t.force, "overwrite an existing recording in --out");
@@ -39,7 +45,7 @@ struct TargetOptions {
   static void note_model(const MultiposTarget& t) {
     for (const ImuClass& c : builtin_imu_classes())
       if (imu_class_matches(c, t.model)) return;
-    std::cout << "note: no built-in device class is named '" << t.model << "'; give fit multipos --device-class FILE "
+    std::cerr << "calbench: note: no built-in device class is named '" << t.model << "'; give fit multipos --device-class FILE "
               << "(bench/imu_classes/*.toml shows the format; known: " << known_imu_classes_text() << ")" << std::endl;
   }
   void finish(MultiposTarget& t) const {

@@ -6,6 +6,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -69,5 +70,28 @@ inline CLI::Validator whole_number(std::uint64_t lo, std::uint64_t hi) {
       "INTEGER " + want);
 }
 inline CLI::Validator set_id() { return whole_number(1, std::numeric_limits<std::int64_t>::max()); }
+
+// A UTC time in ISO 8601: YYYY-MM-DDTHH:MM:SS[.fff]Z (or +00:00), a real calendar date and time.
+inline CLI::Validator iso8601_utc() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        int Y = 0, M = 0, D = 0, h = 0, m = 0, sec = 0, n = 0;
+        const char* p = v.c_str();
+        const bool shape = v.size() >= 20 && std::sscanf(p, "%4d-%2d-%2dT%2d:%2d:%2d%n", &Y, &M, &D, &h, &m, &sec, &n) == 6 &&
+                           n == 19 && p[4] == '-' && p[7] == '-' && p[10] == 'T' && p[13] == ':' && p[16] == ':';
+        std::size_t i = 19;
+        if (shape && i < v.size() && v[i] == '.') {
+          ++i;
+          while (i < v.size() && v[i] >= '0' && v[i] <= '9') ++i;
+        }
+        const std::string zone = shape ? v.substr(std::min(i, v.size())) : "";
+        static const int mdays[12] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+        const bool leap = (Y % 4 == 0 && Y % 100 != 0) || Y % 400 == 0;
+        const bool ok = shape && (zone == "Z" || zone == "+00:00") && Y >= 1970 && Y <= 9999 && M >= 1 && M <= 12 &&
+                        D >= 1 && D <= mdays[M - 1] - (M == 2 && !leap ? 1 : 0) && h <= 23 && m <= 59 && sec <= 60;
+        return ok ? std::string() : "expected a UTC time in ISO 8601 (e.g. 2026-11-27T08:30:00Z), got '" + v + "'";
+      },
+      "ISO8601-UTC");
+}
 
 }  // namespace calbench::cli

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <vector>
 
 #include "bench/drive/kfgins_columns.hpp"
@@ -117,7 +118,7 @@ void write_recording(const ImportKfGinsArgs& a, const RecordingMeta& meta, const
     double last = 0;
     bool first = true;
     while (r.next(v)) {
-      check_time(r, v[G::t], last, first);
+      check_time(r, v[G::t], last, first, std::numeric_limits<double>::infinity());  // fixes may pause for long
       check_range(r, G::lat, v[G::lat], -90, 90, "latitude (deg)");
       check_range(r, G::lon, v[G::lon], -360, 360, "longitude (deg)");
       check_range(r, G::h, v[G::h], -1e5, 1e7, "height (m)");

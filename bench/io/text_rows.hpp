@@ -79,11 +79,16 @@ void check_range(const Reader& r, std::size_t col, double v, double lo, double h
 }
 
 template <class Reader>
-void check_time(const Reader& r, double t, double& last, bool& first) {
+void check_time(const Reader& r, double t, double& last, bool& first,
+                double max_gap = plausible::kMaxImuInterval_s) {
   if (!(std::abs(t) <= plausible::kMaxAbsTime_s))  // the bound every reader of the recording applies
     throw InputError(r.path(), r.line(), "time",
                      "time " + number_text(t) + " s is not plausible (at most " + number_text(plausible::kMaxAbsTime_s) + " s)");
   if (!first && !(t > last)) throw InputError(r.path(), r.line(), "time", "time does not increase");
+  if (!first && !(t - last <= max_gap))  // IMU rows: the recording reader's bound (recording.cpp)
+    throw InputError(r.path(), r.line(), "time",
+                     number_text(t - last) + " s after the row before: not an IMU interval (at most " +
+                         number_text(max_gap) + " s; split the recording at the gap)");
   first = false;
   last = t;
 }

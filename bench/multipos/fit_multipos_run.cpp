@@ -81,6 +81,7 @@ nlohmann::json fit_json(const MultiposRecording& rec, const multipos::MultiposFi
   j["gyro_dof"] = fit.gyro_dof;
   j["g_spread_raw_m_s2"] = fit.g_spread_raw;
   j["g_spread_m_s2"] = fit.g_spread;
+  j["g_loo_rms_m_s2"] = fit.g_loo_rms;
   j["rotation_rms_deg"] = fit.rotation_rms_rad / kDeg;
   j["notes"] = fit.notes;
   return j;
@@ -184,6 +185,19 @@ MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
   const MultiposNoiseCheck nc = multipos_noise_check(r.rec.input, r.fit, r.fit.coeffs, r.rec.noise);
   r.set.extra["multipos"]["accel_chi2_dof_class"] = nc.accel_chi2_dof;
   r.set.extra["multipos"]["gyro_static_chi2_dof_class"] = {nc.gyro_chi2_dof[0], nc.gyro_chi2_dof[1], nc.gyro_chi2_dof[2]};
+  // The QC figure a store of this set can carry (db store-bench --qc): the held-out gravity residual
+  // against 3× what a pose of a sound unit of this class shows (white noise of the pose's mean and
+  // the class's bias drift).
+  {
+    double n_mean = 0;
+    int nu = 0;
+    for (const auto& st : r.fit.statics)
+      if (st.used) n_mean += double(st.i1 - st.i0), ++nu;
+    n_mean /= std::max(nu, 1);
+    const double pose_sigma = std::sqrt(std::pow(r.fit.accel_noise.used_sigma, 2) / std::max(n_mean, 1.0) +
+                                        std::pow(r.rec.noise.accel.drift_sigma, 2));
+    r.set.extra["multipos"]["qc_g_loo_limit_m_s2"] = 3 * pose_sigma;
+  }
   r.set.extra["multipos"]["class_noise_note"] =
       "accel_chi2_dof_class: gravity-magnitude residuals over the static poses (N - 9 dof) under white noise plus the "
       "class's bias drift between poses; gyro_static_chi2_dof_class: each gyro's static mean rate (N - 1 dof) with the "
@@ -196,6 +210,8 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
   const MultiposRecording& rec = r.rec;
   const multipos::MultiposFit& fit = r.fit;
   const CoefficientSet& c = r.set;
+  if (!a.plot.empty() && !a.out.empty() && fs::weakly_canonical(a.plot) == fs::weakly_canonical(a.out))
+    throw InputError("--plot", 0, "", a.plot + " is also --out: the plot and the coefficients need two files");
   if (!a.plot.empty()) write_text_atomic(a.plot, plot_svg(rec.input, fit) + "\n");  // before --out: a bad path writes nothing
   if (!a.out.empty()) write_coefficients(a.out, c);  // read back before it is renamed into place (write_text_atomic)
   if (a.json) {
@@ -219,7 +235,11 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
   out << "\n" << fit.rotations.size() << " rotations between consecutive poses\n";
   out << std::setprecision(2) << "gravity magnitude over the poses (RMS of |f| − g): raw " << fit.g_spread_raw * 1e3
       << " mm/s² → calibrated " << fit.g_spread * 1e3 << " mm/s²; χ²/dof " << fit.accel_chi2_dof << " ("
-      << fit.accel_dof << " dof)\n";
+      << fit.accel_dof << " dof, white noise only); under the class's noise and drift between poses "
+      << m.value("accel_chi2_dof_class", 0.0) << " (what the approval judges)\n";
+  out << "held out (each pose left out of the fit that judges it): |f| − g RMS " << std::setprecision(2)
+      << fit.g_loo_rms * 1e3 << " mm/s²; 3× a sound pose of this class: " << m.value("qc_g_loo_limit_m_s2", 0.0) * 1e3
+      << " mm/s²\n";
   out << "gravity direction after each rotation: RMS error " << std::setprecision(3) << fit.rotation_rms_rad / kDeg
       << "°; χ²/dof " << std::setprecision(2) << fit.gyro_chi2_dof << " (" << fit.gyro_dof << " dof)\n";
   out << coeff_text(fit.coeffs);
@@ -229,6 +249,10 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
   for (const auto& n : fit.notes) out << "note: " << n << "\n";
   if (!a.out.empty()) out << "coefficients written to " << a.out << "\n";
   if (!a.plot.empty()) out << "plot written to " << a.plot << "\n";
+  if (!a.out.empty())
+    out << "to store it with its QC (the approval requires one by default): calbench db store-bench --coeffs " << a.out
+        << " --recording " << a.dir << " --qc g_loo_rms=" << std::setprecision(6) << fit.g_loo_rms << ":"
+        << m.value("qc_g_loo_limit_m_s2", 0.0) << ":m/s2:out-of-sample\n";
 }
 
 }  // namespace calbench

@@ -39,6 +39,17 @@ class CsvRows {
       gyro_[i] = select("--gyro", a.gyro_cols[static_cast<std::size_t>(i)]);
       accel_[i] = select("--accel", a.accel_cols[static_cast<std::size_t>(i)]);
     }
+    // Seven different columns: one column for two quantities is a mistake in the options.
+    const std::pair<const Column*, std::string> roles[7] = {
+        {&time_, "--time"},      {&gyro_[0], "--gyro x"},  {&gyro_[1], "--gyro y"},  {&gyro_[2], "--gyro z"},
+        {&accel_[0], "--accel x"}, {&accel_[1], "--accel y"}, {&accel_[2], "--accel z"}};
+    for (int i = 0; i < 7; ++i)
+      for (int j = 0; j < i; ++j)
+        if (roles[i].first->index == roles[j].first->index)
+          throw InputError(r_.path(), r_.line(), roles[i].second,
+                           "column " + std::to_string(roles[i].first->index + 1) + " ('" +
+                               field_text(r_.header()[roles[i].first->index]) + "') is given for both " +
+                               roles[j].second + " and " + roles[i].second);
   }
   bool next(double& t, Vec3& f, Vec3& w) {
     if (!r_.next()) return false;
@@ -72,6 +83,10 @@ class CsvRows {
     } else {
       idx = static_cast<std::size_t>(std::find(h.begin(), h.end(), col) - h.begin());
     }
+    if (idx < h.size() && std::count(h.begin(), h.end(), h[idx]) > 1)
+      throw InputError(r_.path(), r_.line(), option,
+                       "the header names '" + field_text(h[idx]) + "' " + std::to_string(std::count(h.begin(), h.end(), h[idx])) +
+                           " times: which column is meant cannot be told (rename the columns in the header line)");
     Column c;
     c.slot = r_.require(idx < h.size() ? h[idx] : col);
     c.index = idx;

@@ -280,6 +280,33 @@ std::vector<StaticInterval> detect_statics(const MultiposInput& in, const Multip
   return out;
 }
 
+namespace {
+// A fit that converged but leaves a coefficient with σ beyond any use (a scale or skew with σ above
+// max_m, a bias above max_b) is refused naming the worst one: a near-singular normal matrix
+// passes the singularity test with noise on it (six face poses: skew σ of 10⁶ ppm).
+void refuse_undetermined(const TriadErrors& e, double max_m, double max_b, const char* triad, const char* advice) {
+  double worst = 0;
+  std::string what;
+  for (int i = 0; i < 3; ++i) {
+    if (e.sigma_bias(i) / max_b > worst) {
+      worst = e.sigma_bias(i) / max_b;
+      what = std::string("bias ") + "xyz"[i];
+    }
+    for (int j = 0; j < 3; ++j)
+      if (e.sigma_M(i, j) / max_m > worst) {
+        worst = e.sigma_M(i, j) / max_m;
+        what = std::string("M[") + "xyz"[i] + "][" + "xyz"[j] + "]";
+      }
+  }
+  if (!(worst <= 1)) {
+    std::ostringstream os;
+    os << "the " << triad << " coefficients are not determined: " << what << " has σ " << worst << "× the largest usable ("
+       << (what[0] == 'b' ? max_b : max_m) << (what[0] == 'b' ? (triad[0] == 'g' ? " rad/s" : " m/s²") : "") << "); " << advice;
+    throw MultiposRefusal(os.str());
+  }
+}
+}  // namespace
+
 MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   MultiposFit fit;
   fit.statics = detect_statics(in, opt, &fit.gyro_noise, &fit.accel_noise, &fit.threshold_factor, &fit.window_samples);
@@ -296,12 +323,22 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
 
   // --- Observability of the accelerometer fit: enough poses, every axis both up and down.
   std::vector<std::string> missing;
-  if (st.empty())
-    throw MultiposRefusal("no static pose found (the unit never held still for " + std::to_string(opt.min_static_s) +
-                          " s by the static test): check that the accelerometer and gyro files are not swapped and that "
-                          "the counts conversion gives SI units; the test's noise per sample: gyro " +
-                          std::to_string(fit.gyro_noise.used_sigma) + " rad/s, accelerometer " +
-                          std::to_string(fit.accel_noise.used_sigma) + " m/s²");
+  if (st.empty()) {
+    std::ostringstream os;
+    os << "no static pose found (the unit never held still for " << opt.min_static_s
+       << " s by the static test): check that the accelerometer and gyro files are not swapped and that the "
+          "conversion to SI is right (import imu-tk --acc-scale/--gyro-scale, import csv --accel-unit/--gyro-unit)";
+    for (const auto* n : {&fit.gyro_noise, &fit.accel_noise}) {
+      const bool gyro = n == &fit.gyro_noise;
+      os << "; " << (gyro ? "gyro" : "accelerometer") << " noise per sample used by the test " << n->used_sigma
+         << (gyro ? " rad/s" : " m/s²");
+      if (n->class_sigma > 0 && n->measured_sigma > 0)
+        os << " (class " << n->class_sigma << ", measured on the recording's quietest windows " << n->measured_sigma << ")";
+    }
+    os << ". A device class whose noise is below the unit's (the measured level replaces it only beyond 2×) makes every "
+          "window fail: check the class (meta.json device.model, --device-class)";
+    throw MultiposRefusal(os.str());
+  }
   {  // A still unit measures gravity: a median |f̄| far from g is a wrong conversion, not a calibration.
     std::vector<double> mags;
     for (const auto& s : st) mags.push_back(s.f_mean.norm());
@@ -310,8 +347,9 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
     if (!(ratio > 0.5 && ratio < 2.0))
       throw MultiposRefusal("the static poses measure |f| = " + std::to_string(mags[mags.size() / 2]) +
                             " m/s² (median), " + std::to_string(ratio) + "× gravity (" + std::to_string(in.gravity) +
-                            " m/s²): the accelerometer values are not in m/s² — check the counts conversion "
-                            "(import imu-tk --acc-offset / --acc-scale)");
+                            " m/s²): the accelerometer values are not in m/s² — check the conversion to SI "
+                            "(import imu-tk --acc-offset / --acc-scale, import csv --accel-unit, and that the "
+                            "accelerometer columns are the right ones)");
   }
   if (used.size() < opt.min_poses)
     missing.push_back(std::to_string(used.size()) + " static poses found, at least " + std::to_string(opt.min_poses) +
@@ -334,6 +372,22 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
         missing.push_back(os.str());
       }
   }
+  {
+    // The skews need tilted poses: poses at the six faces only give 6 distinct equations for 9
+    // unknowns however often they are repeated. Directions within 10° count once.
+    std::vector<Vec3> dirs;
+    for (int k : used) {
+      const Vec3 u = st[k].f_mean.normalized();
+      bool seen = false;
+      for (const Vec3& d : dirs) seen = seen || u.dot(d) > std::cos(10 * units::kDeg);
+      if (!seen) dirs.push_back(u);
+    }
+    if (dirs.size() < static_cast<std::size_t>(kAccelParams))
+      missing.push_back("only " + std::to_string(dirs.size()) +
+                        " distinct gravity directions among the poses (poses within 10° of each other count once), at "
+                        "least 9 needed: the skews need tilted poses — add poses resting on an edge (about 45°) or a "
+                        "corner of the unit, not only on its faces");
+  }
   if (!missing.empty()) {
     std::ostringstream os;
     os << "the poses do not determine the accelerometer coefficients:";
@@ -344,13 +398,13 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
 
   // --- Accelerometer: gravity magnitude.
   const double sa = fit.accel_noise.used_sigma;
-  auto accel_eval = [&](const VecX& p, VecX& r, MatX* J) {
+  auto accel_eval_on = [&](const std::vector<int>& poses, const VecX& p, VecX& r, MatX* J) {
     const TriadErrors e = accel_from(p);
     const Mat3 Ainv = (Mat3::Identity() + e.M).inverse();
-    r.resize(static_cast<Eigen::Index>(used.size()));
+    r.resize(static_cast<Eigen::Index>(poses.size()));
     if (J) J->resize(r.size(), kAccelParams);
-    for (std::size_t m = 0; m < used.size(); ++m) {
-      const auto& s = st[used[m]];
+    for (std::size_t m = 0; m < poses.size(); ++m) {
+      const auto& s = st[poses[m]];
       const double sigma = sa / std::sqrt(double(s.i1 - s.i0));
       const Vec3 y = Ainv * (s.f_mean - e.bias);
       const double ny = y.norm();
@@ -363,6 +417,7 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
       }
     }
   };
+  auto accel_eval = [&](const VecX& p, VecX& r, MatX* J) { accel_eval_on(used, p, r, J); };
   auto ar = levenberg_marquardt(VecX::Zero(kAccelParams), accel_eval);
   fit.accel_iterations = ar.iterations;
   fit.accel_dof = static_cast<int>(used.size()) - kAccelParams;
@@ -372,6 +427,8 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
                                        "matrix is singular): add poses with each axis tilted between up, level and down");
   fit.coeffs.accel = accel_from(ar.p);
   accel_sigmas(Ca, fit.coeffs.accel);
+  refuse_undetermined(fit.coeffs.accel, 0.02, 0.05 * in.gravity, "accelerometer",
+                      "the poses do not separate it: add poses tilted between the faces (on an edge or a corner)");
   const TriadCorrector acorr(fit.coeffs.accel);
   double s_raw = 0, s_fit = 0;
   for (auto& s : st) s.g_residual = acorr(s.f_mean).norm() - in.gravity;
@@ -381,6 +438,19 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   }
   fit.g_spread_raw = std::sqrt(s_raw / used.size());
   fit.g_spread = std::sqrt(s_fit / used.size());
+  // Held out: each pose's |f| − g from the accelerometer fitted without it (what a new pose of this
+  // unit would show; the fit's own figure above is in-sample).
+  {
+    double sl = 0;
+    for (std::size_t m = 0; m < used.size(); ++m) {
+      std::vector<int> rest = used;
+      rest.erase(rest.begin() + static_cast<long>(m));
+      const auto lr = levenberg_marquardt(ar.p, [&](const VecX& p, VecX& r, MatX* J) { accel_eval_on(rest, p, r, J); });
+      const double e = TriadCorrector(accel_from(lr.p))(st[used[m]].f_mean).norm() - in.gravity;
+      sl += e * e;
+    }
+    fit.g_loo_rms = std::sqrt(sl / used.size());
+  }
   if (fit.accel_noise.differs)
     fit.notes.push_back("accelerometer white noise measured " + std::to_string(fit.accel_noise.measured_sigma) +
                         " m/s² per sample, the class says " + std::to_string(fit.accel_noise.class_sigma) +
@@ -440,6 +510,32 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   for (int k = 0; k < static_cast<int>(fit.rotations.size()); ++k)
     if (fit.rotations[k].used) rused.push_back(k);
   {
+    // The turn's path length ∫|ω − b|dt can never be shorter than the angle gravity turned through
+    // in the body, and for a hand-turned unit it is seldom more than twice it: rates in the wrong
+    // unit (deg/s read as rad/s: 57×) show here before they ruin the fit.
+    std::vector<double> ratio;
+    for (int k : rused) {
+      const auto& ru = fit.rotations[k];
+      const double alpha = std::acos(std::clamp(up[ru.from].dot(up[ru.to]), -1.0, 1.0));
+      if (alpha < 30 * units::kDeg) continue;
+      double path = 0;
+      for (std::size_t i = st[ru.from].i1; i < st[ru.to].i0; ++i)
+        path += (in.gyro[i] - b0).norm() * (i + 1 < in.t.size() ? in.t[i + 1] - in.t[i] : 1 / in.rate_hz);
+      ratio.push_back(path / alpha);
+    }
+    if (ratio.size() >= 3) {
+      std::nth_element(ratio.begin(), ratio.begin() + static_cast<long>(ratio.size() / 2), ratio.end());
+      const double med = ratio[ratio.size() / 2];
+      if (!(med > 0.7 && med < 5)) {
+        std::ostringstream os;
+        os << "the gyro rates integrate to " << med << "× the angle gravity turned through in the rotations (median over "
+           << ratio.size() << " rotations of 30° or more; 1–2 for rates in rad/s): the gyro values are not in rad/s — "
+           << "check the conversion to SI (import csv --gyro-unit, import imu-tk --gyro-scale) and the gyro columns";
+        throw MultiposRefusal(os.str());
+      }
+    }
+  }
+  {
     std::vector<std::string> miss;
     if (rused.size() < opt.min_rotations)
       miss.push_back(std::to_string(rused.size()) + " rotations between static poses, at least " +
@@ -498,12 +594,15 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   const MatX Cg = covariance_or_refuse(gr, fit.gyro_chi2_dof,
                                        "the rotations do not determine the gyro coefficients (the fit's normal matrix is "
                                        "singular): turn the unit about each of its axes between static poses — or, with "
-                                       "rotations enough, a gyro axis's sign or scale in the counts conversion is wrong "
-                                       "(import imu-tk --gyro-scale)");
+                                       "rotations enough, a gyro axis's sign or scale in the conversion is wrong "
+                                       "(import imu-tk --gyro-scale, import csv --gyro-unit and its columns)");
   fit.coeffs.gyro = gyro_from(gr.p);
   for (int i = 0; i < 3; ++i) fit.coeffs.gyro.sigma_bias(i) = std::sqrt(Cg(i, i));
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) fit.coeffs.gyro.sigma_M(i, j) = std::sqrt(Cg(3 + 3 * i + j, 3 + 3 * i + j));
+  refuse_undetermined(fit.coeffs.gyro, 0.05, units::kPi / 180, "gyro",
+                      "the rotations do not separate it: turn the unit about each of its axes, in both directions, "
+                      "between static poses");
   double rr = 0;
   for (auto& ru : fit.rotations) {
     const Vec3 pred = rotate_up(in, fit.coeffs.gyro, st[ru.from].i1, st[ru.to].i0, up[ru.from]);

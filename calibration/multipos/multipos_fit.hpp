@@ -84,6 +84,7 @@ struct MultiposFit {
   double accel_chi2_dof = 0, gyro_chi2_dof = 0;
   int accel_dof = 0, gyro_dof = 0;
   double g_spread_raw = 0, g_spread = 0;  // RMS of ‖f̄‖ − g over the used poses, before/after
+  double g_loo_rms = 0;                   // the same, each pose left out of the fit that judges it
   double rotation_rms_rad = 0;            // RMS of the gravity-direction error over used rotations
   int accel_iterations = 0, gyro_iterations = 0;
   std::vector<std::string> notes;         // what a reader should know (noise differs, Earth rate …)

@@ -86,8 +86,8 @@ expect_fail "static poses found, at least 9 needed" "$CALBENCH" fit multipos "$t
 grep -q "add static poses" "$tmp/err"
 [ ! -e "$tmp/few.json" ]
 # An unknown model needs --device-class; a bench recording is not a multipos one.
-"$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/unk" "${conv[@]}" --model "Brand X" --serial XS1 > "$tmp/unk.txt"
-grep -q "note: no built-in device class is named 'Brand X'; give fit multipos --device-class FILE" "$tmp/unk.txt"
+"$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/unk" "${conv[@]}" --model "Brand X" --serial XS1 > "$tmp/unk.txt" 2> "$tmp/unk.err"
+grep -q "note: no built-in device class is named 'Brand X'; give fit multipos --device-class FILE" "$tmp/unk.err"
 # The model and the serial are required (the class's noise; the unit's key in the database).
 expect_fail "serial is required" "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/noserial" "${conv[@]}" --model MTi
 [ ! -e "$tmp/noserial" ]
