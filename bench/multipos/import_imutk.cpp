@@ -21,16 +21,19 @@ nlohmann::json counts_json(const CountsConversion& c) {
 struct PairReader {
   TextRows acc, gyro;
   std::vector<double> va, vg;
+  std::size_t rows_ = 0;
   PairReader(const ImportImuTkArgs& a) : acc(a.acc, 4), gyro(a.gyro, 4) {}
   bool next(const ImportImuTkArgs& a, double& t, Vec3& f, Vec3& w) {
     const bool ha = acc.next(va), hg = gyro.next(vg);
     if (ha != hg) {
       const TextRows& shorter = ha ? gyro : acc;
+      if (rows_ == 0) throw InputError(shorter.path(), shorter.line(), "", "no data rows (t x y z)");
       throw InputError(shorter.path(), shorter.line(), "",
                        "ends before " + (ha ? acc : gyro).path() + " (line " + std::to_string((ha ? acc : gyro).line()) +
                            "): the two files must have the same rows");
     }
     if (!ha) return false;
+    ++rows_;
     t = va[0] * a.time_scale;
     const double tg = vg[0] * a.time_scale;
     if (!(std::abs(t - tg) <= 1e-6 * std::max(1.0, std::abs(t))))

@@ -352,7 +352,9 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
                             "accelerometer columns are the right ones)");
   }
   if (used.size() < opt.min_poses)
-    missing.push_back(std::to_string(used.size()) + " static poses found, at least " + std::to_string(opt.min_poses) +
+    missing.push_back(std::to_string(used.size()) + " static poses used (" + std::to_string(st.size()) + " found" +
+                      (used.size() < st.size() ? ", " + std::to_string(st.size() - used.size()) + " left out" : std::string()) +
+                      "), at least " + std::to_string(opt.min_poses) +
                       " needed (9 accelerometer parameters; 12 or more recommended)");
   {
     Vec3 up_max = Vec3::Constant(-2), up_min = Vec3::Constant(2);

@@ -82,7 +82,7 @@ expect_fail "already holds a recording" "$CALBENCH" import imu-tk "$D/xsens_acc.
 # Fit: too few poses (the first 60 s: the opening static and two poses) is refused saying what to add.
 head -6000 "$D/xsens_acc.mat" > "$tmp/a6.txt"; head -6000 "$D/xsens_gyro.mat" > "$tmp/g6.txt"
 "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/few" "${conv[@]}" --model "Xsens MTi" --serial XS1 > /dev/null
-expect_fail "static poses found, at least 9 needed" "$CALBENCH" fit multipos "$tmp/few" --out "$tmp/few.json"
+expect_fail "static poses used (3 found), at least 9 needed" "$CALBENCH" fit multipos "$tmp/few" --out "$tmp/few.json"
 grep -q "add static poses" "$tmp/err"
 [ ! -e "$tmp/few.json" ]
 # An unknown model needs --device-class; a bench recording is not a multipos one.
