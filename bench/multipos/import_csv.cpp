@@ -63,6 +63,16 @@ class CsvRows {
     return true;
   }
   const CsvReader& reader() const { return r_; }
+  // Increments: the rates they make over their interval within what every reader of recordings
+  // accepts (bench/io/plausible.hpp); named at this row and column.
+  void check_increment_rates(const ImuRecord& rec) const {
+    for (int i = 0; i < 3; ++i) {
+      check_range(r_, gyro_[i].index, rec.gyro(i) / rec.dt, -plausible::kMaxAngularRate_rad_s,
+                  plausible::kMaxAngularRate_rad_s, "angular rate of the increment (rad/s)");
+      check_range(r_, accel_[i].index, rec.accel(i) / rec.dt, -plausible::kMaxSpecificForce_m_s2,
+                  plausible::kMaxSpecificForce_m_s2, "specific force of the increment (m/s²)");
+    }
+  }
 
  private:
   struct Column {
@@ -130,6 +140,7 @@ ImportCsvSummary import_csv(const ImportCsvArgs& a) {
     for (bool first = true; r.next(rec.t, rec.accel, rec.gyro); first = false) {
       rec.dt = first ? 1.0 / sum.rate_hz : rec.t - last;
       last = rec.t;
+      if (a.increments) r.check_increment_rates(rec);  // the reader's bounds apply to the rates they make
       wr.imu(rec);
     }
   });

@@ -77,6 +77,10 @@ bad noindex "column 9 does not exist" "${H}0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n
 bad range "$tmp/range.csv:2.*outside" "${H}0,0,0,0,0,0,1e9\n0.01,0,0,0,0,0,9.8\n"
 bad onerow "needs at least two data rows" "${H}0,0,0,0,0,0,9.8\n"
 bad empty "no header line" ""
+bad incrate "$tmp/incrate.csv:3.*angular rate of the increment" "${H}0,0,0,0,0,0,0.098\n0.01,500,0,0,0,0,0.098\n0.02,0,0,0,0,0,0.098\n" --increments
+bad dupcol "given for both --gyro x and --gyro y" "${H}0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n" --gyro 2,2,4
+bad duphead "names 'gx' 2 times" "t,gx,gx,gz,ax,ay,az\n0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n" --gyro 2,3,4
+bad gap "$tmp/gap.csv:4.*not an IMU interval" "${H}0,0,0,0,0,0,9.8\n0.01,0,0,0,0,0,9.8\n4000,0,0,0,0,0,9.8\n"
 set +e; "$CALBENCH" import csv "$tmp/inc.csv" --kind multipos --out "$tmp/u" --model MTi --serial XS1 --gyro-unit furlong/s 2> "$tmp/u.err"; rc=$?; set -e
 [ $rc -ne 0 ] && grep -q "gyro-unit" "$tmp/u.err"
 "$CALBENCH" import csv --help | grep -q -- "--increments"
