@@ -33,6 +33,12 @@ std::string creator_name(const CoefficientSetRecord& set) { return set.created_b
 
 bool stored_by_signer(const Store& store, const CoefficientSetRecord& set) {
   if (store.authenticated()) return set.created_by_login == store.login();
+  // SQLite: the typed names. A console account is its person under two names, the account's login
+  // and the person's name: a set stored as either was stored by the one signing now.
+  const std::string login = store.login();
+  if (login.rfind(kConsoleLoginPrefix, 0) == 0 &&
+      same_person(creator_name(set), login.substr(std::string(kConsoleLoginPrefix).size())))
+    return true;
   return same_person(creator_name(set), store.actor().user);
 }
 

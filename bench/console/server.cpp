@@ -270,7 +270,7 @@ class Console {
       const db::ApprovalCheck chk = db::check_standing(st, s, thresholds(s));
       b << "<tr data-set=\"" << s.id << "\"><td><a class=\"open\" href=\"/set/" << s.id << "\">set " << s.id << "</a></td><td><a href=\"/device/"
         << html_escape(s.serial) << "\">" << html_escape(s.model + " " + s.serial) << "</a></td><td>" << s.version << "</td><td>"
-        << db::to_string(s.source) << "</td><td>" << html_escape(s.created_by + " (" + s.created_at + ")") << "</td><td class=\""
+        << db::source_label(s) << "</td><td>" << html_escape(s.created_by + " (" + s.created_at + ")") << "</td><td class=\""
         << (chk.ok ? "pass\">meets every threshold" : "fail\">would be refused");
       if (!chk.ok) {
         b << "<ul>";
@@ -289,7 +289,7 @@ class Console {
     std::ostringstream b;
     if (!message.empty())
       b << "<div class=\"msg " << (ok ? "ok\" id=\"done\">" : "err\" id=\"error\">") << html_escape(message) << "</div>\n";
-    b << "<h1>Set " << set.id << " of " << html_escape(set.serial) << " (v" << set.version << ", " << db::to_string(set.source)
+    b << "<h1>Set " << set.id << " of " << html_escape(set.serial) << " (v" << set.version << ", " << db::source_label(set)
       << ", <span id=\"status\">" << db::to_string(set.status) << "</span>)</h1>\n";
     const std::string hidden = "<input type=\"hidden\" name=\"csrf\" value=\"" + c.s->csrf + "\">";
     if (set.status == db::SetStatus::draft)

@@ -1,0 +1,237 @@
+#!/usr/bin/python3
+"""The web console (`calbench serve`, issue 38) in a real browser: Debian's Chromium driven by
+Selenium (python3-selenium, chromium-driver), over a SQLite store made by the CLI from a simulated
+hand-turned unit (bench/multipos/sim_effects.py → import imu-tk → fit multipos → db store-bench with
+its QC, stored by QC account qc1).
+
+Paths: log in; see the queue; open the set and its device report; be refused as a station login and
+as the set's own creator; approve as another QC person; see the approval in the audit log; log out.
+Bad input, each refused with a clear message and nothing changed (the set's status is read back
+with the CLI): a wrong password, the lock-out after repeated failures, a missing and a forged CSRF
+token, a stale session after log-out, an overlong form value, path traversal in asset URLs.
+
+Run by ctest (tests/CMakeLists.txt: browser.console) with CALBENCH and SRC set; exit 77 when
+Chromium, chromedriver or Selenium are missing (scripts/setup installs them)."""
+import http.client
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.parse
+
+try:
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service as ChromeService
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support import expected_conditions as EC
+    from selenium.webdriver.support.ui import WebDriverWait
+except ImportError:
+    print("python3-selenium not installed: skipped")
+    sys.exit(77)
+
+CB = os.environ["CALBENCH"]
+SRC = os.environ["SRC"]
+if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.which("chromium-browser"))):
+    print("chromium / chromedriver not installed: skipped")
+    sys.exit(77)
+
+
+def run(*args, env=None, check=True):
+    p = subprocess.run([CB, *args], capture_output=True, text=True, env=env)
+    if check and p.returncode != 0:
+        raise SystemExit(f"calbench {' '.join(args)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
+    return p
+
+
+def free_port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def set_status(db, serial="SIMW1"):
+    sets = json.loads(run("db", "show", serial, "--db", db, "--json").stdout)["sets"]
+    return sets[0]["status"]
+
+
+class Http:
+    """Raw requests beside the browser (forged forms, traversal): http.client, no redirects followed."""
+
+    def __init__(self, port):
+        self.port = port
+
+    def req(self, method, path, body=None, cookie=None):
+        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
+        h = {}
+        if cookie:
+            h["Cookie"] = cookie
+        if body is not None:
+            h["Content-Type"] = "application/x-www-form-urlencoded"
+            body = urllib.parse.urlencode(body)
+        c.request(method, path, body=body, headers=h)
+        r = c.getresponse()
+        out = (r.status, r.read().decode("utf-8", "replace"))
+        c.close()
+        return out
+
+
+def main():
+    work = tempfile.mkdtemp(prefix="calbench-console-")
+    server = driver = None
+    try:
+        db = os.path.join(work, "store.db")
+        sim = os.path.join(work, "sim")
+        subprocess.run([sys.executable, os.path.join(SRC, "bench/multipos/sim_effects.py"), sim, "--seed", "501",
+                        "--poses", "24"], check=True)
+        rec = os.path.join(work, "rec")
+        run("import", "imu-tk", f"{sim}/acc.txt", f"{sim}/gyro.txt", "--out", rec, "--model", "ADIS16488A",
+            "--serial", "SIMW1", "--site-lat", "52")
+        coeffs = os.path.join(work, "c.json")
+        fit = json.loads(run("fit", "multipos", rec, "--out", coeffs, "--json").stdout)["multipos"]
+        run("db", "store-bench", "--db", db, "--coeffs", coeffs, "--recording", rec, "--operator", "qc1", "--qc",
+            f"g_loo_rms={fit['g_loo_rms_m_s2']}:{fit['qc_g_loo_limit_m_s2']}:m/s2:out-of-sample")
+        for login, name, role, pw in (("qc1", "Quinn QA", "qc", "pw-quinn-1234"), ("qc2", "Rita Review", "qc", "pw-rita-12345"),
+                                      ("st1", "Sam Station", "station", "pw-sam-123456")):
+            run("db", "user", "add", login, "--db", db, "--name", name, "--role", role, "--operator", "admin",
+                env={**os.environ, "CALBENCH_PASSWORD": pw})
+        port = free_port()
+        log = open(os.path.join(work, "serve.log"), "w")
+        server = subprocess.Popen([CB, "serve", "--db", db, "--listen", f"127.0.0.1:{port}"], stdout=log, stderr=log)
+        base = f"http://127.0.0.1:{port}"
+        http = Http(port)
+        for _ in range(100):  # until it listens
+            try:
+                http.req("GET", "/login")
+                break
+            except OSError:
+                time.sleep(0.1)
+
+        opts = webdriver.ChromeOptions()
+        for a in ("--headless", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu"):
+            opts.add_argument(a)
+        if shutil.which("chromium"):
+            opts.binary_location = shutil.which("chromium")
+        driver = webdriver.Chrome(service=ChromeService(executable_path=shutil.which("chromedriver")), options=opts)
+        driver.set_page_load_timeout(30)
+        d = driver
+
+        def login(user, pw):
+            d.get(base + "/login")
+            d.find_element(By.ID, "login").send_keys(user)
+            d.find_element(By.ID, "password").send_keys(pw)
+            submit("submit")
+
+        def logout():
+            submit("logout")
+            assert d.find_elements(By.ID, "password"), "log out did not return to the login form"
+
+        def text(id_):
+            return WebDriverWait(d, 15).until(EC.presence_of_element_located((By.ID, id_))).text
+
+        def submit(id_):
+            """Click a form's button and wait for the page it leads to (the old page goes stale)."""
+            old = d.find_element(By.TAG_NAME, "html")
+            d.find_element(By.ID, id_).click()
+            WebDriverWait(d, 15).until(EC.staleness_of(old))
+
+        # Not logged in: every page leads to the login form.
+        d.get(base + "/queue")
+        assert d.current_url.endswith("/login"), d.current_url
+
+        # A wrong password: refused, no session.
+        login("qc2", "not-the-password")
+        assert "wrong login or password" in text("error"), text("error")
+        assert not d.find_elements(By.ID, "queue")
+
+        # Station login: sees the queue, may not approve (the store's own refusal, as on the CLI).
+        login("st1", "pw-sam-123456")
+        assert "Sam Station" in text("who"), text("who")
+        d.find_element(By.CSS_SELECTOR, "#queue tr[data-set='1'] a.open").click()
+        submit("approve")
+        assert d.find_elements(By.ID, "error"), "a station login approved a set: " + d.find_element(By.TAG_NAME, "main").text[:600]
+        assert set_status(db) == "draft"
+        logout()
+
+        # The set's own creator (qc1 stored it): four-eyes refuses.
+        login("qc1", "pw-quinn-1234")
+        d.get(base + "/set/1")
+        submit("approve")
+        assert d.find_elements(By.ID, "error"), "the creator approved: " + d.find_element(By.TAG_NAME, "main").text[:600]
+        err = text("error")
+        assert "four-eyes" in err or "another" in err, err
+        assert set_status(db) == "draft"
+        logout()
+
+        # Another QC person: the queue, the report inline, the approval signed by them.
+        login("qc2", "pw-rita-12345")
+        rows = d.find_elements(By.CSS_SELECTOR, "#queue tr[data-set]")
+        assert [r.get_attribute("data-set") for r in rows] == ["1"], [r.get_attribute("data-set") for r in rows]
+        assert "meets every threshold" in rows[0].text, rows[0].text
+        rows[0].find_element(By.CSS_SELECTOR, "a.open").click()
+        report = text("report")
+        assert "Coefficient history" in report and "multi-position fit" in report, report[:400]
+        cookie = "calbench_session=" + d.get_cookie("calbench_session")["value"]
+        csrf = d.find_element(By.CSS_SELECTOR, "form[action='/set/1/revoke'] input[name=csrf]").get_attribute("value")
+
+        # Forged forms beside the browser, with its session: no token, a wrong token, an overlong value.
+        st, body = http.req("POST", "/set/1/approve", {}, cookie)
+        assert st == 403 and "CSRF" in body, (st, body[:300])
+        st, body = http.req("POST", "/set/1/approve", {"csrf": "0" * 64}, cookie)
+        assert st == 403 and "CSRF" in body, (st, body[:300])
+        st, body = http.req("POST", "/set/1/revoke", {"csrf": csrf, "reason": "x" * 5000}, cookie)
+        assert st == 400 and "nothing was changed" in body, (st, body[:300])
+        assert set_status(db) == "draft"
+
+        submit("approve")
+        assert "approved" in text("done"), text("done")
+        assert text("status") == "approved"
+        assert set_status(db) == "approved"
+        d.get(base + "/audit")
+        audit = text("audit")
+        assert "Rita Review" in audit and "approved" in audit, audit[:500]
+        logout()
+
+        # The session's cookie after log-out is dead: a form posted with it changes nothing.
+        st, body = http.req("POST", "/set/1/revoke", {"csrf": csrf, "reason": "stale"}, cookie)
+        assert st == 401 and "session has ended" in body, (st, body[:300])
+        assert set_status(db) == "approved"
+
+        # Asset URLs: only the built-in style sheets; traversal gets nothing from the disk.
+        for path in ("/assets/../../../../etc/passwd", "/assets/%2e%2e/%2e%2e/etc/passwd", "/assets/..%2fstore.db",
+                     "/assets/report.css/../../store.db"):
+            st, body = http.req("GET", path)
+            assert st in (400, 404) and "root:" not in body and "SQLite" not in body, (path, st, body[:200])
+        st, body = http.req("GET", "/assets/console.css")
+        assert st == 200, st
+
+        # Lock-out: five wrong passwords lock the login; the right one is refused meanwhile.
+        for _ in range(5):
+            login("qc1", "wrong-password-x")
+        login("qc1", "pw-quinn-1234")
+        err = text("error")
+        assert "locked" in err, err
+        assert not d.find_elements(By.ID, "queue")
+
+        # No password or session token in the server's log.
+        log.flush()
+        logged = open(os.path.join(work, "serve.log")).read()
+        for secret in ("pw-quinn-1234", "pw-rita-12345", "pw-sam-123456", cookie.split("=", 1)[1], csrf):
+            assert secret not in logged, "a secret reached the log"
+        print("console in Chromium: ok")
+    finally:
+        if driver:
+            driver.quit()
+        if server:
+            server.terminate()
+            server.wait(10)
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
