@@ -247,7 +247,7 @@ FitEvidence fit_evidence(Store& store, const CoefficientSetRecord& set) {
           throw InputError(where, 0, std::string("multipos.") + k, "missing or not a finite number");
         return (*m)[k].get<double>();
       };
-      ev.multipos_chi2 = std::make_pair(num("accel_chi2_dof_class"), num("gyro_chi2_dof"));
+      ev.multipos_chi2 = std::make_pair(num("accel_chi2_dof_class"), num("gyro_chi2_dof_class"));
     }
   } catch (const InputError& e) {
     ev.problems.push_back(std::string("fit quality of the set unreadable: ") + e.what());

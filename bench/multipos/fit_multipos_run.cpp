@@ -129,6 +129,7 @@ MultiposRecording read_multipos_recording(const std::string& dir, const std::str
   in.gyro_density = cls.cls.noise.gyro.white_density;
   in.accel_density = cls.cls.noise.accel.white_density;
   in.gyro_bias_stability = cls.cls.noise.gyro.drift_sigma;
+  in.accel_bias_stability = cls.cls.noise.accel.drift_sigma;
   if (meta.extra.contains("gravity_m_s2")) {
     const auto& g = meta.extra["gravity_m_s2"];
     if (!g.is_number() || !(g.get<double>() >= 9.7 && g.get<double>() <= 9.9))
@@ -184,6 +185,7 @@ MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
   // approval judges (db/approval_quality.hpp); the fit's own χ²/dof weighs white noise only.
   const MultiposNoiseCheck nc = multipos_noise_check(r.rec.input, r.fit, r.fit.coeffs, r.rec.noise);
   r.set.extra["multipos"]["accel_chi2_dof_class"] = nc.accel_chi2_dof;
+  r.set.extra["multipos"]["gyro_chi2_dof_class"] = r.fit.gyro_chi2_dof_class;
   r.set.extra["multipos"]["gyro_static_chi2_dof_class"] = {nc.gyro_chi2_dof[0], nc.gyro_chi2_dof[1], nc.gyro_chi2_dof[2]};
   // The QC figure a store of this set can carry (db store-bench --qc): the held-out gravity residual
   // against 3× what a pose of a sound unit of this class shows (white noise of the pose's mean and
@@ -201,7 +203,8 @@ MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
   r.set.extra["multipos"]["class_noise_note"] =
       "accel_chi2_dof_class: gravity-magnitude residuals over the static poses (N - 9 dof) under white noise plus the "
       "class's bias drift between poses; gyro_static_chi2_dof_class: each gyro's static mean rate (N - 1 dof) with the "
-      "Earth rate as noise (calibration/diagnosis/multipos_diagnose.hpp)";
+      "Earth rate as noise (calibration/diagnosis/multipos_diagnose.hpp); gyro_chi2_dof_class: the gravity direction after "
+      "the rotations under white noise and the class's bias wander (calibration/multipos/multipos_fit.cpp)";
   return r;
 }
 
@@ -241,7 +244,9 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
       << fit.g_loo_rms * 1e3 << " mm/s²; 3× a sound pose of this class: " << m.value("qc_g_loo_limit_m_s2", 0.0) * 1e3
       << " mm/s²\n";
   out << "gravity direction after each rotation: RMS error " << std::setprecision(3) << fit.rotation_rms_rad / kDeg
-      << "°; χ²/dof " << std::setprecision(2) << fit.gyro_chi2_dof << " (" << fit.gyro_dof << " dof)\n";
+      << "°; χ²/dof " << std::setprecision(2) << fit.gyro_chi2_dof << " (" << fit.gyro_dof
+      << " dof, white noise only); under the class's noise and drift " << fit.gyro_chi2_dof_class
+      << " (what the approval judges)\n";
   out << coeff_text(fit.coeffs);
   out << "frame: " << m["frame"].get<std::string>() << " (accel M[0][1], M[0][2], M[1][2] are 0 by that definition)\n";
   if (std::max(fit.accel_chi2_dof, fit.gyro_chi2_dof) > 1)

@@ -612,6 +612,22 @@ MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
     if (ru.used) rr += ru.residual_rad * ru.residual_rad;
   }
   fit.rotation_rms_rad = std::sqrt(rr / rused.size());
+  // The same residuals under the class's whole noise (the fit weighs white noise only): the bias
+  // wander tilts the gravity direction measured at either end (the fitted accelerometer bias is the
+  // mean over all poses: each end keeps up to σ/g) and adds the gyro's drift over the turn. What
+  // the approval judges; ≈ 1 or below for a sound unit.
+  {
+    const double tilt = in.accel_bias_stability / in.gravity;
+    double c2 = 0;
+    for (int k : rused) {
+      const auto& ru = fit.rotations[k];
+      const Vec3 pred = rotate_up(in, fit.coeffs.gyro, st[ru.from].i1, st[ru.to].i0, up[ru.from]);
+      const double gdrift = in.gyro_bias_stability * (ru.t1 - ru.t0);
+      const double s2 = std::pow(rot_sigma(ru), 2) + 2 * tilt * tilt + gdrift * gdrift;
+      c2 += (pred - up[ru.to]).squaredNorm() / s2;
+    }
+    fit.gyro_chi2_dof_class = fit.gyro_dof > 0 ? c2 / fit.gyro_dof : 0;
+  }
   return fit;
 }
 

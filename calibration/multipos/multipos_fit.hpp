@@ -36,6 +36,9 @@ struct MultiposInput {
   // The class's in-run gyro bias stability (rad/s; 0 = unknown): how far a still unit's mean rate
   // may stray from the statics' median bias.
   double gyro_bias_stability = 0;
+  // The class's accelerometer bias stability (m/s²; 0 = unknown): the gravity direction measured at
+  // either end of a rotation carries its tilt, σ/g per axis, in the rotations' weights.
+  double accel_bias_stability = 0;
 };
 
 struct MultiposOptions {
@@ -82,6 +85,7 @@ struct MultiposFit {
   double threshold_factor = 0;           // χ²_{n−1}(1−α)/(n−1) of the static test
   std::size_t window_samples = 0;
   double accel_chi2_dof = 0, gyro_chi2_dof = 0;
+  double gyro_chi2_dof_class = 0;         // the rotations under white noise and the class's bias wander
   int accel_dof = 0, gyro_dof = 0;
   double g_spread_raw = 0, g_spread = 0;  // RMS of ‖f̄‖ − g over the used poses, before/after
   double g_loo_rms = 0;                   // the same, each pose left out of the fit that judges it
