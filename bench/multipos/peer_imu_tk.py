@@ -35,6 +35,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import hand_turn  # noqa: E402  (the turn both generators make)
+
 OFFSET = 32768.0
 ACC_SCALE = 0.0027          # m/s² per count (nominal)
 GYRO_SCALE = 1.0 / 6258.0   # rad/s per count (IMU-TK's example)
@@ -337,19 +340,8 @@ def simulate(seed, folder):
         ax = unit([rnd.gauss(0, 1) for _ in range(3)])
         theta = math.radians(rnd.uniform(60, 150)) * rnd.choice((-1, 1))
         T = rnd.uniform(1.5, 3.0)
-        n = int(T * rate)
-        for k in range(1, n + 1):
-            tau = k * dt
-            r = theta / T * (1 - math.cos(2 * math.pi * tau / T))
-            a1 = theta * (tau / T - math.sin(2 * math.pi * tau / T) / (2 * math.pi))
-            a0 = theta * ((tau - dt) / T - math.sin(2 * math.pi * (tau - dt) / T) / (2 * math.pi))
-            d = a1 - a0  # rotate the body about ax by d: C ← C·Rot(ax, d)
-            c, s = math.cos(d), math.sin(d)
-            x, y, z = ax
-            R = [[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
-                 [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
-                 [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]]
-            C = mat_mul(C, R)
+        for r, d in hand_turn.turn_samples(theta, T, rate):
+            C = mat_mul(C, hand_turn.rotation(ax, d))  # rotate the body about ax by d: C ← C·Rot(ax, d)
             emit([r * ax[0], r * ax[1], r * ax[2]])
         still(rnd.uniform(3.0, 6.0))
     os.makedirs(folder, exist_ok=True)

@@ -21,6 +21,10 @@ import json
 import math
 import os
 import random
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import hand_turn  # noqa: E402  (the turn both generators make)
 
 ARW = 0.26 * math.pi / 180 / 60      # rad/s/√Hz  (0.26 °/√h)
 VRW = 0.029 / 60                     # m/s²/√Hz   (0.029 m/s/√h)
@@ -40,14 +44,6 @@ def matmul(A, B):
 
 def transpose(A):
     return [[A[j][i] for j in range(3)] for i in range(3)]
-
-
-def rot(axis, ang):
-    x, y, z = axis
-    c, s = math.cos(ang), math.sin(ang)
-    return [[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
-            [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
-            [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]]
 
 
 def unit(v):
@@ -115,13 +111,8 @@ def main():
         ax = unit([rnd.gauss(0, 1) for _ in range(3)])
         theta = math.radians(rnd.uniform(60, 150)) * rnd.choice((-1, 1))
         T = rnd.uniform(1.5, 3.0)
-        n = int(T * rate)
-        for k in range(1, n + 1):
-            tau = k * dt
-            r = theta / T * (1 - math.cos(2 * math.pi * tau / T))
-            a1 = theta * (tau / T - math.sin(2 * math.pi * tau / T) / (2 * math.pi))
-            a0 = theta * ((tau - dt) / T - math.sin(2 * math.pi * (tau - dt) / T) / (2 * math.pi))
-            C = matmul(C, rot(ax, a1 - a0))
+        for r, d in hand_turn.turn_samples(theta, T, rate):
+            C = matmul(C, hand_turn.rotation(ax, d))
             emit([r * ax[0], r * ax[1], r * ax[2]])
         still(rnd.uniform(4.0, 7.0))
     os.makedirs(a.folder, exist_ok=True)

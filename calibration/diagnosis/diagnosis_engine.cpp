@@ -1,5 +1,7 @@
 #include "calibration/diagnosis/diagnosis_engine.hpp"
 
+#include <cmath>
+
 namespace calbench::diag {
 
 void whiten(LinearDataset& S, Eigen::MatrixXd R, const Eigen::VectorXd& z, const Eigen::MatrixXd& X, int retries) {
@@ -29,6 +31,38 @@ void solve_scaled(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, double rid
   theta = s.asDiagonal() * ldlt.solve(s.asDiagonal() * b);
   cov = s.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(P, P)) * s.asDiagonal();
   logdet_info = ldlt.vectorD().array().log().sum() - 2 * s.array().log().sum();
+}
+
+FitOut fit_global(const std::vector<int>& idx, int P, int n_base, const std::vector<double>& prior_sigma,
+                  const std::vector<const LinearDataset*>& sets) {
+  const int K = static_cast<int>(idx.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(K, K);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(K);
+  ColumnMap cm;  // global column → the model's own parameter index
+  for (int u = 0; u < K; ++u) cm.push_back({idx[u], u});
+  for (const LinearDataset* S : sets) accumulate_normal(A, b, *S, cm);
+  for (int u = 0; u < K; ++u) {
+    if (idx[u] < n_base) continue;
+    const double ps = prior_sigma[static_cast<std::size_t>(idx[u] - n_base)];
+    if (ps > 0) A(u, u) += 1.0 / std::pow(ps, 2);
+  }
+  Eigen::VectorXd th;
+  Eigen::MatrixXd C;
+  FitOut out;
+  solve_scaled(A, b, 1e-9, th, C, out.logdet_info);
+  out.theta = Eigen::VectorXd::Zero(P);
+  out.cov = Eigen::MatrixXd::Zero(P, P);
+  for (int u = 0; u < K; ++u) {
+    out.theta(idx[u]) = th(u);
+    for (int v = 0; v < K; ++v) out.cov(idx[u], idx[v]) = C(u, v);
+  }
+  const ColumnMap gm = global_map(idx);
+  for (const LinearDataset* S : sets) {
+    const double c = quadratic_chi2(S->G, S->g, S->zz, gm, out.theta);
+    out.chi2_axis[S->axis] += c;
+    out.chi2 += c;
+  }
+  return out;
 }
 
 Eigen::VectorXd smoothed_drift(const std::vector<ParentBlock>& parents, const LinearDataset& S,

@@ -124,6 +124,21 @@ inline void accumulate_normal(Eigen::MatrixXd& A, Eigen::VectorXd& b, const Line
   }
 }
 
+// Each global index mapped to itself (χ² of a global theta).
+inline ColumnMap global_map(const std::vector<int>& idx) {
+  ColumnMap cm;
+  for (int p : idx) cm.push_back({p, p});
+  return cm;
+}
+
+// The fit of a model over global parameters `idx` (of P in all; the drive's and the multipos
+// diagnosis' layout): the datasets' normal equations, weak zero-mean priors on every parameter from
+// n_base on (σ = prior_sigma[index − n_base]; ≤ 0: none) so that one the data cannot see stays at
+// zero instead of trading off against the bias, solve_scaled; θ and its covariance global (zeros
+// outside the model), χ² per axis.
+FitOut fit_global(const std::vector<int>& idx, int P, int n_base, const std::vector<double>& prior_sigma,
+                  const std::vector<const LinearDataset*>& sets);
+
 // Solve A θ = b with Jacobi scaling and a tiny ridge (parameters a subset cannot see stay at 0):
 // θ, its covariance A⁻¹ and ln det A into out.
 void solve_scaled(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, double ridge, Eigen::VectorXd& theta,

@@ -286,41 +286,8 @@ std::vector<int> model_params(const Design& D, const std::vector<int>& terms) {
   return idx;
 }
 
-diag::ColumnMap global_map(const std::vector<int>& idx) {
-  diag::ColumnMap cm;
-  for (int p : idx) cm.push_back({p, p});
-  return cm;
-}
-
 FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vector<const Dataset*>& sets) {
-  const std::vector<int> idx = model_params(D, terms);
-  const int K = static_cast<int>(idx.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(K, K);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(K);
-  diag::ColumnMap cm;  // global column → the model's own parameter index
-  for (int u = 0; u < K; ++u) cm.push_back({idx[u], u});
-  for (const Dataset* S : sets) diag::accumulate_normal(A, b, *S, cm);
-  // Weak zero-mean priors on the catalogue parameters: a component a drive cannot see (e.g. the
-  // g-sensitivity to the always-vertical gravity, which the bias absorbs, or the lever arm along
-  // the yaw axis) stays at zero with σ ≈ its prior instead of trading off against the bias.
-  for (int u = D.n_base; u < K; ++u) A(u, u) += 1.0 / std::pow(D.prior_sigma[idx[u] - D.n_base], 2);
-  Eigen::VectorXd th;
-  Eigen::MatrixXd C;
-  FitOut out;
-  diag::solve_scaled(A, b, 1e-9, th, C, out.logdet_info);
-  out.theta = Eigen::VectorXd::Zero(D.P);
-  out.cov = Eigen::MatrixXd::Zero(D.P, D.P);
-  for (int u = 0; u < K; ++u) {
-    out.theta(idx[u]) = th(u);
-    for (int v = 0; v < K; ++v) out.cov(idx[u], idx[v]) = C(u, v);
-  }
-  const diag::ColumnMap gm = global_map(idx);
-  for (const Dataset* S : sets) {
-    const double c = diag::quadratic_chi2(S->G, S->g, S->zz, gm, out.theta);
-    out.chi2_axis[S->axis] += c;
-    out.chi2 += c;
-  }
-  return out;
+  return diag::fit_global(model_params(D, terms), D.P, D.n_base, D.prior_sigma, sets);
 }
 
 }  // namespace calbench::drive_diag

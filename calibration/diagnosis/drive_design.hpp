@@ -61,8 +61,7 @@ Design build_design(const DriveDiagData& d, const SensorErrors& cur, const Effec
 Dataset build_dataset(const DriveDiagData& d, const Design& D, int a, int subset, double ds, double tau);
 // Global parameter indices of a model: the base, then the terms' parameters.
 std::vector<int> model_params(const Design& D, const std::vector<int>& terms);
-// Each global index mapped to itself (χ² of a global theta).
-diag::ColumnMap global_map(const std::vector<int>& idx);
+using diag::global_map;  // each global index mapped to itself (χ² of a global theta)
 FitOut fit_model(const Design& D, const std::vector<int>& terms, const std::vector<const Dataset*>& sets);
 // Parent-level residual of axis a for global parameters theta.
 inline Eigen::VectorXd residual(const Design& D, int a, const Eigen::VectorXd& theta) { return D.zp[a] - D.Xp[a] * theta; }

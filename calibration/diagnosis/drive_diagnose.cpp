@@ -286,28 +286,13 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   // stays unexplained, a term kept only because the unmodelled structure inflates its Δχ² is
   // withdrawn (quasi-likelihood: each axis's Δχ² divided by its χ²/dof φ). The statistics are taken
   // again after each change.
-  for (int round = 0; round < 4; ++round) {
-    const int np_now = static_cast<int>(model_params(D, search.model).size());
-    double phi[kAxes];
-    bool unexplained[kAxes];
-    for (int a = 0; a < kAxes; ++a) {
-      Eigen::VectorXd rn;
-      const AxisStats st = axis_stats(data, D, all[a], residual(D, a, search.cur.theta), np_now, rn);
-      unexplained[a] = axis_unexplained(st, all[a]);
-      phi[a] = unexplained[a] ? std::max(1.0, st.chi2_dof) : 1.0;
-    }
-    bool gave_up = false;
-    for (int triad = 0; triad < 2 && !gave_up; ++triad) {
-      if (search.ds[triad] == prior_drift.sigma[triad] && search.tau[triad] == prior_drift.tau[triad]) continue;
-      if (!unexplained[3 * triad] && !unexplained[3 * triad + 1] && !unexplained[3 * triad + 2]) continue;
-      res.withdrawn.push_back(search.withdrawn_report(search.give_up_drift(triad), WithdrawnWhy::leaves_unexplained));
-      gave_up = true;
-    }
-    if (gave_up) continue;
-    const auto w = search.withdraw_overdispersed(phi);
-    for (const auto& x : w) res.withdrawn.push_back(search.withdrawn_report(x, WithdrawnWhy::overdispersed));
-    if (w.empty()) break;
-  }
+  search.recheck_unexplained(res.withdrawn, [&](int a) {
+    Eigen::VectorXd rn;
+    const AxisStats st = axis_stats(data, D, all[a], residual(D, a, search.cur.theta),
+                                    static_cast<int>(model_params(D, search.model).size()), rn);
+    const bool u = axis_unexplained(st, all[a]);
+    return std::make_pair(u, u ? std::max(1.0, st.chi2_dof) : 1.0);
+  });
   const std::vector<int>& model = search.model;
   const FitOut& cur = search.cur;
   const double* ds = search.ds;

@@ -281,6 +281,35 @@ class GreedySearch {
     return out;
   }
 
+  // The rechecks against the final residual (drive and multipos diagnoses), up to four rounds, the
+  // statistics taken again after each change: a drift beyond the prior that leaves an axis of its
+  // triad unexplained has stood in for structure outside the catalogue and is given up
+  // (give_up_drift); else a term kept only because unmodelled structure inflates its Δχ² is
+  // withdrawn (withdraw_overdispersed). check(a) → {axis a stays unexplained, its φ (1 if not)}.
+  template <class Check>
+  void recheck_unexplained(std::vector<DiagWithdrawn>& out, Check check) {
+    for (int round = 0; round < 4; ++round) {
+      double phi[kAxes];
+      bool unexplained[kAxes];
+      for (int a = 0; a < kAxes; ++a) {
+        const std::pair<bool, double> c = check(a);
+        unexplained[a] = c.first;
+        phi[a] = c.second;
+      }
+      bool gave_up = false;
+      for (int triad = 0; triad < 2 && !gave_up; ++triad) {
+        if (ds[triad] == prior_ds_[triad] && tau[triad] == prior_tau_[triad]) continue;
+        if (!unexplained[3 * triad] && !unexplained[3 * triad + 1] && !unexplained[3 * triad + 2]) continue;
+        out.push_back(withdrawn_report(give_up_drift(triad), WithdrawnWhy::leaves_unexplained));
+        gave_up = true;
+      }
+      if (gave_up) continue;
+      const auto w = withdraw_overdispersed(phi);
+      for (const auto& x : w) out.push_back(withdrawn_report(x, WithdrawnWhy::overdispersed));
+      if (w.empty()) break;
+    }
+  }
+
   // A drift finding that leaves an axis of its triad unexplained has not explained the residual:
   // something outside the catalogue (a periodic term, a step) inflated the drift. Give it up:
   // redo the search with that triad's drift held at the prior and adopt the result.

@@ -175,43 +175,10 @@ std::vector<int> model_params(const PoseDesign& D, const std::vector<int>& terms
   return idx;
 }
 
-diag::ColumnMap global_map(const std::vector<int>& idx) {
-  diag::ColumnMap cm;
-  for (int p : idx) cm.push_back({p, p});
-  return cm;
-}
+using diag::global_map;
 
 FitOut fit_model(const PoseDesign& D, const std::vector<int>& terms, const std::vector<const Dataset*>& sets) {
-  const std::vector<int> idx = model_params(D, terms);
-  const int K = static_cast<int>(idx.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(K, K);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(K);
-  diag::ColumnMap cm;
-  for (int u = 0; u < K; ++u) cm.push_back({idx[u], u});
-  for (const Dataset* S : sets) diag::accumulate_normal(A, b, *S, cm);
-  // Weak zero-mean priors on the catalogue parameters (the drive's): a component the poses cannot
-  // see stays at zero with σ ≈ its prior instead of trading off against the bias.
-  for (int u = kBase; u < K; ++u) {
-    const double ps = D.prior_sigma[static_cast<std::size_t>(idx[u] - kBase)];
-    if (ps > 0) A(u, u) += 1.0 / (ps * ps);
-  }
-  Eigen::VectorXd th;
-  Eigen::MatrixXd Cv;
-  FitOut out;
-  diag::solve_scaled(A, b, 1e-9, th, Cv, out.logdet_info);
-  out.theta = Eigen::VectorXd::Zero(D.P);
-  out.cov = Eigen::MatrixXd::Zero(D.P, D.P);
-  for (int u = 0; u < K; ++u) {
-    out.theta(idx[u]) = th(u);
-    for (int w = 0; w < K; ++w) out.cov(idx[u], idx[w]) = Cv(u, w);
-  }
-  const diag::ColumnMap gm = global_map(idx);
-  for (const Dataset* S : sets) {
-    const double c = diag::quadratic_chi2(S->G, S->g, S->zz, gm, out.theta);
-    out.chi2_axis[S->axis] += c;
-    out.chi2 += c;
-  }
-  return out;
+  return diag::fit_global(model_params(D, terms), D.P, kBase, D.prior_sigma, sets);
 }
 
 struct PoseProblem {
@@ -341,28 +308,13 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
   for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w, WithdrawnWhy::drift_recheck));
   // As on the drive: a drift that leaves an axis of its triad unexplained is given up; a term kept
   // only because unmodelled structure inflates its Δχ² is withdrawn (Δχ² over the axis's χ²/dof).
-  for (int round = 0; round < 4; ++round) {
-    double phi[kAxes];
-    bool unexplained[kAxes];
-    for (int a = 0; a < kAxes; ++a) {
-      const int da = std::min(a, kMag);
-      Eigen::VectorXd rn;
-      const AxisStats st = axis_stats(D, all[da], residual(D, da, search.cur.theta), axis_params(D, search.model, da), rn);
-      unexplained[a] = axis_unexplained(st, all[da]);
-      phi[a] = a > kMag ? 1.0 : unexplained[a] ? std::max(1.0, st.chi2_dof) : 1.0;
-    }
-    bool gave_up = false;
-    for (int triad = 0; triad < 2 && !gave_up; ++triad) {
-      if (search.ds[triad] == prior.sigma[triad] && search.tau[triad] == prior.tau[triad]) continue;
-      if (!unexplained[3 * triad] && !unexplained[3 * triad + 1] && !unexplained[3 * triad + 2]) continue;
-      res.withdrawn.push_back(search.withdrawn_report(search.give_up_drift(triad), WithdrawnWhy::leaves_unexplained));
-      gave_up = true;
-    }
-    if (gave_up) continue;
-    const auto w = search.withdraw_overdispersed(phi);
-    for (const auto& x : w) res.withdrawn.push_back(search.withdrawn_report(x, WithdrawnWhy::overdispersed));
-    if (w.empty()) break;
-  }
+  search.recheck_unexplained(res.withdrawn, [&](int a) {
+    if (a > kMag) return std::make_pair(false, 1.0);  // the accelerometer's one dataset is axis 3's
+    Eigen::VectorXd rn;
+    const AxisStats st = axis_stats(D, all[a], residual(D, a, search.cur.theta), axis_params(D, search.model, a), rn);
+    const bool u = axis_unexplained(st, all[a]);
+    return std::make_pair(u, u ? std::max(1.0, st.chi2_dof) : 1.0);
+  });
   const FitOut& cur = search.cur;
 
   // Improved: the biases and the lower-triangular M corrected, the terms added.

@@ -57,8 +57,12 @@ run "$CALBENCH" db user add anna --name "Anna Berg" --role admin --db "$ADMIN"
 run "$CALBENCH" db user add bob --name "bob@lab" --role qc --db "$ADMIN"
 [ "$rc" = 2 ] && grep -q -- "--name: operator name 'bob@lab' must not contain '@'" err.txt || { cat err.txt; fail "bad name: exit $rc"; }
 "$CALBENCH" db init --db s.db > /dev/null
-run "$CALBENCH" db user add bob --name "Bob" --role qc --db s.db
-[ "$rc" = 2 ] && grep -q "a SQLite file has none" err.txt || { cat err.txt; fail "user add on SQLite: exit $rc"; }
+# On SQLite `db user add` makes a web-console account (docs/console.md): its password from
+# CALBENCH_PASSWORD or stdin, 8 characters at least, never on the command line.
+run "$CALBENCH" db user add bob --name "Bob" --role qc --db s.db < /dev/null
+[ "$rc" = 2 ] && grep -q "password: shorter than 8 characters" err.txt || { cat err.txt; fail "user add on SQLite without a password: exit $rc"; }
+CALBENCH_PASSWORD=bob-secret-1 "$CALBENCH" db user add bob --name "Bob" --role qc --db s.db > out.txt
+grep -q "console account bob = Bob (qc): added" out.txt || { cat out.txt; fail "user add on SQLite"; }
 # The mapping table is the admin's: a QC login cannot map itself to someone else.
 psql -h 127.0.0.1 -p "$port" -U anna -d calbench -w -qtAX -c "UPDATE calbench_users SET name = 'Bob Ode' WHERE login = 'anna'" \
   2> err.txt && fail "a QC login rewrote its person"
@@ -67,7 +71,8 @@ grep -q "permission denied" err.txt || { cat err.txt; fail "mapping rewrite refu
 # ---- sets to sign: a recording folder stored by the station's login ----
 mkdir -p rec/sub
 python3 -c 'import sys; print("t,gx,gy,gz,ax,ay,az"); [print(f"{i*0.01},0,0,0,0,0,9.81") for i in range(50)]' > rec/imu.csv
-echo '{"note": "meta"}' > rec/meta.json
+# meta.json names the unit: store-bench refuses a set with another unit's recording.
+echo '{"format": "calbench-recording/1", "kind": "multipos", "device": {"model": "ADIS16488A", "serial": "S1"}, "imu_rate_hz": 100.0}' > rec/meta.json
 printf 'x\0y' > rec/sub/blob.bin
 coeffs() { python3 "$SRC/tests/support/make_coeffs.py" "$@"; }
 coeffs S1 1 > c1.json; coeffs S1 2 > c2.json; coeffs S1 3 > c3.json; coeffs S1 4 > c4.json
