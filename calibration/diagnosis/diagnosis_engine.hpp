@@ -8,6 +8,7 @@
 // pairs: the bench keeps per-axis local columns, the drive global ones. The sums run in the
 // order the two diagnoses always ran them (the outputs are compared within 1e-12).
 #pragma once
+#include <algorithm>
 #include <utility>
 #include <vector>
 
@@ -138,6 +139,27 @@ inline ColumnMap global_map(const std::vector<int>& idx) {
 // outside the model), χ² per axis.
 FitOut fit_global(const std::vector<int>& idx, int P, int n_base, const std::vector<double>& prior_sigma,
                   const std::vector<const LinearDataset*>& sets);
+
+// The catalogue search's problem (greedy_search.hpp) over a design of global parameters (the
+// drive's, the multipos poses'): Design has `terms`, `term_off` (global index of each term's first
+// parameter) and `touched` (per term, the axes with a column), and model_params(D, terms) (found by
+// argument-dependent lookup) gives a model's global indices. A term's penalty counts the rows of
+// the axes it touches, correlated_drift's the rows; the data source adds build() and fit().
+template <class Design>
+struct GlobalProblem {
+  using Dataset = LinearDataset;
+  using Fit = FitOut;
+  const Design& D;
+  int n_terms() const { return static_cast<int>(D.terms.size()); }
+  const Term& term(int t) const { return D.terms[t]; }
+  double chi2(const Dataset& S, const std::vector<int>& m, const Fit& f) const {
+    return quadratic_chi2(S.G, S.g, S.zz, global_map(model_params(D, m)), f.theta);
+  }
+  bool touches(int t, int a) const { return std::find(D.touched[t].begin(), D.touched[t].end(), a) != D.touched[t].end(); }
+  int rows(const Dataset& S) const { return S.n_low; }
+  int drift_rows(const Dataset& S) const { return S.n_low; }
+  int param_index(const Fit& /*f*/, std::size_t /*k*/, int t) const { return D.term_off[t]; }
+};
 
 // Solve A θ = b with Jacobi scaling and a tiny ridge (parameters a subset cannot see stay at 0):
 // θ, its covariance A⁻¹ and ln det A into out.

@@ -26,22 +26,10 @@ using namespace drive_diag;
 // The drive as a problem of the catalogue search (greedy_search.hpp): global parameters; a term
 // with no column on any axis is no candidate; a term's penalty counts the parent rows of the axes
 // it touches, correlated_drift's the parents.
-struct DriveProblem {
-  using Dataset = drive_diag::Dataset;
-  using Fit = FitOut;
+struct DriveProblem : diag::GlobalProblem<Design> {
   const DriveDiagData& d;
-  const Design& D;
-  int n_terms() const { return static_cast<int>(D.terms.size()); }
-  const Term& term(int t) const { return D.terms[t]; }
   Dataset build(int a, int subset, double ds, double tau) const { return build_dataset(d, D, a, subset, ds, tau); }
   Fit fit(const std::vector<int>& m, const std::vector<const Dataset*>& sets) const { return fit_model(D, m, sets); }
-  double chi2(const Dataset& S, const std::vector<int>& m, const Fit& f) const {
-    return diag::quadratic_chi2(S.G, S.g, S.zz, global_map(model_params(D, m)), f.theta);
-  }
-  bool touches(int t, int a) const { return std::find(D.touched[t].begin(), D.touched[t].end(), a) != D.touched[t].end(); }
-  int rows(const Dataset& S) const { return S.n_low; }
-  int drift_rows(const Dataset& S) const { return S.n_low; }
-  int param_index(const Fit& /*f*/, std::size_t /*k*/, int t) const { return D.term_off[t]; }
 };
 
 // Systematic RMS of residual r (drift removed) over groups of parents: each group's mean squared
@@ -222,7 +210,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   }
   res.base_before = current;
 
-  const DriveProblem problem{data, D};
+  const DriveProblem problem{{D}, data};
   GreedyPolicy policy = diag::search_policy(opt);
   policy.skip_untouched = true;
   const diag::DriftPrior prior_drift = diag::drift_prior(opt.noise);

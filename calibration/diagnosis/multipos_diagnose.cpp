@@ -181,21 +181,9 @@ FitOut fit_model(const PoseDesign& D, const std::vector<int>& terms, const std::
   return diag::fit_global(model_params(D, terms), D.P, kBase, D.prior_sigma, sets);
 }
 
-struct PoseProblem {
-  using Dataset = diag::LinearDataset;
-  using Fit = FitOut;
-  const PoseDesign& D;
-  int n_terms() const { return static_cast<int>(D.terms.size()); }
-  const Term& term(int t) const { return D.terms[t]; }
+struct PoseProblem : diag::GlobalProblem<PoseDesign> {
   Dataset build(int a, int subset, double ds, double tau) const { return build_dataset(D, a, subset, ds, tau); }
   Fit fit(const std::vector<int>& m, const std::vector<const Dataset*>& sets) const { return fit_model(D, m, sets); }
-  double chi2(const Dataset& S, const std::vector<int>& m, const Fit& f) const {
-    return diag::quadratic_chi2(S.G, S.g, S.zz, global_map(model_params(D, m)), f.theta);
-  }
-  bool touches(int t, int a) const { return std::find(D.touched[t].begin(), D.touched[t].end(), a) != D.touched[t].end(); }
-  int rows(const Dataset& S) const { return S.n_low; }
-  int drift_rows(const Dataset& S) const { return S.n_low; }
-  int param_index(const Fit& /*f*/, std::size_t /*k*/, int t) const { return D.term_off[t]; }
 };
 
 Eigen::VectorXd residual(const PoseDesign& D, int a, const Eigen::VectorXd& theta) {
@@ -288,7 +276,7 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
     res.white_sigma[a] = a < 3 ? fit.gyro_noise.used_sigma : fit.accel_noise.used_sigma;
   res.base_before = current;
 
-  const PoseProblem problem{D};
+  const PoseProblem problem{{D}};
   GreedyPolicy policy = diag::search_policy(opt);
   policy.skip_untouched = true;
   const diag::DriftPrior prior = diag::drift_prior(opt.noise);
