@@ -15,6 +15,13 @@ TriadErrors triad_from_json(const nlohmann::json& j, const std::string& f, const
   TriadErrors t;
   t.bias = jvec3(jreq(j, "bias", f, name), f, name + ".bias");
   t.M = jmat3(jreq(j, "M", f, name), f, name + ".M");
+  // measured = (I + M)·true + b is inverted by every user of a set: I + M must be a usable scale
+  // matrix (a triad whose axes still see their own input). A determinant below 0.1 (an axis scaled
+  // by −100 %, two axes parallel) is no calibration of a working sensor.
+  if (const double det = (Mat3::Identity() + t.M).determinant(); !(det >= 0.1))
+    throw InputError(f, 0, name + ".M",
+                     "I + M has determinant " + std::to_string(det) +
+                         ": not invertible as a calibration (an axis's sign flipped, a scale of −100 % or axes that coincide); at least 0.1 expected");
   t.sigma_bias = j.contains("sigma_bias") ? jsigma3(j["sigma_bias"], f, name + ".sigma_bias") : Vec3::Constant(kUnknownSigma);
   t.sigma_M = j.contains("sigma_M") ? jsigmamat3(j["sigma_M"], f, name + ".sigma_M") : Mat3::Constant(kUnknownSigma);
   for (auto it = j.begin(); it != j.end(); ++it)

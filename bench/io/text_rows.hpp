@@ -20,7 +20,9 @@ namespace calbench {
 
 class TextRows {
  public:
-  TextRows(std::string path, std::size_t min_cols) : path_(std::move(path)), in_(path_), min_(min_cols) {
+  // Rows of min_cols to max_cols numbers (max_cols 0: no upper bound).
+  TextRows(std::string path, std::size_t min_cols, std::size_t max_cols = 0)
+      : path_(std::move(path)), in_(path_), min_(min_cols), max_(max_cols) {
     if (!in_) throw InputError(path_, 0, "", "cannot open file");
   }
   bool next(std::vector<double>& v) {
@@ -55,6 +57,9 @@ class TextRows {
       }
       if (v.size() < min_)
         throw InputError(path_, line_, "", "expected at least " + std::to_string(min_) + " columns, found " + std::to_string(v.size()));
+      if (max_ > 0 && v.size() > max_)
+        throw InputError(path_, line_, "", "expected " + (max_ == min_ ? std::to_string(max_) : "at most " + std::to_string(max_)) +
+                                               " columns, found " + std::to_string(v.size()));
       return true;
     }
     return false;
@@ -65,7 +70,7 @@ class TextRows {
  private:
   std::string path_;
   std::ifstream in_;
-  std::size_t min_;
+  std::size_t min_, max_;
   std::size_t line_ = 0;
 };
 

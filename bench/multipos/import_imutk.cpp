@@ -22,7 +22,7 @@ struct PairReader {
   TextRows acc, gyro;
   std::vector<double> va, vg;
   std::size_t rows_ = 0;
-  PairReader(const ImportImuTkArgs& a) : acc(a.acc, 4), gyro(a.gyro, 4) {}
+  PairReader(const ImportImuTkArgs& a) : acc(a.acc, 4, 4), gyro(a.gyro, 4, 4) {}  // t x y z, nothing else
   bool next(const ImportImuTkArgs& a, double& t, Vec3& f, Vec3& w) {
     const bool ha = acc.next(va), hg = gyro.next(vg);
     if (ha != hg) {

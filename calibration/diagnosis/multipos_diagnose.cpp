@@ -40,6 +40,7 @@ struct PoseDesign {
 PoseDesign build_design(const multipos::MultiposInput& in, const multipos::MultiposFit& fit, const SensorErrors& cur,
                         const EffectTerms& carried, MultiposDiagnoseResult& out) {
   PoseDesign D;
+  out.poses.clear();
   for (std::size_t k = 0; k < fit.statics.size(); ++k)
     if (fit.statics[k].used) out.poses.push_back(static_cast<int>(k));
   const int N = static_cast<int>(out.poses.size());
@@ -238,6 +239,45 @@ bool axis_unexplained(const AxisStats& s, const Dataset& S) {
 
 double rms(const Eigen::VectorXd& r) { return r.size() ? std::sqrt(r.squaredNorm() / r.size()) : 0.0; }
 
+// The tested coefficients with the base model's correction (biases, the accelerometer's
+// lower-triangular M) applied exactly, again and again until it is negligible. The search
+// linearises about the coefficients it is given: a set far from the recording's (a bias of grams, a
+// scale 10 % off) would leave the linearisation error to the catalogue, as a false nonlinearity or
+// drift, and write absurd improved coefficients. `fit multipos`'s own set needs one round.
+SensorErrors relinearised(const multipos::MultiposInput& in, const multipos::MultiposFit& fit, const SensorErrors& current,
+                          const NoiseSpec& noise) {
+  SensorErrors c = current;
+  MultiposDiagnoseResult scratch;
+  const diag::DriftPrior prior = diag::drift_prior(noise);
+  // Coefficients this far from the recording are another unit's, or none: refused rather than
+  // relinearised from (Gauss–Newton from grams away may settle anywhere).
+  {
+    const PoseDesign D0 = build_design(in, fit, c, EffectTerms{}, scratch);
+    const double rms0 = D0.zp[kMag].size() ? std::sqrt(D0.zp[kMag].squaredNorm() / D0.zp[kMag].size()) : 0.0;
+    if (!(rms0 <= 0.1 * in.gravity))
+      throw std::runtime_error("the coefficients tested leave |f| − g of " + std::to_string(rms0) +
+                               " m/s² RMS over the static poses (more than 10 % of gravity): they are not a calibration "
+                               "of this unit (fit multipos gives one)");
+  }
+  for (int it = 0; it < 20; ++it) {
+    const PoseDesign D = build_design(in, fit, c, EffectTerms{}, scratch);
+    if (D.parents.size() < 9) break;
+    std::vector<Dataset> sets;
+    for (int a = 0; a <= kMag; ++a) sets.push_back(build_dataset(D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
+    std::vector<const Dataset*> ptrs;
+    for (const auto& S : sets) ptrs.push_back(&S);
+    const Eigen::VectorXd th = fit_model(D, {}, ptrs).theta;
+    for (int i = 0; i < 3; ++i) {
+      c.gyro.bias(i) += th(i);
+      c.accel.bias(i) += th(3 + i);
+    }
+    for (int k = 0; k < 6; ++k) c.accel.M(kLower[k][0], kLower[k][1]) += th(6 + k);
+    if (!th.allFinite()) throw std::runtime_error("diagnose: the coefficients tested do not fit the static poses");
+    if (th.segment<6>(0).cwiseAbs().maxCoeff() < 1e-9 && th.segment<6>(6).cwiseAbs().maxCoeff() < 1e-10) break;
+  }
+  return c;
+}
+
 }  // namespace
 
 MultiposNoiseCheck multipos_noise_check(const multipos::MultiposInput& in, const multipos::MultiposFit& fit,
@@ -264,7 +304,8 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
   MultiposDiagnoseResult out;
   DiagnoseResult& res = out.core;
   const EffectTerms carried{};
-  const PoseDesign D = build_design(in, fit, current, carried, out);
+  const SensorErrors base = relinearised(in, fit, current, opt.noise);
+  const PoseDesign D = build_design(in, fit, base, carried, out);
   const int NP = static_cast<int>(D.parents.size());
   if (NP < 9) throw std::runtime_error("diagnose: " + std::to_string(NP) + " static poses used, at least 9 needed");
   res.parents = NP;
@@ -305,8 +346,9 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
   });
   const FitOut& cur = search.cur;
 
-  // Improved: the biases and the lower-triangular M corrected, the terms added.
-  res.improved = current;
+  // Improved: the biases and the lower-triangular M corrected (from the relinearised base), the
+  // terms added.
+  res.improved = base;
   for (int i = 0; i < 3; ++i) {
     res.improved.gyro.bias(i) += cur.theta(i);
     res.improved.gyro.sigma_bias(i) = std::sqrt(std::max(cur.cov(i, i), 0.0));

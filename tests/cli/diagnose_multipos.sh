@@ -85,6 +85,25 @@ for u in k2 clean301; do
     [ $rc -eq 0 ] || { cat "$tmp/$u-appr.txt"; exit 1; }
   fi
 done
+# --coeffs far from the recording: a bias of 5 g is refused (not relinearised from); a scale 10 %
+# off on one axis is refitted exactly (no false nonlinearity); a singular I + M is bad input.
+"$CALBENCH" fit multipos "$tmp/clean302" --out "$tmp/c302.json" > /dev/null
+python3 - "$tmp/c302.json" "$tmp" <<'PY'
+import copy, json, sys
+c = json.load(open(sys.argv[1]))
+for name, edit in (("bigbias", lambda c: c["accel"]["bias"].__setitem__(0, 50.0)),
+                   ("scaley", lambda c: c["accel"]["M"][1].__setitem__(1, c["accel"]["M"][1][1] + 0.1)),
+                   ("sing", lambda c: c["gyro"]["M"][0].__setitem__(0, -1.0))):
+    d = copy.deepcopy(c)
+    edit(d)
+    json.dump(d, open(f"{sys.argv[2]}/c-{name}.json", "w"))
+PY
+set +e; "$CALBENCH" diagnose "$tmp/clean302" --coeffs "$tmp/c-bigbias.json" > /dev/null 2> "$tmp/err"; rc=$?; set -e
+[ $rc -eq 2 ] && grep -q "not a calibration of this unit" "$tmp/err" || { cat "$tmp/err"; exit 1; }
+"$CALBENCH" diagnose "$tmp/clean302" --coeffs "$tmp/c-scaley.json" --json > "$tmp/scaley.json"
+python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['findings'] == [], j['findings']" "$tmp/scaley.json"
+set +e; "$CALBENCH" diagnose "$tmp/clean302" --coeffs "$tmp/c-sing.json" > /dev/null 2> "$tmp/err"; rc=$?; set -e
+[ $rc -eq 2 ] && grep -q "c-sing.json: 'gyro.M': I + M has determinant" "$tmp/err" || { cat "$tmp/err"; exit 1; }
 # IMU-TK's real recording: runs, 41 poses, the class (Xsens MTi, raw) prior.
 D="$SHARED/data/imu_tk-xsens-multipos"
 if [ -f "$D/xsens_acc.mat" ]; then

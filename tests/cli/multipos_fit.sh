@@ -97,6 +97,13 @@ head -6000 "$D/xsens_acc.mat" > "$tmp/a6.txt"; head -6000 "$D/xsens_gyro.mat" > 
 expect_fail "static poses used (3 found), at least 9 needed" "$CALBENCH" fit multipos "$tmp/few" --out "$tmp/few.json"
 grep -q "add static poses" "$tmp/err"
 [ ! -e "$tmp/few.json" ]
+# IMU-TK's format is t x y z exactly: a leading row index (5 numbers) would shift every column.
+awk '{ print NR, $0 }' "$tmp/a6.txt" > "$tmp/a6i.txt"
+expect_fail "a6i.txt:1: expected 4 columns, found 5" "$CALBENCH" import imu-tk "$tmp/a6i.txt" "$tmp/g6.txt" --out "$tmp/idx" "${conv[@]}" "${dev[@]}"
+[ ! -e "$tmp/idx" ]
+# A run that ends before it starts is bad input.
+expect_fail "ended.*is before --started" "$CALBENCH" db store-bench --db "$tmp/s.db" --coeffs "$tmp/c.json" --recording "$tmp/xs" \
+  --started 2026-11-27T10:00:00Z --ended 2026-11-27T09:59:59Z --operator "T Eng"
 # An unknown model needs --device-class; a bench recording is not a multipos one.
 "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/unk" "${conv[@]}" --model "Brand X" --serial XS1 > "$tmp/unk.txt" 2> "$tmp/unk.err"
 grep -q "note: no built-in device class is named 'Brand X'; give fit multipos --device-class FILE" "$tmp/unk.err"
