@@ -145,7 +145,9 @@ ApprovalCheck check_thresholds(const CoefficientSetRecord& set, const std::vecto
   ApprovalCheck r;
   check_triad("gyro", set.errors.gyro, t.gyro, kDegPerHour, "°/h", t.allow_unknown_sigma, r.reasons);
   check_triad("accel", set.errors.accel, t.accel, kMilliG, "mg", t.allow_unknown_sigma, r.reasons);
-  if (t.require_qc && qc.empty()) r.reasons.push_back("no QC results recorded for this set's run");
+  if (t.require_qc && qc.empty())
+    r.reasons.push_back("no QC results recorded for this set's run (db store-bench --qc NAME=VALUE:LIMIT; fit multipos "
+                        "prints its line; or the thresholds' \"require_qc\": false)");
   for (const auto& q : qc)
     if (!q.pass)
       r.reasons.push_back("QC " + q.metric + " = " + fmt(q.value) + (q.unit.empty() ? "" : " " + q.unit) + " failed" +
