@@ -124,7 +124,6 @@ const bool registered = add_command(95, [](CLI::App& app) {
       }
       cc[k]->given = true;
     }
-    t->time_scale = t->time_unit == "ms" ? 1e-3 : t->time_unit == "us" ? 1e-6 : t->time_unit == "ns" ? 1e-9 : 1.0;
     target->finish(*t);
     const ImportImuTkSummary s = import_imu_tk(*t);
     std::cout << "imported " << s.rows << " rows (" << s.rate_hz << " Hz) into " << t->out << " (kind multipos)"

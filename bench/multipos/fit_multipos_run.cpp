@@ -84,6 +84,30 @@ nlohmann::json fit_json(const MultiposRecording& rec, const multipos::MultiposFi
   j["g_loo_rms_m_s2"] = fit.g_loo_rms;
   j["rotation_rms_deg"] = fit.rotation_rms_rad / kDeg;
   j["notes"] = fit.notes;
+  // The statics under the class's whole noise model (its drift between poses too): what the
+  // approval judges (db/approval_quality.hpp); the fit's own χ²/dof weighs white noise only.
+  const MultiposNoiseCheck nc = multipos_noise_check(rec.input, fit, fit.coeffs, rec.noise);
+  j["accel_chi2_dof_class"] = nc.accel_chi2_dof;
+  j["gyro_chi2_dof_class"] = fit.gyro_chi2_dof_class;
+  j["gyro_static_chi2_dof_class"] = {nc.gyro_chi2_dof[0], nc.gyro_chi2_dof[1], nc.gyro_chi2_dof[2]};
+  // The QC figure a store of this set can carry (db store-bench --qc): the held-out gravity residual
+  // against 3× what a pose of a sound unit of this class shows (white noise of the pose's mean and
+  // the class's bias drift).
+  {
+    double n_mean = 0;
+    int nu = 0;
+    for (const auto& st : fit.statics)
+      if (st.used) n_mean += double(st.i1 - st.i0), ++nu;
+    n_mean /= std::max(nu, 1);
+    const double pose_sigma = std::sqrt(std::pow(fit.accel_noise.used_sigma, 2) / std::max(n_mean, 1.0) +
+                                        std::pow(rec.noise.accel.drift_sigma, 2));
+    j["qc_g_loo_limit_m_s2"] = 3 * pose_sigma;
+  }
+  j["class_noise_note"] =
+      "accel_chi2_dof_class: gravity-magnitude residuals over the static poses (N - 9 dof) under white noise plus the "
+      "class's bias drift between poses; gyro_static_chi2_dof_class: each gyro's static mean rate (N - 1 dof) with the "
+      "Earth rate as noise (calibration/diagnosis/multipos_diagnose.hpp); gyro_chi2_dof_class: the gravity direction after "
+      "the rotations under white noise and the class's bias wander (calibration/multipos/multipos_fit.cpp)";
   return j;
 }
 
@@ -181,30 +205,6 @@ MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
                            {"recording", a.dir},
                            {"imu_sha256", sha256_file(table_file(a.dir, "imu"))}};  // db store-bench checks it
   r.set.extra["multipos"] = fit_json(r.rec, r.fit);
-  // The statics under the class's whole noise model (its drift between poses too): what the
-  // approval judges (db/approval_quality.hpp); the fit's own χ²/dof weighs white noise only.
-  const MultiposNoiseCheck nc = multipos_noise_check(r.rec.input, r.fit, r.fit.coeffs, r.rec.noise);
-  r.set.extra["multipos"]["accel_chi2_dof_class"] = nc.accel_chi2_dof;
-  r.set.extra["multipos"]["gyro_chi2_dof_class"] = r.fit.gyro_chi2_dof_class;
-  r.set.extra["multipos"]["gyro_static_chi2_dof_class"] = {nc.gyro_chi2_dof[0], nc.gyro_chi2_dof[1], nc.gyro_chi2_dof[2]};
-  // The QC figure a store of this set can carry (db store-bench --qc): the held-out gravity residual
-  // against 3× what a pose of a sound unit of this class shows (white noise of the pose's mean and
-  // the class's bias drift).
-  {
-    double n_mean = 0;
-    int nu = 0;
-    for (const auto& st : r.fit.statics)
-      if (st.used) n_mean += double(st.i1 - st.i0), ++nu;
-    n_mean /= std::max(nu, 1);
-    const double pose_sigma = std::sqrt(std::pow(r.fit.accel_noise.used_sigma, 2) / std::max(n_mean, 1.0) +
-                                        std::pow(r.rec.noise.accel.drift_sigma, 2));
-    r.set.extra["multipos"]["qc_g_loo_limit_m_s2"] = 3 * pose_sigma;
-  }
-  r.set.extra["multipos"]["class_noise_note"] =
-      "accel_chi2_dof_class: gravity-magnitude residuals over the static poses (N - 9 dof) under white noise plus the "
-      "class's bias drift between poses; gyro_static_chi2_dof_class: each gyro's static mean rate (N - 1 dof) with the "
-      "Earth rate as noise (calibration/diagnosis/multipos_diagnose.hpp); gyro_chi2_dof_class: the gravity direction after "
-      "the rotations under white noise and the class's bias wander (calibration/multipos/multipos_fit.cpp)";
   return r;
 }
 

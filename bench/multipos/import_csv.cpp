@@ -1,30 +1,14 @@
 #include "bench/multipos/import_csv.hpp"
 
 #include <algorithm>
-#include <initializer_list>
 #include <utility>
 
 #include "bench/io/csv.hpp"
 #include "bench/io/message_text.hpp"
 #include "common/input_error.hpp"
-#include "common/units.hpp"
 
 namespace calbench {
 namespace {
-
-using units::kDeg;
-using units::kG0;
-using units::kMilliG;
-
-double unit_si(const char* option, const std::string& unit,
-               std::initializer_list<std::pair<const char*, double>> table) {
-  std::string names;
-  for (const auto& [name, si] : table) {
-    if (unit == name) return si;
-    names += names.empty() ? name : std::string(", ") + name;
-  }
-  throw InputError(option, 0, "", "unknown unit '" + field_text(unit) + "' (one of " + names + ")");
-}
 
 // The rows of the file, in SI, one at a time.
 class CsvRows {
@@ -108,16 +92,6 @@ class CsvRows {
 };
 
 }  // namespace
-
-double gyro_unit_si(const std::string& u) {
-  return unit_si("--gyro-unit", u, {{"rad/s", 1.0}, {"deg/s", kDeg}, {"mdeg/s", 1e-3 * kDeg}});
-}
-double accel_unit_si(const std::string& u) {
-  return unit_si("--accel-unit", u, {{"m/s2", 1.0}, {"g", kG0}, {"mg", kMilliG}});
-}
-double time_unit_si(const std::string& u) {
-  return unit_si("--time-unit", u, {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}});
-}
 
 ImportCsvSummary import_csv(const ImportCsvArgs& a) {
   ImportCsvSummary sum;

@@ -25,11 +25,6 @@ struct ImportCsvSummary {
   char delimiter = ',';
 };
 
-// SI per unit of the option values above; an InputError naming the option for anything else.
-double gyro_unit_si(const std::string& unit);
-double accel_unit_si(const std::string& unit);
-double time_unit_si(const std::string& unit);
-
 // InputError naming file, line and column on anything malformed; nothing is written then.
 ImportCsvSummary import_csv(const ImportCsvArgs& a);
 

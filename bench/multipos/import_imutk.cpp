@@ -22,7 +22,9 @@ struct PairReader {
   TextRows acc, gyro;
   std::vector<double> va, vg;
   std::size_t rows_ = 0;
-  PairReader(const ImportImuTkArgs& a) : acc(a.acc, 4, 4), gyro(a.gyro, 4, 4) {}  // t x y z, nothing else
+  double time_si;  // seconds per unit of the files' time column
+  PairReader(const ImportImuTkArgs& a)
+      : acc(a.acc, 4, 4), gyro(a.gyro, 4, 4), time_si(time_unit_si(a.time_unit)) {}  // t x y z, nothing else
   bool next(const ImportImuTkArgs& a, double& t, Vec3& f, Vec3& w) {
     const bool ha = acc.next(va), hg = gyro.next(vg);
     if (ha != hg) {
@@ -34,8 +36,8 @@ struct PairReader {
     }
     if (!ha) return false;
     ++rows_;
-    t = va[0] * a.time_scale;
-    const double tg = vg[0] * a.time_scale;
+    t = va[0] * time_si;
+    const double tg = vg[0] * time_si;
     if (!(std::abs(t - tg) <= 1e-6 * std::max(1.0, std::abs(t))))
       throw InputError(gyro.path(), gyro.line(), "column 1",
                        "time " + number_text(tg) + " s differs from " + acc.path() + " line " + std::to_string(acc.line()) +

@@ -20,7 +20,6 @@ struct CountsConversion {
 struct ImportImuTkArgs : MultiposTarget {
   std::string acc, gyro;
   CountsConversion acc_counts, gyro_counts;
-  double time_scale = 1.0;        // seconds per time unit of the files
   std::string time_unit = "s";
 };
 

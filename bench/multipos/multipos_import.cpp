@@ -1,10 +1,13 @@
 #include "bench/multipos/multipos_import.hpp"
 
 #include <cmath>
+#include <initializer_list>
+#include <utility>
 
 #include "bench/io/message_text.hpp"
 #include "bench/io/staging_folder.hpp"
 #include "common/input_error.hpp"
+#include "common/units.hpp"
 
 namespace calbench {
 
@@ -27,6 +30,28 @@ double multipos_rate(const MultiposTarget& t, std::vector<double>& dts) {
     throw InputError("--rate", 0, "", number_text(t.rate_hz) + " Hz contradicts the time stamps (median interval: " +
                                          number_text(from_stamps) + " Hz; is --time-unit right?)");
   return t.rate_hz;
+}
+
+namespace {
+double unit_si(const char* option, const std::string& unit,
+               std::initializer_list<std::pair<const char*, double>> table) {
+  std::string names;
+  for (const auto& [name, si] : table) {
+    if (unit == name) return si;
+    names += names.empty() ? name : std::string(", ") + name;
+  }
+  throw InputError(option, 0, "", "unknown unit '" + field_text(unit) + "' (one of " + names + ")");
+}
+}  // namespace
+
+double gyro_unit_si(const std::string& u) {
+  return unit_si("--gyro-unit", u, {{"rad/s", 1.0}, {"deg/s", units::kDeg}, {"mdeg/s", 1e-3 * units::kDeg}});
+}
+double accel_unit_si(const std::string& u) {
+  return unit_si("--accel-unit", u, {{"m/s2", 1.0}, {"g", units::kG0}, {"mg", units::kMilliG}});
+}
+double time_unit_si(const std::string& u) {
+  return unit_si("--time-unit", u, {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}});
 }
 
 RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz) {

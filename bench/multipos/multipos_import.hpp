@@ -49,6 +49,12 @@ double multipos_rate(const MultiposTarget& t, std::vector<double>& dts);
 
 RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz);
 
+// SI per unit of the importers' unit options (--gyro-unit rad/s|deg/s|mdeg/s, --accel-unit
+// m/s2|g|mg, --time-unit s|ms|us|ns); an InputError naming the option for anything else.
+double gyro_unit_si(const std::string& unit);
+double accel_unit_si(const std::string& unit);
+double time_unit_si(const std::string& unit);
+
 // Writes the recording into a staging folder with `rows`, reads it back (RecordingWriter::finish),
 // then places it at `out` (place_staged_recording).
 void write_multipos(const std::filesystem::path& out, const RecordingMeta& meta, ImuForm form,

@@ -222,11 +222,9 @@ double systematic(const PoseDesign& D, const Dataset& S, const Eigen::VectorXd& 
   return std::sqrt(std::max(0.0, ms - mv));
 }
 
-AxisStats axis_stats(const PoseDesign& D, const Dataset& S, const Eigen::VectorXd& r, int nparams,
-                     Eigen::VectorXd& r_nodrift) {
+AxisStats axis_stats(const PoseDesign& D, const Dataset& S, const Eigen::VectorXd& r, int nparams) {
   AxisStats st;
   diag::whiteness(S, r, nparams, st);
-  r_nodrift = r;  // per pose, as fitted (the JSON's residuals)
   st.systematic_rms = systematic(D, S, r, &st.systematic_floor);
   st.step_rms = st.systematic_rms;
   return st;
@@ -239,6 +237,25 @@ bool axis_unexplained(const AxisStats& s, const Dataset& S) {
 
 double rms(const Eigen::VectorXd& r) { return r.size() ? std::sqrt(r.squaredNorm() / r.size()) : 0.0; }
 
+// The base model (no catalogue term) fitted under the class's drift prior.
+FitOut base_fit(const PoseDesign& D, const NoiseSpec& noise) {
+  const diag::DriftPrior prior = diag::drift_prior(noise);
+  std::vector<Dataset> sets;
+  for (int a = 0; a <= kMag; ++a) sets.push_back(build_dataset(D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
+  std::vector<const Dataset*> ptrs;
+  for (const auto& S : sets) ptrs.push_back(&S);
+  return fit_model(D, {}, ptrs);
+}
+
+// The base model's correction θ (gyro bias, accelerometer bias, its lower-triangular ΔM) added to c.
+void apply_base(SensorErrors& c, const Eigen::VectorXd& th) {
+  for (int i = 0; i < 3; ++i) {
+    c.gyro.bias(i) += th(i);
+    c.accel.bias(i) += th(3 + i);
+  }
+  for (int k = 0; k < 6; ++k) c.accel.M(kLower[k][0], kLower[k][1]) += th(6 + k);
+}
+
 // The tested coefficients with the base model's correction (biases, the accelerometer's
 // lower-triangular M) applied exactly, again and again until it is negligible. The search
 // linearises about the coefficients it is given: a set far from the recording's (a bias of grams, a
@@ -248,12 +265,11 @@ SensorErrors relinearised(const multipos::MultiposInput& in, const multipos::Mul
                           const NoiseSpec& noise) {
   SensorErrors c = current;
   MultiposDiagnoseResult scratch;
-  const diag::DriftPrior prior = diag::drift_prior(noise);
   // Coefficients this far from the recording are another unit's, or none: refused rather than
   // relinearised from (Gauss–Newton from grams away may settle anywhere).
   {
     const PoseDesign D0 = build_design(in, fit, c, EffectTerms{}, scratch);
-    const double rms0 = D0.zp[kMag].size() ? std::sqrt(D0.zp[kMag].squaredNorm() / D0.zp[kMag].size()) : 0.0;
+    const double rms0 = rms(D0.zp[kMag]);
     if (!(rms0 <= 0.1 * in.gravity))
       throw std::runtime_error("the coefficients tested leave |f| − g of " + std::to_string(rms0) +
                                " m/s² RMS over the static poses (more than 10 % of gravity): they are not a calibration "
@@ -262,16 +278,8 @@ SensorErrors relinearised(const multipos::MultiposInput& in, const multipos::Mul
   for (int it = 0; it < 20; ++it) {
     const PoseDesign D = build_design(in, fit, c, EffectTerms{}, scratch);
     if (D.parents.size() < 9) break;
-    std::vector<Dataset> sets;
-    for (int a = 0; a <= kMag; ++a) sets.push_back(build_dataset(D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
-    std::vector<const Dataset*> ptrs;
-    for (const auto& S : sets) ptrs.push_back(&S);
-    const Eigen::VectorXd th = fit_model(D, {}, ptrs).theta;
-    for (int i = 0; i < 3; ++i) {
-      c.gyro.bias(i) += th(i);
-      c.accel.bias(i) += th(3 + i);
-    }
-    for (int k = 0; k < 6; ++k) c.accel.M(kLower[k][0], kLower[k][1]) += th(6 + k);
+    const Eigen::VectorXd th = base_fit(D, noise).theta;
+    apply_base(c, th);
     if (!th.allFinite()) throw std::runtime_error("diagnose: the coefficients tested do not fit the static poses");
     if (th.segment<6>(0).cwiseAbs().maxCoeff() < 1e-9 && th.segment<6>(6).cwiseAbs().maxCoeff() < 1e-10) break;
   }
@@ -285,12 +293,7 @@ MultiposNoiseCheck multipos_noise_check(const multipos::MultiposInput& in, const
   MultiposDiagnoseResult scratch;
   const PoseDesign D = build_design(in, fit, current, EffectTerms{}, scratch);
   const int N = static_cast<int>(D.parents.size());
-  const diag::DriftPrior prior = diag::drift_prior(noise);
-  std::vector<Dataset> sets;
-  for (int a = 0; a <= kMag; ++a) sets.push_back(build_dataset(D, a, kSubsetAll, prior.sigma[a / 3], prior.tau[a / 3]));
-  std::vector<const Dataset*> ptrs;
-  for (const auto& S : sets) ptrs.push_back(&S);
-  const FitOut f = fit_model(D, {}, ptrs);
+  const FitOut f = base_fit(D, noise);
   MultiposNoiseCheck out;
   out.accel_dof = N - 9;
   out.gyro_dof = N - 1;
@@ -325,13 +328,11 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
   const std::vector<Dataset>& all = search.all;
 
   // Before: the base model (biases and the accelerometer's lower-triangular ΔM refitted).
-  Eigen::VectorXd rn_before[kAxes], rn_after[kAxes];
+  Eigen::VectorXd r_before[kAxes], r_after[kAxes];  // per pose, as fitted (the JSON's residuals)
   for (int a = 0; a <= kMag; ++a) {
-    const Eigen::VectorXd r = residual(D, a, search.cur.theta);
-    res.before[a] = axis_stats(D, all[a], r, axis_params(D, {}, a), rn_before[a]);
+    r_before[a] = residual(D, a, search.cur.theta);
+    res.before[a] = axis_stats(D, all[a], r_before[a], axis_params(D, {}, a));
   }
-  out.g_rms_before = rms(residual(D, kMag, search.cur.theta));
-  for (int a = 0; a < 3; ++a) out.gyro_rms_before[a] = rms(residual(D, a, search.cur.theta));
 
   search.run();
   for (const auto& w : search.recheck_drift()) res.withdrawn.push_back(search.withdrawn_report(w, WithdrawnWhy::drift_recheck));
@@ -339,8 +340,7 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
   // only because unmodelled structure inflates its Δχ² is withdrawn (Δχ² over the axis's χ²/dof).
   search.recheck_unexplained(res.withdrawn, [&](int a) {
     if (a > kMag) return std::make_pair(false, 1.0);  // the accelerometer's one dataset is axis 3's
-    Eigen::VectorXd rn;
-    const AxisStats st = axis_stats(D, all[a], residual(D, a, search.cur.theta), axis_params(D, search.model, a), rn);
+    const AxisStats st = axis_stats(D, all[a], residual(D, a, search.cur.theta), axis_params(D, search.model, a));
     const bool u = axis_unexplained(st, all[a]);
     return std::make_pair(u, u ? std::max(1.0, st.chi2_dof) : 1.0);
   });
@@ -349,36 +349,36 @@ MultiposDiagnoseResult diagnose_multipos(const multipos::MultiposInput& in, cons
   // Improved: the biases and the lower-triangular M corrected (from the relinearised base), the
   // terms added.
   res.improved = base;
+  apply_base(res.improved, cur.theta);
+  const auto sd = [&](int p) { return std::sqrt(std::max(cur.cov(p, p), 0.0)); };
   for (int i = 0; i < 3; ++i) {
-    res.improved.gyro.bias(i) += cur.theta(i);
-    res.improved.gyro.sigma_bias(i) = std::sqrt(std::max(cur.cov(i, i), 0.0));
-    res.improved.accel.bias(i) += cur.theta(3 + i);
-    res.improved.accel.sigma_bias(i) = std::sqrt(std::max(cur.cov(3 + i, 3 + i), 0.0));
+    res.improved.gyro.sigma_bias(i) = sd(i);
+    res.improved.accel.sigma_bias(i) = sd(3 + i);
   }
-  for (int c = 0; c < 6; ++c) {
-    const int i = kLower[c][0], j = kLower[c][1];
-    res.improved.accel.M(i, j) += cur.theta(6 + c);
-    res.improved.accel.sigma_M(i, j) = std::sqrt(std::max(cur.cov(6 + c, 6 + c), 0.0));
-  }
+  for (int k = 0; k < 6; ++k) res.improved.accel.sigma_M(kLower[k][0], kLower[k][1]) = sd(6 + k);
   search.fitted_terms(carried, res.improved_terms, res.terms_sigma);
   std::copy(search.ds, search.ds + 2, res.drift_sigma);
   std::copy(search.tau, search.tau + 2, res.drift_tau);
   for (int a = 0; a <= kMag; ++a) {
-    const Eigen::VectorXd r = residual(D, a, cur.theta);
-    res.after[a] = axis_stats(D, all[a], r, axis_params(D, search.model, a), rn_after[a]);
+    r_after[a] = residual(D, a, cur.theta);
+    res.after[a] = axis_stats(D, all[a], r_after[a], axis_params(D, search.model, a));
   }
   for (int a = kMag + 1; a < kAxes; ++a) {  // the accelerometer's one dataset
     res.before[a] = res.before[kMag];
     res.after[a] = res.after[kMag];
-    rn_before[a] = rn_before[kMag];
-    rn_after[a] = rn_after[kMag];
+    r_before[a] = r_before[kMag];
+    r_after[a] = r_after[kMag];
   }
   for (int a = 0; a < kAxes; ++a) {
-    res.residual[a].before.assign(rn_before[a].data(), rn_before[a].data() + rn_before[a].size());
-    res.residual[a].after.assign(rn_after[a].data(), rn_after[a].data() + rn_after[a].size());
+    res.residual[a].before.assign(r_before[a].data(), r_before[a].data() + r_before[a].size());
+    res.residual[a].after.assign(r_after[a].data(), r_after[a].data() + r_after[a].size());
   }
-  out.g_rms_after = rms(residual(D, kMag, cur.theta));
-  for (int a = 0; a < 3; ++a) out.gyro_rms_after[a] = rms(residual(D, a, cur.theta));
+  out.g_rms_before = rms(r_before[kMag]);
+  out.g_rms_after = rms(r_after[kMag]);
+  for (int a = 0; a < 3; ++a) {
+    out.gyro_rms_before[a] = rms(r_before[a]);
+    out.gyro_rms_after[a] = rms(r_after[a]);
+  }
 
   // Unexplained: an axis still far from its noise model (the accelerometer once: axis −1, all).
   for (int a = 0; a <= kMag; ++a) {
