@@ -1,9 +1,6 @@
 // calbench db import-inmotion, store-bench and sync: what brings runs and sets into the store
 // (registered with the other db subcommands in bench/cli/cmd_db.cpp; docs/database.md).
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -11,6 +8,7 @@
 #include <sstream>
 
 #include "bench/cli/db_args.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/io/recording_location.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/coefficients_json.hpp"
@@ -177,18 +175,10 @@ void cmd_store_bench(const DbArgs& a) {
   }
   run.started_at = a.started;
   run.ended_at = a.ended;
-  if (!a.started.empty() && !a.ended.empty()) {  // both ISO 8601 UTC (checked by their options)
-    const auto secs = [](const std::string& t) {
-      std::tm tm{};
-      std::sscanf(t.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
-                  &tm.tm_sec);
-      tm.tm_year -= 1900;
-      tm.tm_mon -= 1;
-      return static_cast<double>(timegm(&tm)) + (t.size() > 19 && t[19] == '.' ? std::atof(t.c_str() + 19) : 0.0);
-    };
-    if (secs(a.ended) < secs(a.started))
-      throw InputError("--ended", 0, "", a.ended + " is before --started " + a.started);
-  }
+  // Both were checked by their options (number_options.hpp, iso8601_utc).
+  if (const auto t0 = iso8601_utc_seconds(a.started), t1 = iso8601_utc_seconds(a.ended); t0 && t1 && *t1 < *t0)
+    throw InputError("--ended", 0, "", a.ended + " is before --started " + a.started);
+
   run.outcome = a.outcome;
   for (const auto& q : a.qc) run.qc.push_back(parse_qc_option(q));
   if (is_postgres_uri(db_path(a))) {

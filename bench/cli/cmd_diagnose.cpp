@@ -25,6 +25,18 @@ struct DiagnoseArgs {
   bool list_effects = false;
 };
 
+// --out: IMPROVED.json claims an improvement; without a finding there is none, and none is written
+// (said on standard error). Returns whether it was written.
+bool write_improved(const DiagnoseArgs& a, bool found, const CoefficientSet& improved) {
+  if (a.out.empty()) return false;
+  if (!found) {
+    std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+    return false;
+  }
+  write_coefficients(a.out, improved);
+  return true;
+}
+
 // GNSS-only drives (no reference.csv, gnss.csv): bench/diagnose/gnss_run.hpp, docs/diagnosis.md
 // "GNSS-only drives". The filter always runs (it is the evidence): --no-innovations does not apply.
 void run_diagnose_gnss(const DiagnoseArgs& a, const std::optional<DriveCoeffs>& given) {
@@ -35,9 +47,7 @@ void run_diagnose_gnss(const DiagnoseArgs& a, const std::optional<DriveCoeffs>& 
   const RecordingMeta meta = read_meta(a.dir);
   if (!meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
   const GnssDiagRun run = run_gnss_diagnosis(a.dir, given ? &*given : nullptr, a.device_class);
-  const bool write_out = !a.out.empty() && !run.core.findings.empty();
-  if (write_out) write_coefficients(a.out, run.improved);
-  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+  const bool write_out = write_improved(a, !run.core.findings.empty(), run.improved);
   if (a.json) {
     auto j = gnss_diagnosis_json(run);
     j["recording"] = {{"path", a.dir}, {"complete", meta.complete}};
@@ -66,10 +76,7 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
   in.device_class = a.device_class;
   if (!in.meta.complete) std::cerr << "calbench: warning: " << a.dir << " is marked incomplete (interrupted run)\n";
   const DriveDiagRun run = run_drive_diagnosis(in, given ? &*given : nullptr, !a.no_innovations);
-  // An IMPROVED.json claims an improvement: without a finding there is none, and none is written.
-  const bool write_out = !a.out.empty() && !run.result.core.findings.empty();
-  if (write_out) write_coefficients(a.out, run.improved);
-  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+  const bool write_out = write_improved(a, !run.result.core.findings.empty(), run.improved);
   if (!a.report.empty()) write_drive_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
     auto j = drive_diagnosis_json(in, run);
@@ -94,9 +101,7 @@ void run_diagnose_multipos(const DiagnoseArgs& a) {
     throw InputError("--report", 0, "", a.dir + " is a multipos recording: the HTML report covers bench and drive recordings; "
                                             "use --json (per-pose residuals before/after) or fit multipos --plot");
   const MultiposDiagRun run = run_multipos_diagnosis(a.dir, a.coeffs, a.device_class);
-  const bool write_out = !a.out.empty() && !run.result.core.findings.empty();
-  if (write_out) write_coefficients(a.out, run.improved);
-  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+  const bool write_out = write_improved(a, !run.result.core.findings.empty(), run.improved);
   if (a.json) {
     auto j = multipos_diagnosis_json(run);
     j["recording"] = {{"path", a.dir}, {"kind", "multipos"}};
@@ -124,9 +129,7 @@ void run_diagnose(const DiagnoseArgs& a) {
     check_same_unit(given.device, a.coeffs, a.dir);
   }
   const DiagRun run = run_diagnosis(in, a.coeffs.empty() ? nullptr : &given, table);
-  const bool write_out = !a.out.empty() && !run.result.findings.empty();
-  if (write_out) write_coefficients(a.out, run.improved);
-  else if (!a.out.empty()) std::cerr << "calbench: no finding: " << a.out << " not written (nothing to improve)\n";
+  const bool write_out = write_improved(a, !run.result.findings.empty(), run.improved);
   if (!a.report.empty()) write_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
     auto j = diagnosis_json(run);

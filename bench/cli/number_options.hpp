@@ -6,10 +6,13 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <charconv>
-#include <cstdio>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -72,24 +75,32 @@ inline CLI::Validator whole_number(std::uint64_t lo, std::uint64_t hi) {
 inline CLI::Validator set_id() { return whole_number(1, std::numeric_limits<std::int64_t>::max()); }
 
 // A UTC time in ISO 8601: YYYY-MM-DDTHH:MM:SS[.fff]Z (or +00:00), a real calendar date and time.
+// Its seconds since 1970 (fraction included), or nullopt for anything else.
+inline std::optional<double> iso8601_utc_seconds(const std::string& v) {
+  int Y = 0, M = 0, D = 0, h = 0, m = 0, sec = 0, n = 0;
+  const char* p = v.c_str();
+  const bool shape = v.size() >= 20 && std::sscanf(p, "%4d-%2d-%2dT%2d:%2d:%2d%n", &Y, &M, &D, &h, &m, &sec, &n) == 6 &&
+                     n == 19 && p[4] == '-' && p[7] == '-' && p[10] == 'T' && p[13] == ':' && p[16] == ':';
+  std::size_t i = 19;
+  if (shape && i < v.size() && v[i] == '.') {
+    ++i;
+    while (i < v.size() && v[i] >= '0' && v[i] <= '9') ++i;
+  }
+  const std::string zone = shape ? v.substr(std::min(i, v.size())) : "";
+  static const int mdays[12] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (Y % 4 == 0 && Y % 100 != 0) || Y % 400 == 0;
+  const bool ok = shape && (zone == "Z" || zone == "+00:00") && Y >= 1970 && Y <= 9999 && M >= 1 && M <= 12 &&
+                  D >= 1 && D <= mdays[M - 1] - (M == 2 && !leap ? 1 : 0) && h <= 23 && m <= 59 && sec <= 60;
+  if (!ok) return std::nullopt;
+  std::tm tm{};
+  tm.tm_year = Y - 1900, tm.tm_mon = M - 1, tm.tm_mday = D, tm.tm_hour = h, tm.tm_min = m, tm.tm_sec = sec;
+  return static_cast<double>(timegm(&tm)) + (i > 20 ? std::atof(v.substr(19, i - 19).c_str()) : 0.0);
+}
 inline CLI::Validator iso8601_utc() {
   return CLI::Validator(
       [](std::string& v) -> std::string {
-        int Y = 0, M = 0, D = 0, h = 0, m = 0, sec = 0, n = 0;
-        const char* p = v.c_str();
-        const bool shape = v.size() >= 20 && std::sscanf(p, "%4d-%2d-%2dT%2d:%2d:%2d%n", &Y, &M, &D, &h, &m, &sec, &n) == 6 &&
-                           n == 19 && p[4] == '-' && p[7] == '-' && p[10] == 'T' && p[13] == ':' && p[16] == ':';
-        std::size_t i = 19;
-        if (shape && i < v.size() && v[i] == '.') {
-          ++i;
-          while (i < v.size() && v[i] >= '0' && v[i] <= '9') ++i;
-        }
-        const std::string zone = shape ? v.substr(std::min(i, v.size())) : "";
-        static const int mdays[12] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
-        const bool leap = (Y % 4 == 0 && Y % 100 != 0) || Y % 400 == 0;
-        const bool ok = shape && (zone == "Z" || zone == "+00:00") && Y >= 1970 && Y <= 9999 && M >= 1 && M <= 12 &&
-                        D >= 1 && D <= mdays[M - 1] - (M == 2 && !leap ? 1 : 0) && h <= 23 && m <= 59 && sec <= 60;
-        return ok ? std::string() : "expected a UTC time in ISO 8601 (e.g. 2026-11-27T08:30:00Z), got '" + v + "'";
+        return iso8601_utc_seconds(v) ? std::string()
+                                      : "expected a UTC time in ISO 8601 (e.g. 2026-11-27T08:30:00Z), got '" + v + "'";
       },
       "ISO8601-UTC");
 }

@@ -15,6 +15,7 @@
 #include "bench/report/db_report.hpp"
 #include "bench/report/html_parts.hpp"
 #include "common/input_error.hpp"
+#include "common/percent_encode.hpp"
 #include "db/approval.hpp"
 #include "db/console_accounts.hpp"
 #include "db/signer.hpp"
@@ -43,18 +44,6 @@ struct Page {
   std::string html;
 };
 
-std::string pct(const std::string& s) {  // for a libpq URI parameter
-  std::string out;
-  for (unsigned char c : s) {
-    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') out += static_cast<char>(c);
-    else {
-      char b[4];
-      std::snprintf(b, sizeof b, "%%%02X", c);
-      out += b;
-    }
-  }
-  return out;
-}
 
 class Console {
  public:
@@ -215,8 +204,8 @@ class Console {
     who.source = "console login " + login;
     try {
       if (postgres_) {
-        const std::string uri = o_.db + (o_.db.find('?') == std::string::npos ? "?" : "&") + "user=" + pct(login) +
-                                "&password=" + pct(password);
+        const std::string uri = o_.db + (o_.db.find('?') == std::string::npos ? "?" : "&") + "user=" + percent_encode(login) +
+                                "&password=" + percent_encode(password);
         who.user = login;  // the login's person, once the store knows it (db::Store::check_signer)
         s->store = std::make_unique<db::Store>(uri, db::OpenOptions{}, who);
         s->login = login;

@@ -8,6 +8,7 @@
 #include "bench/io/recording.hpp"
 #include "bench/io/sha256.hpp"
 #include "common/input_error.hpp"
+#include "common/percent_encode.hpp"
 
 namespace calbench {
 namespace fs = std::filesystem;
@@ -16,18 +17,7 @@ std::string file_uri(const fs::path& p) {
   char host[256] = {};
   const std::string h = ::gethostname(host, sizeof host - 1) == 0 && host[0] ? host : "localhost";
   const std::string path = fs::weakly_canonical(fs::absolute(p)).generic_string();
-  std::string out = "file://" + h;
-  static const char* hex = "0123456789ABCDEF";
-  for (unsigned char c : path) {
-    if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~' || c == '/') {
-      out += static_cast<char>(c);
-    } else {
-      out += '%';
-      out += hex[c >> 4];
-      out += hex[c & 15];
-    }
-  }
-  return out;
+  return "file://" + h + percent_encode(path, "/");
 }
 
 std::string folder_digest(const fs::path& folder) {
