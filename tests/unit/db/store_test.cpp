@@ -79,7 +79,7 @@ TEST(DbStore, MigratesSchema5ToLoginsAndRecordingLocations) {
     sqlite3_close(raw);
   }
   Store s(t.db(), {}, Actor{"Nora", "line-2", "--operator", "noraos"});
-  EXPECT_EQ(s.schema_version(), 6);
+  EXPECT_EQ(s.schema_version(), kSchemaVersion);
   EXPECT_EQ(s.get_set(1).created_by_login, "");
   EXPECT_EQ(s.bench_run(1)->recording_uri, "");
   const auto old = s.audit_of_device(1);
