@@ -59,12 +59,24 @@ struct TemperatureProfile {
   double chamber_at(double t) const;               // setpoint at t
 };
 
+// An operator prompt (issue 38): a [[step]] of kind "prompt" in the plan file. The station asks it
+// before table step `before_step` (== steps.size(): after the last) and waits for a person's answer
+// (docs/devices.md "Operator prompts"); the table steps, their indices and every estimator ignore it.
+struct PlanPrompt {
+  std::size_t before_step = 0;
+  std::string text;        // e.g. "mount the unit in slot 3, then confirm"
+  std::string slot;        // the slot it concerns ("" : the whole fixture)
+  double timeout_s = 600;  // unanswered this long: the run aborts (table stopped)
+  int line = 0;
+};
+
 struct BenchPlan {
   std::string name;
   std::string description;
   Site site;               // default site (a recording's meta.json overrides)
   TableSpec table;
   std::vector<PlanStep> steps;
+  std::vector<PlanPrompt> prompts;  // by before_step
   TemperatureProfile temperature;
   std::string fixture_file;  // [plan] fixture: the station's multi-unit fixture (path; empty: one unit)
 };

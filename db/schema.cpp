@@ -17,6 +17,61 @@ CREATE TABLE console_accounts (
   added_by      TEXT NOT NULL
 );
 )SQL";
+// Schema 8, the station's part (issue 38 item 3): the live state of each slot of each running
+// station run, and the operator prompts a plan's prompt steps raise (docs/database.md "Station
+// progress and operator prompts"). Rows are replaced as a run goes (upserts keyed by run and slot):
+// a live view, not history — the history is bench_runs and the audit log.
+const char* schema8_station_progress() {
+  return R"SQL(
+CREATE TABLE station_progress (
+  run_id       TEXT NOT NULL,
+  slot         TEXT NOT NULL,
+  station      TEXT NOT NULL,
+  login        TEXT NOT NULL DEFAULT '',
+  serial       TEXT NOT NULL DEFAULT '',
+  step_index   INTEGER NOT NULL DEFAULT 0,
+  step_count   INTEGER NOT NULL DEFAULT 0,
+  step_name    TEXT NOT NULL DEFAULT '',
+  step_kind    TEXT NOT NULL DEFAULT '',
+  step_fraction REAL NOT NULL DEFAULT 0 CHECK (step_fraction >= 0 AND step_fraction <= 1),
+  check_name   TEXT NOT NULL DEFAULT '',
+  check_value  REAL,
+  check_limit  REAL,
+  check_unit   TEXT NOT NULL DEFAULT '',
+  state        TEXT NOT NULL CHECK (state IN ('running', 'waiting', 'passed', 'failed', 'aborted')),
+  reason       TEXT NOT NULL DEFAULT '',
+  started_at   TEXT NOT NULL,
+  heartbeat_at TEXT NOT NULL,
+  PRIMARY KEY (run_id, slot),
+  CHECK (state NOT IN ('failed', 'aborted') OR reason <> '')
+);
+CREATE INDEX station_progress_heartbeat ON station_progress(heartbeat_at);
+CREATE TABLE station_prompts (
+  id             INTEGER PRIMARY KEY,
+  run_id         TEXT NOT NULL,
+  station        TEXT NOT NULL,
+  slot           TEXT NOT NULL DEFAULT '',
+  text           TEXT NOT NULL CHECK (text <> ''),
+  timeout_s      REAL NOT NULL CHECK (timeout_s > 0),
+  created_at     TEXT NOT NULL,
+  created_login  TEXT NOT NULL DEFAULT '',
+  state          TEXT NOT NULL DEFAULT 'waiting'
+                 CHECK (state IN ('waiting', 'confirmed', 'rejected', 'timed out')),
+  reason         TEXT NOT NULL DEFAULT '',
+  answered_by    TEXT NOT NULL DEFAULT '',
+  answered_login TEXT NOT NULL DEFAULT '',
+  answered_at    TEXT
+);
+CREATE INDEX station_prompts_run ON station_prompts(run_id);
+-- An answer is given once: a prompt that is no longer waiting never changes again.
+CREATE TRIGGER station_prompts_answer_once BEFORE UPDATE ON station_prompts
+WHEN OLD.state <> 'waiting' OR NEW.text IS NOT OLD.text OR NEW.run_id IS NOT OLD.run_id
+  OR NEW.created_at IS NOT OLD.created_at
+BEGIN SELECT RAISE(ABORT, 'an operator prompt is answered once'); END;
+CREATE TRIGGER station_prompts_no_delete BEFORE DELETE ON station_prompts
+BEGIN SELECT RAISE(ABORT, 'operator prompts are never deleted'); END;
+)SQL";
+}
 
 const std::vector<const char*>& migrations() {
   static const std::vector<const char*> m = {
@@ -203,6 +258,8 @@ ALTER TABLE bench_runs ADD COLUMN recording_uri TEXT NOT NULL DEFAULT '';
 ALTER TABLE bench_runs ADD COLUMN recording_digest TEXT NOT NULL DEFAULT '';
 )SQL",
       schema7_console_accounts,
+      // ---- 8: the station's live state and its operator prompts (issue 38) ----
+      schema8_station_progress(),
   };
   return m;
 }

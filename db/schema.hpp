@@ -5,4 +5,6 @@
 namespace calbench::db {
 // migrations()[i] takes the schema from user_version i to i + 1 (fixed DDL text, no data).
 const std::vector<const char*>& migrations();
+// Schema 7's station block (issue 38 item 3): station_progress and station_prompts (SQLite DDL).
+const char* schema8_station_progress();
 }  // namespace calbench::db

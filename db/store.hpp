@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 7;
+inline constexpr int kSchemaVersion = 8;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };

@@ -84,6 +84,19 @@ StationPlan load_plan(const std::filesystem::path& file) {
     const std::string pre = "step[" + std::to_string(i + 1) + "].";
     const toml::table* s = (*steps)[i].as_table();
     if (!s) c.fail(&(*steps)[i], "step[" + std::to_string(i + 1) + "]", "expected a table");
+    // An operator prompt (issue 38): asked before the next table step, answered from the store.
+    if (const auto k = s->get("kind"); k && k->value<std::string>() == std::string("prompt")) {
+      c.check_keys(*s, pre, {"kind", "text", "slot", "timeout_s"});
+      PlanPrompt pr;
+      pr.before_step = p.steps.size();
+      pr.text = c.str(*s, pre, "text", std::nullopt);
+      if (pr.text.empty() || pr.text.size() > 500) c.fail(s->get("text"), pre + "text", "expected 1 to 500 characters");
+      pr.slot = c.str(*s, pre, "slot", std::string());
+      pr.timeout_s = c.num(*s, pre, "timeout_s", 600.0, 1, 86400);
+      pr.line = static_cast<int>(s->source().begin.line);
+      p.prompts.push_back(pr);
+      continue;
+    }
     c.check_keys(*s, pre, {"kind", "label", "mount", "axis", "outer_deg", "inner_deg", "rpy_deg", "rate_dps", "dwell_s"});
     PlanStep st;
     st.line = static_cast<int>(s->source().begin.line);
@@ -132,7 +145,7 @@ StationPlan load_plan(const std::filesystem::path& file) {
       }
       if (s->get("rate_dps")) c.fail(s->get("rate_dps"), pre + "rate_dps", "not allowed for a static step");
     } else {
-      c.fail(s->get("kind"), pre + "kind", "must be \"static\" or \"rate\"");
+      c.fail(s->get("kind"), pre + "kind", "must be \"static\", \"rate\" or \"prompt\"");
     }
     // A positions plan is one continuous recording whose fit integrates the gyros between poses: a
     // re-mount by hand between steps is a rotation nobody records.
@@ -144,9 +157,17 @@ StationPlan load_plan(const std::filesystem::path& file) {
     p.steps.push_back(st);
   }
   // [plan] repeat = N: the step list N times (e.g. one cycle per stretch of a temperature ramp).
+  if (p.steps.empty()) c.fail(root, "step", "a plan needs at least one table step (static or rate), not only prompts");
   const std::size_t cycle = p.steps.size();
-  for (int r = 1; r < repeat; ++r)
+  const std::size_t prompts = p.prompts.size();
+  for (int r = 1; r < repeat; ++r) {
     for (std::size_t i = 0; i < cycle; ++i) p.steps.push_back(p.steps[i]);
+    for (std::size_t i = 0; i < prompts; ++i) {
+      PlanPrompt pr = p.prompts[i];
+      pr.before_step += static_cast<std::size_t>(r) * cycle;
+      p.prompts.push_back(pr);
+    }
+  }
   if (const toml::node* tn = root.get("temperature")) {
     const toml::table* tt2 = tn->as_table();
     if (!tt2) c.fail(tn, "temperature", "expected a table [temperature]");

@@ -15,6 +15,113 @@ const char* pg_roles_sql() { return generated::kPgRolesSql; }
 static const char* const pg_schema7_console_accounts = R"SQL(
 INSERT INTO schema_version(version) VALUES (7);
 )SQL";
+// Schema 8, the station's part (issue 38 item 3; the SQLite twin is db/schema.cpp
+// schema8_station_progress, which says what the tables are). Who may do what is enforced here:
+// a station login writes only its own progress rows and prompts (login = session_user, stamped by
+// the server), QC and readers read them; a prompt is answered (once) by a station or QC login, whose
+// login the server stamps. calbench_grant_station_live() holds the grants and row rules, called here
+// and by roles.sql, so that they hold whichever of the two runs first.
+const char* pg_schema8_station_progress() {
+  return R"SQL(
+CREATE TABLE station_progress (
+  run_id        text NOT NULL,
+  slot          text NOT NULL,
+  station       text NOT NULL,
+  login         text NOT NULL DEFAULT session_user,
+  serial        text NOT NULL DEFAULT '',
+  step_index    integer NOT NULL DEFAULT 0,
+  step_count    integer NOT NULL DEFAULT 0,
+  step_name     text NOT NULL DEFAULT '',
+  step_kind     text NOT NULL DEFAULT '',
+  step_fraction double precision NOT NULL DEFAULT 0 CHECK (step_fraction >= 0 AND step_fraction <= 1),
+  check_name    text NOT NULL DEFAULT '',
+  check_value   double precision,
+  check_limit   double precision,
+  check_unit    text NOT NULL DEFAULT '',
+  state         text NOT NULL CHECK (state IN ('running', 'waiting', 'passed', 'failed', 'aborted')),
+  reason        text NOT NULL DEFAULT '',
+  started_at    timestamptz NOT NULL DEFAULT now(),
+  heartbeat_at  timestamptz NOT NULL DEFAULT now(),
+  PRIMARY KEY (run_id, slot),
+  CHECK (state NOT IN ('failed', 'aborted') OR reason <> '')
+);
+CREATE INDEX station_progress_heartbeat ON station_progress(heartbeat_at);
+CREATE TABLE station_prompts (
+  id             bigint GENERATED ALWAYS AS IDENTITY PRIMARY KEY,
+  run_id         text NOT NULL,
+  station        text NOT NULL,
+  slot           text NOT NULL DEFAULT '',
+  text           text NOT NULL CHECK (text <> ''),
+  timeout_s      double precision NOT NULL CHECK (timeout_s > 0),
+  created_at     timestamptz NOT NULL DEFAULT now(),
+  created_login  text NOT NULL DEFAULT session_user,
+  state          text NOT NULL DEFAULT 'waiting' CHECK (state IN ('waiting', 'confirmed', 'rejected', 'timed out')),
+  reason         text NOT NULL DEFAULT '',
+  answered_by    text NOT NULL DEFAULT '',
+  answered_login text NOT NULL DEFAULT '',
+  answered_at    timestamptz
+);
+CREATE INDEX station_prompts_run ON station_prompts(run_id);
+-- The server stamps who wrote a row: a login cannot write another's progress or answer as another.
+CREATE FUNCTION calbench_stamp_progress() RETURNS trigger LANGUAGE plpgsql AS $f$
+BEGIN
+  NEW.login := session_user;
+  NEW.heartbeat_at := now();
+  RETURN NEW;
+END $f$;
+CREATE TRIGGER station_progress_stamp BEFORE INSERT OR UPDATE ON station_progress
+  FOR EACH ROW EXECUTE FUNCTION calbench_stamp_progress();
+CREATE FUNCTION calbench_prompt_answer() RETURNS trigger LANGUAGE plpgsql AS $f$
+BEGIN
+  IF TG_OP = 'INSERT' THEN
+    NEW.created_login := session_user;
+    NEW.state := 'waiting';
+    RETURN NEW;
+  END IF;
+  IF OLD.state <> 'waiting' OR NEW.text IS DISTINCT FROM OLD.text OR NEW.run_id IS DISTINCT FROM OLD.run_id
+     OR NEW.created_at IS DISTINCT FROM OLD.created_at OR NEW.created_login IS DISTINCT FROM OLD.created_login THEN
+    RAISE EXCEPTION 'an operator prompt is answered once' USING ERRCODE = 'integrity_constraint_violation';
+  END IF;
+  NEW.answered_login := session_user;
+  RETURN NEW;
+END $f$;
+CREATE TRIGGER station_prompts_answer BEFORE INSERT OR UPDATE ON station_prompts
+  FOR EACH ROW EXECUTE FUNCTION calbench_prompt_answer();
+CREATE FUNCTION calbench_grant_station_live() RETURNS void LANGUAGE plpgsql AS $f$
+BEGIN
+  IF NOT EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'calbench_station') THEN
+    RETURN;  -- roles.sql, run later, calls this again
+  END IF;
+  REVOKE ALL ON station_progress, station_prompts FROM calbench_provisioning;
+  GRANT SELECT ON station_progress, station_prompts TO calbench_station, calbench_qc, calbench_reader;
+  GRANT INSERT, UPDATE ON station_progress TO calbench_station;
+  GRANT INSERT ON station_prompts TO calbench_station;
+  GRANT UPDATE (state, reason, answered_by, answered_at) ON station_prompts TO calbench_station, calbench_qc;
+  ALTER TABLE station_progress ENABLE ROW LEVEL SECURITY;
+  ALTER TABLE station_prompts ENABLE ROW LEVEL SECURITY;
+  DROP POLICY IF EXISTS progress_read ON station_progress;
+  DROP POLICY IF EXISTS progress_station_insert ON station_progress;
+  DROP POLICY IF EXISTS progress_station_update ON station_progress;
+  DROP POLICY IF EXISTS prompts_read ON station_prompts;
+  DROP POLICY IF EXISTS prompts_station_insert ON station_prompts;
+  DROP POLICY IF EXISTS prompts_answer ON station_prompts;
+  CREATE POLICY progress_read ON station_progress FOR SELECT
+    TO calbench_station, calbench_qc, calbench_reader USING (true);
+  CREATE POLICY progress_station_insert ON station_progress FOR INSERT
+    TO calbench_station WITH CHECK (login = session_user);
+  CREATE POLICY progress_station_update ON station_progress FOR UPDATE
+    TO calbench_station USING (login = session_user) WITH CHECK (login = session_user);
+  CREATE POLICY prompts_read ON station_prompts FOR SELECT
+    TO calbench_station, calbench_qc, calbench_reader USING (true);
+  CREATE POLICY prompts_station_insert ON station_prompts FOR INSERT
+    TO calbench_station WITH CHECK (created_login = session_user);
+  CREATE POLICY prompts_answer ON station_prompts FOR UPDATE
+    TO calbench_station, calbench_qc USING (state = 'waiting') WITH CHECK (true);
+END $f$;
+SELECT calbench_grant_station_live();
+INSERT INTO schema_version(version) VALUES (8);
+)SQL";
+}
 
 const std::vector<const char*>& pg_migrations() {
   static const std::vector<const char*> m = {
@@ -90,6 +197,8 @@ $f$;
 INSERT INTO schema_version(version) VALUES (6);
 )SQL",
       pg_schema7_console_accounts,
+      // ---- 8: the station's live state and its operator prompts (issue 38) ----
+      pg_schema8_station_progress(),
   };
   return m;
 }

@@ -7,6 +7,8 @@
 namespace calbench::db {
 inline constexpr int kPgBaseSchemaVersion = 3;
 const char* pg_base_schema();  // schema.sql
+// Schema 7's station block (issue 38 item 3): station_progress, station_prompts, their row rules.
+const char* pg_schema8_station_progress();
 const char* pg_roles_sql();    // roles.sql
 // pg_migrations()[i] takes the database from version kPgBaseSchemaVersion + i to + i + 1.
 const std::vector<const char*>& pg_migrations();

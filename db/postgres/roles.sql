@@ -90,4 +90,13 @@ CREATE POLICY values_read ON coefficient_values FOR SELECT
 CREATE POLICY values_station_insert ON coefficient_values FOR INSERT
   TO calbench_station WITH CHECK (EXISTS (SELECT 1 FROM coefficient_sets s WHERE s.id = set_id AND s.status = 'draft'));
 
+-- The station's live state and operator prompts (schema version 7): grants and row rules in
+-- calbench_grant_station_live() (db/postgres/pg_schema.cpp), one place for both paths.
+DO $$
+BEGIN
+  IF to_regprocedure('calbench_grant_station_live()') IS NOT NULL THEN
+    PERFORM calbench_grant_station_live();
+  END IF;
+END $$;
+
 COMMIT;
