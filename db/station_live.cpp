@@ -157,6 +157,14 @@ Prompt end_prompt(Store& store, std::int64_t id, const std::string& state, const
 
 Prompt answer_prompt(Store& store, std::int64_t id, bool confirm, const std::string& reason) {
   if (!confirm && reason.empty()) throw InputError("--reject", 0, "", "a rejection says why");
+  // SQLite with a console account: the twin of PostgreSQL's grant (UPDATE on station_prompts to
+  // calbench_station and calbench_qc only).
+  const std::string& role = store.console_role();
+  if (!role.empty() && role != "station" && role != "qc")
+    throw PermissionError(0, store.connection().path() + ": refused to a " + role +
+                                 " account: only a station or QC account answers an operator prompt (as only a login "
+                                 "in calbench_station or calbench_qc may on PostgreSQL)",
+                          "42501");
   return end_prompt(store, id, confirm ? "confirmed" : "rejected", reason, true);
 }
 
@@ -173,7 +181,7 @@ double age_s(const std::string& iso, double now_epoch_s) {
   int ms = 0;
   char frac[8] = "";
   // 2026-11-27T01:02:03.456Z (SQLite, PostgreSQL as the store reads it) or without milliseconds.
-  if (std::sscanf(iso.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
+  if (std::sscanf(iso.c_str(), "%4d-%2d-%2d%*1[T ]%2d:%2d:%2d", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &tm.tm_hour, &tm.tm_min,
                   &tm.tm_sec) != 6)
     return NAN;
   if (iso.size() > 20 && iso[19] == '.' && std::sscanf(iso.c_str() + 20, "%3[0-9]", frac) == 1) {

@@ -236,6 +236,7 @@ class Store {
   void check_signer(const char* role = "qc");
   // The web console's local account on a SQLite store (db/console_accounts.hpp), checked by its
   // password: login() becomes "console:LOGIN" and check_signer() enforces the account's role.
+  const std::string& console_role() const { return console_role_; }  // "" without a console account
   void set_console_account(const std::string& login, const std::string& role) {
     console_login_ = login;
     console_role_ = role;

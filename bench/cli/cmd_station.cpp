@@ -209,6 +209,10 @@ const bool registered = add_command(20, [](CLI::App& app) {
                   "emulated faults [SLOT:]KEY=VALUE (SLOT: of that slot only): table-kill-at=S (emulated s), "
                   "imu-prod-id=0x4060, imu-flags=0x0008, imu-flags-from=S (the flags from emulated time S on), "
                   "imu-skip-every=N, imu-self-test=0x0001");
+  run->add_option("--pace", a->o.pace,
+                  "emulated runs with the in-process table: at most PACE x real time (1: as long as on a real bench, "
+                  "e.g. to watch the live view; default: as fast as the machine can)")
+      ->check(finite_number(0.01, 1000));
   run->add_flag("--json", a->json, "print a JSON summary on stdout");
   run->callback([a] { run_station(*a); });
 });

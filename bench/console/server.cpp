@@ -7,9 +7,11 @@
 #include <iostream>
 #include <regex>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #include "bench/approval_thresholds.hpp"
+#include "bench/console/live_page.hpp"
 #include "bench/console/request_parse.hpp"
 #include "bench/console/sessions.hpp"
 #include "bench/report/db_report.hpp"
@@ -19,6 +21,7 @@
 #include "db/approval.hpp"
 #include "db/console_accounts.hpp"
 #include "db/signer.hpp"
+#include "db/station_live.hpp"
 
 // Last: httplib.h brings <resolv.h>, whose macro _res breaks Eigen's headers if they come after it.
 #include <httplib.h>
@@ -37,11 +40,16 @@ nav form{display:inline} main{margin:12px 16px;max-width:1400px}
 form.act{margin:6px 0;padding:6px;border:1px solid #bbb;display:inline-block;vertical-align:top}
 input,button{font:inherit} table.q td,table.q th{border:1px solid #bbb;padding:2px 6px;text-align:left;vertical-align:top}
 table.q{border-collapse:collapse}
+.prompt{border-color:#a60;background:#fff8e8} section.run{margin:10px 0 18px} #live-status{color:#666}
 )CSS";
+constexpr int kWorkers = 64;             // server threads (pages and live event streams)
+constexpr double kStreamS = 300;          // a live page's event stream is renewed (EventSource reconnects) after this
 
 struct Page {
   int status = 200;
   std::string html;
+  std::string type = "text/html; charset=utf-8";
+  bool streamed = false;  // the handler set a content provider (server-sent events)
 };
 
 
@@ -56,8 +64,7 @@ class Console {
   }
 
   void install(httplib::Server& srv) {
-    // The route table: {method, path pattern, handler, needs a session}. The station live view and
-    // the fleet dashboard (integrated later) add their rows here.
+    // The route table: {method, path pattern, handler, needs a session}.
     routes_ = {
         {"GET", "/", [this](Ctx& c) { return redirect(c, "/queue"); }, false},
         {"GET", "/login", [this](Ctx& c) { return login_page(c, ""); }, false},
@@ -68,12 +75,17 @@ class Console {
         {"POST", R"(/set/(\d{1,18})/(approve|revoke))", [this](Ctx& c) { return set_action(c); }, true},
         {"GET", R"(/device/([^/]{1,200}))", [this](Ctx& c) { return device_page(c); }, true},
         {"GET", "/audit", [this](Ctx& c) { return audit_page(c); }, true},
-        {"GET", R"(/assets/([a-z]+\.css))", [this](Ctx& c) { return asset(c); }, false},
+        {"GET", "/live", [this](Ctx& c) { return live_page(c, "", true); }, true},
+        {"GET", "/live/events", [this](Ctx& c) { return live_events(c); }, true},
+        {"POST", R"(/prompt/(\d{1,18})/(confirm|reject))", [this](Ctx& c) { return prompt_action(c); }, true},
+        {"GET", R"(/assets/([a-z]+\.(?:css|js)))", [this](Ctx& c) { return asset(c); }, false},
     };
     const auto handler = [this](const httplib::Request& req, httplib::Response& res) { dispatch(req, res); };
     srv.Get(R"(/.*)", handler);
     srv.Post(R"(/.*)", handler);
     srv.set_payload_max_length(64 * 1024);
+    // Each open live page holds a worker for its event stream: room for them beside the pages.
+    srv.new_task_queue = [] { return new httplib::ThreadPool(kWorkers); };
     srv.set_logger([](const httplib::Request& req, const httplib::Response& res) {
       // The path only: no query, body or header (passwords, session and CSRF tokens never reach the log).
       std::cerr << "calbench serve: " << req.method << " " << req.path << " " << res.status << "\n";
@@ -131,8 +143,10 @@ class Console {
       p = {500, shell(c, "Error", "<div class=\"msg err\" id=\"error\">" + html_escape(e.what()) + "</div>")};
     }
     res.status = p.status;
-    if (res.get_header_value("Location").empty()) res.set_content(p.html, p.html.rfind("/*css*/", 0) == 0 ? "text/css" : "text/html; charset=utf-8");
-    res.set_header("Content-Security-Policy", "default-src 'none'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; form-action 'self'; frame-ancestors 'none'");
+    if (res.get_header_value("Location").empty() && !p.streamed) res.set_content(p.html, p.type);
+    // Script only from the console's own built-in asset (the live view's event stream).
+    res.set_header("Content-Security-Policy", "default-src 'none'; script-src 'self'; connect-src 'self'; style-src 'self' "
+                                              "'unsafe-inline'; img-src 'self' data:; form-action 'self'; frame-ancestors 'none'");
     res.set_header("X-Content-Type-Options", "nosniff");
     res.set_header("Referrer-Policy", "no-referrer");
     res.set_header("Cache-Control", "no-store");
@@ -158,7 +172,7 @@ class Console {
   std::string shell(Ctx& c, const std::string& title, const std::string& body) {
     std::string nav = "<nav><b>calbench console</b> &nbsp; ";
     if (c.s)
-      nav += "<a href=\"/queue\">QC queue</a><a href=\"/audit\">audit log</a>"
+      nav += "<a href=\"/queue\">QC queue</a><a href=\"/live\">live stations</a><a href=\"/audit\">audit log</a>"
              "<form method=\"get\" action=\"/audit\"><input name=\"serial\" placeholder=\"serial\" size=\"10\"></form> "
              "signed in as <span id=\"who\">" + html_escape(c.s->name + " (" + c.s->login + (c.s->role.empty() ? "" : ", " + c.s->role) + ")") +
              "</span> <form method=\"post\" action=\"/logout\"><input type=\"hidden\" name=\"csrf\" value=\"" + c.s->csrf +
@@ -171,9 +185,10 @@ class Console {
 
   Page asset(Ctx& c) {
     const std::string name = c.m[1];
-    if (name == "console.css") return {200, std::string("/*css*/") + kConsoleCss};
-    if (name == "report.css") return {200, std::string("/*css*/") + report::report_css()};
-    return {404, "/*css*/ no such asset"};
+    if (name == "console.css") return {200, kConsoleCss, "text/css"};
+    if (name == "report.css") return {200, report::report_css(), "text/css"};
+    if (name == "live.js") return {200, live_js(), "text/javascript"};
+    return {404, "/* no such asset */", "text/css"};
   }
 
   Page login_page(Ctx& c, const std::string& error, int status = 200) {
@@ -210,7 +225,8 @@ class Console {
         s->store = std::make_unique<db::Store>(uri, db::OpenOptions{}, who);
         s->login = login;
         auto st = s->store->connection().prepare("SELECT name, role FROM calbench_users WHERE login = session_user");
-        s->name = st.step() ? st.text(0) : login;
+        if (st.step()) s->name = st.text(0), s->role = st.text(1);
+        else s->name = login;
       } else {
         auto store = std::make_unique<db::Store>(o_.db, db::OpenOptions{}, who);
         const auto acct = db::check_console_password(*store, login, password);
@@ -224,7 +240,18 @@ class Console {
     } catch (const db::DbError& e) {
       // PostgreSQL refused the credentials (or SQLite's account check failed): one failure.
       sessions_.failed(login);
-      std::string why = postgres_ ? std::string("the database refused the login: ") + e.what() : e.what();
+      std::string why = e.what();
+      if (postgres_) {
+        // The server's own words (libpq's "FATAL: …"), without the command line's advice on where
+        // a password comes from, which does not apply to a form.
+        const auto fatal = why.find("FATAL:");
+        if (fatal != std::string::npos) {
+          why = why.substr(fatal + 6);
+          why = why.substr(0, why.find_first_of(";)\n"));
+          while (!why.empty() && why.front() == ' ') why.erase(0, 1);
+        }
+        why = "the database refused the login: " + why;
+      }
       // Never echo the password (libpq messages do not contain it; the URI is redacted by the store).
       if (!password.empty())
         for (std::size_t p; (p = why.find(password)) != std::string::npos;) why.replace(p, password.size(), "***");
@@ -357,6 +384,88 @@ class Console {
     }
     b << "</table>";
     return {200, shell(c, "Audit log", b.str())};
+  }
+
+  // Station or QC may answer prompts (the store refuses others in any case: PostgreSQL's grants, the
+  // SQLite account's role in db::answer_prompt).
+  static bool may_answer(const Session& s) { return s.role != "provisioning"; }
+
+  Page live_page(Ctx& c, const std::string& message, bool ok, int status = 200) {
+    std::string b = "<h1>Live stations</h1>";
+    if (!message.empty())
+      b += std::string("<div class=\"msg ") + (ok ? "ok\" id=\"done\">" : "err\" id=\"error\">") + html_escape(message) + "</div>\n";
+    b += "<p id=\"live-status\">live updates need script; without it, reload the page</p><div id=\"live\">" +
+         live_fragment(*c.s->store, c.s->csrf, may_answer(*c.s)) + "</div><script src=\"/assets/live.js\"></script>";
+    return {status, shell(c, "Live stations", b)};
+  }
+
+  // Server-sent events: the live fragment again whenever it changes (checked every 0.5 s), a comment
+  // every 15 s to keep proxies from closing the stream, "end" when the session has ended. The stream
+  // does not keep the session alive and is renewed after kStreamS (the browser reconnects).
+  Page live_events(Ctx& c) {
+    auto sess = c.s;
+    const std::string token = c.token;
+    struct State {
+      std::string last;
+      Clock::time_point start = Clock::now(), said = Clock::now();
+    };
+    auto state = std::make_shared<State>();
+    c.res.set_header("X-Accel-Buffering", "no");
+    c.res.set_chunked_content_provider("text/event-stream", [this, sess, token, state](std::size_t, httplib::DataSink& sink) {
+      const auto send = [&](const std::string& text) { return sink.write(text.data(), text.size()); };
+      if (!sessions_.find(token, false)) {
+        send("event: end\ndata: session ended\n\n");
+        sink.done();
+        return true;
+      }
+      std::string frag;
+      try {
+        const std::lock_guard<std::mutex> l(sess->m);
+        frag = live_fragment(*sess->store, sess->csrf, may_answer(*sess));
+      } catch (const std::exception& e) {
+        frag = "<div class=\"msg err\">the store could not be read: " + html_escape(e.what()) + "</div>";
+      }
+      const auto now = Clock::now();
+      if (frag != state->last) {
+        state->last = frag;
+        std::string ev = "event: live\n";
+        std::size_t a = 0;
+        while (a <= frag.size()) {  // one data: line per line of the fragment
+          const std::size_t e = frag.find('\n', a);
+          ev += "data: " + frag.substr(a, e == std::string::npos ? std::string::npos : e - a) + "\n";
+          if (e == std::string::npos) break;
+          a = e + 1;
+        }
+        if (!send(ev + "\n")) return false;
+        state->said = now;
+      } else if (now - state->said > std::chrono::seconds(15)) {
+        if (!send(": keep-alive\n\n")) return false;
+        state->said = now;
+      }
+      if (now - state->start > std::chrono::duration<double>(kStreamS)) {
+        sink.done();
+        return true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      return sink.is_writable();
+    });
+    Page p;
+    p.streamed = true;
+    return p;
+  }
+
+  Page prompt_action(Ctx& c) {
+    db::Store& st = *c.s->store;
+    const std::int64_t id = std::stoll(c.m[1]);
+    const bool confirm = c.m[2] == "confirm";
+    try {
+      const db::Prompt p = db::answer_prompt(st, id, confirm, confirm ? std::string() : c.form["reason"]);
+      return live_page(c, "prompt " + std::to_string(id) + " " + p.state + " by " + p.answered_by + ": " + p.text, true);
+    } catch (const db::PermissionError& e) {
+      return live_page(c, std::string("refused by the store: ") + e.what() + "; nothing was changed", false, 403);
+    } catch (const InputError& e) {
+      return live_page(c, std::string("refused: ") + e.what() + "; nothing was changed", false, 409);
+    }
   }
 
   ServeOptions o_;

@@ -29,7 +29,7 @@ std::string Sessions::add(std::shared_ptr<Session> s) {
   return token;
 }
 
-std::shared_ptr<Session> Sessions::find(const std::string& token) {
+std::shared_ptr<Session> Sessions::find(const std::string& token, bool touch) {
   const std::lock_guard<std::mutex> l(m_);
   const auto it = by_token_.find(token);
   if (it == by_token_.end()) return nullptr;
@@ -38,7 +38,7 @@ std::shared_ptr<Session> Sessions::find(const std::string& token) {
     by_token_.erase(it);  // expired: its store (and connection) closes with the last request using it
     return nullptr;
   }
-  it->second->last = now;
+  if (touch) it->second->last = now;
   return it->second;
 }
 

@@ -38,8 +38,9 @@ class Sessions {
  public:
   explicit Sessions(std::chrono::seconds idle) : idle_(idle) {}
   std::string add(std::shared_ptr<Session> s);  // returns the token
-  // The live session of `token`, its idle clock restarted; null when unknown or expired.
-  std::shared_ptr<Session> find(const std::string& token);
+  // The live session of `token`, its idle clock restarted (touch: a person's request; a live page's
+  // stream does not keep a session alive); null when unknown or expired.
+  std::shared_ptr<Session> find(const std::string& token, bool touch = true);
   void remove(const std::string& token);
   // Lock-out: "" if `login` may try, else why not (until when).
   std::string locked(const std::string& login);

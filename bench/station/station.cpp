@@ -19,6 +19,7 @@
 #include "bench/io/recording.hpp"
 #include "bench/io/recording_location.hpp"
 #include "bench/station/fixture.hpp"
+#include "bench/station/live.hpp"
 #include "bench/station/run_summary.hpp"
 #include "bench/station/step_runner.hpp"
 #include "bench/station/unit.hpp"
@@ -93,9 +94,10 @@ class Station {
   }
   // The store and the bench-run record of this run (the done and the aborted run share them).
   std::unique_ptr<db::Store> open_store() const;
+  std::string station_label() const;  // the station's name in the store
   std::string store_path() const;  // the SQLite file written: --db, or the journal of a central --db
   void forward(db::Store& journal, nlohmann::json& summary, const std::string& uid);
-  db::BenchRunInput bench_run_record(const Unit& u, const db::Store& store, const std::string& outcome,
+  db::BenchRunInput bench_run_record(const Unit& u, const std::string& outcome,
                                      const std::string& recording) const;
 
   const Options& o_;
@@ -111,6 +113,7 @@ class Station {
   std::unique_ptr<TableEmulator> table_emu_;
   std::unique_ptr<TableClient> table_;
   Units units_;
+  std::unique_ptr<LiveView> live_;        // the slots' progress rows and the prompts (with --db)
   std::unique_ptr<StepRunner> runner_;    // from setup on (the emulated units' physics read its mount)
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
   std::string started_ = iso_utc(std::chrono::system_clock::now());
@@ -226,6 +229,8 @@ void Station::setup() {
                                probe.string());
   }
   runner_ = std::make_unique<StepRunner>(o_, log_, stop_, plan_, *earth_, units_, fixture_mode_, clock_, wall0_);
+  live_ = std::make_unique<LiveView>(o_.db, run_id_, station_label(), log_);
+  runner_->attach_live(*live_);
   if (o_.emulated && clock_) {
     TableEmulatorConfig tc;
     tc.watchdog_s = 0.5;
@@ -316,6 +321,12 @@ void Station::connect_unit(Unit& u) {
   }
 }
 
+std::string Station::station_label() const {
+  // An emulated run is "calbench-emulated" unless the station is named ($CALBENCH_STATION).
+  const char* named = std::getenv("CALBENCH_STATION");
+  return o_.emulated && !(named && *named) ? "calbench-emulated" : db::Actor::from_environment(o_.operator_name).station;
+}
+
 std::string Station::store_path() const {
   return db::is_postgres_uri(o_.db) ? db::journal_path(o_.journal) : o_.db;
 }
@@ -350,12 +361,10 @@ void Station::forward(db::Store& journal, nlohmann::json& summary, const std::st
   }
 }
 
-db::BenchRunInput Station::bench_run_record(const Unit& u, const db::Store& store, const std::string& outcome,
+db::BenchRunInput Station::bench_run_record(const Unit& u, const std::string& outcome,
                                             const std::string& recording) const {
   db::BenchRunInput run;
-  // An emulated run is "calbench-emulated" unless the station is named ($CALBENCH_STATION).
-  const char* named = std::getenv("CALBENCH_STATION");
-  run.station = o_.emulated && !(named && *named) ? "calbench-emulated" : store.actor().station;
+  run.station = station_label();
   run.plan = plan_.name;
   run.recording_path = recording;
   run.started_at = started_;
@@ -389,7 +398,7 @@ void Station::finish_unit(Unit& u) {
   write_coefficients(u.out / "COEFFS.json", cs);
   if (!o_.db.empty()) {  // the coefficient store: bench run + draft set, one transaction
     const std::unique_ptr<db::Store> store = open_store();
-    db::BenchRunInput run = bench_run_record(u, *store, "pass", u.rec_dir.string());
+    db::BenchRunInput run = bench_run_record(u, "pass", u.rec_dir.string());
     run.recording_sha256 = sha256_file(u.rec_dir / "imu.csv");
     describe_recording(run, u.rec_dir);  // a central store's view: file://HOST/path and the digest of its files
     run.qc.push_back({"step_repeats", static_cast<double>(u.repeats), std::nullopt, true, "", db::kSampleNotApplicable, ""});
@@ -419,7 +428,7 @@ void Station::record_aborted(Unit& u, const std::string& outcome, const std::str
   if (o_.db.empty() || !u.imu || u.imu->identity().prod_id == 0) return;
   try {
     const std::unique_ptr<db::Store> store = open_store();
-    const db::BenchRunInput run = bench_run_record(u, *store, outcome, fs::exists(u.rec_dir) ? u.rec_dir.string() : "");
+    const db::BenchRunInput run = bench_run_record(u, outcome, fs::exists(u.rec_dir) ? u.rec_dir.string() : "");
     const auto& id = u.imu->identity();
     const std::int64_t run_id = store->store_bench_run({"ADIS16488A", id.serial_string(), id.firmware()}, run,
                                                       why + " (after " + std::to_string(u.samples) + " samples)");
@@ -468,6 +477,7 @@ Result Station::run() {
     table_done = true;
     runner_->stop_readers();
     // Fit (the spine's bench fit) and store, unit by unit.
+    live_->publish(units_, runner_->live_step(), true);
     std::size_t done = 0;
     for (auto& up : units_) {
       Unit& u = *up;
@@ -486,6 +496,11 @@ Result Station::run() {
         record_aborted(*up, "fail", up->why, res);
       }
     complete_run(res, facts(), done);
+    LiveStep end = runner_->live_step();
+    end.name = "fitted and stored";
+    end.kind = "done";
+    end.fraction = 1;
+    live_->finish(units_, end, "");
   } catch (const std::exception& e) {
     // Safety first: stop and disable the table (best effort, bounded time), keep the partial recordings.
     bool stopped = table_done;
@@ -511,6 +526,7 @@ Result Station::run() {
     }
     if (!fixture_mode_ && !units_.empty() && units_.front()->summary.contains("db"))
       res.summary["db"] = units_.front()->summary["db"];
+    if (live_ && runner_) live_->finish(units_, runner_->live_step(), res.message);
   }
   if (table_emu_) table_emu_->stop();
   summarise_run(res, facts());

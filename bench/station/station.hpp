@@ -47,6 +47,7 @@ struct Options {
   int max_repeats = 2;         // per step
   double heartbeat_s = 0.1;    // bus-clock period of heartbeat + status poll
   bool progress_tty = false;
+  double pace = 0;             // > 0, emulated time of the in-process table: at most pace x real time
   Injections inject;
 };
 

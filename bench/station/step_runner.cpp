@@ -1,5 +1,6 @@
 #include "bench/station/step_runner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -29,6 +30,7 @@ StepRunner::StepRunner(const Options& o, std::ostream& log, const std::atomic<bo
 
 void StepRunner::run_plan() {
   for (step_index_ = 0; step_index_ < plan_.steps.size(); ++step_index_) {
+    ask_prompts(step_index_);
     const PlanStep& s = plan_.steps[step_index_];
     if (s.mount != mount_) {
       // Stop, and have the cube (the fixture) re-mounted with axis `mount` on the inner axis.
@@ -46,6 +48,62 @@ void StepRunner::run_plan() {
     done_s_ += s.dwell_s + plan_.table.settle_s;
     progress("done", true);
   }
+  ask_prompts(plan_.steps.size());
+}
+
+// The plan's operator prompts before table step `before` (after the last: steps.size()). The table
+// is brought to rest first (a person is about to touch the fixture), and is kept under heartbeat while
+// the station waits; the IMUs keep streaming (nothing is recorded).
+void StepRunner::ask_prompts(std::size_t before) {
+  for (const PlanPrompt& p : plan_.prompts) {
+    if (p.before_step != before) continue;
+    poll(true);
+    if (st_[kInner].mode == table::Mode::rate) {
+      table_->command_rate(kInner, 0.0);
+      while (std::abs(st_[kInner].rate) > 1e-6) pump(), poll();
+    }
+    LiveStep at = live_step();
+    at.name = "prompt: " + p.text;
+    at.kind = "prompt";
+    at.fraction = 0;
+    const auto keep_alive = [this] {
+      if (threaded_) pump();  // drains the readers' queues (nothing is recorded between steps)
+      poll(true);
+    };
+    if (live_) {
+      live_->ask(p, units_, at, keep_alive, stop_);
+    } else {
+      LiveView terminal("", "", "", log_);
+      terminal.ask(p, units_, at, keep_alive, stop_);
+    }
+    log_ << "prompt answered: " << p.text << "\n";
+    if (clock_) pace_emu0_ = clock_->now(), pace_wall0_ = std::chrono::steady_clock::now();
+  }
+}
+
+void StepRunner::keep_pace() {
+  if (!(o_.pace > 0) || !clock_) return;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pace_wall0_).count();
+  const double ahead = (clock_->now() - pace_emu0_) / o_.pace - wall;
+  if (ahead > 0.005) std::this_thread::sleep_for(std::chrono::duration<double>(ahead));
+}
+
+LiveStep StepRunner::live_step() const {
+  LiveStep l;
+  const std::size_t n = plan_.steps.size();
+  l.index = static_cast<int>(std::min(step_index_, n));
+  l.count = static_cast<int>(n);
+  if (step_index_ < n) {
+    const PlanStep& s = plan_.steps[step_index_];
+    l.name = s.label;
+    l.kind = s.kind == StepKind::rate ? "rate" : "static";
+    // Within the step: the share of its dwell recorded so far (0 while the table moves and settles).
+    if (rec_step_ >= 0 && rec_dwell_ > 0 && std::isfinite(rec_dwell_)) l.fraction = std::clamp((now() - rec_t_poll_) / rec_dwell_, 0.0, 1.0);
+  } else {
+    l.name = "plan done";
+    l.kind = "fit";
+  }
+  return l;
 }
 
 // One step on the live units: command, settle, record, check; the units whose data failed the check
@@ -109,6 +167,7 @@ void StepRunner::fail_unit(Unit& u, const std::string& why) {
   u.reading = false;
   log_ << (o_.progress_tty ? "\n" : "") << u.label() << " failed: " << why
        << (live_units(units_) ? " (the other units go on)" : "") << "\n";
+  if (live_) live_->publish(units_, live_step(), true);
 }
 
 void StepRunner::poll(bool force) {
@@ -204,6 +263,7 @@ void StepRunner::pump() {
     if (!fixture_mode_) throw;
     fail_unit(u, e.what());
   }
+  keep_pace();
   if (units_.size() > 1 && clock_) {
     double slowest = std::numeric_limits<double>::infinity();
     for (const auto& o : units_)
@@ -296,6 +356,7 @@ void StepRunner::progress(const std::string& what, bool line) {
                 step_index_ + 1, n, plan_.steps[std::min(step_index_, n - 1)].label.c_str(), what.c_str(),
                 units::deg(st_[0].position), units::deg(st_[1].rate), static_cast<unsigned long long>(samples), eta);
   std::string text = buf;
+  if (live_) live_->publish(units_, live_step(), line);
   if (units_.size() > 1) text += "  units " + std::to_string(live_units(units_)) + "/" + std::to_string(units_.size());
   if (o_.progress_tty && !line) {
     static double last = -1;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bench/io/plan_toml.hpp"
+#include "bench/station/live.hpp"
 #include "bench/station/station.hpp"
 #include "bench/station/unit.hpp"
 #include "calibration/bench_plan.hpp"
@@ -31,6 +32,9 @@ class StepRunner {
              std::chrono::steady_clock::time_point wall0);
 
   void attach_table(devices::TableClient& table) { table_ = &table; }
+  void attach_live(LiveView& live) { live_ = &live; }
+  // Where the run is, for the live view.
+  LiveStep live_step() const;
   // Every step of the plan, in order, on the live units (start_readers() first).
   void run_plan();
 
@@ -60,6 +64,7 @@ class StepRunner {
   std::string step_check(const Unit& u) const;  // empty: the step's data passed
   void command_step(const PlanStep& s);
   void progress(const std::string& what, bool line = false);
+  void ask_prompts(std::size_t before_step);  // the plan's operator prompts before this table step
   double now() const { return clock_ ? clock_->now() : units_.front()->bus->now(); }
   void check_stop() {
     if (stop_) throw Aborted("interrupted (Ctrl-C)");
@@ -75,6 +80,7 @@ class StepRunner {
   std::shared_ptr<devices::VirtualClock> clock_;
   const bool threaded_;                   // real time: a reader thread per unit
   devices::TableClient* table_ = nullptr;
+  LiveView* live_ = nullptr;
   int mount_ = 2;                         // the fixture's current mount
   double last_poll_ = -1e9;
   devices::AxisStatus st_[2];
@@ -85,6 +91,11 @@ class StepRunner {
   double plan_s_ = 0, done_s_ = 0;
   std::uint64_t pumps_ = 0;
   std::chrono::steady_clock::time_point wall0_;
+  // --pace: emulated time since pace_emu0_ at most pace x the wall time since pace_wall0_ (re-anchored
+  // after an operator prompt, during which emulated time stands still).
+  double pace_emu0_ = 0;
+  std::chrono::steady_clock::time_point pace_wall0_ = std::chrono::steady_clock::now();
+  void keep_pace();
 };
 
 }  // namespace calbench::station

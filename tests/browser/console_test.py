@@ -5,7 +5,9 @@ hand-turned unit (bench/multipos/sim_effects.py → import imu-tk → fit multip
 its QC, stored by QC account qc1).
 
 Paths: log in; see the queue; open the set and its device report; be refused as a station login and
-as the set's own creator; approve as another QC person; see the approval in the audit log; log out.
+as the set's own creator; see a live station run (emulated, two slots, one failing its
+identification) advance on page /live by server-sent events, answer its operator prompt from the page;
+approve as another QC person; see the approval in the audit log; log out.
 Bad input, each refused with a clear message and nothing changed (the set's status is read back
 with the CLI): a wrong password, the lock-out after repeated failures, a missing and a forged CSRF
 token, a stale session after log-out, an overlong form value, path traversal in asset URLs.
@@ -79,6 +81,107 @@ class Http:
         out = (r.status, r.read().decode("utf-8", "replace"))
         c.close()
         return out
+
+
+PLAN = """[plan]
+name = "live"
+[site]
+lat_deg = 52.0
+lon_deg = 13.0
+h_m = 40.0
+[table]
+max_rate_dps = 500.0
+max_accel_dps2 = 200.0
+slew_rate_dps = 60.0
+settle_s = 0.5
+remount_s = 1.0
+rate_accuracy_ppm = 1.0
+position_accuracy_arcsec = 2.0
+axis_wobble_arcsec = 1.0
+[[step]]
+kind = "static"
+mount = "z"
+outer_deg = 0.0
+inner_deg = 0.0
+dwell_s = 3.0
+label = "z down"
+[[step]]
+kind = "prompt"
+text = "turn the fixture's clamp in slot 1, then confirm"
+slot = "1"
+timeout_s = 120
+[[step]]
+kind = "rate"
+axis = "z"
+rate_dps = 50.0
+dwell_s = 6.0
+label = "+50 dps about z"
+"""
+
+
+def live_run(d, base, http, db, work, text, submit):
+    """An emulated two-slot station run into the store: slot 2's unit is the wrong part (fails its
+    identification), slot 1 runs the plan, stops at the operator prompt, and goes on once it is
+    confirmed from the page. The page follows by server-sent events: it is not reloaded while the
+    run advances from the prompt through the rate step to 'passed'."""
+    plan = os.path.join(work, "live.toml")
+    open(plan, "w").write(PLAN)
+    slog = open(os.path.join(work, "station.log"), "w")
+    # --pace 1: emulated time no faster than real time, so the run takes as long as on a real bench
+    # (about 15 s) and the page can be seen to follow it.
+    station = subprocess.Popen([CB, "station", "run", "--plan", plan, "--emulated", "--pace", "1", "--units", "2", "--inject",
+                                "2:imu-prod-id=0x1234", "--db", db, "--out", os.path.join(work, "station-out")],
+                               stdout=slog, stderr=subprocess.STDOUT, env={**os.environ, "CALBENCH_STATION": "line-7"},
+                               stdin=subprocess.DEVNULL)
+    try:
+        d.get(base + "/live")
+        slot = lambda n: f"#live tr[data-slot='{n}']"
+        # The prompt appears on the page without a reload (the run reaches it after step 1).
+        prompt = WebDriverWait(d, 60).until(EC.presence_of_element_located((By.CSS_SELECTOR, "#live .prompt")))
+        assert "turn the fixture's clamp in slot 1" in prompt.text, prompt.text
+        assert "line-7" in d.find_element(By.ID, "live").text
+        s1 = d.find_element(By.CSS_SELECTOR, slot(1))
+        assert s1.get_attribute("data-state") == "waiting", s1.get_attribute("data-state")
+        assert s1.find_element(By.CSS_SELECTOR, "td.check").text.startswith("0 ≤ 0"), s1.text
+        # The failed slot says why.
+        s2 = d.find_element(By.CSS_SELECTOR, slot(2))
+        assert s2.get_attribute("data-state") == "failed", s2.text
+        assert "PROD_ID" in s2.find_element(By.CSS_SELECTOR, "td.why").text, s2.text
+        # A forged answer (no CSRF token) changes nothing.
+        pid = prompt.get_attribute("data-prompt")
+        cookie = "calbench_session=" + d.get_cookie("calbench_session")["value"]
+        st, body = http.req("POST", f"/prompt/{pid}/confirm", {}, cookie)
+        assert st == 403 and "CSRF" in body, (st, body[:300])
+        assert station.poll() is None, "the run ended without its prompt answered"
+        # Answer from the page.
+        old = d.find_element(By.TAG_NAME, "html")
+        d.find_element(By.CSS_SELECTOR, f"#live .prompt[data-prompt='{pid}'] button.confirm").click()
+        WebDriverWait(d, 15).until(EC.staleness_of(old))
+        assert "confirmed by Sam Station" in text("done"), text("done")
+        page = d.find_element(By.TAG_NAME, "html")
+        seen = []
+        deadline = time.time() + 120
+        while time.time() < deadline:
+            try:
+                row = d.find_element(By.CSS_SELECTOR, slot(1))
+                st_ = (row.get_attribute("data-state"), row.get_attribute("data-step"))
+            except Exception:  # replaced between the find and the read
+                continue
+            if not seen or seen[-1] != st_:
+                seen.append(st_)
+            if st_[0] in ("passed", "failed", "aborted"):
+                break
+            time.sleep(0.1)
+        assert seen and seen[-1][0] == "passed", seen
+        assert ("running", "1") in seen, f"the rate step was never seen running: {seen}"
+        page.tag_name  # raises StaleElementReferenceException if the page was reloaded
+        assert station.wait(60) == 1, "one of two units failed: exit 1"
+    finally:
+        if station.poll() is None:
+            station.kill()
+            station.wait()
+    log = open(os.path.join(work, "station.log")).read()
+    assert "confirmed by Sam Station" in log, log[-800:]
 
 
 def main():
@@ -156,6 +259,7 @@ def main():
         submit("approve")
         assert d.find_elements(By.ID, "error"), "a station login approved a set: " + d.find_element(By.TAG_NAME, "main").text[:600]
         assert set_status(db) == "draft"
+        live_run(d, base, http, db, work, text, submit)
         logout()
 
         # The set's own creator (qc1 stored it): four-eyes refuses.
@@ -171,7 +275,8 @@ def main():
         # Another QC person: the queue, the report inline, the approval signed by them.
         login("qc2", "pw-rita-12345")
         rows = d.find_elements(By.CSS_SELECTOR, "#queue tr[data-set]")
-        assert [r.get_attribute("data-set") for r in rows] == ["1"], [r.get_attribute("data-set") for r in rows]
+        # Set 1 (qc1's), then set 2: slot 1's unit of the live run, stored as a draft by the station.
+        assert [r.get_attribute("data-set") for r in rows] == ["1", "2"], [r.get_attribute("data-set") for r in rows]
         assert "meets every threshold" in rows[0].text, rows[0].text
         rows[0].find_element(By.CSS_SELECTOR, "a.open").click()
         report = text("report")
