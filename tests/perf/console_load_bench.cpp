@@ -57,7 +57,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kUsers = 50;
-constexpr int kRequests = 30;  // page requests per user and run (after its login)
+constexpr int kRequests = 12;  // page requests per user and run (after its login)
 constexpr int kDrafts = 300;
 constexpr int kRevokeEvery = 3000;
 constexpr int kFillChunk = 5000;  // devices per enclosing write transaction
