@@ -299,6 +299,12 @@ class Store {
   std::vector<ProvisioningEvent> provisioning_of(std::int64_t device_id);
   std::vector<AuditEntry> audit_of_device(std::int64_t device_id);
   std::vector<FleetValue> fleet();
+  // Bench runs that ended at or after `iso_from` (ISO 8601 UTC, as the store writes them): the fleet
+  // dashboard's units per hour.
+  struct RunEnd {
+    std::string station, ended_at, outcome;
+  };
+  std::vector<RunEnd> runs_ended_since(const std::string& iso_from);
   // The web console's reads (issue 38): the sets of one status, oldest first (the QC queue: drafts),
   // and the audit log searched by device serial, login or typed name, action and date range
   // (YYYY-MM-DD, inclusive; empty fields: any), newest first.

@@ -242,10 +242,11 @@ std::vector<AuditEntry> Store::audit_search(const AuditQuery& q) {
     if (!d->empty() && (d->size() != 10 || (*d)[4] != '-' || (*d)[7] != '-'))
       throw arg_error(d == &q.from ? "from" : "to", "'" + *d + "' is not a date YYYY-MM-DD");
   std::vector<AuditEntry> out;
+  // A device's rows through the audit_device index (a serial that names no device: none).
   auto st = conn_->prepare(
-      "SELECT a.id, a.at, a.\"user\", a.station, a.entity, a.entity_id, a.action, a.detail, a.db_role FROM audit_log a "
-      "LEFT JOIN devices d ON d.id = a.device_id "
-      "WHERE (CAST(? AS TEXT) = '' OR d.serial = CAST(? AS TEXT)) "
+      std::string("SELECT a.id, a.at, a.\"user\", a.station, a.entity, a.entity_id, a.action, a.detail, a.db_role FROM audit_log a ") +
+      (q.serial.empty() ? "WHERE (CAST(? AS TEXT) = '' OR CAST(? AS TEXT) = '') "
+                        : "WHERE CAST(? AS TEXT) <> '' AND a.device_id = (SELECT id FROM devices WHERE serial = CAST(? AS TEXT)) ") +
       "AND (CAST(? AS TEXT) = '' OR a.db_role = CAST(? AS TEXT) OR lower(a.\"user\") = lower(CAST(? AS TEXT))) "
       "AND (CAST(? AS TEXT) = '' OR a.action = CAST(? AS TEXT)) "
       "AND (CAST(? AS TEXT) = '' OR substr(CAST(a.at AS TEXT), 1, 10) >= CAST(? AS TEXT)) "
@@ -274,6 +275,16 @@ std::vector<FleetValue> Store::fleet() {
   while (st.step())
     out.push_back(FleetValue{st.text(0), st.int64(1), static_cast<int>(st.int64(2)), st.text(3), st.text(4),
                              st.real(5), st.is_null(6) ? kUnknownSigma : st.real(6), st.text(7)});
+  return out;
+}
+
+std::vector<Store::RunEnd> Store::runs_ended_since(const std::string& iso_from) {
+  std::vector<RunEnd> out;
+  auto st = conn_->prepare(
+      "SELECT COALESCE(sn.name, ''), r.ended_at, r.outcome FROM bench_runs r LEFT JOIN stations sn ON sn.id = r.station_id "
+      "WHERE r.ended_at >= ? ORDER BY r.ended_at");
+  st.bind(1, iso_from);
+  while (st.step()) out.push_back(RunEnd{st.text(0), st.text(1), st.text(2)});
   return out;
 }
 

@@ -76,6 +76,7 @@ class Console {
         {"GET", R"(/device/([^/]{1,200}))", [this](Ctx& c) { return device_page(c); }, true},
         {"GET", "/audit", [this](Ctx& c) { return audit_page(c); }, true},
         {"GET", "/live", [this](Ctx& c) { return live_page(c, "", true); }, true},
+        {"GET", "/fleet", [this](Ctx& c) { return Page{200, shell(c, "Fleet", report::fleet_report_body(*c.s->store))}; }, true},
         {"GET", "/live/events", [this](Ctx& c) { return live_events(c); }, true},
         {"POST", R"(/prompt/(\d{1,18})/(confirm|reject))", [this](Ctx& c) { return prompt_action(c); }, true},
         {"GET", R"(/assets/([a-z]+\.(?:css|js)))", [this](Ctx& c) { return asset(c); }, false},
@@ -172,7 +173,7 @@ class Console {
   std::string shell(Ctx& c, const std::string& title, const std::string& body) {
     std::string nav = "<nav><b>calbench console</b> &nbsp; ";
     if (c.s)
-      nav += "<a href=\"/queue\">QC queue</a><a href=\"/live\">live stations</a><a href=\"/audit\">audit log</a>"
+      nav += "<a href=\"/queue\">QC queue</a><a href=\"/live\">live stations</a><a href=\"/fleet\">fleet</a><a href=\"/audit\">audit log</a>"
              "<form method=\"get\" action=\"/audit\"><input name=\"serial\" placeholder=\"serial\" size=\"10\"></form> "
              "signed in as <span id=\"who\">" + html_escape(c.s->name + " (" + c.s->login + (c.s->role.empty() ? "" : ", " + c.s->role) + ")") +
              "</span> <form method=\"post\" action=\"/logout\"><input type=\"hidden\" name=\"csrf\" value=\"" + c.s->csrf +

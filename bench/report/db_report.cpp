@@ -1,8 +1,12 @@
 #include "bench/report/db_report.hpp"
+#include "bench/report/svg_plot.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <chrono>
+#include <cstdio>
 #include <ctime>
+#include <map>
 #include <iomanip>
 #include <sstream>
 
@@ -119,44 +123,43 @@ std::string set_table(const SensorErrors& e) {
 }
 
 // Coefficient history: bias and scale of each axis against the set version, with σ error bars.
+// Coefficient history: value ± 1σ per set version, four inline SVG plots (gyro/accel bias and
+// scale), x, y and z side by side (±0.06 in version) so that no error bar hides another.
 std::string history_plot(const std::vector<CoefficientSetRecord>& sets) {
-  std::map<std::string, std::string> files;
-  std::ostringstream d;
-  d << std::setprecision(10);
-  for (const auto& s : sets) {
-    d << s.version;
-    for (const char* triad : {"gyro", "accel"})
-      for (const char* term : {"bias", "scale"})
-        for (int i = 0; i < 3; ++i) {
-          const std::string name = std::string(triad) + (std::string(term) == "bias" ? ".bias." + std::string(kAxes[i])
-                                                                                      : ".M." + std::string(kAxes[i]) + kAxes[i]);
-          std::string unit;
-          double k;
-          display_unit(name, unit, k);
-          const double sg = coefficient_sigma(s.errors, name);
-          d << " " << coefficient_value(s.errors, name) * k << " " << (std::isfinite(sg) ? sg * k : 0.0);
-        }
-    d << "\n";
-  }
-  files["h.dat"] = d.str();
-  std::ostringstream g;
-  g << "set terminal pngcairo size 1000,520 font 'DejaVu Sans,9'\nset output 'plot.png'\n"
-       "set multiplot layout 2,2 title 'Coefficient history (value ± 1σ per set version)'\n"
-       "set xlabel 'set version'\nset key outside right\nset grid\nset xtics 1\n"
-       "set offsets 0.3,0.3,0,0\n";
-  const char* titles[] = {"gyro bias [°/h]", "gyro scale [ppm]", "accel bias [mg]", "accel scale [ppm]"};
+  const char* titles[] = {"gyro bias", "gyro scale", "accel bias", "accel scale"};
+  std::ostringstream out;
+  out << "<div class=\"plots\" id=\"history-plots\">";
   for (int p = 0; p < 4; ++p) {
-    g << "set title '" << titles[p] << "'\nplot ";
+    const char* triad = p < 2 ? "gyro" : "accel";
+    const bool bias = p % 2 == 0;
+    std::vector<PlotCurve> curves(3);
+    std::string unit;
     for (int i = 0; i < 3; ++i) {
-      const int col = 2 + (p * 3 + i) * 2;
-      // x, y and z side by side (±0.06) so that no error bar hides another
-      g << (i ? ", " : "") << "'h.dat' using ($1" << (i == 0 ? "-0.06" : i == 1 ? "" : "+0.06") << "):" << col << ":" << col + 1
-        << " with yerrorlines title '" << kAxes[i] << "'";
+      curves[static_cast<std::size_t>(i)].name = kAxes[i];
+      const std::string name = std::string(triad) + (bias ? ".bias." + std::string(kAxes[i]) : ".M." + std::string(kAxes[i]) + kAxes[i]);
+      double k = 1;
+      display_unit(name, unit, k);
+      for (const auto& st : sets) {
+        const double sg = coefficient_sigma(st.errors, name);
+        auto& c = curves[static_cast<std::size_t>(i)];
+        c.x.push_back(st.version + (i - 1) * 0.06);
+        c.y.push_back(coefficient_value(st.errors, name) * k);
+        c.err.push_back(std::isfinite(sg) ? sg * k : 0.0);
+      }
     }
-    g << "\n";
+    PlotSpec spec;
+    spec.title = std::string(titles[p]) + " (value ± 1σ per set version)";
+    spec.x_label = "set version";
+    spec.y_label = std::string(titles[p]) + " [" + unit + "]";
+    spec.x_min = sets.empty() ? 0 : sets.front().version - 0.5;
+    spec.x_max = sets.empty() ? 1 : sets.back().version + 0.5;
+    spec.width = 480;
+    spec.height = 260;
+    spec.css_class = "history";
+    out << svg_line_plot(curves, spec);
   }
-  g << "unset multiplot\n";
-  return plot_or_note(g.str(), files, "coefficient history");
+  out << "</div>\n";
+  return out.str();
 }
 
 // The verdict on the device's current set (the newest that is not revoked), with the reasons
@@ -353,57 +356,124 @@ static std::string station_section_html(const std::vector<StationStats>& ss) {
   return b.str();
 }
 
-std::string fleet_report_html(Store& store) {
-  const auto stats = fleet_stats(store.fleet());
+// Units per hour over the last 24 h, per station: bench runs by their end time and outcome.
+static std::string throughput_section_html(Store& store) {
+  constexpr int kHours = 24;
+  const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const std::time_t from_t = static_cast<std::time_t>(now) - kHours * 3600;
+  std::tm tm{};
+  gmtime_r(&from_t, &tm);
+  char from[32];
+  std::strftime(from, sizeof from, "%Y-%m-%dT%H:%M:%S", &tm);
+  struct Counts {
+    std::vector<double> passed = std::vector<double>(kHours, 0.0);
+    int pass = 0, fail = 0, aborted = 0, last_hour = 0;
+  };
+  std::map<std::string, Counts> by;
+  for (const auto& r : store.runs_ended_since(from)) {
+    std::tm e{};
+    if (std::sscanf(r.ended_at.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d", &e.tm_year, &e.tm_mon, &e.tm_mday, &e.tm_hour, &e.tm_min,
+                    &e.tm_sec) != 6)
+      continue;
+    e.tm_year -= 1900;
+    e.tm_mon -= 1;
+    const double ago_h = (now - static_cast<double>(timegm(&e))) / 3600.0;
+    if (!(ago_h >= 0 && ago_h < kHours)) continue;
+    Counts& c = by[r.station];
+    const int bin = kHours - 1 - static_cast<int>(ago_h);  // oldest first
+    if (r.outcome == "pass") {
+      ++c.pass;
+      c.passed[static_cast<std::size_t>(bin)] += 1;
+      if (ago_h < 1) ++c.last_hour;
+    } else if (r.outcome == "fail") {
+      ++c.fail;
+    } else {
+      ++c.aborted;
+    }
+  }
+  std::ostringstream b;
+  b << "<h2>Units per hour</h2>\n<div class=\"muted\">bench runs that ended in the last " << kHours
+    << " h, by station: units calibrated (outcome pass) per clock hour, and the runs that failed or were aborted</div>\n";
+  if (by.empty()) {
+    b << "<p id=\"throughput-none\">No bench run ended in the last " << kHours << " h.</p>\n";
+    return b.str();
+  }
+  std::vector<PlotCurve> curves;
+  for (const auto& [station, c] : by) {
+    PlotCurve pc;
+    pc.name = station.empty() ? "(unknown)" : station;
+    for (int h = 0; h < kHours; ++h) pc.x.push_back(h - kHours + 1), pc.y.push_back(c.passed[static_cast<std::size_t>(h)]);
+    curves.push_back(std::move(pc));
+  }
+  PlotSpec spec;
+  spec.title = "units calibrated per hour";
+  spec.x_label = "hour [h from now]";
+  spec.y_label = "units per hour [1/h]";
+  spec.css_class = "throughput";
+  b << "<div class=\"plots\">" << svg_line_plot(curves, spec) << "</div>\n";
+  b << "<table id=\"throughput\"><tr><th class=\"l\">station</th><th>last hour</th><th>last " << kHours
+    << " h</th><th>per active hour</th><th>failed</th><th>aborted</th></tr>\n";
+  for (const auto& [station, c] : by) {
+    int active = 0;
+    for (double v : c.passed) active += v > 0;
+    b << "<tr data-station=\"" << html_escape(station) << "\"><td class=\"l\">" << html_escape(station.empty() ? "(unknown)" : station)
+      << "</td><td>" << c.last_hour << "</td><td>" << c.pass << "</td><td>" << (active ? num(c.pass / static_cast<double>(active), 3) : "–")
+      << "</td><td class=\"" << (c.fail ? "fail" : "") << "\">" << c.fail << "</td><td>" << c.aborted << "</td></tr>\n";
+  }
+  b << "</table>\n";
+  return b.str();
+}
+
+std::string fleet_report_body(Store& store) {
+  const auto values = store.fleet();
+  const auto stats = fleet_stats(values);
   std::ostringstream b;
   const std::size_t n = stats.empty() ? 0 : stats.front().n;
-  b << "<h1>Fleet report</h1>\n<div class=\"muted\">" << n << " device(s), newest non-revoked coefficient set of each · "
+  b << "<h1>Fleet report</h1>\n<div class=\"muted\" id=\"fleet-summary\">" << n << " device(s), newest non-revoked coefficient set of each · "
     << "outlier: robust z = 0.6745·(x − median)/MAD, |z| &gt; " << kOutlierZ << " · generated " << now_utc() << " from "
     << html_escape(store.connection().path()) << "</div>\n";
-  // One figure per group: a histogram per coefficient, outliers as red points.
-  const std::pair<const char*, std::pair<int, int>> groups[] = {
-      {"gyro bias [°/h]", {0, 3}}, {"gyro M [ppm]", {3, 12}}, {"accel bias [mg]", {12, 15}}, {"accel M [ppm]", {15, 24}}};
-  b << "<h2>Distributions</h2>\n";
-  for (const auto& [title, range] : groups) {
+  // A histogram per coefficient (counts per bin, as a step curve), outliers as red points on the axis.
+  b << "<h2>Distributions</h2>\n<div class=\"plots\" id=\"distributions\">";
+  for (const auto& c : stats) {
     if (n == 0) break;
-    std::map<std::string, std::string> files;
-    std::ostringstream g;
-    const int count = range.second - range.first;
-    const int rows = count == 3 ? 1 : 3;
-    g << "set terminal pngcairo size 1000," << (rows == 1 ? 260 : 700) << " font 'DejaVu Sans,8'\nset output 'plot.png'\n"
-      << "set multiplot layout " << rows << ",3 title '" << title << ": histogram over devices, outliers red'\n"
-      << "set style fill solid 0.6 border -1\nset grid\nunset key\nset xtics rotate by -30 font ',7'\n";
-    for (int k = range.first; k < range.second; ++k) {
-      const auto& c = stats[static_cast<std::size_t>(k)];
-      double lo = c.min * c.to_display, hi = c.max * c.to_display;
-      if (hi <= lo) {
-        lo -= 1;
-        hi += 1;
-      }
-      const int bins = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(c.n))) + 1, 5, 40);
-      const double w = (hi - lo) / bins;
-      std::vector<int> h(static_cast<std::size_t>(bins), 0);
-      std::ostringstream outl;
-      for (const auto& p : c.points) {
-        const double x = p.value * c.to_display;
-        const int i = std::clamp(static_cast<int>((x - lo) / w), 0, bins - 1);
-        ++h[static_cast<std::size_t>(i)];
-        if (p.outlier) outl << std::setprecision(10) << x << " 0\n";
-      }
-      std::ostringstream d;
-      d << std::setprecision(10);
-      for (int i = 0; i < bins; ++i) d << lo + (i + 0.5) * w << " " << h[static_cast<std::size_t>(i)] << "\n";
-      const std::string hf = std::string("h").append(std::to_string(k)).append(".dat");
-      const std::string of = std::string("o").append(std::to_string(k)).append(".dat");
-      files[hf] = d.str();
-      files[of] = outl.str().empty() ? "nan nan\n" : outl.str();
-      g << "set title '" << c.name << "'\nset boxwidth " << w * 0.9 << "\nset yrange [0:*]\nplot '" << hf
-        << "' using 1:2 with boxes lc rgb '#4477aa', '" << of << "' using 1:2 with points pt 7 ps 1.2 lc rgb '#cc0000'\n";
+    double lo = c.min * c.to_display, hi = c.max * c.to_display;
+    if (hi <= lo) {
+      lo -= 1;
+      hi += 1;
     }
-    g << "unset multiplot\n";
-    b << plot_or_note(g.str(), files, title);
+    const int bins = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(c.n))) + 1, 5, 40);
+    const double w = (hi - lo) / bins;
+    std::vector<double> h(static_cast<std::size_t>(bins), 0.0);
+    PlotCurve outl;
+    outl.name = "outliers";
+    outl.points = true;
+    outl.colour = "#cc0000";
+    for (const auto& p : c.points) {
+      const double x = p.value * c.to_display;
+      const int i = std::clamp(static_cast<int>((x - lo) / w), 0, bins - 1);
+      h[static_cast<std::size_t>(i)] += 1;
+      if (p.outlier) outl.x.push_back(x), outl.y.push_back(0);
+    }
+    PlotCurve hist;
+    hist.name = "devices per bin";
+    hist.colour = "#4477aa";
+    for (int i = 0; i < bins; ++i) {  // a step curve: each bin's count across its width
+      hist.x.push_back(lo + i * w), hist.y.push_back(h[static_cast<std::size_t>(i)]);
+      hist.x.push_back(lo + (i + 1) * w), hist.y.push_back(h[static_cast<std::size_t>(i)]);
+    }
+    PlotSpec spec;
+    spec.title = c.name;
+    spec.x_label = c.name + " [" + c.unit + "]";
+    spec.y_label = "devices";
+    spec.width = 330;
+    spec.height = 220;
+    spec.css_class = "histogram";
+    std::vector<PlotCurve> curves{hist};
+    if (!outl.x.empty()) curves.push_back(outl);
+    b << svg_line_plot(curves, spec);
   }
-  b << "<h2>Statistics</h2>\n<table><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>n</th><th>median</th>"
+  b << "</div>\n";
+  b << "<h2>Statistics</h2>\n<table id=\"fleet-stats\"><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>n</th><th>median</th>"
        "<th>MAD</th><th>mean</th><th>std</th><th>min</th><th>max</th><th class=\"l\">outliers (serial: value, z)</th></tr>\n";
   for (const auto& c : stats) {
     std::string outl;
@@ -416,8 +486,11 @@ std::string fleet_report_html(Store& store) {
       << "</td></tr>\n";
   }
   b << "</table>\n";
-  b << station_section_html(station_stats(store.fleet()));
-  return page("calbench fleet report", b.str());
+  b << station_section_html(station_stats(values));
+  b << throughput_section_html(store);
+  return b.str();
 }
+
+std::string fleet_report_html(Store& store) { return page("calbench fleet report", fleet_report_body(store)); }
 
 }  // namespace calbench::report

@@ -51,10 +51,11 @@ std::string svg_line_plot(const std::vector<PlotCurve>& curves, const PlotSpec& 
   for (const auto& c : curves)
     for (std::size_t i = 0; i < c.x.size() && i < c.y.size(); ++i) {
       if (!std::isfinite(c.x[i]) || !std::isfinite(c.y[i])) continue;
+      const double e = i < c.err.size() && std::isfinite(c.err[i]) ? std::abs(c.err[i]) : 0.0;
       x0 = std::min(x0, c.x[i]);
       x1 = std::max(x1, c.x[i]);
-      y0 = std::min(y0, c.y[i]);
-      y1 = std::max(y1, c.y[i]);
+      y0 = std::min(y0, c.y[i] - e);
+      y1 = std::max(y1, c.y[i] + e);
       if (c.y[i] > 0) ypos = std::min(ypos, c.y[i]);
     }
   if (p.x_max > p.x_min) {
@@ -118,9 +119,27 @@ std::string svg_line_plot(const std::vector<PlotCurve>& curves, const PlotSpec& 
   // Curves: earlier ones wider, underneath.
   const std::size_t n = curves.size();
   const auto width_of = [&](std::size_t i) { return n > 1 ? 1.5 + 3.0 * static_cast<double>(n - 1 - i) / static_cast<double>(n - 1) : 1.8; };
+  const auto colour = [&](std::size_t i) { return curves[i].colour.empty() ? std::string(kColours[i % 6]) : curves[i].colour; };
   for (std::size_t i = 0; i < n; ++i) {
     const auto& c = curves[i];
-    s << "<polyline data-curve=\"" << html_escape(c.name) << "\" fill=\"none\" stroke=\"" << kColours[i % 6]
+    if (!c.err.empty()) {  // error bars first, under the curve
+      s << "<g data-errors=\"" << html_escape(c.name) << "\" stroke=\"" << colour(i) << "\" stroke-width=\"1\">";
+      for (std::size_t k = 0; k < c.x.size() && k < c.y.size() && k < c.err.size(); ++k) {
+        if (!std::isfinite(c.x[k]) || !std::isfinite(c.y[k]) || !std::isfinite(c.err[k])) continue;
+        s << "<line x1=\"" << px(X(c.x[k])) << "\" x2=\"" << px(X(c.x[k])) << "\" y1=\"" << px(Y(c.y[k] - c.err[k]))
+          << "\" y2=\"" << px(Y(c.y[k] + c.err[k])) << "\"/>";
+      }
+      s << "</g>\n";
+    }
+    if (c.points) {
+      s << "<g data-curve=\"" << html_escape(c.name) << "\" fill=\"" << colour(i) << "\">";
+      for (std::size_t k = 0; k < c.x.size() && k < c.y.size(); ++k)
+        if (std::isfinite(c.x[k]) && std::isfinite(c.y[k]))
+          s << "<circle cx=\"" << px(X(c.x[k])) << "\" cy=\"" << px(Y(c.y[k])) << "\" r=\"3.5\"/>";
+      s << "</g>\n";
+      continue;
+    }
+    s << "<polyline data-curve=\"" << html_escape(c.name) << "\" fill=\"none\" stroke=\"" << colour(i)
       << "\" stroke-width=\"" << width_of(i) << "\" stroke-linejoin=\"round\" points=\"";
     bool first = true;
     for (std::size_t k = 0; k < c.x.size() && k < c.y.size(); ++k) {
@@ -134,7 +153,7 @@ std::string svg_line_plot(const std::vector<PlotCurve>& curves, const PlotSpec& 
   for (std::size_t i = 0; i < n; ++i) {
     const double y = kTop + 14 + 15 * static_cast<double>(i);
     s << "<line x1=\"" << px(kLeft + 8) << "\" x2=\"" << px(kLeft + 34) << "\" y1=\"" << px(y) << "\" y2=\"" << px(y)
-      << "\" stroke=\"" << kColours[i % 6] << "\" stroke-width=\"" << width_of(i) << "\"/><text x=\"" << px(kLeft + 40)
+      << "\" stroke=\"" << colour(i) << "\" stroke-width=\"" << (curves[i].points ? 6.0 : width_of(i)) << "\"/><text x=\"" << px(kLeft + 40)
       << "\" y=\"" << px(y + 4) << "\">" << html_escape(curves[i].name) << "</text>\n";
   }
   s << "</svg>\n";

@@ -11,6 +11,9 @@ namespace calbench::report {
 struct PlotCurve {
   std::string name;
   std::vector<double> x, y;  // same length; non-finite points are left out
+  std::vector<double> err;   // optional: ±err bars at each point (same length as y)
+  bool points = false;       // markers only (a circle per point, no line), e.g. outliers
+  std::string colour;        // "" : the plot's palette by curve order
 };
 
 struct PlotSpec {

@@ -297,6 +297,14 @@ def main():
         assert "approved" in text("done"), text("done")
         assert text("status") == "approved"
         assert set_status(db) == "approved"
+        # The fleet dashboard: a histogram per coefficient, the stations, units per hour (the live
+        # run's bench run ended within the hour on station line-7).
+        d.get(base + "/fleet")
+        assert len(d.find_elements(By.CSS_SELECTOR, "#distributions svg.histogram")) == 24
+        tp = d.find_element(By.CSS_SELECTOR, "#throughput tr[data-station='line-7']").find_elements(By.TAG_NAME, "td")
+        assert [c.text for c in tp[1:3]] == ["1", "1"], [c.text for c in tp]
+        # Slot 2's unit never identified itself: no device, so no bench run to count.
+        assert tp[4].text == "0", tp[4].text
         d.get(base + "/audit")
         audit = text("audit")
         assert "Rita Review" in audit and "approved" in audit, audit[:500]

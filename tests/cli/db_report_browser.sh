@@ -85,8 +85,11 @@ json.dump(result("U00", {"gyro": [1e-4, -2e-4, 5e-5], "accel": [0.01, -0.02, 0.0
 json.dump(result("U01", {"gyro": [3e-4, 1e-4, 0.0], "accel": [0.0, 0.01, 0.0]}, False, worse=True), open("worse.json", "w"))
 PY
 "$CALBENCH" db init >/dev/null
-for f in u*.json; do
+k=0
+for f in u*.json; do  # ended 10 min apart, the newest now: all within the fleet page's last 24 h
+  k=$((k + 1))
   "$CALBENCH" db store-bench --coeffs "$f" --sha256 "$(printf 'a%.0s' {1..64})" --plan "factory <plan>" \
+    --ended "$(date -u -d "-$((k * 10)) min" +%Y-%m-%dT%H:%M:%SZ)" --station "line-$((k % 2 + 1))" \
     --qc gyro_resid_rms=1e-5:1e-4:rad/s:in-sample >/dev/null
 done
 "$CALBENCH" db approve 1 --operator qc-anna >/dev/null   # U00's bench set
@@ -117,9 +120,24 @@ check() {  # check PAGE MIN_IMAGES: load in Chromium at 1200 px, all images deco
   [ -n "$w" ] && [ "$w" -le 1200 ] || fail "$1: laid out $w px wide at a 1200 px window (text cut)"
   echo "$1: $n images decoded, $w px wide"
 }
-check dev.html 1       # coefficient history (ΔS is inline SVG)
-check worse.html 1
-check fleet.html 4     # four distribution figures
+check dev.html 0       # its plots are inline SVG (counted below)
+check worse.html 0
+check fleet.html 0
+# Inline SVG plots: the coefficient history (4) in each device report; in the fleet report a
+# histogram per coefficient (24), outliers drawn as red points, and the units per hour.
+[ "$(grep -o '<svg[^>]*class="history"' dev.html.dom | wc -l)" = 4 ] || fail "dev.html: expected 4 coefficient-history plots"
+[ "$(grep -o '<svg[^>]*class="history"' worse.html.dom | wc -l)" = 4 ] || fail "worse.html: expected 4 coefficient-history plots"
+[ "$(grep -o '<svg[^>]*class="histogram"' fleet.html.dom | wc -l)" = 24 ] || fail "fleet.html: expected 24 histograms"
+grep -q '<g data-curve="outliers"' fleet.html.dom || fail "fleet.html: outliers not drawn"
+grep -q '<svg[^>]*class="throughput"' fleet.html.dom || fail "fleet.html: no units-per-hour plot"
+python3 - "$k" <<'PY' || fail "fleet.html: units per hour do not count the stored runs"
+import re, sys
+dom = open("fleet.html.dom").read()
+rows = re.findall(r'<tr data-station="(line-[12])"><td[^>]*>[^<]*</td><td>(\d+)</td><td>(\d+)</td>', dom)
+assert sorted(r[0] for r in rows) == ["line-1", "line-2"], rows
+assert sum(int(r[2]) for r in rows) == int(sys.argv[1]), (rows, sys.argv[1])
+assert sum(int(r[1]) for r in rows) == 5, rows  # ended 10 to 50 min ago: five within the last hour
+PY
 
 python3 - good.json worse.json <<'PY' || fail "device report content"
 import json, re, sys
