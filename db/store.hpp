@@ -308,7 +308,8 @@ class Store {
   // The web console's reads (issue 38): the sets of one status, oldest first (the QC queue: drafts),
   // and the audit log searched by device serial, login or typed name, action and date range
   // (YYYY-MM-DD, inclusive; empty fields: any), newest first.
-  std::vector<CoefficientSetRecord> sets_with_status(SetStatus status, int limit);
+  std::vector<CoefficientSetRecord> sets_with_status(SetStatus status, int limit, std::int64_t offset = 0);
+  std::int64_t count_sets_with_status(SetStatus status);
   struct AuditQuery {
     std::string serial, who, action, from, to;
     int limit = 200;

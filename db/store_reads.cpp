@@ -228,10 +228,10 @@ std::vector<AuditEntry> Store::audit_of_device(std::int64_t device_id) {
   return out;
 }
 
-std::vector<CoefficientSetRecord> Store::sets_with_status(SetStatus status, int limit) {
+std::vector<CoefficientSetRecord> Store::sets_with_status(SetStatus status, int limit, std::int64_t offset) {
   std::vector<CoefficientSetRecord> out;
-  auto st = conn_->prepare(std::string(kSetColumns) + "WHERE s.status = ? ORDER BY s.id LIMIT ?");
-  st.bind(1, to_string(status)).bind(2, limit);
+  auto st = conn_->prepare(std::string(kSetColumns) + "WHERE s.status = ? ORDER BY s.id LIMIT ? OFFSET ?");
+  st.bind(1, to_string(status)).bind(2, limit).bind(3, offset);
   while (st.step()) out.push_back(read_set_row(st));
   for (auto& r : out) load_values(*conn_, r);
   return out;
@@ -276,6 +276,13 @@ std::vector<FleetValue> Store::fleet() {
     out.push_back(FleetValue{st.text(0), st.int64(1), static_cast<int>(st.int64(2)), st.text(3), st.text(4),
                              st.real(5), st.is_null(6) ? kUnknownSigma : st.real(6), st.text(7)});
   return out;
+}
+
+std::int64_t Store::count_sets_with_status(SetStatus status) {
+  auto st = conn_->prepare("SELECT COUNT(*) FROM coefficient_sets WHERE status = ?");
+  st.bind(1, to_string(status));
+  st.step();
+  return st.int64(0);
 }
 
 std::vector<Store::RunEnd> Store::runs_ended_since(const std::string& iso_from) {

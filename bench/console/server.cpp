@@ -42,6 +42,7 @@ input,button{font:inherit} table.q td,table.q th{border:1px solid #bbb;padding:2
 table.q{border-collapse:collapse}
 .prompt{border-color:#a60;background:#fff8e8} section.run{margin:10px 0 18px} #live-status{color:#666}
 )CSS";
+constexpr int kQueuePage = 50;          // sets per page of the QC queue
 constexpr int kWorkers = 64;             // server threads (pages and live event streams)
 constexpr double kStreamS = 300;          // a live page's event stream is renewed (EventSource reconnects) after this
 
@@ -277,11 +278,30 @@ class Console {
 
   Page queue(Ctx& c) {
     db::Store& st = *c.s->store;
-    const auto drafts = st.sets_with_status(db::SetStatus::draft, 200);
+    // 50 per page, oldest first: each row's verdict is computed as db approve would (its QC results,
+    // parent and fit evidence), so a page is bounded work however long the queue.
+    const std::int64_t total = st.count_sets_with_status(db::SetStatus::draft);
+    const std::int64_t pages = std::max<std::int64_t>(1, (total + kQueuePage - 1) / kQueuePage);
+    std::int64_t page = 1;
+    if (const auto q = c.query.find("page"); q != c.query.end()) {
+      const std::string& v = q->second;
+      if (v.empty() || v.size() > 9 || v.find_first_not_of("0123456789") != std::string::npos || std::stoll(v) < 1)
+        throw InputError("page", 0, "", "'" + v + "' is not a page number (1, 2, …)");
+      page = std::min<std::int64_t>(std::stoll(v), pages);
+    }
+    const auto drafts = st.sets_with_status(db::SetStatus::draft, kQueuePage, (page - 1) * kQueuePage);
     std::ostringstream b;
-    b << "<h1>QC queue</h1><p class=\"note\">" << drafts.size()
-      << " set(s) awaiting approval, oldest first. The verdict is the one db approve gives (thresholds in force per "
-         "device class).</p>\n<table class=\"q\" id=\"queue\"><tr><th>set</th><th>device</th><th>version</th><th>source</th>"
+    b << "<h1>QC queue</h1><p class=\"note\" id=\"queue-count\">" << total
+      << " set(s) awaiting approval, oldest first";
+    if (pages > 1) b << "; page " << page << " of " << pages << " (" << kQueuePage << " per page)";
+    b << ". The verdict is the one db approve gives (thresholds in force per device class).</p>\n";
+    if (pages > 1) {
+      b << "<p class=\"pages\">";
+      if (page > 1) b << "<a id=\"prev\" href=\"/queue?page=" << page - 1 << "\">← older</a> ";
+      if (page < pages) b << "<a id=\"next\" href=\"/queue?page=" << page + 1 << "\">newer →</a>";
+      b << "</p>\n";
+    }
+    b << "<table class=\"q\" id=\"queue\"><tr><th>set</th><th>device</th><th>version</th><th>source</th>"
          "<th>stored by</th><th>verdict</th></tr>\n";
     for (const auto& s : drafts) {
       const db::ApprovalCheck chk = db::check_standing(st, s, thresholds(s));
