@@ -140,12 +140,16 @@ Prompt end_prompt(Store& store, std::int64_t id, const std::string& state, const
                            (p->answered_at.empty() ? "" : " at " + p->answered_at) +
                            (p->reason.empty() ? "" : " (" + p->reason + ")"));
     }
-    auto st = c.prepare(std::string("UPDATE station_prompts SET state = ?, reason = ?, answered_by = ?, "
-                                    "answered_login = ?, answered_at = ") + c.now_sql() +
+    // PostgreSQL stamps answered_login itself (trigger calbench_prompt_answer; the column is not
+    // granted to anyone); SQLite records the store's login.
+    const bool pg = store.authenticated();
+    auto st = c.prepare(std::string("UPDATE station_prompts SET state = ?, reason = ?, answered_by = ?, ") +
+                        (pg ? "" : "answered_login = ?, ") + "answered_at = " + c.now_sql() +
                         " WHERE id = ? AND state = 'waiting'");
     const bool person = state != "timed out";
     st.bind(1, state).bind(2, reason).bind(3, person ? store.actor().user : std::string("station"));
-    st.bind(4, store.login()).bind(5, id);
+    if (pg) st.bind(4, id);
+    else st.bind(4, store.login()).bind(5, id);
     st.run();
     store.audit_locked("station_prompt", id, state == "timed out" ? "timeout" : "answer",
                        state + (reason.empty() ? "" : ": " + reason));

@@ -218,17 +218,6 @@ def live_run(d, http, base, work, pgport, env, text, admin, psql_as):
             WebDriverWait(d, 30).until(EC.staleness_of(old))
 
         confirm()
-        err = d.find_elements(By.ID, "error")
-        if err and "permission denied for table station_prompts" in err[0].text:
-            # KNOWN BUG (schema 8 on PostgreSQL): db/station_live.cpp end_prompt() sets answered_login,
-            # a column calbench_grant_station_live() grants to nobody (the trigger stamps it), so every
-            # answer is refused. The refusal is clean (the prompt waits, the run waits); the test grants
-            # the column to go on. Remove this branch once the C++ is fixed.
-            assert admin("calbench", f"SELECT state FROM station_prompts WHERE id = {pid}") == "waiting"
-            assert station.poll() is None, station_log()[-2000:]
-            print("KNOWN BUG: the console's answer to a prompt is refused on PostgreSQL: " + err[0].text, flush=True)
-            admin("calbench", "GRANT UPDATE (answered_login) ON station_prompts TO calbench_station, calbench_qc")
-            confirm()
         if not d.find_elements(By.ID, "done"):
             raise SystemExit("confirming the prompt failed: " + d.find_element(By.TAG_NAME, "main").text[:1200]
                              + "\n--- station log:\n" + station_log()[-2000:])
