@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "common/units.hpp"
 
@@ -75,10 +76,10 @@ std::vector<StationStats> station_stats(const std::vector<FleetValue>& values) {
   // station → coefficient → values; station → serials
   std::map<std::string, std::map<std::string, std::vector<double>>> by;
   std::map<std::string, std::vector<std::string>> serials;
+  std::map<std::string, std::set<std::string>> seen;  // (a linear search here was quadratic: 90 s for 10^5 devices)
   for (const auto& v : values) {
     by[v.station][v.name].push_back(v.value);
-    auto& s = serials[v.station];
-    if (std::find(s.begin(), s.end(), v.serial) == s.end()) s.push_back(v.serial);
+    if (seen[v.station].insert(v.serial).second) serials[v.station].push_back(v.serial);
   }
   std::vector<StationStats> out;
   for (const auto& [station, coeffs] : by) {

@@ -64,9 +64,12 @@ CREATE TABLE station_prompts (
 );
 CREATE INDEX station_prompts_run ON station_prompts(run_id);
 -- The console's reads over a large store (tests/perf/console_load_bench.cpp): the QC queue (sets of
--- one status, oldest first) and the fleet dashboard's units per hour (runs ended since a time).
+-- one status, oldest first), the fleet dashboard's units per hour (runs ended since a time) and the
+-- audit search by person or login.
 CREATE INDEX coefficient_sets_status ON coefficient_sets(status, id);
 CREATE INDEX bench_runs_ended ON bench_runs(ended_at);
+CREATE INDEX audit_user ON audit_log(lower("user"));
+CREATE INDEX audit_db_role ON audit_log(db_role);
 -- An answer is given once: a prompt that is no longer waiting never changes again.
 CREATE TRIGGER station_prompts_answer_once BEFORE UPDATE ON station_prompts
 WHEN OLD.state <> 'waiting' OR NEW.text IS NOT OLD.text OR NEW.run_id IS NOT OLD.run_id

@@ -346,8 +346,9 @@ static std::string station_section_html(const std::vector<StationStats>& ss) {
         flags += (flags.empty() ? "" : "; ") + c.name + ": " + num(c.median * c.to_display) + " / " +
                  num(c.median_others * c.to_display) + " " + c.unit + ", z " + num(c.z, 3) + ", spread " +
                  num(c.spread_ratio, 3);
-    std::string serials;
-    for (const auto& x : s.serials) serials += (serials.empty() ? "" : ", ") + x;
+    std::string serials;  // at most 20 named (a station of a large fleet has thousands)
+    for (std::size_t k = 0; k < s.serials.size() && k < 20; ++k) serials += (serials.empty() ? "" : ", ") + s.serials[k];
+    if (s.serials.size() > 20) serials += " and " + std::to_string(s.serials.size() - 20) + " more";
     b << "<tr><td class=\"l\">" << html_escape(s.station.empty() ? "(unknown)" : s.station) << "</td><td>" << s.devices
       << "</td><td class=\"l " << (s.flagged ? "fail" : "") << "\">" << station_verdict(s) << "</td><td class=\"l\">"
       << html_escape(flags.empty() ? "–" : flags) << "</td><td class=\"l\">" << html_escape(serials) << "</td></tr>\n";
@@ -476,9 +477,14 @@ std::string fleet_report_body(Store& store) {
   b << "<h2>Statistics</h2>\n<table id=\"fleet-stats\"><tr><th class=\"l\">coefficient</th><th class=\"l\">unit</th><th>n</th><th>median</th>"
        "<th>MAD</th><th>mean</th><th>std</th><th>min</th><th>max</th><th class=\"l\">outliers (serial: value, z)</th></tr>\n";
   for (const auto& c : stats) {
-    std::string outl;
+    std::string outl;  // the 20 largest |z| named, the count of the rest
+    std::vector<const CoefficientStats::Point*> out_pts;
     for (const auto& p : c.points)
-      if (p.outlier) outl += (outl.empty() ? "" : "; ") + p.serial + ": " + num(p.value * c.to_display) + ", z " + num(p.z, 3);
+      if (p.outlier) out_pts.push_back(&p);
+    std::sort(out_pts.begin(), out_pts.end(), [](const auto* a, const auto* z) { return std::abs(a->z) > std::abs(z->z); });
+    for (std::size_t k = 0; k < out_pts.size() && k < 20; ++k)
+      outl += (outl.empty() ? "" : "; ") + out_pts[k]->serial + ": " + num(out_pts[k]->value * c.to_display) + ", z " + num(out_pts[k]->z, 3);
+    if (out_pts.size() > 20) outl += "; and " + std::to_string(out_pts.size() - 20) + " more";
     b << "<tr><td class=\"l\">" << c.name << "</td><td class=\"l\">" << c.unit << "</td><td>" << c.n << "</td><td>"
       << num(c.median * c.to_display) << "</td><td>" << num(c.mad * c.to_display) << "</td><td>" << num(c.mean * c.to_display)
       << "</td><td>" << num(c.stddev * c.to_display) << "</td><td>" << num(c.min * c.to_display) << "</td><td>"

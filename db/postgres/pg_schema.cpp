@@ -63,9 +63,12 @@ CREATE TABLE station_prompts (
 );
 CREATE INDEX station_prompts_run ON station_prompts(run_id);
 -- The console's reads over a large store (tests/perf/console_load_bench.cpp): the QC queue (sets of
--- one status, oldest first) and the fleet dashboard's units per hour (runs ended since a time).
+-- one status, oldest first), the fleet dashboard's units per hour (runs ended since a time) and the
+-- audit search by person or login.
 CREATE INDEX coefficient_sets_status ON coefficient_sets(status, id);
 CREATE INDEX bench_runs_ended ON bench_runs(ended_at);
+CREATE INDEX audit_user ON audit_log(lower("user"));
+CREATE INDEX audit_db_role ON audit_log(db_role);
 -- The server stamps who wrote a row: a login cannot write another's progress or answer as another.
 CREATE FUNCTION calbench_stamp_progress() RETURNS trigger LANGUAGE plpgsql AS $f$
 BEGIN

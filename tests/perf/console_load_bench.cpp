@@ -13,8 +13,9 @@
 // One benchmark run (one iteration): spawn `calbench serve --db FILE --listen 127.0.0.1:PORT`
 // (the executable: $CALBENCH, else the one built beside this benchmark), wait until it answers, let
 // 50 threads log in (each with its own account: GET /login for the double-submit CSRF token, POST
-// /login), wait for all, then each makes kRequests GETs without think time (closed loop: 50
-// requests always outstanding): the queue, device pages of random serials, set pages of random
+// /login), wait for all, then each makes kRequests GETs, each after a think time drawn from an
+// exponential distribution with the benchmark's argument as its mean (3 s: people browsing, who read
+// each page; 0: a closed loop with 50 requests always outstanding, the server's saturation): the queue, device pages of random serials, set pages of random
 // sets, audit searches (by serial, or by a QC person's name). Reported: p50/p95/max per page kind
 // in ms, the login's (GET + POST), pages/s of the browsing phase, and the server's peak memory
 // (VmHWM) and RSS after the run, read from /proc before it is stopped.
@@ -61,7 +62,7 @@ constexpr int kRequests = 12;  // page requests per user and run (after its logi
 constexpr int kDrafts = 300;
 constexpr int kRevokeEvery = 3000;
 constexpr int kFillChunk = 5000;  // devices per enclosing write transaction
-constexpr int kFixtureVersion = 1;  // bump when the fill changes (a new cache file)
+constexpr int kFixtureVersion = 2;  // bump when the fill changes (a new cache file); 2: schema 8 with its audit indexes
 const char* kPassword = "load-bench-password";
 
 const int kDevices = [] {
@@ -281,7 +282,7 @@ struct UserResult {
   std::string error;
 };
 
-void user(int u, int port, StartBarrier& start, UserResult& out) {
+void user(int u, int port, double think_ms, StartBarrier& start, UserResult& out) {
   httplib::Client cli("127.0.0.1", port);
   cli.set_keep_alive(true);  // as a browser
   cli.set_read_timeout(120, 0);
@@ -308,7 +309,10 @@ void user(int u, int port, StartBarrier& start, UserResult& out) {
   const httplib::Headers h{{"Cookie", "calbench_session=" + session}};
   std::mt19937 g(1000 + u);  // the same walk in every run
   std::uniform_int_distribution<int> device(0, kDevices - 1), pick(0, 99);
+  std::exponential_distribution<double> think(think_ms > 0 ? 1.0 / think_ms : 1.0);
   for (int k = 0; k < kRequests; ++k) {
+    // A person reads the page before the next (exponential think time; 0: no pause, the saturation case).
+    if (think_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(think(g)));
     const int p = pick(g);
     Kind kind;
     std::string path, expect;
@@ -355,7 +359,8 @@ void BM_ConsoleLoad(benchmark::State& state) {
     StartBarrier start(kUsers, StartMark{&browse0});
     std::vector<std::thread> users;
     const auto t0 = Clock::now();
-    for (int u = 0; u < kUsers; ++u) users.emplace_back(user, u, srv.port, std::ref(start), std::ref(res[u]));
+    const double think_ms = static_cast<double>(state.range(0));
+    for (int u = 0; u < kUsers; ++u) users.emplace_back(user, u, srv.port, think_ms, std::ref(start), std::ref(res[u]));
     for (auto& t : users) t.join();
     const auto t1 = Clock::now();
     const double browse_s = std::chrono::duration<double>(t1 - browse0).count();
@@ -382,8 +387,12 @@ void BM_ConsoleLoad(benchmark::State& state) {
   }
   state.counters["devices"] = kDevices;
   if (f.fill_s > 0) state.counters["fill_s"] = f.fill_s;  // only in the process that filled the store
-  state.SetLabel(std::to_string(kUsers) + " users x " + std::to_string(kRequests) + " pages, no think time");
+  state.SetLabel(std::to_string(kUsers) + " users x " + std::to_string(kRequests) + " pages, " +
+                 (state.range(0) > 0 ? "think time " + std::to_string(state.range(0) / 1000.0).substr(0, 3) + " s (mean, exponential)"
+                                     : "no think time (saturation)"));
 }
-BENCHMARK(BM_ConsoleLoad)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
+// Argument: the users' mean think time in ms. 3000: people browsing (each reads a page for seconds);
+// 0: every user requests the next page the moment the last arrives, the server's saturation.
+BENCHMARK(BM_ConsoleLoad)->Arg(3000)->Arg(0)->Unit(benchmark::kSecond)->UseManualTime()->Iterations(1);
 
 }  // namespace
