@@ -13,7 +13,7 @@
 #   * a bench run stores its recording as file://HOST/absolute/path with the digest of its files;
 #   * the provisioning login on a draft is told that a draft awaits approval;
 #   * a URI without a database is exit 2, naming what is missing;
-#   * a store at schema version 3 (schema.sql alone) with data is migrated to 7 by `db init`.
+#   * a store at schema version 3 (schema.sql alone) with data is migrated to 8 by `db init`.
 source "$SRC/tests/support/pg_test.sh"
 cd "$T"
 admin -d postgres -c "CREATE DATABASE calbench"
