@@ -27,18 +27,15 @@ Run by ctest (tests/CMakeLists.txt: browser.console_pg) with CALBENCH and SRC se
 Chromium, chromedriver, Selenium or the PostgreSQL server binaries are missing (scripts/setup
 installs them)."""
 import glob
-import http.client
 import json
 import os
 import re
 import secrets
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
 import time
-import urllib.parse
 
 try:
     from selenium import webdriver
@@ -51,8 +48,8 @@ except ImportError:
     print("python3-selenium not installed: skipped")
     sys.exit(77)
 
-CB = os.environ["CALBENCH"]
-SRC = os.environ["SRC"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, follow_slot, free_port, run  # noqa: E402
 if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.which("chromium-browser"))):
     print("chromium / chromedriver not installed: skipped")
     sys.exit(77)
@@ -64,87 +61,6 @@ if not (os.access(os.path.join(PG_BIN, "initdb"), os.X_OK) and shutil.which("psq
 PG_SERVER = os.path.join(SRC, "tests/support/pg_server.sh")
 
 
-def run(*args, env=None, check=True):
-    p = subprocess.run([CB, *args], capture_output=True, text=True, env=env)
-    if check and p.returncode != 0:
-        raise SystemExit(f"calbench {' '.join(args)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
-    return p
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
-
-
-class Http:
-    """Raw requests beside the browser: http.client, no redirects followed, cookies by hand."""
-
-    def __init__(self, port):
-        self.port = port
-
-    def req(self, method, path, body=None, cookie=None):
-        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=30)
-        h = {}
-        if cookie:
-            h["Cookie"] = cookie
-        if body is not None:
-            h["Content-Type"] = "application/x-www-form-urlencoded"
-            body = urllib.parse.urlencode(body)
-        c.request(method, path, body=body, headers=h)
-        r = c.getresponse()
-        out = (r.status, r.read().decode("utf-8", "replace"), r.getheader("Set-Cookie") or "")
-        c.close()
-        return out
-
-    def login(self, user, pw):
-        """The login form as a browser posts it: its double-submit CSRF cookie and field."""
-        st, body, setc = self.req("GET", "/login")
-        assert st == 200, st
-        pre = re.search(r"calbench_login=([0-9a-f]+)", setc).group(1)
-        csrf = re.search(r'name="csrf" value="([0-9a-f]+)"', body).group(1)
-        return self.req("POST", "/login", {"csrf": csrf, "login": user, "password": pw}, f"calbench_login={pre}")
-
-
-# The plan of console_test.py's live run: an operator prompt (slot 1) before a 6-s rate step.
-PLAN = """[plan]
-name = "live"
-[site]
-lat_deg = 52.0
-lon_deg = 13.0
-h_m = 40.0
-[table]
-max_rate_dps = 500.0
-max_accel_dps2 = 200.0
-slew_rate_dps = 60.0
-settle_s = 0.5
-remount_s = 1.0
-rate_accuracy_ppm = 1.0
-position_accuracy_arcsec = 2.0
-axis_wobble_arcsec = 1.0
-[[step]]
-kind = "static"
-mount = "z"
-outer_deg = 0.0
-inner_deg = 0.0
-dwell_s = 3.0
-label = "z down"
-[[step]]
-kind = "prompt"
-text = "turn the fixture's clamp in slot 1, then confirm"
-slot = "1"
-timeout_s = 120
-[[step]]
-kind = "rate"
-axis = "z"
-rate_dps = 50.0
-dwell_s = 6.0
-label = "+50 dps about z"
-"""
-
-
 def live_run(d, http, base, work, pgport, env, text, admin, psql_as):
     """The live view on PostgreSQL, seen by a QC login (qc2, logged in): st1 runs an emulated
     two-slot station run with a PostgreSQL --db (the run through a local journal, the progress rows
@@ -153,8 +69,7 @@ def live_run(d, http, base, work, pgport, env, text, admin, psql_as):
     qc2 confirms from the page, which then follows slot 1 through the rate step to 'passed' without
     a reload. A second answer is refused (409); the rows cannot be changed by another login (grants,
     row-level security)."""
-    plan = os.path.join(work, "live.toml")
-    open(plan, "w").write(PLAN)
+    plan = PROMPT_PLAN
     slog_path = os.path.join(work, "station.log")
     slog = open(slog_path, "w")
     station_env = {**env, "CALBENCH_JOURNAL": os.path.join(work, "journal.db"), "CALBENCH_STATION": "line-7"}
@@ -231,19 +146,7 @@ def live_run(d, http, base, work, pgport, env, text, admin, psql_as):
         answered = admin("calbench", f"SELECT state || '|' || answered_by || '|' || answered_login FROM station_prompts WHERE id = {pid}")
         assert answered == "confirmed|Rita Review|qc2", answered
         # The page follows slot 1 (server-sent events, no reload) through the rate step to passed.
-        seen = []
-        deadline = time.time() + 120
-        while time.time() < deadline:
-            try:
-                row = d.find_element(By.CSS_SELECTOR, slot(1))
-                st_ = (row.get_attribute("data-state"), row.get_attribute("data-step"))
-            except Exception:  # replaced between the find and the read
-                continue
-            if not seen or seen[-1] != st_:
-                seen.append(st_)
-            if st_[0] in ("passed", "failed", "aborted"):
-                break
-            time.sleep(0.1)
+        seen = follow_slot(d, 1)
         assert seen and seen[-1][0] == "passed", (seen, station_log()[-2000:])
         assert ("running", "1") in seen, f"the rate step was never seen running: {seen}"
         page.tag_name  # raises StaleElementReferenceException if the page was reloaded
@@ -354,13 +257,7 @@ def main():
                     raise SystemExit("calbench serve ended: " + open(os.path.join(work, "serve.err")).read())
                 time.sleep(0.1)
 
-        opts = webdriver.ChromeOptions()
-        for a in ("--headless", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu"):
-            opts.add_argument(a)
-        if shutil.which("chromium"):
-            opts.binary_location = shutil.which("chromium")
-        driver = webdriver.Chrome(service=ChromeService(executable_path=shutil.which("chromedriver")), options=opts)
-        driver.set_page_load_timeout(60)
+        driver = chromium(60)
         d = driver
 
         def login(user, secret):

@@ -14,20 +14,15 @@ token, a stale session after log-out, an overlong form value, path traversal in 
 
 Run by ctest (tests/CMakeLists.txt: browser.console) with CALBENCH and SRC set; exit 77 when
 Chromium, chromedriver or Selenium are missing (scripts/setup installs them)."""
-import http.client
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
 import time
-import urllib.parse
 
 try:
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service as ChromeService
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support import expected_conditions as EC
     from selenium.webdriver.support.ui import WebDriverWait
@@ -35,26 +30,11 @@ except ImportError:
     print("python3-selenium not installed: skipped")
     sys.exit(77)
 
-CB = os.environ["CALBENCH"]
-SRC = os.environ["SRC"]
 if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.which("chromium-browser"))):
     print("chromium / chromedriver not installed: skipped")
     sys.exit(77)
-
-
-def run(*args, env=None, check=True):
-    p = subprocess.run([CB, *args], capture_output=True, text=True, env=env)
-    if check and p.returncode != 0:
-        raise SystemExit(f"calbench {' '.join(args)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
-    return p
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, follow_slot, free_port, run  # noqa: E402
 
 
 def set_status(db, serial="SIMW1"):
@@ -62,70 +42,12 @@ def set_status(db, serial="SIMW1"):
     return sets[0]["status"]
 
 
-class Http:
-    """Raw requests beside the browser (forged forms, traversal): http.client, no redirects followed."""
-
-    def __init__(self, port):
-        self.port = port
-
-    def req(self, method, path, body=None, cookie=None):
-        c = http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
-        h = {}
-        if cookie:
-            h["Cookie"] = cookie
-        if body is not None:
-            h["Content-Type"] = "application/x-www-form-urlencoded"
-            body = urllib.parse.urlencode(body)
-        c.request(method, path, body=body, headers=h)
-        r = c.getresponse()
-        out = (r.status, r.read().decode("utf-8", "replace"))
-        c.close()
-        return out
-
-
-PLAN = """[plan]
-name = "live"
-[site]
-lat_deg = 52.0
-lon_deg = 13.0
-h_m = 40.0
-[table]
-max_rate_dps = 500.0
-max_accel_dps2 = 200.0
-slew_rate_dps = 60.0
-settle_s = 0.5
-remount_s = 1.0
-rate_accuracy_ppm = 1.0
-position_accuracy_arcsec = 2.0
-axis_wobble_arcsec = 1.0
-[[step]]
-kind = "static"
-mount = "z"
-outer_deg = 0.0
-inner_deg = 0.0
-dwell_s = 3.0
-label = "z down"
-[[step]]
-kind = "prompt"
-text = "turn the fixture's clamp in slot 1, then confirm"
-slot = "1"
-timeout_s = 120
-[[step]]
-kind = "rate"
-axis = "z"
-rate_dps = 50.0
-dwell_s = 6.0
-label = "+50 dps about z"
-"""
-
-
 def live_run(d, base, http, db, work, text, submit):
     """An emulated two-slot station run into the store: slot 2's unit is the wrong part (fails its
     identification), slot 1 runs the plan, stops at the operator prompt, and goes on once it is
     confirmed from the page. The page follows by server-sent events: it is not reloaded while the
     run advances from the prompt through the rate step to 'passed'."""
-    plan = os.path.join(work, "live.toml")
-    open(plan, "w").write(PLAN)
+    plan = PROMPT_PLAN
     slog = open(os.path.join(work, "station.log"), "w")
     # --pace 1: emulated time no faster than real time, so the run takes as long as on a real bench
     # (about 15 s) and the page can be seen to follow it.
@@ -150,7 +72,7 @@ def live_run(d, base, http, db, work, text, submit):
         # A forged answer (no CSRF token) changes nothing.
         pid = prompt.get_attribute("data-prompt")
         cookie = "calbench_session=" + d.get_cookie("calbench_session")["value"]
-        st, body = http.req("POST", f"/prompt/{pid}/confirm", {}, cookie)
+        st, body, _ = http.req("POST", f"/prompt/{pid}/confirm", {}, cookie)
         assert st == 403 and "CSRF" in body, (st, body[:300])
         assert station.poll() is None, "the run ended without its prompt answered"
         # Answer from the page.
@@ -159,19 +81,7 @@ def live_run(d, base, http, db, work, text, submit):
         WebDriverWait(d, 15).until(EC.staleness_of(old))
         assert "confirmed by Sam Station" in text("done"), text("done")
         page = d.find_element(By.TAG_NAME, "html")
-        seen = []
-        deadline = time.time() + 120
-        while time.time() < deadline:
-            try:
-                row = d.find_element(By.CSS_SELECTOR, slot(1))
-                st_ = (row.get_attribute("data-state"), row.get_attribute("data-step"))
-            except Exception:  # replaced between the find and the read
-                continue
-            if not seen or seen[-1] != st_:
-                seen.append(st_)
-            if st_[0] in ("passed", "failed", "aborted"):
-                break
-            time.sleep(0.1)
+        seen = follow_slot(d, 1)
         assert seen and seen[-1][0] == "passed", seen
         assert ("running", "1") in seen, f"the rate step was never seen running: {seen}"
         page.tag_name  # raises StaleElementReferenceException if the page was reloaded
@@ -208,20 +118,9 @@ def main():
         server = subprocess.Popen([CB, "serve", "--db", db, "--listen", f"127.0.0.1:{port}"], stdout=log, stderr=log)
         base = f"http://127.0.0.1:{port}"
         http = Http(port)
-        for _ in range(100):  # until it listens
-            try:
-                http.req("GET", "/login")
-                break
-            except OSError:
-                time.sleep(0.1)
+        http.wait_listening()
 
-        opts = webdriver.ChromeOptions()
-        for a in ("--headless", "--no-sandbox", "--disable-dev-shm-usage", "--disable-gpu"):
-            opts.add_argument(a)
-        if shutil.which("chromium"):
-            opts.binary_location = shutil.which("chromium")
-        driver = webdriver.Chrome(service=ChromeService(executable_path=shutil.which("chromedriver")), options=opts)
-        driver.set_page_load_timeout(30)
+        driver = chromium(30)
         d = driver
 
         def login(user, pw):
@@ -285,11 +184,11 @@ def main():
         csrf = d.find_element(By.CSS_SELECTOR, "form[action='/set/1/revoke'] input[name=csrf]").get_attribute("value")
 
         # Forged forms beside the browser, with its session: no token, a wrong token, an overlong value.
-        st, body = http.req("POST", "/set/1/approve", {}, cookie)
+        st, body, _ = http.req("POST", "/set/1/approve", {}, cookie)
         assert st == 403 and "CSRF" in body, (st, body[:300])
-        st, body = http.req("POST", "/set/1/approve", {"csrf": "0" * 64}, cookie)
+        st, body, _ = http.req("POST", "/set/1/approve", {"csrf": "0" * 64}, cookie)
         assert st == 403 and "CSRF" in body, (st, body[:300])
-        st, body = http.req("POST", "/set/1/revoke", {"csrf": csrf, "reason": "x" * 5000}, cookie)
+        st, body, _ = http.req("POST", "/set/1/revoke", {"csrf": csrf, "reason": "x" * 5000}, cookie)
         assert st == 400 and "nothing was changed" in body, (st, body[:300])
         assert set_status(db) == "draft"
 
@@ -311,16 +210,16 @@ def main():
         logout()
 
         # The session's cookie after log-out is dead: a form posted with it changes nothing.
-        st, body = http.req("POST", "/set/1/revoke", {"csrf": csrf, "reason": "stale"}, cookie)
+        st, body, _ = http.req("POST", "/set/1/revoke", {"csrf": csrf, "reason": "stale"}, cookie)
         assert st == 401 and "session has ended" in body, (st, body[:300])
         assert set_status(db) == "approved"
 
         # Asset URLs: only the built-in style sheets; traversal gets nothing from the disk.
         for path in ("/assets/../../../../etc/passwd", "/assets/%2e%2e/%2e%2e/etc/passwd", "/assets/..%2fstore.db",
                      "/assets/report.css/../../store.db"):
-            st, body = http.req("GET", path)
+            st, body, _ = http.req("GET", path)
             assert st in (400, 404) and "root:" not in body and "SQLite" not in body, (path, st, body[:200])
-        st, body = http.req("GET", "/assets/console.css")
+        st, body, _ = http.req("GET", "/assets/console.css")
         assert st == 200, st
 
         # Lock-out: five wrong passwords lock the login; the right one is refused meanwhile.

@@ -11,49 +11,8 @@ set -euo pipefail
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
-plan() {  # plan TIMEOUT_S [EXTRA_PROMPT_LINE]
-  cat <<TOML
-[plan]
-name = "prompts"
-[site]
-lat_deg = 52.0
-lon_deg = 13.0
-h_m = 40.0
-[table]
-max_rate_dps = 500.0
-max_accel_dps2 = 200.0
-slew_rate_dps = 60.0
-settle_s = 0.5
-remount_s = 1.0
-rate_accuracy_ppm = 1.0
-position_accuracy_arcsec = 2.0
-axis_wobble_arcsec = 1.0
-[[step]]
-kind = "static"
-mount = "z"
-outer_deg = 0.0
-inner_deg = 0.0
-dwell_s = 2.0
-label = "z down"
-[[step]]
-kind = "prompt"
-text = "swap the cable, then confirm"
-timeout_s = $1
-${2:-}
-[[step]]
-kind = "static"
-mount = "z"
-outer_deg = 180.0
-inner_deg = 0.0
-dwell_s = 2.0
-label = "z up"
-[[step]]
-kind = "rate"
-axis = "z"
-rate_dps = 50.0
-dwell_s = 2.0
-label = "+50 dps about z"
-TOML
+plan() {  # plan TIMEOUT_S [EXTRA_PROMPT_LINE]: the shared prompt plan with this timeout (and line)
+  sed -e "s/^timeout_s = .*/timeout_s = $1/" -e "s/^slot = \"1\"/slot = \"1\"\n${2:-}/" "$SRC/tests/data/prompt_plan.toml"
 }
 plan 30 > "$tmp/p30.toml"
 plan 1 > "$tmp/p1.toml"
@@ -61,7 +20,7 @@ run() { "$CALBENCH" station run --emulated --plan "$1" --out "$tmp/$2" "${@:3}";
 
 # Terminal: confirmed.
 echo y | run "$tmp/p30.toml" yes > "$tmp/yes.log" 2>&1 || { cat "$tmp/yes.log"; fail "a confirmed prompt did not complete the run"; }
-grep -q "operator prompt: swap the cable, then confirm" "$tmp/yes.log" || fail "the prompt was not asked"
+grep -q "operator prompt (slot 1): turn the fixture's clamp in slot 1, then confirm" "$tmp/yes.log" || fail "the prompt was not asked"
 [ -f "$tmp/yes/COEFFS.json" ] || fail "no coefficients after a confirmed prompt"
 
 # Terminal: rejected with a reason; the run aborts, the table stopped.
