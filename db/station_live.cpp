@@ -128,13 +128,13 @@ Prompt end_prompt(Store& store, std::int64_t id, const std::string& state, const
   Prompt out;
   c.write_transaction([&] {
     const auto p = find_prompt(store, id);
-    if (!p) throw InputError("PROMPT_ID", 0, "", "no operator prompt " + std::to_string(id) + " in " + c.path());
+    if (!p) throw InputError("prompt", 0, "", "no operator prompt " + std::to_string(id) + " in " + c.path());
     if (p->state != "waiting") {
       if (!must_wait) {
         out = *p;
         return;
       }
-      throw InputError("PROMPT_ID", 0, "",
+      throw InputError("prompt", 0, "",
                        "prompt " + std::to_string(id) + " is no longer waiting: " + p->state +
                            (p->answered_by.empty() ? "" : " by " + p->answered_by) +
                            (p->answered_at.empty() ? "" : " at " + p->answered_at) +
@@ -160,7 +160,8 @@ Prompt end_prompt(Store& store, std::int64_t id, const std::string& state, const
 }  // namespace
 
 Prompt answer_prompt(Store& store, std::int64_t id, bool confirm, const std::string& reason) {
-  if (!confirm && reason.empty()) throw InputError("--reject", 0, "", "a rejection says why");
+  if (!confirm && reason.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw InputError("reason", 0, "", "a rejection says why (the reason is empty)");
   // SQLite with a console account: the twin of PostgreSQL's grant (UPDATE on station_prompts to
   // calbench_station and calbench_qc only).
   const std::string& role = store.console_role();

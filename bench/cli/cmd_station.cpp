@@ -124,6 +124,9 @@ void run_station(StationArgs& a) {
   if (a.o.emulated && !a.o.imu_uri.empty())  // was silently ignored: the emulated IMU ran instead
     throw InputError("--imu", 0, "", "not used with --emulated (the IMU is emulated; --table may name an external table)");
   a.o.progress_tty = ::isatty(STDERR_FILENO) && !a.json;
+  if (a.o.pace > 0 && (!a.o.emulated || !a.o.table_uri.empty()))
+    throw InputError("--pace", 0, "", "paces the in-process emulated table's time (--emulated without --table); a real or "
+                                      "external table runs in real time already");
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   const station::Result r = station::run(a.o, std::cerr, g_stop);

@@ -40,7 +40,7 @@ nav form{display:inline} main{margin:12px 16px;max-width:1400px}
 form.act{margin:6px 0;padding:6px;border:1px solid #bbb;display:inline-block;vertical-align:top}
 input,button{font:inherit} table.q td,table.q th{border:1px solid #bbb;padding:2px 6px;text-align:left;vertical-align:top}
 table.q{border-collapse:collapse}
-.prompt{border-color:#a60;background:#fff8e8} section.run{margin:10px 0 18px} #live-status{color:#666}
+.prompt{border-color:#a60;background:#fff8e8;overflow-wrap:anywhere} table.live td.why{overflow-wrap:anywhere;max-width:32em} section.run{margin:10px 0 18px} #live-status{color:#666}
 )CSS";
 constexpr int kQueuePage = 50;          // sets per page of the QC queue
 constexpr int kWorkers = 64;             // server threads (pages and live event streams)
@@ -479,6 +479,7 @@ class Console {
     db::Store& st = *c.s->store;
     const std::int64_t id = std::stoll(c.m[1]);
     const bool confirm = c.m[2] == "confirm";
+    if (!db::find_prompt(st, id)) return live_page(c, "no operator prompt " + std::to_string(id) + "; nothing was changed", false, 404);
     try {
       const db::Prompt p = db::answer_prompt(st, id, confirm, confirm ? std::string() : c.form["reason"]);
       return live_page(c, "prompt " + std::to_string(id) + " " + p.state + " by " + p.answered_by + ": " + p.text, true);

@@ -91,6 +91,11 @@ StationPlan load_plan(const std::filesystem::path& file) {
       pr.before_step = p.steps.size();
       pr.text = c.str(*s, pre, "text", std::nullopt);
       if (pr.text.empty() || pr.text.size() > 500) c.fail(s->get("text"), pre + "text", "expected 1 to 500 characters");
+      if (pr.text.find_first_not_of(" \t") == std::string::npos)
+        c.fail(s->get("text"), pre + "text", "says nothing (only spaces): say what the operator is to do");
+      for (const unsigned char ch : pr.text)
+        if (ch < 0x20 || ch == 0x7f)
+          c.fail(s->get("text"), pre + "text", "contains a control character (a line break, tab, bell…): one line of text");
       pr.slot = c.str(*s, pre, "slot", std::string());
       pr.timeout_s = c.num(*s, pre, "timeout_s", 600.0, 1, 86400);
       pr.line = static_cast<int>(s->source().begin.line);

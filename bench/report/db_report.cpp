@@ -394,7 +394,8 @@ static std::string throughput_section_html(Store& store) {
   }
   std::ostringstream b;
   b << "<h2>Units per hour</h2>\n<div class=\"muted\">bench runs that ended in the last " << kHours
-    << " h, by station: units calibrated (outcome pass) per clock hour, and the runs that failed or were aborted</div>\n";
+    << " h, by station: units calibrated (outcome pass) per hour, and the runs that failed or were aborted (runs stored "
+       "without an end time, e.g. db store-bench without --ended, are not counted)</div>\n";
   if (by.empty()) {
     b << "<p id=\"throughput-none\">No bench run ended in the last " << kHours << " h.</p>\n";
     return b.str();

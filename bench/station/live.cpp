@@ -112,7 +112,7 @@ void LiveView::ask(const PlanPrompt& p, const Units& units, const LiveStep& step
       log_ << "\n" << what << "\n  waiting for an answer in the console (page /live, prompt " << id << "), at most "
            << p.timeout_s << " s\n";
       const double end = wall_s() + p.timeout_s;
-      double next_check = 0;
+      double next_check = 0, next_beat = wall_s() + 5;
       for (;;) {
         if (stop) {
           try {
@@ -123,6 +123,10 @@ void LiveView::ask(const PlanPrompt& p, const Units& units, const LiveStep& step
         }
         keep_alive();
         const double now = wall_s();
+        if (now >= next_beat) {  // the rows' heartbeat: the station is alive while it waits
+          next_beat = now + 5;
+          write(units, step, p.text, "");
+        }
         if (now >= next_check) {
           next_check = now + 0.25;
           std::optional<db::Prompt> a;
@@ -158,8 +162,8 @@ void LiveView::ask(const PlanPrompt& p, const Units& units, const LiveStep& step
   last_write_ = -1e9;
 }
 
-// No store to answer in: the terminal. "y" or "yes" confirms; any other line rejects (the line is the
-// reason); a closed standard input rejects.
+// No store to answer in: the terminal. "y", "Y" or "yes" confirms; an empty line asks again; any
+// other line rejects (the line is the reason); a closed standard input rejects.
 bool LiveView::ask_terminal(const PlanPrompt& p, const std::function<void()>& keep_alive, const std::atomic<bool>& stop,
                             std::string& why) {
   log_ << "\noperator prompt" << (p.slot.empty() ? "" : " (slot " + p.slot + ")") << ": " << p.text
@@ -177,8 +181,14 @@ bool LiveView::ask_terminal(const PlanPrompt& p, const std::function<void()>& ke
       why = "not answered: standard input closed (no operator at the terminal, and no --db store to answer from)";
       return false;
     }
+    if (c == '\r') continue;  // a CR LF line end
     if (c != '\n') {
       if (line.size() < 500) line += c;
+      continue;
+    }
+    if (line.find_first_not_of(" \t") == std::string::npos) {  // Enter alone: ask again, never abort a run
+      log_ << "  type y and Enter to confirm, or a reason to reject: " << std::flush;
+      line.clear();
       continue;
     }
     if (line == "y" || line == "yes" || line == "Y") return true;

@@ -173,6 +173,17 @@ void Station::setup() {
     throw std::invalid_argument("--table is required without --emulated");
   }
   make_units();
+  // A prompt about one slot names a slot of this fixture (found before anything moves).
+  if (fixture_mode_)
+    for (const PlanPrompt& p : plan_.prompts) {
+      if (p.slot.empty()) continue;
+      std::string names;
+      bool found = false;
+      for (const auto& s : fixture_.slots) names += (names.empty() ? "" : ", ") + s.name, found = found || s.name == p.slot;
+      if (!found)
+        throw InputError(o_.plan_file.string(), p.line, "slot",
+                         "the prompt names slot '" + p.slot + "', not a slot of fixture " + fixture_.name + " (slots: " + names + ")");
+    }
   // Where the results go is checked before anything moves (a wrong --out or --db found after the
   // plan costs a table cycle); nothing is written yet: a missing database is created at the end.
   check_output_folder(o_.out_dir);

@@ -74,6 +74,12 @@ def live_run(d, base, http, db, work, text, submit):
         cookie = "calbench_session=" + d.get_cookie("calbench_session")["value"]
         st, body, _ = http.req("POST", f"/prompt/{pid}/confirm", {}, cookie)
         assert st == 403 and "CSRF" in body, (st, body[:300])
+        # A rejection whose reason is only spaces says nothing: refused; an unknown prompt: 404.
+        csrf = prompt.find_element(By.CSS_SELECTOR, "input[name=csrf]").get_attribute("value")
+        st, body, _ = http.req("POST", f"/prompt/{pid}/reject", {"csrf": csrf, "reason": "   "}, cookie)
+        assert st == 409 and "says why" in body, (st, body[:300])
+        st, body, _ = http.req("POST", "/prompt/999999/confirm", {"csrf": csrf}, cookie)
+        assert st == 404 and "no operator prompt 999999" in body, (st, body[:300])
         assert station.poll() is None, "the run ended without its prompt answered"
         # Answer from the page.
         old = d.find_element(By.TAG_NAME, "html")

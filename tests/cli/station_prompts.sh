@@ -64,4 +64,23 @@ for b in bad1 bad2; do
   [ "$rc" = 2 ] && grep -q "$b.toml" "$tmp/$b.log" && grep -qE "step\[2\]\.(text|colour)" "$tmp/$b.log" ||
     { cat "$tmp/$b.log"; fail "$b: exit $rc, expected 2 naming the file and the field"; }
 done
+# Enter alone asks again (it never aborts a run); a CR LF "y" confirms.
+printf '\n\r\ny\r\n' | run "$tmp/p30.toml" enter > "$tmp/enter.log" 2>&1 || { cat "$tmp/enter.log"; fail "an empty line aborted the run"; }
+# A prompt about a slot the fixture lacks, a prompt text with a control character or only spaces,
+# --pace with an external table: bad input before anything moves.
+set +e
+sed 's/^slot = .*/slot = "9"/' "$tmp/p30.toml" > "$tmp/s9.toml"
+run "$tmp/s9.toml" slot9 --units 2 > /dev/null 2> "$tmp/slot.log"; rc1=$?
+sed 's/^text = .*/text = "ring\\u0007 the bell"/' "$tmp/p30.toml" > "$tmp/bell.toml"
+run "$tmp/bell.toml" bell > /dev/null 2> "$tmp/bell.log"; rc2=$?
+sed 's/^text = .*/text = "   "/' "$tmp/p30.toml" > "$tmp/blank.toml"
+run "$tmp/blank.toml" blank > /dev/null 2> "$tmp/blank.log"; rc3=$?
+run "$tmp/p30.toml" pace --pace 1 --table modbus-tcp://127.0.0.1:9 > /dev/null 2> "$tmp/pace.log"; rc4=$?
+set -e
+[ "$rc1" = 2 ] && grep -q "s9.toml:" "$tmp/slot.log" && grep -q "slot '9'" "$tmp/slot.log" ||
+  { cat "$tmp/slot.log"; fail "a prompt naming no slot of the fixture: exit $rc1"; }
+[ "$rc2" = 2 ] && grep -q "control character" "$tmp/bell.log" || { cat "$tmp/bell.log"; fail "a control character: exit $rc2"; }
+[ "$rc3" = 2 ] && grep -q "only spaces" "$tmp/blank.log" || { cat "$tmp/blank.log"; fail "a blank text: exit $rc3"; }
+[ "$rc4" = 2 ] && grep -q -- "--pace" "$tmp/pace.log" || { cat "$tmp/pace.log"; fail "--pace with --table: exit $rc4"; }
+[ ! -e "$tmp/slot9/recording" ] || fail "the table moved for a bad prompt slot"
 echo "station_prompts: ok"
