@@ -92,11 +92,11 @@ void add_user_commands(CLI::App* db, const std::shared_ptr<DbArgs>& a) {
                                           "console's accounts");
   user->require_subcommand(1);
   const auto db_opt = [&](CLI::App* sub) {
-    sub->add_option("--db", a->db, "the central store: postgresql://USER@HOST[:PORT]/DB (default: $CALBENCH_DB)");
+    sub->add_option("--db", a->db, "a SQLite store FILE (console accounts) or the central store postgresql://USER@HOST[:PORT]/DB (default: $CALBENCH_DB)");
   };
-  auto* add = user->add_subcommand("add", "map a login to a person and a role (grants the role's group if needed; audited)");
+  auto* add = user->add_subcommand("add", "SQLite: add or change a console account (password from $CALBENCH_PASSWORD or standard input, kept as an argon2id hash); PostgreSQL: map a login to a person and a role (grants the role's group if needed); audited");
   db_opt(add);
-  add->add_option("LOGIN", a->login, "an existing PostgreSQL login role (CREATE ROLE LOGIN LOGIN PASSWORD '...')")->required();
+  add->add_option("LOGIN", a->login, "SQLite: the console account's login; PostgreSQL: an existing login role (CREATE ROLE LOGIN LOGIN PASSWORD '...')")->required();
   add->add_option("--name", a->name, "the person's full name, as it will appear beside each signature")->required();
   add->add_option("--role", a->role, "qc | station | provisioning (member of calbench_qc, calbench_station, calbench_provisioning)")
       ->required()
