@@ -76,12 +76,14 @@ void put_progress(Store& store, const SlotProgress& p) {
   });
 }
 
-std::vector<SlotProgress> progress_rows(Store& store, const std::string& run_id) {
+std::vector<SlotProgress> progress_rows(Store& store, const std::string& run_id, const std::string& since) {
   std::vector<SlotProgress> out;
   auto st = store.connection().prepare(std::string("SELECT ") + kProgressColumns +
-                                       " FROM station_progress WHERE (? = '' OR run_id = ?) "
+                                       " FROM station_progress WHERE (? = '' OR run_id = ?) " +
+                                       (since.empty() ? "" : "AND heartbeat_at >= ? ") +
                                        "ORDER BY heartbeat_at DESC, run_id, slot");
   st.bind(1, run_id).bind(2, run_id);
+  if (!since.empty()) st.bind(3, since);
   while (st.step()) out.push_back(read_progress(st));
   return out;
 }
@@ -197,6 +199,15 @@ double age_s(const std::string& iso, double now_epoch_s) {
   tm.tm_mon -= 1;
   const double t = static_cast<double>(timegm(&tm)) + ms / 1000.0;
   return now_epoch_s - t;
+}
+
+std::string iso_utc_at(double epoch_s) {
+  const std::time_t t = static_cast<std::time_t>(std::floor(epoch_s));
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char b[32];
+  std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return b;
 }
 
 double epoch_now_s() {

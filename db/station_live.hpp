@@ -36,8 +36,9 @@ struct SlotProgress {
 // Writes (replaces) the row of p.run_id/p.slot with the heartbeat now. InputError on a bad state or
 // fraction; PermissionError when the database refuses it (PostgreSQL: another login's row).
 void put_progress(Store& store, const SlotProgress& p);
-// Rows of every run (run_id empty) or of one, newest heartbeat first, then by run and slot.
-std::vector<SlotProgress> progress_rows(Store& store, const std::string& run_id = "");
+// Rows of every run (run_id empty) or of one, newest heartbeat first, then by run and slot; with
+// `since` (ISO 8601 UTC), only rows whose heartbeat is that recent (through the heartbeat index).
+std::vector<SlotProgress> progress_rows(Store& store, const std::string& run_id = "", const std::string& since = "");
 
 // A prompt's states: waiting, then once confirmed, rejected or timed out.
 struct Prompt {
@@ -66,5 +67,7 @@ Prompt expire_prompt(Store& store, std::int64_t id);
 // to `now_epoch_s`; NaN when it does not parse.
 double age_s(const std::string& iso_utc, double now_epoch_s);
 double epoch_now_s();
+// An epoch time as ISO 8601 UTC to the second ("2026-11-27T08:30:00Z"), as the store compares times.
+std::string iso_utc_at(double epoch_s);
 
 }  // namespace calbench::db

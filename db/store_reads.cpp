@@ -244,16 +244,17 @@ std::vector<AuditEntry> Store::audit_search(const AuditQuery& q) {
   std::vector<AuditEntry> out;
   // A device's rows through the audit_device index (a serial that names no device: none).
   auto st = conn_->prepare(
-      std::string("SELECT a.id, a.at, a.\"user\", a.station, a.entity, a.entity_id, a.action, a.detail, a.db_role FROM audit_log a ") +
-      (q.serial.empty() ? "WHERE (CAST(? AS TEXT) = '' OR CAST(? AS TEXT) = '') "
-                        : "WHERE CAST(? AS TEXT) <> '' AND a.device_id = (SELECT id FROM devices WHERE serial = CAST(? AS TEXT)) ") +
-      "AND (CAST(? AS TEXT) = '' OR a.db_role = CAST(? AS TEXT) OR lower(a.\"user\") = lower(CAST(? AS TEXT))) "
+      std::string("SELECT a.id, a.at, a.\"user\", a.station, a.entity, a.entity_id, a.action, a.detail, a.db_role FROM audit_log a WHERE ") +
+      (q.serial.empty() ? "" : "a.device_id = (SELECT id FROM devices WHERE serial = CAST(? AS TEXT)) AND ") +
+      "(CAST(? AS TEXT) = '' OR a.db_role = CAST(? AS TEXT) OR lower(a.\"user\") = lower(CAST(? AS TEXT))) "
       "AND (CAST(? AS TEXT) = '' OR a.action = CAST(? AS TEXT)) "
       "AND (CAST(? AS TEXT) = '' OR substr(CAST(a.at AS TEXT), 1, 10) >= CAST(? AS TEXT)) "
       "AND (CAST(? AS TEXT) = '' OR substr(CAST(a.at AS TEXT), 1, 10) <= CAST(? AS TEXT)) "
       "ORDER BY a.id DESC LIMIT ?");
-  st.bind(1, q.serial).bind(2, q.serial).bind(3, q.who).bind(4, q.who).bind(5, q.who).bind(6, q.action)
-      .bind(7, q.action).bind(8, q.from).bind(9, q.from).bind(10, q.to).bind(11, q.to).bind(12, q.limit);
+  int k = 1;
+  if (!q.serial.empty()) st.bind(k++, q.serial);
+  for (const std::string* v : {&q.who, &q.who, &q.who, &q.action, &q.action, &q.from, &q.from, &q.to, &q.to}) st.bind(k++, *v);
+  st.bind(k, q.limit);
   while (st.step())
     out.push_back(AuditEntry{st.int64(0), st.text(1), st.text(2), st.text(3), st.text(4), st.int64(5), st.text(6),
                              st.text(7), st.text(8)});

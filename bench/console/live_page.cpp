@@ -40,13 +40,12 @@ std::string bar(double f) {
 
 std::string live_fragment(db::Store& store, const std::string& csrf, bool may_answer) {
   const double now = db::epoch_now_s();
-  const auto rows = db::progress_rows(store);
+  const auto rows = db::progress_rows(store, "", db::iso_utc_at(now - 86400));
   const auto prompts = db::waiting_prompts(store);
   // Runs by their newest heartbeat (rows come newest first).
   std::vector<std::string> order;
   std::map<std::string, std::vector<const db::SlotProgress*>> runs;
   for (const auto& r : rows) {
-    if (!(db::age_s(r.heartbeat_at, now) < 86400)) continue;
     if (!runs.count(r.run_id)) {
       if (order.size() >= kLiveRuns) continue;
       order.push_back(r.run_id);

@@ -285,9 +285,10 @@ class Console {
     std::int64_t page = 1;
     if (const auto q = c.query.find("page"); q != c.query.end()) {
       const std::string& v = q->second;
-      if (v.empty() || v.size() > 9 || v.find_first_not_of("0123456789") != std::string::npos || std::stoll(v) < 1)
-        throw InputError("page", 0, "", "'" + v + "' is not a page number (1, 2, …)");
-      page = std::min<std::int64_t>(std::stoll(v), pages);
+      const bool digits = !v.empty() && v.size() <= 9 && v.find_first_not_of("0123456789") == std::string::npos;
+      const std::int64_t asked = digits ? std::stoll(v) : 0;
+      if (asked < 1) throw InputError("page", 0, "", "'" + v + "' is not a page number (1, 2, …)");
+      page = std::min(asked, pages);
     }
     const auto drafts = st.sets_with_status(db::SetStatus::draft, kQueuePage, (page - 1) * kQueuePage);
     std::ostringstream b;

@@ -19,6 +19,7 @@
 #include "db/fleet.hpp"
 #include "db/input_errors.hpp"
 #include "db/signer.hpp"
+#include "db/station_live.hpp"
 
 namespace calbench::report {
 namespace {
@@ -360,25 +361,14 @@ static std::string station_section_html(const std::vector<StationStats>& ss) {
 // Units per hour over the last 24 h, per station: bench runs by their end time and outcome.
 static std::string throughput_section_html(Store& store) {
   constexpr int kHours = 24;
-  const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-  const std::time_t from_t = static_cast<std::time_t>(now) - kHours * 3600;
-  std::tm tm{};
-  gmtime_r(&from_t, &tm);
-  char from[32];
-  std::strftime(from, sizeof from, "%Y-%m-%dT%H:%M:%S", &tm);
+  const double now = epoch_now_s();
   struct Counts {
     std::vector<double> passed = std::vector<double>(kHours, 0.0);
     int pass = 0, fail = 0, aborted = 0, last_hour = 0;
   };
   std::map<std::string, Counts> by;
-  for (const auto& r : store.runs_ended_since(from)) {
-    std::tm e{};
-    if (std::sscanf(r.ended_at.c_str(), "%4d-%2d-%2dT%2d:%2d:%2d", &e.tm_year, &e.tm_mon, &e.tm_mday, &e.tm_hour, &e.tm_min,
-                    &e.tm_sec) != 6)
-      continue;
-    e.tm_year -= 1900;
-    e.tm_mon -= 1;
-    const double ago_h = (now - static_cast<double>(timegm(&e))) / 3600.0;
+  for (const auto& r : store.runs_ended_since(iso_utc_at(now - kHours * 3600.0))) {
+    const double ago_h = age_s(r.ended_at, now) / 3600.0;  // NaN for an end time that does not parse
     if (!(ago_h >= 0 && ago_h < kHours)) continue;
     Counts& c = by[r.station];
     const int bin = kHours - 1 - static_cast<int>(ago_h);  // oldest first

@@ -25,6 +25,16 @@ struct Fixture {
   std::string name;
   std::string file;           // empty for a fixture made from --units
   std::vector<FixtureSlot> slots;
+  bool has_slot(const std::string& slot) const {
+    for (const auto& s : slots)
+      if (s.name == slot) return true;
+    return false;
+  }
+  std::string slot_names() const {  // "1, 2, 3": for messages
+    std::string names;
+    for (const auto& s : slots) names += (names.empty() ? "" : ", ") + s.name;
+    return names;
+  }
 };
 
 // Reads and checks a fixture file: InputError (exit 2) naming the file, line and key for bad input

@@ -136,15 +136,9 @@ void Station::make_units() {
   if (!fixture_mode_ && !o_.emulated && o_.imu_uri.empty()) throw std::invalid_argument("--imu is required without --emulated");
   // Bus arbitration (one bridge per unit) and the slots' IMUs were checked with the fixture
   // (bench/station/fixture.hpp), the same for an emulated and a real run.
-  for (const auto& [name, _] : o_.inject.slot) {
-    bool found = false;
-    for (const auto& s : fixture_.slots) found = found || s.name == name;
-    if (!found) {
-      std::string names;
-      for (const auto& s : fixture_.slots) names += (names.empty() ? "" : ", ") + s.name;
-      throw InputError("--inject", 0, name, "no slot '" + name + "' in the fixture (slots: " + names + ")");
-    }
-  }
+  for (const auto& [name, _] : o_.inject.slot)
+    if (!fixture_.has_slot(name))
+      throw InputError("--inject", 0, name, "no slot '" + name + "' in the fixture (slots: " + fixture_.slot_names() + ")");
   const bool several = fixture_.slots.size() > 1;
   for (std::size_t k = 0; k < fixture_.slots.size(); ++k) {
     auto u = std::make_unique<Unit>();
@@ -175,15 +169,11 @@ void Station::setup() {
   make_units();
   // A prompt about one slot names a slot of this fixture (found before anything moves).
   if (fixture_mode_)
-    for (const PlanPrompt& p : plan_.prompts) {
-      if (p.slot.empty()) continue;
-      std::string names;
-      bool found = false;
-      for (const auto& s : fixture_.slots) names += (names.empty() ? "" : ", ") + s.name, found = found || s.name == p.slot;
-      if (!found)
+    for (const PlanPrompt& p : plan_.prompts)
+      if (!p.slot.empty() && !fixture_.has_slot(p.slot))
         throw InputError(o_.plan_file.string(), p.line, "slot",
-                         "the prompt names slot '" + p.slot + "', not a slot of fixture " + fixture_.name + " (slots: " + names + ")");
-    }
+                         "the prompt names slot '" + p.slot + "', not a slot of fixture " + fixture_.name + " (slots: " +
+                             fixture_.slot_names() + ")");
   // Where the results go is checked before anything moves (a wrong --out or --db found after the
   // plan costs a table cycle); nothing is written yet: a missing database is created at the end.
   check_output_folder(o_.out_dir);

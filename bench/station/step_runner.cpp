@@ -58,10 +58,7 @@ void StepRunner::ask_prompts(std::size_t before) {
   for (const PlanPrompt& p : plan_.prompts) {
     if (p.before_step != before) continue;
     poll(true);
-    if (st_[kInner].mode == table::Mode::rate) {
-      table_->command_rate(kInner, 0.0);
-      while (std::abs(st_[kInner].rate) > 1e-6) pump(), poll();
-    }
+    inner_to_rest();
     LiveStep at = live_step();
     at.name = "prompt: " + p.text;
     at.kind = "prompt";
@@ -79,6 +76,15 @@ void StepRunner::ask_prompts(std::size_t before) {
     log_ << "prompt answered: " << p.text << "\n";
     if (clock_) pace_emu0_ = clock_->now(), pace_wall0_ = std::chrono::steady_clock::now();
   }
+}
+
+// A rotating inner axis: rate 0, wait until it stands, then position mode at where it stopped.
+void StepRunner::inner_to_rest() {
+  if (st_[kInner].mode != table::Mode::rate) return;
+  table_->command_rate(kInner, 0.0);
+  while (std::abs(st_[kInner].rate) > 1e-6) pump(), poll();
+  table_->set_mode(kInner, table::Mode::position);
+  poll(true);
 }
 
 void StepRunner::keep_pace() {
@@ -312,12 +318,7 @@ void StepRunner::command_step(const PlanStep& s) {
   // then rate mode. Positions go the short way round from the current (unwrapped) angle.
   poll(true);
   auto target = [&](int a, double ang) { return st_[a].position + std::remainder(ang - st_[a].position, 2 * M_PI); };
-  if (st_[kInner].mode == table::Mode::rate) {
-    table_->command_rate(kInner, 0.0);
-    while (std::abs(st_[kInner].rate) > 1e-6) pump(), poll();
-    table_->set_mode(kInner, table::Mode::position);
-    poll(true);
-  }
+  inner_to_rest();
   table_->command_position(kOuter, target(kOuter, s.outer));
   table_->command_position(kInner, target(kInner, s.inner));
   if (s.kind == StepKind::rate) {

@@ -65,6 +65,7 @@ class StepRunner {
   void command_step(const PlanStep& s);
   void progress(const std::string& what, bool line = false);
   void ask_prompts(std::size_t before_step);  // the plan's operator prompts before this table step
+  void inner_to_rest();
   double now() const { return clock_ ? clock_->now() : units_.front()->bus->now(); }
   void check_stop() {
     if (stop_) throw Aborted("interrupted (Ctrl-C)");

@@ -12,7 +12,10 @@ import urllib.parse
 
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service as ChromeService
+from selenium.common.exceptions import StaleElementReferenceException
 from selenium.webdriver.common.by import By
+from selenium.webdriver.support import expected_conditions as EC
+from selenium.webdriver.support.ui import WebDriverWait
 
 CB = os.environ["CALBENCH"]
 SRC = os.environ["SRC"]
@@ -82,6 +85,32 @@ def chromium(page_load_timeout=60):
     d = webdriver.Chrome(service=ChromeService(executable_path=shutil.which("chromedriver")), options=opts)
     d.set_page_load_timeout(page_load_timeout)
     return d
+
+
+def fresh(read, attempts=20):
+    """read() again when the live table was redrawn under it (server-sent events replace it every
+    few seconds: heartbeats, times left)."""
+    for attempt in range(attempts):
+        try:
+            return read()
+        except StaleElementReferenceException:
+            if attempt == attempts - 1:
+                raise
+
+
+def confirm_prompt(d, pid):
+    """Press a prompt's confirm button on /live and wait for the page it leads to. The live table is
+    redrawn by server-sent events every few seconds (heartbeats, times left), so a button found just
+    before a redraw is gone: find it again."""
+    old = d.find_element(By.TAG_NAME, "html")
+    for attempt in range(20):
+        try:
+            d.find_element(By.CSS_SELECTOR, f"#live .prompt[data-prompt='{pid}'] button.confirm").click()
+            break
+        except StaleElementReferenceException:
+            if attempt == 19:
+                raise
+    WebDriverWait(d, 30).until(EC.staleness_of(old))
 
 
 def follow_slot(d, slot, timeout_s=120):

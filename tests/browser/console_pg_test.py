@@ -40,7 +40,6 @@ import time
 try:
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service as ChromeService
-    from selenium.common.exceptions import StaleElementReferenceException
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support import expected_conditions as EC
     from selenium.webdriver.support.ui import WebDriverWait
@@ -49,7 +48,7 @@ except ImportError:
     sys.exit(77)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, follow_slot, free_port, run  # noqa: E402
+from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, confirm_prompt, follow_slot, free_port, run  # noqa: E402
 if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.which("chromium-browser"))):
     print("chromium / chromedriver not installed: skipped")
     sys.exit(77)
@@ -121,18 +120,7 @@ def live_run(d, http, base, work, pgport, env, text, admin, psql_as):
         assert station.poll() is None, "the run ended without its prompt answered:\n" + station_log()[-2000:]
         # Answer from the page. The heartbeat changes the fragment every 0.5 s and the page's script
         # replaces it: a button found just before a replacement is stale, so find it again.
-        def confirm():
-            old = d.find_element(By.TAG_NAME, "html")
-            for attempt in range(20):
-                try:
-                    d.find_element(By.CSS_SELECTOR, f"#live .prompt[data-prompt='{pid}'] button.confirm").click()
-                    break
-                except StaleElementReferenceException:
-                    if attempt == 19:
-                        raise
-            WebDriverWait(d, 30).until(EC.staleness_of(old))
-
-        confirm()
+        confirm_prompt(d, pid)
         if not d.find_elements(By.ID, "done"):
             raise SystemExit("confirming the prompt failed: " + d.find_element(By.TAG_NAME, "main").text[:1200]
                              + "\n--- station log:\n" + station_log()[-2000:])

@@ -34,7 +34,7 @@ if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.whi
     print("chromium / chromedriver not installed: skipped")
     sys.exit(77)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, follow_slot, free_port, run  # noqa: E402
+from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, confirm_prompt, follow_slot, free_port, fresh, run  # noqa: E402
 
 
 def set_status(db, serial="SIMW1"):
@@ -59,32 +59,40 @@ def live_run(d, base, http, db, work, text, submit):
         d.get(base + "/live")
         slot = lambda n: f"#live tr[data-slot='{n}']"
         # The prompt appears on the page without a reload (the run reaches it after step 1).
-        prompt = WebDriverWait(d, 60).until(EC.presence_of_element_located((By.CSS_SELECTOR, "#live .prompt")))
-        assert "turn the fixture's clamp in slot 1" in prompt.text, prompt.text
-        assert "line-7" in d.find_element(By.ID, "live").text
-        s1 = d.find_element(By.CSS_SELECTOR, slot(1))
-        assert s1.get_attribute("data-state") == "waiting", s1.get_attribute("data-state")
-        assert s1.find_element(By.CSS_SELECTOR, "td.check").text.startswith("0 ≤ 0"), s1.text
+        WebDriverWait(d, 60).until(EC.presence_of_element_located((By.CSS_SELECTOR, "#live .prompt")))
+
+        def snapshot():  # the page as it is now, read in one go
+            prompt = d.find_element(By.CSS_SELECTOR, "#live .prompt")
+            s1 = d.find_element(By.CSS_SELECTOR, slot(1))
+            s2 = d.find_element(By.CSS_SELECTOR, slot(2))
+            return {"prompt": prompt.text, "pid": prompt.get_attribute("data-prompt"),
+                    "csrf": prompt.find_element(By.CSS_SELECTOR, "input[name=csrf]").get_attribute("value"),
+                    "live": d.find_element(By.ID, "live").text,
+                    "s1": s1.get_attribute("data-state"), "s1check": s1.find_element(By.CSS_SELECTOR, "td.check").text,
+                    "s2": s2.get_attribute("data-state"), "s2why": s2.find_element(By.CSS_SELECTOR, "td.why").text}
+
+        v = fresh(snapshot)
+        assert "turn the fixture's clamp in slot 1" in v["prompt"], v["prompt"]
+        assert "line-7" in v["live"]
+        assert v["s1"] == "waiting", v["s1"]
+        assert v["s1check"].startswith("0 ≤ 0"), v["s1check"]
         # The failed slot says why.
-        s2 = d.find_element(By.CSS_SELECTOR, slot(2))
-        assert s2.get_attribute("data-state") == "failed", s2.text
-        assert "PROD_ID" in s2.find_element(By.CSS_SELECTOR, "td.why").text, s2.text
+        assert v["s2"] == "failed", v
+        assert "PROD_ID" in v["s2why"], v["s2why"]
         # A forged answer (no CSRF token) changes nothing.
-        pid = prompt.get_attribute("data-prompt")
+        pid = v["pid"]
         cookie = "calbench_session=" + d.get_cookie("calbench_session")["value"]
         st, body, _ = http.req("POST", f"/prompt/{pid}/confirm", {}, cookie)
         assert st == 403 and "CSRF" in body, (st, body[:300])
         # A rejection whose reason is only spaces says nothing: refused; an unknown prompt: 404.
-        csrf = prompt.find_element(By.CSS_SELECTOR, "input[name=csrf]").get_attribute("value")
+        csrf = v["csrf"]
         st, body, _ = http.req("POST", f"/prompt/{pid}/reject", {"csrf": csrf, "reason": "   "}, cookie)
         assert st == 409 and "says why" in body, (st, body[:300])
         st, body, _ = http.req("POST", "/prompt/999999/confirm", {"csrf": csrf}, cookie)
         assert st == 404 and "no operator prompt 999999" in body, (st, body[:300])
         assert station.poll() is None, "the run ended without its prompt answered"
         # Answer from the page.
-        old = d.find_element(By.TAG_NAME, "html")
-        d.find_element(By.CSS_SELECTOR, f"#live .prompt[data-prompt='{pid}'] button.confirm").click()
-        WebDriverWait(d, 15).until(EC.staleness_of(old))
+        confirm_prompt(d, pid)
         assert "confirmed by Sam Station" in text("done"), text("done")
         page = d.find_element(By.TAG_NAME, "html")
         seen = follow_slot(d, 1)
