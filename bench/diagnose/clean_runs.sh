@@ -32,8 +32,10 @@ kind, src, seed, sec, path = sys.argv[1:]
 d = json.load(open(path))
 est = [f"{f['effect']} {f['sensor']} {f['axis']}" for f in d["findings"] if f.get("established")]
 par = [f"{f['effect']} {f['sensor']} {f['axis']}" for f in d["findings"] if not f.get("established")]
+par += [f"drift beyond stability {x['sensor']} {x['axis']}" for x in d.get("drift_excess", [])]
 une = [f"{u['sensor']} {u['axis']}" for u in d["unexplained"]]
-print("\t".join([kind, src, seed, f"{float(sec):.1f}", str(len(est)), str(len(par)), str(len(une)), "; ".join(est + [p + " (partial)" for p in par] + [u + " unexplained" for u in une])]))
+sat = [f"{x['sensor']} {x['axis']} range exceeded" for x in d.get("saturation", [])]
+print("\t".join([kind, src, seed, f"{float(sec):.1f}", str(len(est)), str(len(par)), str(len(une)), "; ".join(est + [p + " (partial)" for p in par] + [u + " unexplained" for u in une] + sat)]))
 PY
 }
 # CLEAN_TABLE_ONLY=1: no new runs, the table from the per-run file already there (a run stopped early).
@@ -78,7 +80,8 @@ PY
 cat "$md"
 {
   echo "Clean simulated recordings (no injected effect) through \`calbench diagnose --json\`; the issue-36 target is"
-  echo "0 established findings. Measured on main before the issue-36 rule change (the baseline)."
+  echo "0 established findings. \"partial findings\" include a drift beyond the class's stability (reported, never"
+  echo "established); a plateau (range exceeded) is listed by name.${CLEAN_NOTE:+ $CLEAN_NOTE}"
   echo
   cat "$md"
 } | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-diagnose-clean-runs.md}" \

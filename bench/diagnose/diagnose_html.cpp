@@ -101,6 +101,14 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
       << ", before (red circles) and after (blue dots):</p>\n"
       << plot_svg(in, r, a, f.condition);
   }
+  if (!r.drift_excess.empty()) {
+    o << "<h2>Drift beyond the class's stability (not established)</h2>\n";
+    for (const auto& x : r.drift_excess) o << "<p>" << report::html_escape(drift_excess_sentence(x)) << "</p>\n";
+  }
+  if (!r.saturation.empty()) {
+    o << "<h2>Range exceeded</h2>\n";
+    for (const auto& x : r.saturation) o << "<p>" << report::html_escape(saturation_sentence(x)) << "</p>\n";
+  }
   if (!r.unexplained.empty()) {
     o << "<h2>Unexplained</h2>\n";
     for (const auto& u : r.unexplained) {

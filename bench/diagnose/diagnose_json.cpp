@@ -122,6 +122,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                            {"chi2_per_dof", u.chi2_dof},
                            {"within_step_chi2_per_dof", u.high_chi2_dof},
                            {"ljung_box_p", u.ljung_box_p},
+                           {"step_offset_p", u.step_p},
                            {"systematic_rms", u.systematic_rms},
                            {"worst_steps", u.worst_steps},
                            {"correlations", corr},
@@ -132,13 +133,46 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                                          {"mean", u.angle_bin_mean}, {"z", u.angle_bin_z}};
     if (u.period_hz > 0) unexplained.back()["periodic"] = {{"hz", u.period_hz}, {"amplitude", u.period_amp}};
   }
+  nlohmann::json saturation = nlohmann::json::array();
+  for (const auto& x : r.saturation) {
+    auto level = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+    saturation.push_back({{"sensor", kSensor[x.sensor]},
+                          {"axis", kAxis[x.axis]},
+                          {"level_positive", level(x.level_pos)},
+                          {"level_negative", level(x.level_neg)},
+                          {"reference_max", x.reference_max},
+                          {"frozen_fraction", x.frozen_fraction},
+                          {"steps_left_out", x.steps},
+                          {"seconds_left_out", x.excluded_s},
+                          {"sentence", saturation_sentence(x)}});
+  }
+  nlohmann::json drift_excess = nlohmann::json::array();
+  for (const auto& x : r.drift_excess) {
+    drift_excess.push_back({{"sensor", kSensor[x.sensor]},
+                            {"axis", kAxis[x.axis]},
+                            {"status", x.follows_temperature ? "temperature or drift, not told apart" : "drift or an effect outside the catalogue, not told apart"},
+                            {"change", x.change},
+                            {"class_stability", x.stability},
+                            {"ratio", x.change / x.stability},
+                            {"null_mean", x.null_mean},
+                            {"null_sd", x.null_sd},
+                            {"z", x.z},
+                            {"gain", x.gain},
+                            {"drift_sigma", x.sigma},
+                            {"drift_tau_s", x.tau_s},
+                            {"sentence", drift_excess_sentence(x)}});
+    if (x.has_temperature)
+      drift_excess.back()["temperature"] = {{"change_c", x.temperature_change}, {"r", x.temperature_r},
+                                            {"per_degree", x.per_degree}, {"follows", x.follows_temperature}};
+  }
   nlohmann::json axes = nlohmann::json::object();
   for (int a = 0; a < 6; ++a) {
     auto st = [](const AxisStats& s) {
       return nlohmann::json{{"systematic_rms", s.systematic_rms}, {"step_rms", s.step_rms}, {"within_step_rms", s.within_rms},
                             {"chi2_per_dof", s.chi2_dof},        {"within_step_chi2_per_dof", s.high_chi2_dof},
                             {"ljung_box_q", s.ljung_box_q},      {"ljung_box_p", s.ljung_box_p},
-                            {"criterion", s.bic}};
+                            {"step_offset_q", s.step_q},          {"step_offset_dof", s.step_dof},
+                            {"step_offset_p", s.step_p},          {"criterion", s.bic}};
     };
     const nlohmann::json corr = correlations_json(r.correlations_before[a], 4);
     axes[std::string(kSensor[a / 3]) + "_" + kAxis[a % 3]] = {
@@ -147,6 +181,8 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
   }
   return {{"findings", findings},
           {"unexplained", unexplained},
+          {"saturation", saturation},
+          {"drift_excess", drift_excess},
           {"withdrawn", withdrawn_json(r.withdrawn)},
           {"not_excited", not_excited_json(r.not_excited)},
           {"axes", axes},
@@ -233,6 +269,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
                   {"ljung_box_p", u.ljung_box_p}, {"systematic_rms", u.systematic_rms}, {"worst_windows_s", w},
                   {"correlations", c}});
     if (u.period_hz > 0) us.back()["periodic"] = {{"hz", u.period_hz}, {"amplitude", u.period_amp}};
+    if (!u.condition_test.empty())
+      us.back()["follows_condition"] = {{"condition", u.condition_test}, {"delta_chi2", u.condition_dchi2}, {"r", u.condition_r}};
   }
   j["unexplained"] = us;
   j["withdrawn"] = withdrawn_json(r.withdrawn);

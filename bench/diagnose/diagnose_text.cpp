@@ -217,14 +217,19 @@ std::string diagnosis_text(const DiagRun& run) {
   std::ostringstream o;
   o << "coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << "; " << r.parents
     << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\n";
+  for (const auto& x : r.saturation) o << "! " << saturation_sentence(x) << "\n";
   if (r.findings.empty())
-    o << (r.unexplained.empty() ? "no finding: the residual is consistent with the model and the sensor's noise\n"
+    o << (!r.drift_excess.empty() ? std::string("no established finding: see the drift beyond the class's stability below\n") :
+          r.unexplained.empty() ? std::string("no finding") + (r.saturation.empty() ? "" : " in the rest of the recording") +
+                                      ": the residual is consistent with the model and the sensor's noise\n"
                                 : "no catalogue finding, but the residual is NOT consistent: see unexplained below\n");
   for (const auto& f : r.findings) o << "* " << finding_sentence(f) << "\n";
+  for (const auto& x : r.drift_excess) o << "~ " << drift_excess_sentence(x) << "\n";
   for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
   for (const auto& u : r.unexplained) {
     o << "? unexplained (no catalogue effect explains it): " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)
-      << " (within steps " << fmt(u.high_chi2_dof) << "), Ljung–Box p " << fmt(u.ljung_box_p) << "; worst steps";
+      << " (within steps " << fmt(u.high_chi2_dof) << "), Ljung–Box p " << fmt(u.ljung_box_p)
+      << ", step-offset test p " << fmt(u.step_p, 2) << "; worst steps";
     for (int s : u.worst_steps) o << " " << s;
     o << "; correlates with";
     o << correlations_text(u.correlations);
@@ -297,6 +302,9 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
     o << "! unexplained: " << kSensor[u.sensor] << " " << kAxis[u.axis] << " χ²/dof " << fmt(u.chi2_dof)
       << ", Ljung–Box p " << fmt(u.ljung_box_p, 2) << "; strongest correlations:";
     o << correlations_text(u.correlations);
+    if (!u.condition_test.empty())
+      o << "; the bias the noise model's drift absorbed follows " << u.condition_test << " (GLS test Δχ² " << fmt(u.condition_dchi2)
+        << ", r " << fmt(u.condition_r, 2) << "): an effect outside the catalogue, not a drift";
     if (u.period_hz > 0)
       o << "; strongest periodic component " << fmt(u.period_hz, 3) << " Hz, amplitude " << fmt(disp(u.period_amp, u.sensor))
         << " " << disp_unit(u.sensor);

@@ -144,4 +144,43 @@ std::string fill_sentence(const char* tmpl, const std::string& who, const std::s
   return s;
 }
 
+std::string saturation_sentence(const DiagSaturation& x) {
+  const bool gyro = x.sensor == 0;
+  const double k = gyro ? 1.0 / units::kDeg : 1.0 / units::kG0;
+  const char* unit = gyro ? " °/s" : " g";
+  std::string levels;
+  if (std::isfinite(x.level_pos)) levels += "+" + fmt(x.level_pos * k, 4);
+  if (std::isfinite(x.level_neg)) levels += (levels.empty() ? "" : " / ") + fmt(x.level_neg * k, 4);
+  std::string steps;
+  for (int s : x.steps) steps += (steps.empty() ? "" : ", ") + std::to_string(s);
+  return std::string("range exceeded: ") + (gyro ? "gyro " : "accel ") + "xyz"[x.axis] + " output held at " + levels + unit +
+         " with no noise (a plateau at the highest outputs; " + fmt(100 * x.frozen_fraction, 3) +
+         " % of those steps' sub-blocks frozen) where the reference reached " + fmt(x.reference_max * k, 4) + unit +
+         ": saturation, not a polynomial; step" + (x.steps.size() > 1 ? "s " : " ") + steps + " (" + fmt(x.excluded_s, 3) +
+         " s) left out of the diagnosis";
+}
+
+std::string drift_excess_sentence(const DiagDriftExcess& x) {
+  const bool gyro = x.sensor == 0;
+  const double k = gyro ? 1.0 / units::kDegPerHour : 1.0 / units::kMilliG;
+  const char* unit = gyro ? " °/h" : " mg";
+  std::string o = std::string("drift beyond the class's stability, not established: ") + (gyro ? "gyro " : "accel ") + "xyz"[x.axis] +
+                  "'s bias moved " + fmt(x.change * k) + unit + " over the run, " + fmt(x.change / x.stability, 2) +
+                  "× the class's in-run bias stability (" + fmt(x.stability * k) + unit + ") and " + fmt(x.z, 2) +
+                  " standard deviations above what the class's noise gives on this recording (" + fmt(x.null_mean * k) + " ± " +
+                  fmt(x.null_sd * k, 2) + unit + "); by likelihood " +
+                  (x.gain > 0 ? "a drift of that axis alone " + fmt(x.sigma / x.stability, 2) + "× the class's (τ " + fmt(x.tau_s) +
+                                    " s) fits better by Δ(−2 ln L) " + fmt(x.gain) + ", below the evidence a finding needs"
+                              : std::string("no larger drift fits better: the record is too short to tell"));
+  if (x.has_temperature && x.temperature_dchi2 > 0)
+    o += "; the temperature bias term gives " + fmt(x.temperature_coef * k) + " ± " + fmt(x.temperature_coef_sigma * k, 2) + unit +
+         " per °C, " + fmt(x.temperature_change_total() * k) + unit + " over the " + fmt(x.temperature_change) +
+         " °C of the run (Δχ² " + fmt(x.temperature_dchi2, 2) + ", not established)";
+  if (x.follows_temperature || (x.has_temperature && x.temperature_dchi2 >= kDriftTemperatureChi2))
+    return o + "; the path follows the recorded temperature (r " + fmt(x.temperature_r, 2) +
+           "): temperature or drift, not told apart";
+  return o + (x.has_temperature ? "; it does not follow the recorded temperature (r " + fmt(x.temperature_r, 2) + ")" : std::string()) +
+         ": a drift beyond the data sheet, or an effect outside the catalogue that a drift imitates, not told apart";
+}
+
 }  // namespace calbench

@@ -35,6 +35,15 @@ std::string withdrawn_text(const DiagWithdrawn& w);
 // The JSON "why" of a withdrawn term.
 const char* withdrawn_why_key(WithdrawnWhy w);
 
+// "range exceeded: gyro z output held at +97.1 / −97.1 °/s (frozen: no noise) on 4 steps where
+// the reference reached 100 °/s; those steps (12 s) are left out of the diagnosis (the rest is
+// diagnosed as usual)".
+std::string saturation_sentence(const DiagSaturation& x);
+
+// "drift beyond the class's stability, not established: gyro z's bias moved 19.6 °/h over the
+// run, 3.8× …; it follows the recorded temperature (…): temperature or drift, not told apart".
+std::string drift_excess_sentence(const DiagDriftExcess& x);
+
 // A spec's sentence (effect_registry.hpp) with {who} and {condition} filled in.
 std::string fill_sentence(const char* tmpl, const std::string& who, const std::string& condition);
 

@@ -28,12 +28,15 @@ import json, sys
 row, path = sys.argv[1], sys.argv[2]
 d = json.load(open(path))
 est = sorted({f"{f['effect']} {f['sensor']} {f['axis']}" for f in d["findings"] if f.get("established")})
-par = sorted({f"{f['effect']} {f['sensor']} {f['axis']}" for f in d["findings"] if not f.get("established")})
+par = sorted({f"{f['effect']} {f['sensor']} {f['axis']}" for f in d["findings"] if not f.get("established")} |
+             {f"drift beyond stability {x['sensor']} {x['axis']}" for x in d.get("drift_excess", [])})
 une = sorted({f"{u['sensor']} {u['axis']}" for u in d["unexplained"]})
-print("\t".join([row, "; ".join(est), "; ".join(par), "; ".join(une)]))
+sat = sorted({f"{x['sensor']} {x['axis']}" for x in d.get("saturation", [])})
+print("\t".join([row, "; ".join(est), "; ".join(par), "; ".join(une), "; ".join(sat)]))
 PY
 }
 bench_classes=(
+  "clean (no injection)|"
   "warm-up gyro z, 20 °/h over 10 °C|warmup --sensor gyro --axis z --change 20 --dT 10"
   "warm-up accel x, 1 mg over 10 °C|warmup --sensor accel --axis x --change 1 --dT 10"
   "dead band gyro xyz, 0.01 °/s|deadband --axis all --width 0.01"
@@ -52,8 +55,12 @@ for plan in ${INJECT_PLANS:-diagnose}; do
     "$cb" simulate bench --plan "$here/bench/plans/$plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
     for c in "${bench_classes[@]}"; do
       row="bench $plan: ${c%%|*}"
-      # shellcheck disable=SC2086
-      python3 "$inj" "$work/clean" "$work/inj" ${c#*|} --force
+      if [ -n "${c#*|}" ]; then
+        # shellcheck disable=SC2086
+        python3 "$inj" "$work/clean" "$work/inj" ${c#*|} --force
+      else
+        rm -rf "$work/inj"; cp -r "$work/clean" "$work/inj"
+      fi
       "$cb" diagnose "$work/inj" --json > "$work/out.json"
       score "$row" "$work/out.json"
     done
@@ -81,18 +88,18 @@ python3 - "$runs" > "$md" <<'PY'
 import sys, collections
 rows = collections.OrderedDict()
 for line in open(sys.argv[1]):
-    row, est, par, une = (line.rstrip("\n").split("\t") + ["", "", ""])[:4]
-    rows.setdefault(row, []).append((est, par, une))
-print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | nothing reported | established names (runs) | partial names (runs) | unexplained axes (runs) |")
-print("|---|---|---|---|---|---|---|---|---|")
+    row, est, par, une, sat = (line.rstrip("\n").split("\t") + ["", "", "", ""])[:5]
+    rows.setdefault(row, []).append((est, par, une, sat))
+print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | nothing reported | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 def tally(xs):
     c = collections.Counter(n for x in xs for n in x.split("; ") if n)
     return ", ".join(f"{k} ({v})" for k, v in sorted(c.items())) or "–"
 for row, rs in rows.items():
     n = len(rs)
     e = sum(1 for r in rs if r[0]); p = sum(1 for r in rs if not r[0] and r[1]); u = sum(1 for r in rs if r[2])
-    z = sum(1 for r in rs if not any(r))
-    print(f"| {row} | {n} | {e} | {p} | {u} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} |")
+    x = sum(1 for r in rs if r[3]); z = sum(1 for r in rs if not any(r))
+    print(f"| {row} | {n} | {e} | {p} | {u} | {x} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} | {tally(r[3] for r in rs)} |")
 PY
 cat "$md"
 {
@@ -100,8 +107,10 @@ cat "$md"
   echo "recordings; \"established\": runs with at least one established finding (for a term outside the catalogue"
   echo "every established name is a wrong name; for warm-up the temperature term on the injected axis is right);"
   echo "\"partial only\": findings, none established; \"unexplained\": runs with an axis reported unexplained;"
-  echo "\"nothing\": no finding, nothing unexplained (a miss for every row but the clean one). Measured on main"
-  echo "before the issue-36 rule change (the baseline)."
+  echo "\"partial only\" includes a drift beyond the class's stability (reported, never established); \"range"
+  echo "exceeded\": an output plateau found and its steps left out; \"nothing\": no finding, nothing unexplained,"
+  echo "no plateau (a miss for every row but the clean one)."
+  [ -z "${INJECT_NOTE:-}" ] || { echo; echo "$INJECT_NOTE"; }
   echo
   cat "$md"
 } | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-diagnose-inject-confusion.md}" \

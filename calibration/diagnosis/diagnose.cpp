@@ -4,6 +4,9 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <random>
+#include <cstdio>
+#include <cstdlib>
 
 #include "calibration/diagnosis/bench_design.hpp"
 #include "calibration/diagnosis/condition_correlation.hpp"
@@ -48,6 +51,27 @@ Eigen::VectorXd smoothed_drift(const DiagData& d, const Dataset& S, const Eigen:
   return diag::smoothed_drift(d.parents, S, parent_means(d, S, r));
 }
 
+// Issue 36, the remainder's power: one offset per plan step in the whitened parent residual
+// (AxisStats::step_q). The step indicators are whitened by the same Cholesky factor as the
+// residual, so the drift and bench errors of the noise model are accounted for; the residual is
+// already orthogonal to the model's columns, of which about nparams/6 per axis lie in the span of
+// the indicators (bias, and the scale and skew columns of steps with a constant input).
+void step_offset_test(const DiagData& d, const Dataset& S, const Eigen::VectorXd& rw, int nparams, AxisStats& st) {
+  const int N = static_cast<int>(S.parents.size());
+  std::map<int, int> col;
+  for (int k = 0; k < N; ++k) col.emplace(d.parents[S.parents[k]].step, static_cast<int>(col.size()));
+  const int ns = static_cast<int>(col.size());
+  st.step_dof = ns - nparams / kAxes;
+  if (st.step_dof < 1 || N <= ns) return;
+  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(N, ns);
+  for (int k = 0; k < N; ++k) U(k, col[d.parents[S.parents[k]].step]) = 1.0;
+  U = S.L.triangularView<Eigen::Lower>().solve(U);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(U);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(N, ns);
+  st.step_q = (Q.transpose() * rw).squaredNorm();
+  st.step_p = chi2_upper_p(st.step_q, st.step_dof);
+}
+
 // Statistics of a residual series on one axis (dataset gives the noise model). The systematic
 // figure removes `drift` (parent level) when given, else the drift smoothed from r itself. The
 // before figure is given the drift smoothed from the final residual: smoothed from the base
@@ -61,6 +85,7 @@ AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const
   const int N = static_cast<int>(S.parents.size());
   const Eigen::VectorXd rP = parent_means(d, S, r);
   const Eigen::VectorXd rw = diag::whiteness(S, rP, nparams, st);
+  step_offset_test(d, S, rw, nparams, st);
   // Drift as the noise model sees it (smoothed), to be removed from the systematic figure.
   const Eigen::VectorXd drift = drift_given ? *drift_given : smoothed_drift(d, S, r);
   // Per-step means (drift removed, white noise expectation subtracted).
@@ -192,6 +217,9 @@ void finding_rms(const Term& t, const std::vector<int>& touched, const DiagnoseR
   f.rms_after = n ? std::sqrt(ra / n) : 0;
 }
 
+// The step-offset test's level per axis (docs/diagnosis.md, "Decision rules": its false-alarm rate).
+constexpr double kStepOffsetP = 1e-4;
+
 // Is an axis's final residual still far from its noise model? Parent-level or sub-block χ²/dof
 // beyond 6σ of its sampling spread, Ljung–Box p < 1e-4, or structure in the table angle: the
 // residual's angle profile (12 bins summed over the rotating steps) with χ² p < 1e-6.
@@ -200,7 +228,8 @@ void finding_rms(const Term& t, const std::vector<int>& touched, const DiagnoseR
 bool axis_unexplained(const AxisStats& s, const Dataset& S, bool parent_level = false) {
   const double z_low = (s.chi2_dof - 1) * std::sqrt(std::max(1, S.n_low) / 2.0);
   const double z_high = (s.high_chi2_dof - 1) * std::sqrt(std::max(1, S.n_high) / 2.0);
-  return z_low >= 6 || (!parent_level && z_high >= 6) || s.ljung_box_p <= 1e-4 || s.angle_profile_p < 1e-6;
+  return z_low >= 6 || (!parent_level && z_high >= 6) || s.ljung_box_p <= 1e-4 || s.angle_profile_p < 1e-6 ||
+         s.step_p < kStepOffsetP;
 }
 
 // The condition that reveals a finding (g-sensitivity: the force component it follows most).
@@ -214,7 +243,94 @@ void finding_condition(const Term& t, DiagFinding& f) {
   }
 }
 
+// What the drift model absorbed on axis a (DiagDriftExcess): the smoothed drift path under the class's
+// noise model in the final residual, its tie to temperature, and whether a larger drift of that axis
+// alone (on the drift grid, the other axes as they are) fits better.
+DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProblem>& search, int a, double sigma0) {
+  DiagDriftExcess x;
+  x.sensor = a / 3;
+  x.axis = a % 3;
+  x.stability = sigma0;
+  const Dataset& S0 = search.all[a];
+  const Eigen::VectorXd path = smoothed_drift(P.d, S0, residual(P.D, search.model, a, search.cur.theta));
+  x.change = path.maxCoeff() - path.minCoeff();
+  if (x.change <= kDriftExcessFactor * sigma0 && !P.d.has_temperature) return x;
+  // The range's null distribution: parent residuals drawn from the noise model (white, drift, bench
+  // errors: r = L·n), smoothed the same way. The fitted bias and scale columns are not projected
+  // out of the draws, which widens it a little (conservative). A fixed seed: the same recording
+  // gives the same report.
+  const int N = static_cast<int>(S0.parents.size());
+  std::mt19937_64 rng(0x36d1f7u + static_cast<unsigned>(a));
+  std::normal_distribution<double> n01;
+  double m1 = 0, m2 = 0;
+  for (int i = 0; i < kDriftExcessDraws; ++i) {
+    Eigen::VectorXd n(N);
+    for (int k = 0; k < N; ++k) n(k) = n01(rng);
+    const Eigen::VectorXd rP = S0.L.triangularView<Eigen::Lower>() * n;
+    const Eigen::VectorXd q = diag::smoothed_drift(P.d.parents, S0, rP);
+    const double range = q.maxCoeff() - q.minCoeff();
+    m1 += range;
+    m2 += range * range;
+  }
+  m1 /= kDriftExcessDraws;
+  const double sd = std::sqrt(std::max(m2 / kDriftExcessDraws - m1 * m1, 1e-300));
+  x.null_mean = m1;
+  x.null_sd = sd;
+  x.z = (x.change - m1) / sd;
+  auto fit_with = [&](const Dataset& S) {
+    std::vector<const Dataset*> p;
+    for (int b = 0; b < kAxes; ++b) p.push_back(b == a ? &S : &search.all[b]);
+    return P.fit(search.model, p);
+  };
+  const double base = search.cur.chi2_axis[a] + S0.logdet;
+  x.gain = -std::numeric_limits<double>::infinity();
+  for (double m : greedy_drift_multipliers())
+    for (double t : greedy_drift_taus()) {
+      const Dataset S = P.build(a, kSubsetAll, sigma0 * m, t);
+      const double gain = base - (fit_with(S).chi2_axis[a] + S.logdet);
+      if (gain > x.gain) {
+        x.gain = gain;
+        x.sigma = sigma0 * m;
+        x.tau_s = t;
+      }
+    }
+  if (!P.d.has_temperature) return x;
+  Eigen::VectorXd T(N);
+  for (int k = 0; k < N; ++k) T(k) = P.d.parents[S0.parents[k]].temp_c;
+  if (!T.allFinite()) return x;
+  x.has_temperature = true;
+  x.temperature_change = T.maxCoeff() - T.minCoeff();
+  x.temperature_r = diag::pearson(path, T);
+  const Eigen::VectorXd Tc = T.array() - T.mean();
+  if (Tc.squaredNorm() > 0) x.per_degree = Tc.dot(path) / Tc.squaredNorm();
+  x.follows_temperature = x.temperature_change >= 1.0 && std::abs(x.temperature_r) >= kDriftTemperatureR;
+  // The catalogue's temperature bias of this axis, added to the final model: its evidence (Δχ²)
+  // and the change it gives over the run.
+  for (int t = 0; t < P.n_terms(); ++t) {
+    const Term& term = P.term(t);
+    if (term.effect != EffectId::temperature_bias || term.sensor != a / 3 || term.axis != a % 3) continue;
+    if (std::find(search.model.begin(), search.model.end(), t) != search.model.end()) break;
+    std::vector<int> m = search.model;
+    m.push_back(t);
+    const FitOut f = P.fit(m, GreedySearch<BenchProblem>::ptrs(search.all));
+    x.temperature_dchi2 = search.cur.chi2 - f.chi2;
+    int first = 0;
+    for (std::size_t k = 0; k < m.size(); ++k)
+      if (m[k] == t) first = f.offset[k];
+    x.temperature_coef = f.theta(first);
+    x.temperature_coef_sigma = std::sqrt(std::max(f.cov(first, first), 0.0));
+    break;
+  }
+  return x;
+}
+
 }  // namespace
+
+bool drift_excess_reported(const DiagDriftExcess& x) {
+  const double limit = kDriftExcessFactor * x.stability;
+  return (x.change > limit && x.z >= kDriftExcessZ) ||
+         (x.has_temperature && x.temperature_dchi2 >= kDriftTemperatureChi2 && x.temperature_change_total() > limit);
+}
 
 void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOptions& opt) {
   f.explained_fraction = f.rms_before > 0 ? 1 - f.rms_after / f.rms_before : 1.0;
@@ -226,10 +342,95 @@ void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOpt
                                                                                          : "partial";
 }
 
+std::vector<DiagSaturation> find_saturation(const DiagData& d, const double (&white_var)[6]) {
+  std::vector<DiagSaturation> out;
+  for (int a = 0; a < kAxes; ++a) {
+    const int i = a % 3;
+    auto meas = [&](const SubBlock& s) { return a < 3 ? s.gyro(i) : s.accel(i); };
+    auto ref = [&](const SubBlock& s) { return a < 3 ? s.w(i) : s.f(i); };
+    auto scatter = [&](const SubBlock& s) { return a < 3 ? s.gyro_ss(i) : s.accel_ss(i); };
+    double top = 0;
+    for (const auto& s : d.subs) top = std::max(top, std::abs(meas(s)));
+    if (top <= 0) continue;
+    // Per step: frozen sub-blocks at the top of the axis's outputs, and all sub-blocks.
+    std::map<int, std::array<double, 2>> per_step;
+    for (const auto& s : d.subs) {
+      if (s.n < 10) continue;
+      auto& c = per_step[s.step];
+      c[1] += 1;
+      if (scatter(s) < kFrozenScatter * (s.n - 1) * white_var[a] && std::abs(meas(s)) >= 0.9 * top) c[0] += 1;
+    }
+    DiagSaturation sat;
+    sat.sensor = a / 3;
+    sat.axis = i;
+    double frozen = 0, total = 0;
+    for (const auto& [step, c] : per_step)
+      if (c[0] >= 0.5 * c[1]) {
+        sat.steps.push_back(step);
+        frozen += c[0];
+        total += c[1];
+      }
+    if (sat.steps.empty()) continue;
+    sat.frozen_fraction = frozen / total;
+    double pos = 0, neg = 0, np = 0, nn = 0;
+    for (const auto& s : d.subs) {
+      if (!std::binary_search(sat.steps.begin(), sat.steps.end(), s.step)) continue;
+      sat.reference_max = std::max(sat.reference_max, std::abs(ref(s)));
+      if (s.n < 10 || scatter(s) >= kFrozenScatter * (s.n - 1) * white_var[a]) continue;
+      (meas(s) > 0 ? pos : neg) += meas(s);
+      (meas(s) > 0 ? np : nn) += 1;
+    }
+    if (np > 0) sat.level_pos = pos / np;
+    if (nn > 0) sat.level_neg = neg / nn;
+    for (const auto& p : d.parents)
+      if (std::binary_search(sat.steps.begin(), sat.steps.end(), p.step)) sat.excluded_s += p.duration;
+    out.push_back(std::move(sat));
+  }
+  return out;
+}
+
+DiagData without_steps(const DiagData& d, const std::vector<int>& steps) {
+  DiagData o;
+  o.sample_rate_hz = d.sample_rate_hz;
+  o.has_temperature = d.has_temperature;
+  o.has_angle = d.has_angle;
+  o.stretch_axes = d.stretch_axes;
+  for (const auto& p : d.parents) {
+    if (std::find(steps.begin(), steps.end(), p.step) != steps.end()) continue;
+    ParentBlock q = p;
+    q.first = static_cast<int>(o.subs.size());
+    for (int j = p.first; j < p.first + p.count; ++j) {
+      SubBlock s = d.subs[j];
+      s.parent = static_cast<int>(o.parents.size());
+      o.subs.push_back(s);
+    }
+    o.parents.push_back(q);
+  }
+  return o;
+}
+
 DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current, const EffectTerms& carried,
                               const DiagnoseOptions& opt) {
-  DiagnoseResult res;
   if (data.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks in plan steps");
+  {
+    // A plateau at the highest outputs (a range exceeded): its steps are left out, then the rest is
+    // diagnosed (the white noise per axis comes from static sub-blocks, which a plateau at the top
+    // rates does not touch).
+    const Design D0 = build_design(data, carried);
+    std::vector<DiagSaturation> sat = find_saturation(data, D0.white_var);
+    if (!sat.empty()) {
+      std::vector<int> steps;
+      for (const auto& s : sat) steps.insert(steps.end(), s.steps.begin(), s.steps.end());
+      std::sort(steps.begin(), steps.end());
+      steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
+      const DiagData rest = without_steps(data, steps);
+      if (rest.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks left outside the steps whose output is clipped");
+      DiagnoseResult res = diagnose_bench(rest, current, carried, opt);
+      res.saturation = std::move(sat);
+      return res;
+    }
+  }
+  DiagnoseResult res;
   const Design D = build_design(data, carried);
   res.not_excited = D.not_excited;
   res.parents = static_cast<int>(data.parents.size());
@@ -396,6 +597,18 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     }
     u.worst_steps = diag::worst_windows(st, 1.0);
     res.unexplained.push_back(u);
+  }
+  // Drift against the class's stability (issue 36): on an axis with no finding and not unexplained,
+  // under a triad drift still at the class's, what a larger drift of that axis alone absorbs.
+  for (int a = 0; a < kAxes; ++a) {
+    const int triad = a / 3;
+    if (ds[triad] != drift_sigma[triad] || tau[triad] != drift_tau[triad]) continue;
+    bool claimed = false;
+    for (const auto& f : res.findings) claimed = claimed || (f.report_sensor == triad && (f.report_axis < 0 || f.report_axis == a % 3));
+    for (const auto& u : res.unexplained) claimed = claimed || u.sensor * 3 + u.axis == a;
+    if (claimed) continue;
+    DiagDriftExcess x = drift_excess(problem, search, a, drift_sigma[triad]);
+    if (drift_excess_reported(x)) res.drift_excess.push_back(x);
   }
   for (auto& f : res.findings) finding_status(f, res, opt);
   return res;

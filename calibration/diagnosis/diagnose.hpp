@@ -56,6 +56,14 @@ struct AxisStats {
   int worst_angle_bin = -1;
   double worst_angle_bin_z = 0, worst_angle_bin_mean = 0;
   double angle_profile_p = 1;  // χ² test of the 12-bin angle profile against white noise
+  // Bench (issue 36, the remainder's power): a generalised-least-squares test of one offset per
+  // plan step in the whitened parent residual (the noise model's drift and bench errors in the
+  // whitening): Q = ‖projection of the whitened residual on the whitened step indicators‖², χ²
+  // with step_dof = steps − parameters per axis under the noise model. A remainder that moves
+  // from step to step (a dead band, a memory of the last rotation, a clipped output) concentrates
+  // there, where the parent-level χ²/dof spreads it over every block.
+  double step_q = 0, step_p = 1;
+  int step_dof = 0;
   double bic = 0;
 };
 
@@ -149,6 +157,11 @@ struct DiagWithdrawn {
 struct DiagUnexplained {
   int sensor = 0, axis = 0;
   double chi2_dof = 0, high_chi2_dof = 0, ljung_box_p = 1, systematic_rms = 0;
+  double step_p = 1;  // bench: the step-offset test (AxisStats::step_p)
+  // Drives: the motion condition whose GLS test against the residual (the noise model's drift
+  // included) reaches the acceptance threshold, its Δχ² and plain correlation; empty if none.
+  std::string condition_test;
+  double condition_dchi2 = 0, condition_r = 0;
   std::vector<int> worst_steps;
   std::vector<ConditionCorrelation> correlations;  // strongest first
   double angle_harmonic_amp = 0;
@@ -160,6 +173,64 @@ struct DiagUnexplained {
   double angle_bin_mean = 0, angle_bin_z = 0;
   double period_hz = 0, period_amp = 0;
 };
+
+// Issue 36, a plateau at the highest inputs: an axis whose output stays frozen (its scatter inside
+// the sub-blocks below kFrozenScatter of its white noise) at the largest outputs of the recording
+// has left its measurement range. Those plan steps are left out of the diagnosis: a clipped output
+// says nothing about the sensor model, and fitted by polynomial terms it would name them.
+struct DiagSaturation {
+  int sensor = 0, axis = 0;
+  double level_pos = std::numeric_limits<double>::quiet_NaN();  // plateau output, positive side (SI)
+  double level_neg = std::numeric_limits<double>::quiet_NaN();  // negative side
+  double reference_max = 0;  // largest |reference input| about the axis on those steps
+  double frozen_fraction = 0;  // share of those steps' sub-blocks that are frozen
+  std::vector<int> steps;    // plan steps left out
+  double excluded_s = 0;     // data left out (all axes: the steps are removed whole)
+};
+// Sub-block scatter below this fraction of (n − 1)·white variance counts as frozen.
+constexpr double kFrozenScatter = 0.01;
+// Finds the plateaus (empty if none) from the sub-blocks' scatter and the white noise per axis.
+std::vector<DiagSaturation> find_saturation(const DiagData& d, const double (&white_var)[6]);
+// The recording without those steps (parents and sub-blocks renumbered).
+DiagData without_steps(const DiagData& d, const std::vector<int>& steps);
+
+// Issue 36, drift against the class's stability: on an axis with no finding of its own and not
+// unexplained, the drift the class's noise model absorbed (its smoothed path in the final residual).
+// When it moved the bias by more than kDriftExcessFactor × the class's in-run bias stability over
+// the run and stands kDriftExcessZ standard deviations above what that noise model gives on this
+// recording (a drawn null), or the catalogue's temperature bias of the axis, though below the
+// acceptance threshold (Δχ² ≥ 4), gives such a change, it is reported, never established: "temperature or drift, not told
+// apart" when the path follows the recorded temperature, else "a drift beyond the data sheet or an
+// effect outside the catalogue". Beside it, the best larger drift of that axis alone on the drift
+// grid and its likelihood gain (which a short record leaves small: a warm-up is a likely path of the
+// class's drift there, only an unusually large one).
+struct DiagDriftExcess {
+  int sensor = 0, axis = 0;
+  double gain = 0;                 // −2 ln L of the class's drift minus that of the best larger one (≤ 0: none better)
+  double sigma = 0, tau_s = 0;     // that drift (SI)
+  double change = 0;               // max − min of its smoothed path over the run (SI)
+  double stability = 0;            // the class's in-run bias stability (its drift σ, SI)
+  // The change against its distribution under the class's noise model (kDriftExcessDraws draws of
+  // the parent residual through the same smoother): mean, standard deviation, z.
+  double null_mean = 0, null_sd = 0, z = 0;
+  bool has_temperature = false;
+  double temperature_change = 0;   // max − min of the recorded temperature over the blocks (°C)
+  double temperature_r = 0;        // correlation of the path with the temperature
+  double per_degree = 0;           // the path's least-squares slope on the temperature (SI per °C)
+  bool follows_temperature = false;  // |r| ≥ kDriftTemperatureR and temperature_change ≥ 1 °C
+  // The catalogue's temperature_bias of this axis added to the final model: Δχ², value, 1σ (SI per K).
+  double temperature_dchi2 = 0, temperature_coef = 0, temperature_coef_sigma = 0;
+  // |coefficient| × the temperature change: the change over the run the temperature term gives.
+  double temperature_change_total() const { return std::abs(temperature_coef) * temperature_change; }
+};
+constexpr double kDriftExcessFactor = 2.0;  // the change must exceed 2× the class's stability
+constexpr double kDriftExcessZ = 4.0;       // and stand 4 standard deviations above its null mean
+constexpr int kDriftExcessDraws = 400;
+constexpr double kDriftTemperatureChi2 = 4;  // or: the temperature term at 2σ giving a change > 2× the stability
+// The report rule: (change > kDriftExcessFactor·stability and z ≥ kDriftExcessZ) or (the temperature
+// term's Δχ² ≥ kDriftTemperatureChi2 and its change over the run > kDriftExcessFactor·stability).
+bool drift_excess_reported(const DiagDriftExcess& x);
+constexpr double kDriftTemperatureR = 0.8;
 
 // Per-sub-block residual of one sensor axis, for plots.
 struct ResidualSeries {
@@ -179,6 +250,8 @@ struct DiagnoseResult {
   std::vector<NotExcited> not_excited;
   std::vector<DiagUnexplained> unexplained;
   std::vector<DiagWithdrawn> withdrawn;
+  std::vector<DiagSaturation> saturation;        // steps left out (rule: plateau at the top inputs)
+  std::vector<DiagDriftExcess> drift_excess;     // drift beyond the class's stability, not established
   AxisStats before[6], after[6];                 // gyro x,y,z, accel x,y,z
   std::vector<ConditionCorrelation> correlations_before[6];
   SensorErrors base_before;                      // coefficients used for "before"

@@ -84,6 +84,7 @@ DiagUnexplained unexplained_axis(int a, const AxisStats& s, std::vector<Conditio
   u.high_chi2_dof = s.high_chi2_dof;
   u.ljung_box_p = s.ljung_box_p;
   u.systematic_rms = s.systematic_rms;
+  u.step_p = s.step_p;
   u.correlations = std::move(correlations);
   if (u.correlations.size() > 4) u.correlations.resize(4);
   return u;
