@@ -199,7 +199,8 @@ DiagData without_steps(const DiagData& d, const std::vector<int>& steps);
 // When it moved the bias by more than kDriftExcessFactor × the class's in-run bias stability over
 // the run and stands kDriftExcessZ standard deviations above what that noise model gives on this
 // recording (a drawn null), or the catalogue's temperature bias of the axis, though below the
-// acceptance threshold (Δχ² ≥ 4), gives such a change, it is reported, never established: "temperature or drift, not told
+// acceptance threshold (Δχ² ≥ kDriftTemperatureChi2), gives such a change, it is reported, never
+// established: "temperature or drift, not told
 // apart" when the path follows the recorded temperature, else "a drift beyond the data sheet or an
 // effect outside the catalogue". Beside it, the best larger drift of that axis alone on the drift
 // grid and its likelihood gain (which a short record leaves small: a warm-up is a likely path of the
@@ -226,7 +227,10 @@ struct DiagDriftExcess {
 constexpr double kDriftExcessFactor = 2.0;  // the change must exceed 2× the class's stability
 constexpr double kDriftExcessZ = 4.0;       // and stand 4 standard deviations above its null mean
 constexpr int kDriftExcessDraws = 400;
-constexpr double kDriftTemperatureChi2 = 4;  // or: the temperature term at 2σ giving a change > 2× the stability
+// or: the temperature term, though below the acceptance threshold, at Δχ² ≥ 13.8 (χ²₁ p = 2·10⁻⁴)
+// giving a change > 2× the stability. At Δχ² ≥ 4 a quarter of clean simulated units were reported
+// (their own drift, following the self-heating of the plan, looks the same).
+constexpr double kDriftTemperatureChi2 = 13.8;
 // The report rule: (change > kDriftExcessFactor·stability and z ≥ kDriftExcessZ) or (the temperature
 // term's Δχ² ≥ kDriftTemperatureChi2 and its change over the run > kDriftExcessFactor·stability).
 bool drift_excess_reported(const DiagDriftExcess& x);
