@@ -380,6 +380,13 @@ RecordingWriter::RecordingWriter(const fs::path& dir, RecordingMeta meta, ImuFor
                      "sigma_vel_m_s"},
                     "GNSS antenna fixes");
   }
+  // A new recording in this folder (an overwrite): a table of an earlier one that this recording
+  // does not have would be read as part of it (a drive without GNSS over one with gnss.csv).
+  for (const char* t : kRecordingTables) {
+    bool written = false;
+    for (const auto& x : tally_) written = written || x.name() == t;
+    if (!written) fs::remove(dir_ / (std::string(t) + ".csv"));
+  }
 }
 
 RecordingWriter::~RecordingWriter() {

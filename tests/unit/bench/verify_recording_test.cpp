@@ -10,6 +10,7 @@
 
 #include "bench/io/csv.hpp"
 #include "bench/io/hdf5_recording.hpp"
+#include "bench/io/recording.hpp"
 #include "bench/io/verify_recording.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -98,6 +99,18 @@ TEST(VerifyRecording, MissingAndUnwrittenTablesAreRefused) {
   m = refusal(d.path(), t);
   EXPECT_NE(m.find("gnss.csv"), std::string::npos) << m;
   EXPECT_NE(m.find("table gnss was not written"), std::string::npos) << m;
+}
+
+// An overwrite (simulate drive --force) by a recording without GNSS of one with gnss.csv: the old
+// table is removed, not read back as an unwritten part of the new recording.
+TEST(VerifyRecording, AnOverwriteRemovesTablesTheNewRecordingHasNot) {
+  TempDir d;
+  { CsvWriter w((d.path() / "gnss.csv").string(), {"t_s", "lat_deg"}); w.row({0.0, 1.0}); }
+  RecordingMeta meta;
+  meta.kind = RecordingKind::drive;
+  meta.imu_rate_hz = 100;
+  RecordingWriter w(d.path(), meta, ImuForm::rates, false, false, false);
+  EXPECT_FALSE(std::filesystem::exists(d.path() / "gnss.csv"));
 }
 
 TEST(VerifyRecording, OtherColumnsAreRefused) {
