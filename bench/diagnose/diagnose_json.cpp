@@ -307,7 +307,8 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
   }
   j["mounting"] = mount;
   j["noise_model"] = {{"gyro_drift_sigma_rad_s", r.drift_sigma[0]}, {"gyro_drift_tau_s", r.drift_tau[0]},
-                      {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]}};
+                      {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]},
+                      {"device_class", run.noise_class}};
   j["data"] = {{"blocks", r.parents}, {"intervals", r.subs}, {"seconds", r.data_s},
                {"imu_rate_hz", in.data.imu_rate_hz}, {"skipped_intervals", in.data.skipped_intervals}};
   if (run.innovations || !run.innovations_skipped.empty()) j["innovations"] = drive_innovations_json(run);

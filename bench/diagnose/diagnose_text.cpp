@@ -280,7 +280,7 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
   o << "drive: " << r.parents << " blocks, " << fmt(r.data_s, 4) << " s; reference intervals " << r.subs
     << "; coefficients tested: "
     << (run.coeffs_given ? "given (M fixed; bias and mounting re-estimated)" : "none (bias and M fitted on this drive)")
-    << "\n";
+    << "\nnoise model (drift prior) of " << run.noise_class << "\n";
   if (run.coeffs_given)
     o << "mounting correction (MEMS axes): " << fmt(R.mounting_delta(0) / units::kDeg) << ", "
       << fmt(R.mounting_delta(1) / units::kDeg) << ", " << fmt(R.mounting_delta(2) / units::kDeg) << " ° (σ "

@@ -67,6 +67,8 @@ struct DriveInnovations {
 
 struct DriveDiagRun {
   DriveDiagnoseResult result;
+  // The device class whose noise (the drift prior) the drive is judged by, and how it was chosen.
+  std::string noise_class;
   CoefficientSet current;   // what was tested ("before")
   CoefficientSet improved;  // IMPROVED.json
   bool coeffs_given = false;
