@@ -150,7 +150,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
   for (const auto& x : r.drift_excess) {
     drift_excess.push_back({{"sensor", kSensor[x.sensor]},
                             {"axis", kAxis[x.axis]},
-                            {"status", x.follows_temperature ? "temperature or drift, not told apart" : "drift or an effect outside the catalogue, not told apart"},
+                            {"status", x.temperature_or_drift() ? "temperature or drift, not told apart" : "drift or an effect outside the catalogue, not told apart"},
                             {"change", x.change},
                             {"class_stability", x.stability},
                             {"ratio", x.change / x.stability},

@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "bench/diagnose/diagnose_text.hpp"
 #include "calibration/gauss_markov_window.hpp"
 #include "common/units.hpp"
 
@@ -161,10 +162,10 @@ std::string saturation_sentence(const DiagSaturation& x) {
 }
 
 std::string drift_excess_sentence(const DiagDriftExcess& x) {
-  const bool gyro = x.sensor == 0;
-  const double k = gyro ? 1.0 / units::kDegPerHour : 1.0 / units::kMilliG;
-  const char* unit = gyro ? " °/h" : " mg";
-  std::string o = std::string("drift beyond the class's stability, not established: ") + (gyro ? "gyro " : "accel ") + "xyz"[x.axis] +
+  using diagnose_out::kAxis, diagnose_out::kSensor;
+  const double k = diagnose_out::disp(1.0, x.sensor);
+  const std::string unit = std::string(" ") + diagnose_out::disp_unit(x.sensor);
+  std::string o = std::string("drift beyond the class's stability, not established: ") + kSensor[x.sensor] + " " + kAxis[x.axis] +
                   "'s bias moved " + fmt(x.change * k) + unit + " over the run, " + fmt(x.change / x.stability, 2) +
                   "× the class's in-run bias stability (" + fmt(x.stability * k) + unit + ") and " + fmt(x.z, 2) +
                   " standard deviations above what the class's noise gives on this recording (" + fmt(x.null_mean * k) + " ± " +
@@ -176,7 +177,7 @@ std::string drift_excess_sentence(const DiagDriftExcess& x) {
     o += "; the temperature bias term gives " + fmt(x.temperature_coef * k) + " ± " + fmt(x.temperature_coef_sigma * k, 2) + unit +
          " per °C, " + fmt(x.temperature_change_total() * k) + unit + " over the " + fmt(x.temperature_change) +
          " °C of the run (Δχ² " + fmt(x.temperature_dchi2, 2) + ", not established)";
-  if (x.follows_temperature || (x.has_temperature && x.temperature_dchi2 >= kDriftTemperatureChi2))
+  if (x.temperature_or_drift())
     return o + "; the path follows the recorded temperature (r " + fmt(x.temperature_r, 2) +
            "): temperature or drift, not told apart";
   return o + (x.has_temperature ? "; it does not follow the recorded temperature (r " + fmt(x.temperature_r, 2) + ")" : std::string()) +

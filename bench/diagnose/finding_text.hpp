@@ -35,9 +35,9 @@ std::string withdrawn_text(const DiagWithdrawn& w);
 // The JSON "why" of a withdrawn term.
 const char* withdrawn_why_key(WithdrawnWhy w);
 
-// "range exceeded: gyro z output held at +97.1 / −97.1 °/s (frozen: no noise) on 4 steps where
-// the reference reached 100 °/s; those steps (12 s) are left out of the diagnosis (the rest is
-// diagnosed as usual)".
+// "range exceeded: gyro z output held at +291 / -291 °/s with no noise (a plateau at the highest
+// outputs; 100 % of those steps' sub-blocks frozen) where the reference reached 300 °/s:
+// saturation, not a polynomial; steps 10, 11 (16 s) left out of the diagnosis".
 std::string saturation_sentence(const DiagSaturation& x);
 
 // "drift beyond the class's stability, not established: gyro z's bias moved 19.6 °/h over the

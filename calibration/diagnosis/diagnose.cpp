@@ -5,8 +5,6 @@
 #include <cmath>
 #include <map>
 #include <random>
-#include <cstdio>
-#include <cstdlib>
 
 #include "calibration/diagnosis/bench_design.hpp"
 #include "calibration/diagnosis/condition_correlation.hpp"
@@ -314,9 +312,7 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
     m.push_back(t);
     const FitOut f = P.fit(m, GreedySearch<BenchProblem>::ptrs(search.all));
     x.temperature_dchi2 = search.cur.chi2 - f.chi2;
-    int first = 0;
-    for (std::size_t k = 0; k < m.size(); ++k)
-      if (m[k] == t) first = f.offset[k];
+    const int first = P.param_index(f, m.size() - 1, t);
     x.temperature_coef = f.theta(first);
     x.temperature_coef_sigma = std::sqrt(std::max(f.cov(first, first), 0.0));
     break;
@@ -348,7 +344,9 @@ std::vector<DiagSaturation> find_saturation(const DiagData& d, const double (&wh
     const int i = a % 3;
     auto meas = [&](const SubBlock& s) { return a < 3 ? s.gyro(i) : s.accel(i); };
     auto ref = [&](const SubBlock& s) { return a < 3 ? s.w(i) : s.f(i); };
-    auto scatter = [&](const SubBlock& s) { return a < 3 ? s.gyro_ss(i) : s.accel_ss(i); };
+    auto frozen = [&](const SubBlock& s) {
+      return s.n >= 10 && (a < 3 ? s.gyro_ss(i) : s.accel_ss(i)) < kFrozenScatter * (s.n - 1) * white_var[a];
+    };
     double top = 0;
     for (const auto& s : d.subs) top = std::max(top, std::abs(meas(s)));
     if (top <= 0) continue;
@@ -358,25 +356,25 @@ std::vector<DiagSaturation> find_saturation(const DiagData& d, const double (&wh
       if (s.n < 10) continue;
       auto& c = per_step[s.step];
       c[1] += 1;
-      if (scatter(s) < kFrozenScatter * (s.n - 1) * white_var[a] && std::abs(meas(s)) >= 0.9 * top) c[0] += 1;
+      if (frozen(s) && std::abs(meas(s)) >= 0.9 * top) c[0] += 1;
     }
     DiagSaturation sat;
     sat.sensor = a / 3;
     sat.axis = i;
-    double frozen = 0, total = 0;
+    double n_frozen = 0, total = 0;
     for (const auto& [step, c] : per_step)
       if (c[0] >= 0.5 * c[1]) {
         sat.steps.push_back(step);
-        frozen += c[0];
+        n_frozen += c[0];
         total += c[1];
       }
     if (sat.steps.empty()) continue;
-    sat.frozen_fraction = frozen / total;
+    sat.frozen_fraction = n_frozen / total;
     double pos = 0, neg = 0, np = 0, nn = 0;
     for (const auto& s : d.subs) {
       if (!std::binary_search(sat.steps.begin(), sat.steps.end(), s.step)) continue;
       sat.reference_max = std::max(sat.reference_max, std::abs(ref(s)));
-      if (s.n < 10 || scatter(s) >= kFrozenScatter * (s.n - 1) * white_var[a]) continue;
+      if (!frozen(s)) continue;
       (meas(s) > 0 ? pos : neg) += meas(s);
       (meas(s) > 0 ? np : nn) += 1;
     }
@@ -412,26 +410,22 @@ DiagData without_steps(const DiagData& d, const std::vector<int>& steps) {
 DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current, const EffectTerms& carried,
                               const DiagnoseOptions& opt) {
   if (data.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks in plan steps");
-  {
-    // A plateau at the highest outputs (a range exceeded): its steps are left out, then the rest is
-    // diagnosed (the white noise per axis comes from static sub-blocks, which a plateau at the top
-    // rates does not touch).
-    const Design D0 = build_design(data, carried);
-    std::vector<DiagSaturation> sat = find_saturation(data, D0.white_var);
-    if (!sat.empty()) {
-      std::vector<int> steps;
-      for (const auto& s : sat) steps.insert(steps.end(), s.steps.begin(), s.steps.end());
-      std::sort(steps.begin(), steps.end());
-      steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
-      const DiagData rest = without_steps(data, steps);
-      if (rest.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks left outside the steps whose output is clipped");
-      DiagnoseResult res = diagnose_bench(rest, current, carried, opt);
-      res.saturation = std::move(sat);
-      return res;
-    }
+  const Design D = build_design(data, carried);
+  // A plateau at the highest outputs (a range exceeded): its steps are left out, then the rest is
+  // diagnosed (the white noise per axis comes from static sub-blocks, which a plateau at the top
+  // rates does not touch).
+  if (std::vector<DiagSaturation> sat = find_saturation(data, D.white_var); !sat.empty()) {
+    std::vector<int> steps;
+    for (const auto& s : sat) steps.insert(steps.end(), s.steps.begin(), s.steps.end());
+    std::sort(steps.begin(), steps.end());
+    steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
+    const DiagData rest = without_steps(data, steps);
+    if (rest.parents.size() < 8) throw std::runtime_error("diagnose: fewer than 8 data blocks left outside the steps whose output is clipped");
+    DiagnoseResult res = diagnose_bench(rest, current, carried, opt);
+    res.saturation = std::move(sat);
+    return res;
   }
   DiagnoseResult res;
-  const Design D = build_design(data, carried);
   res.not_excited = D.not_excited;
   res.parents = static_cast<int>(data.parents.size());
   res.subs = static_cast<int>(data.subs.size());
@@ -602,11 +596,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   // under a triad drift still at the class's, what a larger drift of that axis alone absorbs.
   for (int a = 0; a < kAxes; ++a) {
     const int triad = a / 3;
-    if (ds[triad] != drift_sigma[triad] || tau[triad] != drift_tau[triad]) continue;
-    bool claimed = false;
-    for (const auto& f : res.findings) claimed = claimed || (f.report_sensor == triad && (f.report_axis < 0 || f.report_axis == a % 3));
-    for (const auto& u : res.unexplained) claimed = claimed || u.sensor * 3 + u.axis == a;
-    if (claimed) continue;
+    if (ds[triad] != drift_sigma[triad] || tau[triad] != drift_tau[triad] || diag::axis_reported(res, a)) continue;
     DiagDriftExcess x = drift_excess(problem, search, a, drift_sigma[triad]);
     if (drift_excess_reported(x)) res.drift_excess.push_back(x);
   }

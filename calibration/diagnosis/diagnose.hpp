@@ -200,9 +200,9 @@ DiagData without_steps(const DiagData& d, const std::vector<int>& steps);
 // the run and stands kDriftExcessZ standard deviations above what that noise model gives on this
 // recording (a drawn null), or the catalogue's temperature bias of the axis, though below the
 // acceptance threshold (Δχ² ≥ kDriftTemperatureChi2), gives such a change, it is reported, never
-// established: "temperature or drift, not told
-// apart" when the path follows the recorded temperature, else "a drift beyond the data sheet or an
-// effect outside the catalogue". Beside it, the best larger drift of that axis alone on the drift
+// established: "temperature or drift, not told apart" when the temperature accounts for it
+// (temperature_or_drift()), else "a drift beyond the data sheet or an effect outside the
+// catalogue". Beside it, the best larger drift of that axis alone on the drift
 // grid and its likelihood gain (which a short record leaves small: a warm-up is a likely path of the
 // class's drift there, only an unusually large one).
 struct DiagDriftExcess {
@@ -223,10 +223,14 @@ struct DiagDriftExcess {
   double temperature_dchi2 = 0, temperature_coef = 0, temperature_coef_sigma = 0;
   // |coefficient| × the temperature change: the change over the run the temperature term gives.
   double temperature_change_total() const { return std::abs(temperature_coef) * temperature_change; }
+  // Read as "temperature or drift, not told apart": the path follows the temperature, or the
+  // temperature term reaches kDriftTemperatureChi2 (the text and the JSON status both ask this).
+  bool temperature_or_drift() const;
 };
 constexpr double kDriftExcessFactor = 2.0;  // the change must exceed 2× the class's stability
 constexpr double kDriftExcessZ = 4.0;       // and stand 4 standard deviations above its null mean
 constexpr int kDriftExcessDraws = 400;
+constexpr double kDriftTemperatureR = 0.8;  // |r| of the path with the temperature that "follows" it
 // or: the temperature term, though below the acceptance threshold, at Δχ² ≥ 13.8 (χ²₁ p = 2·10⁻⁴)
 // giving a change > 2× the stability. At Δχ² ≥ 4 a quarter of clean simulated units were reported
 // (their own drift, following the self-heating of the plan, looks the same).
@@ -234,7 +238,9 @@ constexpr double kDriftTemperatureChi2 = 13.8;
 // The report rule: (change > kDriftExcessFactor·stability and z ≥ kDriftExcessZ) or (the temperature
 // term's Δχ² ≥ kDriftTemperatureChi2 and its change over the run > kDriftExcessFactor·stability).
 bool drift_excess_reported(const DiagDriftExcess& x);
-constexpr double kDriftTemperatureR = 0.8;
+inline bool DiagDriftExcess::temperature_or_drift() const {
+  return follows_temperature || (has_temperature && temperature_dchi2 >= kDriftTemperatureChi2);
+}
 
 // Per-sub-block residual of one sensor axis, for plots.
 struct ResidualSeries {

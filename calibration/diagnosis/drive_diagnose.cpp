@@ -448,11 +448,8 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   {
     const std::vector<int> mp = model_params(D, model);
     for (int a = 0; a < kAxes; ++a) {
-      bool claimed = false;
-      for (const auto& u : res.unexplained) claimed = claimed || u.sensor * 3 + u.axis == a;
-      for (const auto& f : res.findings) claimed = claimed || (f.report_sensor == a / 3 && (f.report_axis < 0 || f.report_axis == a % 3));
       const Dataset& S = all[a];
-      if (claimed || static_cast<int>(S.parents.size()) != NP) continue;
+      if (diag::axis_reported(res, a) || static_cast<int>(S.parents.size()) != NP) continue;
       const auto L = S.L.triangularView<Eigen::Lower>();
       const Eigen::VectorXd rw = L.solve(r_after[a]);
       Eigen::MatrixXd X(NP, static_cast<int>(mp.size()));
@@ -468,9 +465,10 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
         for (int k = 0; k < NP; ++k) c(k) = drive_condition_value(data, k, name);
         if (!c.allFinite()) continue;
         Eigen::VectorXd u = L.solve(c);
+        const double whole = u.squaredNorm();
         u -= Q * (Q.transpose() * u);
         const double uu = u.squaredNorm();
-        if (uu <= 1e-12 * L.solve(c).squaredNorm()) continue;  // in the model's span
+        if (uu <= 1e-12 * whole) continue;  // in the model's span
         const double d = std::pow(u.dot(rw), 2) / uu;
         if (d > best_d) {
           best_d = d;

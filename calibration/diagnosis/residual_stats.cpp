@@ -76,6 +76,14 @@ std::vector<int> worst_windows(const std::map<int, std::pair<double, double>>& s
   return worst;
 }
 
+bool axis_reported(const DiagnoseResult& r, int a) {
+  for (const auto& f : r.findings)
+    if (f.report_sensor == a / 3 && (f.report_axis < 0 || f.report_axis == a % 3)) return true;
+  for (const auto& u : r.unexplained)
+    if (u.sensor * 3 + u.axis == a) return true;
+  return false;
+}
+
 DiagUnexplained unexplained_axis(int a, const AxisStats& s, std::vector<ConditionCorrelation> correlations) {
   DiagUnexplained u;
   u.sensor = a / 3;

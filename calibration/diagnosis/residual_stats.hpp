@@ -23,5 +23,9 @@ std::vector<int> worst_windows(const std::map<int, std::pair<double, double>>& s
 
 // The unexplained entry of axis a (its statistics after, the strongest four correlations).
 DiagUnexplained unexplained_axis(int a, const AxisStats& after, std::vector<ConditionCorrelation> correlations);
+// Is sensor axis a (0–5) already spoken for: a finding reported on it (or on all of its triad), or
+// unexplained? The issue-36 remainder reports (drift against stability, the drive's condition test)
+// are made only on the other axes.
+bool axis_reported(const DiagnoseResult& r, int a);
 
 }  // namespace calbench::diag
