@@ -24,6 +24,22 @@ nlohmann::json not_excited_json(const std::vector<NotExcited>& v) {
   }
   return out;
 }
+// What the drift model absorbed on one axis (DiagDriftExcess), SI: in drift_excess[] and axes.*.drift.
+nlohmann::json drift_figures_json(const DiagDriftExcess& x) {
+  nlohmann::json j = {{"change", x.change},   {"class_stability", x.stability}, {"ratio", x.change / x.stability},
+                      {"null_mean", x.null_mean}, {"null_sd", x.null_sd},       {"z", x.z},
+                      {"gain", x.gain},       {"drift_sigma", x.sigma},         {"drift_tau_s", x.tau_s}};
+  if (x.has_temperature)
+    j["temperature"] = {{"change_c", x.temperature_change},
+                        {"r", x.temperature_r},
+                        {"per_degree", x.per_degree},
+                        {"follows", x.follows_temperature},
+                        {"term_dchi2", x.temperature_dchi2},
+                        {"term_coef", x.temperature_coef},
+                        {"term_coef_sigma", x.temperature_coef_sigma}};
+  return j;
+}
+
 }  // namespace
 
 namespace diagnose_out {
@@ -123,6 +139,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                            {"within_step_chi2_per_dof", u.high_chi2_dof},
                            {"ljung_box_p", u.ljung_box_p},
                            {"step_offset_p", u.step_p},
+                           {"step_offset_family", u.step_family},
                            {"systematic_rms", u.systematic_rms},
                            {"worst_steps", u.worst_steps},
                            {"correlations", corr},
@@ -150,20 +167,9 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
   for (const auto& x : r.drift_excess) {
     drift_excess.push_back({{"sensor", kSensor[x.sensor]},
                             {"axis", kAxis[x.axis]},
-                            {"status", x.temperature_or_drift() ? "temperature or drift, not told apart" : "drift or an effect outside the catalogue, not told apart"},
-                            {"change", x.change},
-                            {"class_stability", x.stability},
-                            {"ratio", x.change / x.stability},
-                            {"null_mean", x.null_mean},
-                            {"null_sd", x.null_sd},
-                            {"z", x.z},
-                            {"gain", x.gain},
-                            {"drift_sigma", x.sigma},
-                            {"drift_tau_s", x.tau_s},
-                            {"sentence", drift_excess_sentence(x)}});
-    if (x.has_temperature)
-      drift_excess.back()["temperature"] = {{"change_c", x.temperature_change}, {"r", x.temperature_r},
-                                            {"per_degree", x.per_degree}, {"follows", x.follows_temperature}};
+                            {"status", x.temperature_or_drift() ? "temperature or drift, not told apart" : "drift or an effect outside the catalogue, not told apart"}});
+    drift_excess.back().update(drift_figures_json(x));
+    drift_excess.back()["sentence"] = drift_excess_sentence(x);
   }
   nlohmann::json axes = nlohmann::json::object();
   for (int a = 0; a < 6; ++a) {
@@ -172,12 +178,18 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                             {"chi2_per_dof", s.chi2_dof},        {"within_step_chi2_per_dof", s.high_chi2_dof},
                             {"ljung_box_q", s.ljung_box_q},      {"ljung_box_p", s.ljung_box_p},
                             {"step_offset_q", s.step_q},          {"step_offset_dof", s.step_dof},
-                            {"step_offset_p", s.step_p},          {"criterion", s.bic}};
+                            {"step_offset_p", s.step_p},          {"step_offset_family", s.step_family},
+                            {"criterion", s.bic}};
     };
     const nlohmann::json corr = correlations_json(r.correlations_before[a], 4);
-    axes[std::string(kSensor[a / 3]) + "_" + kAxis[a % 3]] = {
-        {"before", st(r.before[a])}, {"after", st(r.after[a])}, {"white_sigma_per_sample", r.white_sigma[a]},
-        {"correlations_before", corr}};
+    nlohmann::json& ax = axes[std::string(kSensor[a / 3]) + "_" + kAxis[a % 3]];
+    ax = {{"before", st(r.before[a])}, {"after", st(r.after[a])}, {"white_sigma_per_sample", r.white_sigma[a]},
+          {"correlations_before", corr}};
+    for (const auto& x : r.drift_checked)
+      if (x.sensor * 3 + x.axis == a) {
+        ax["drift"] = drift_figures_json(x);
+        ax["drift"]["reported"] = drift_excess_reported(x);
+      }
   }
   return {{"findings", findings},
           {"unexplained", unexplained},
@@ -306,6 +318,15 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
     mount["correction_sigma_rad"] = to_json(R.mounting_sigma);
   }
   j["mounting"] = mount;
+  if (run.coeffs_given) {
+    const BiasChange c = bias_change(r);
+    nlohmann::json b = {{"unit", "rad/s (gyro), m/s² (accel)"}};
+    for (int a = 0; a < 6; ++a) b[kAxisName[a]] = {{"change", c.change[a]}, {"sigma", c.sigma[a]}};
+    nlohmann::json beyond = nlohmann::json::array();
+    for (int a : c.beyond_3sigma) beyond.push_back(kAxisName[a]);
+    b["beyond_3sigma"] = beyond;
+    j["bias_since_coefficients"] = b;
+  }
   j["noise_model"] = {{"gyro_drift_sigma_rad_s", r.drift_sigma[0]}, {"gyro_drift_tau_s", r.drift_tau[0]},
                       {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]},
                       {"device_class", run.noise_class}};

@@ -21,6 +21,37 @@ const char* const kAxisName[6] = {"gyro_x", "gyro_y", "gyro_z", "accel_x", "acce
 double disp(double v, int sensor) { return sensor == 0 ? v / units::kDegPerHour : v / units::kMilliG; }
 const char* disp_unit(int sensor) { return sensor == 0 ? "°/h" : "mg"; }
 
+BiasChange bias_change(const DiagnoseResult& r) {
+  BiasChange c;
+  for (int a = 0; a < 6; ++a) {
+    const TriadErrors& now = a < 3 ? r.improved.gyro : r.improved.accel;
+    const TriadErrors& given = a < 3 ? r.base_before.gyro : r.base_before.accel;
+    c.change[a] = now.bias(a % 3) - given.bias(a % 3);
+    c.sigma[a] = now.sigma_bias(a % 3);
+    if (c.sigma[a] > 0 && std::abs(c.change[a]) > 3 * c.sigma[a]) c.beyond_3sigma.push_back(a);
+  }
+  return c;
+}
+
+std::string bias_change_text(const DiagnoseResult& r) {
+  const BiasChange c = bias_change(r);
+  std::string s = "bias since the given coefficients (re-estimated on every drive: a turn-on bias shift is the null "
+                  "alternative of any term nearly constant here):";
+  for (int sensor = 0; sensor < 2; ++sensor) {
+    s += std::string(sensor ? ";" : "") + " " + kSensor[sensor];
+    for (int i = 0; i < 3; ++i) {
+      const int a = 3 * sensor + i;
+      s += std::string(i ? ", " : " ") + fmt(disp(c.change[a], sensor), 3) + " ± " + fmt(disp(c.sigma[a], sensor), 2);
+    }
+    s += std::string(" ") + disp_unit(sensor);
+  }
+  s += "; beyond 3σ:";
+  if (c.beyond_3sigma.empty()) s += " none";
+  for (std::size_t k = 0; k < c.beyond_3sigma.size(); ++k)
+    s += std::string(k ? "," : "") + " " + kSensor[c.beyond_3sigma[k] / 3] + " " + kAxis[c.beyond_3sigma[k] % 3];
+  return s + "\n";
+}
+
 std::string correlations_text(const std::vector<ConditionCorrelation>& c) {
   std::string s;
   for (const auto& x : c) s += " " + x.condition + " (r " + fmt(x.r, 2) + ")";
@@ -229,7 +260,8 @@ std::string diagnosis_text(const DiagRun& run) {
   for (const auto& u : r.unexplained) {
     o << "? unexplained (no catalogue effect explains it): " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)
       << " (within steps " << fmt(u.high_chi2_dof) << "), Ljung–Box p " << fmt(u.ljung_box_p)
-      << ", step-offset test p " << fmt(u.step_p, 2) << "; worst steps";
+      << ", step-offset test (" << (std::string(u.step_family) == "all" ? "all steps" : std::string(u.step_family) + " steps")
+      << ") p " << fmt(u.step_p, 2) << "; worst steps";
     for (int s : u.worst_steps) o << " " << s;
     o << "; correlates with";
     o << correlations_text(u.correlations);
@@ -285,6 +317,7 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
     o << "mounting correction (MEMS axes): " << fmt(R.mounting_delta(0) / units::kDeg) << ", "
       << fmt(R.mounting_delta(1) / units::kDeg) << ", " << fmt(R.mounting_delta(2) / units::kDeg) << " ° (σ "
       << fmt(R.mounting_sigma.maxCoeff() / units::kDeg) << " °) relative to " << in.mounting_source << "\n";
+  if (run.coeffs_given) o << bias_change_text(r);
   int flagged = 0;  // motion classes whose mean residual is beyond 3σ after the fit
   for (const auto& sg : R.segments)
     for (int a = 0; a < 6; ++a) flagged += std::abs(sg.z_after[a]) > 3;

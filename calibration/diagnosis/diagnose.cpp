@@ -49,25 +49,62 @@ Eigen::VectorXd smoothed_drift(const DiagData& d, const Dataset& S, const Eigen:
   return diag::smoothed_drift(d.parents, S, parent_means(d, S, r));
 }
 
-// Issue 36, the remainder's power: one offset per plan step in the whitened parent residual
-// (AxisStats::step_q). The step indicators are whitened by the same Cholesky factor as the
-// residual, so the drift and bench errors of the noise model are accounted for; the residual is
-// already orthogonal to the model's columns, of which about nparams/6 per axis lie in the span of
-// the indicators (bias, and the scale and skew columns of steps with a constant input).
-void step_offset_test(const DiagData& d, const Dataset& S, const Eigen::VectorXd& rw, int nparams, AxisStats& st) {
+// Issue 36, the remainder's power: one offset per plan step (AxisStats::step_q), for the three
+// families of steps. The indicators and the model's columns (parent means) are whitened by the
+// residual's Cholesky factor; the indicators' part outside the columns' span is what the test
+// projects on, so its rank is the exact number of degrees of freedom.
+void step_offset_test(const DiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& rw,
+                      const std::vector<int>& cols, AxisStats& st) {
   const int N = static_cast<int>(S.parents.size());
-  std::map<int, int> col;
-  for (int k = 0; k < N; ++k) col.emplace(d.parents[S.parents[k]].step, static_cast<int>(col.size()));
-  const int ns = static_cast<int>(col.size());
-  st.step_dof = ns - nparams / kAxes;
-  if (st.step_dof < 1 || N <= ns) return;
-  Eigen::MatrixXd U = Eigen::MatrixXd::Zero(N, ns);
-  for (int k = 0; k < N; ++k) U(k, col[d.parents[S.parents[k]].step]) = 1.0;
-  U = S.L.triangularView<Eigen::Lower>().solve(U);
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(U);
-  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(N, ns);
-  st.step_q = (Q.transpose() * rw).squaredNorm();
-  st.step_p = chi2_upper_p(st.step_q, st.step_dof);
+  Eigen::MatrixXd X(N, static_cast<Eigen::Index>(cols.size()));
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      double x = 0;
+      for (int j = pb.first; j < pb.first + pb.count; ++j) x += d.subs[j].n * D.X[S.axis](j, cols[c]);
+      X(k, static_cast<Eigen::Index>(c)) = x / pb.n;
+    }
+  }
+  const auto Lt = S.L.triangularView<Eigen::Lower>();
+  X = Lt.solve(X);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qx(X);
+  qx.setThreshold(1e-9);
+  const Eigen::MatrixXd Qx = qx.householderQ() * Eigen::MatrixXd::Identity(N, qx.rank());
+  // A step is static when none of its parent blocks turns (|ω| ≤ 1 °/s: the Earth rate only).
+  std::map<int, bool> turns;
+  for (int k = 0; k < N; ++k) {
+    const ParentBlock& pb = d.parents[S.parents[k]];
+    turns[pb.step] = turns[pb.step] || pb.w.norm() > 0.0174533;
+  }
+  static const char* const kFamily[3] = {"all", "static", "rotating"};
+  st.step_p = 1;
+  for (int fam = 0; fam < 3; ++fam) {
+    std::map<int, int> col;
+    for (const auto& [step, t] : turns)
+      if (fam == 0 || (fam == 1) != t) col.emplace(step, static_cast<int>(col.size()));
+    const int ns = static_cast<int>(col.size());
+    if (ns < 2 || N <= ns) continue;
+    Eigen::MatrixXd U = Eigen::MatrixXd::Zero(N, ns);
+    for (int k = 0; k < N; ++k) {
+      const auto it = col.find(d.parents[S.parents[k]].step);
+      if (it != col.end()) U(k, it->second) = 1.0;
+    }
+    U = Lt.solve(U);
+    U -= Qx * (Qx.transpose() * U);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qu(U);
+    qu.setThreshold(1e-6);
+    const int dof = static_cast<int>(qu.rank());
+    if (dof < 1) continue;
+    const Eigen::MatrixXd Qu = qu.householderQ() * Eigen::MatrixXd::Identity(N, dof);
+    const double q = (Qu.transpose() * rw).squaredNorm();
+    const double p = std::min(1.0, 3.0 * chi2_upper_p(q, dof));
+    if (fam == 0 || p < st.step_p) {
+      st.step_q = q;
+      st.step_dof = dof;
+      st.step_p = p;
+      st.step_family = kFamily[fam];
+    }
+  }
 }
 
 // Statistics of a residual series on one axis (dataset gives the noise model). The systematic
@@ -76,14 +113,17 @@ void step_offset_test(const DiagData& d, const Dataset& S, const Eigen::VectorXd
 // model's own residual the drift would absorb a slow effect (a temperature ramp, 1–2 mg over a
 // chamber cycle) and hide it from the before figure; one drift estimate keeps before and after
 // comparable.
-AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& r, int nparams,
+AxisStats axis_stats(const DiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& r, const Model& m,
                      const Eigen::VectorXd* drift_given = nullptr) {
+  const int nparams = model_params(D, m);
+  std::vector<int> offset, cols;
+  for (const auto& [c, p] : column_map(D, m, S.axis, offset)) cols.push_back(c);
   AxisStats st;
   const int a = S.axis;
   const int N = static_cast<int>(S.parents.size());
   const Eigen::VectorXd rP = parent_means(d, S, r);
   const Eigen::VectorXd rw = diag::whiteness(S, rP, nparams, st);
-  step_offset_test(d, S, rw, nparams, st);
+  step_offset_test(d, D, S, rw, cols, st);
   // Drift as the noise model sees it (smoothed), to be removed from the systematic figure.
   const Eigen::VectorXd drift = drift_given ? *drift_given : smoothed_drift(d, S, r);
   // Per-step means (drift removed, white noise expectation subtracted).
@@ -446,7 +486,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   Eigen::VectorXd r_before[kAxes];
   for (int a = 0; a < kAxes; ++a) {
     r_before[a] = residual_coeffs(D, current, a);
-    res.before[a] = axis_stats(data, D, all[a], r_before[a], kAxes * kBase);
+    res.before[a] = axis_stats(data, D, all[a], r_before[a], Model{});
     res.correlations_before[a] = diag::correlations(data, r_before[a]);
   }
 
@@ -464,11 +504,10 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
   const FitOut& cur = search.cur;
   Eigen::VectorXd r_after[kAxes];
   for (int round = 0;; ++round) {
-    const int np = model_params(D, model);
     double phi[kAxes];
     for (int a = 0; a < kAxes; ++a) {
       r_after[a] = residual(D, model, a, cur.theta);
-      res.after[a] = axis_stats(data, D, all[a], r_after[a], np);
+      res.after[a] = axis_stats(data, D, all[a], r_after[a], model);
       phi[a] = axis_unexplained(res.after[a], all[a]) ? std::max(1.0, res.after[a].chi2_dof) : 1.0;
     }
     if (round == 3) break;
@@ -498,7 +537,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     const Dataset prior = drift_changed ? problem.build(a, kSubsetAll, drift_sigma[triad], drift_tau[triad]) : Dataset{};
     const Dataset& noise_before = drift_changed ? prior : all[a];
     const Eigen::VectorXd drift = smoothed_drift(data, noise_before, r_after[a]);
-    const AxisStats sys = axis_stats(data, D, noise_before, r_before[a], kAxes * kBase, &drift);
+    const AxisStats sys = axis_stats(data, D, noise_before, r_before[a], Model{}, &drift);
     res.before[a].step_rms = sys.step_rms;
     res.before[a].within_rms = sys.within_rms;
     res.before[a].systematic_rms = sys.systematic_rms;
@@ -598,6 +637,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     const int triad = a / 3;
     if (ds[triad] != drift_sigma[triad] || tau[triad] != drift_tau[triad] || diag::axis_reported(res, a)) continue;
     DiagDriftExcess x = drift_excess(problem, search, a, drift_sigma[triad]);
+    res.drift_checked.push_back(x);
     if (drift_excess_reported(x)) res.drift_excess.push_back(x);
   }
   for (auto& f : res.findings) finding_status(f, res, opt);

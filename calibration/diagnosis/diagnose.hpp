@@ -58,12 +58,18 @@ struct AxisStats {
   double angle_profile_p = 1;  // χ² test of the 12-bin angle profile against white noise
   // Bench (issue 36, the remainder's power): a generalised-least-squares test of one offset per
   // plan step in the whitened parent residual (the noise model's drift and bench errors in the
-  // whitening): Q = ‖projection of the whitened residual on the whitened step indicators‖², χ²
-  // with step_dof = steps − parameters per axis under the noise model. A remainder that moves
-  // from step to step (a dead band, a memory of the last rotation, a clipped output) concentrates
-  // there, where the parent-level χ²/dof spreads it over every block.
+  // whitening). The step indicators are whitened by the same factor and projected off the axis's
+  // model columns; Q = ‖projection of the whitened residual on what is left‖² is χ² with step_dof
+  // = the rank of what is left. A remainder that moves from step to step (a dead band, a memory
+  // of the last rotation, a clipped output) concentrates there, where the parent-level χ²/dof
+  // spreads it over every block. Three families: all steps, the static steps and the rotating
+  // steps (an effect of low rates or of gravity sits in the statics, one of the rate in the
+  // rotations, and a family's test has fewer degrees of freedom to spread it over); step_p is the
+  // smallest family p times 3 (Bonferroni: the axis's false-alarm rate stays at the level),
+  // step_q and step_dof are that family's, step_family names it.
   double step_q = 0, step_p = 1;
   int step_dof = 0;
+  const char* step_family = "all";
   double bic = 0;
 };
 
@@ -157,7 +163,8 @@ struct DiagWithdrawn {
 struct DiagUnexplained {
   int sensor = 0, axis = 0;
   double chi2_dof = 0, high_chi2_dof = 0, ljung_box_p = 1, systematic_rms = 0;
-  double step_p = 1;  // bench: the step-offset test (AxisStats::step_p)
+  double step_p = 1;  // bench: the step-offset test (AxisStats::step_p, step_family)
+  const char* step_family = "all";
   // Drives: the motion condition whose GLS test against the residual (the noise model's drift
   // included) reaches the acceptance threshold, its Δχ² and plain correlation; empty if none.
   std::string condition_test;
@@ -262,6 +269,9 @@ struct DiagnoseResult {
   std::vector<DiagWithdrawn> withdrawn;
   std::vector<DiagSaturation> saturation;        // steps left out (rule: plateau at the top inputs)
   std::vector<DiagDriftExcess> drift_excess;     // drift beyond the class's stability, not established
+  // What the drift model absorbed, for every axis checked (no finding, not unexplained, the class's
+  // drift kept): the reported ones and the rest, so that a reader sees the margin (JSON axes.*.drift).
+  std::vector<DiagDriftExcess> drift_checked;
   AxisStats before[6], after[6];                 // gyro x,y,z, accel x,y,z
   std::vector<ConditionCorrelation> correlations_before[6];
   SensorErrors base_before;                      // coefficients used for "before"

@@ -93,6 +93,7 @@ DiagUnexplained unexplained_axis(int a, const AxisStats& s, std::vector<Conditio
   u.ljung_box_p = s.ljung_box_p;
   u.systematic_rms = s.systematic_rms;
   u.step_p = s.step_p;
+  u.step_family = s.step_family;
   u.correlations = std::move(correlations);
   if (u.correlations.size() > 4) u.correlations.resize(4);
   return u;
