@@ -41,6 +41,17 @@ std::string correlations_text(const std::vector<ConditionCorrelation>& c);
 // "per axis (systematic RMS, χ²/dof, Ljung–Box p) before → after:" and one line per axis, the RMS
 // as rms(sensor, value) writes it.
 std::string axis_table_text(const DiagnoseResult& r, const std::function<std::string(int, double)>& rms);
+// Drives with --coeffs: the bias re-estimated against the given coefficients (the null alternative
+// "a turn-on bias shift", in every drive model, so a term whose regressor is nearly constant on the
+// drive — g-sensitivity to f_z ≈ −g on a level road — is credited only with what its variation
+// explains). change = improved − given, per axis gyro x … accel z (SI), and the axes beyond 3σ.
+struct BiasChange {
+  double change[6] = {}, sigma[6] = {};
+  std::vector<int> beyond_3sigma;
+};
+BiasChange bias_change(const DiagnoseResult& r);
+// "bias since the given coefficients (…): gyro +30.1 ± 0.9, … °/h; accel … mg; beyond 3σ: gyro x\n"
+std::string bias_change_text(const DiagnoseResult& r);
 // IMPROVED.json's extra: the catalogue keys replaced by the improved terms, and "diagnosis".
 void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohmann::json& diagnosis);
 

@@ -6,7 +6,8 @@
 #                catalogue any established name is wrong; for warm-up the temperature term is right),
 #   partial:     findings, none established (not told apart from an alternative),
 #   unexplained: an axis reported as unexplained,  nothing: no finding and nothing unexplained.
-# Bench rows: the diagnosis plan (bench/plans/diagnose.toml; INJECT_PLANS="diagnose factory" for more).
+# Bench rows: the diagnosis plan (bench/plans/diagnose.toml; INJECT_PLANS="diagnose factory" for more),
+# then the rows of INJECT_EXTRA_PLAN (default lowrate, bench/plans/lowrate.toml: clean and the dead band).
 # Drive rows: the level test route tests/data/drive_diag_level.toml (every grade 0, f_z ≈ −g), diagnosed
 # with the bench fit of the same simulated unit on the diagnosis plan (--coeffs), so the injected change is
 # the only change since the bench.
@@ -32,19 +33,29 @@ par = sorted({f"{f['effect']} {f['sensor']} {f['axis']}" for f in d["findings"] 
              {f"drift beyond stability {x['sensor']} {x['axis']}" for x in d.get("drift_excess", [])})
 une = sorted({f"{u['sensor']} {u['axis']}" for u in d["unexplained"]})
 sat = sorted({f"{x['sensor']} {x['axis']}" for x in d.get("saturation", [])})
-print("\t".join([row, "; ".join(est), "; ".join(par), "; ".join(une), "; ".join(sat)]))
+bias = sorted(a.replace("_", " ") for a in d.get("bias_since_coefficients", {}).get("beyond_3sigma", []))
+print("\t".join([row, "; ".join(est), "; ".join(par), "; ".join(une), "; ".join(sat), "; ".join(bias)]))
 PY
 }
 bench_classes=(
   "clean (no injection)|"
   "warm-up gyro z, 20 °/h over 10 °C|warmup --sensor gyro --axis z --change 20 --dT 10"
+  "warm-up gyro z, 40 °/h over 10 °C|warmup --sensor gyro --axis z --change 40 --dT 10"
   "warm-up accel x, 1 mg over 10 °C|warmup --sensor accel --axis x --change 1 --dT 10"
   "dead band gyro xyz, 0.01 °/s|deadband --axis all --width 0.01"
   "rotation memory gyro z, 30 °/h|memory --axis z --memory 30"
   "saturation gyro z, 97 % of the top rate|saturation --axis z"
 )
+# Rows on a plan of their own (INJECT_EXTRA_PLAN, default the low-rate plan: a dead band needs inputs
+# inside it), after the INJECT_PLANS rows.
+extra_plan=${INJECT_EXTRA_PLAN:-lowrate}
+extra_classes=(
+  "clean (no injection)|"
+  "dead band gyro xyz, 0.01 °/s|deadband --axis all --width 0.01"
+)
 drive_classes=(
   "speed-dependent bias gyro z, 1 °/h per m/s|speed --sensor gyro --axis z --k 1"
+  "speed-dependent bias gyro z, 3 °/h per m/s|speed --sensor gyro --axis z --k 3"
   "turn-on bias shift gyro x, 30 °/h|shift --sensor gyro --axis x --bias 30"
 )
 # INJECT_TABLE_ONLY=1: no new runs, the table from the per-run file already there (a run stopped early).
@@ -64,6 +75,20 @@ for plan in ${INJECT_PLANS:-diagnose}; do
       "$cb" diagnose "$work/inj" --json > "$work/out.json"
       score "$row" "$work/out.json"
     done
+  done
+done
+for s in $(seq 1 "$seeds"); do
+  [ -n "$extra_plan" ] || break
+  "$cb" simulate bench --plan "$here/bench/plans/$extra_plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
+  for c in "${extra_classes[@]}"; do
+    if [ -n "${c#*|}" ]; then
+      # shellcheck disable=SC2086
+      python3 "$inj" "$work/clean" "$work/inj" ${c#*|} --force
+    else
+      rm -rf "$work/inj"; cp -r "$work/clean" "$work/inj"
+    fi
+    "$cb" diagnose "$work/inj" --json > "$work/out.json"
+    score "bench $extra_plan: ${c%%|*}" "$work/out.json"
   done
 done
 for s in $(seq 1 "$seeds"); do
@@ -88,18 +113,18 @@ python3 - "$runs" > "$md" <<'PY'
 import sys, collections
 rows = collections.OrderedDict()
 for line in open(sys.argv[1]):
-    row, est, par, une, sat = (line.rstrip("\n").split("\t") + ["", "", "", ""])[:5]
-    rows.setdefault(row, []).append((est, par, une, sat))
-print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | nothing reported | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
+    row, est, par, une, sat, bias = (line.rstrip("\n").split("\t") + ["", "", "", "", ""])[:6]
+    rows.setdefault(row, []).append((est, par, une, sat, bias))
+print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | bias change beyond 3σ | nothing reported | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) | bias change since --coeffs beyond 3σ (runs) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 def tally(xs):
     c = collections.Counter(n for x in xs for n in x.split("; ") if n)
     return ", ".join(f"{k} ({v})" for k, v in sorted(c.items())) or "–"
 for row, rs in rows.items():
     n = len(rs)
     e = sum(1 for r in rs if r[0]); p = sum(1 for r in rs if not r[0] and r[1]); u = sum(1 for r in rs if r[2])
-    x = sum(1 for r in rs if r[3]); z = sum(1 for r in rs if not any(r))
-    print(f"| {row} | {n} | {e} | {p} | {u} | {x} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} | {tally(r[3] for r in rs)} |")
+    x = sum(1 for r in rs if r[3]); b = sum(1 for r in rs if r[4]); z = sum(1 for r in rs if not any(r))
+    print(f"| {row} | {n} | {e} | {p} | {u} | {x} | {b} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} | {tally(r[3] for r in rs)} | {tally(r[4] for r in rs)} |")
 PY
 cat "$md"
 {
@@ -108,8 +133,10 @@ cat "$md"
   echo "every established name is a wrong name; for warm-up the temperature term on the injected axis is right);"
   echo "\"partial only\": findings, none established; \"unexplained\": runs with an axis reported unexplained;"
   echo "\"partial only\" includes a drift beyond the class's stability (reported, never established); \"range"
-  echo "exceeded\": an output plateau found and its steps left out; \"nothing\": no finding, nothing unexplained,"
-  echo "no plateau (a miss for every row but the clean one)."
+  echo "exceeded\": an output plateau found and its steps left out; \"bias change beyond 3σ\" (drives, diagnosed"
+  echo "with the unit's bench coefficients): the bias re-estimated on the drive differs from the bench's by more"
+  echo "than 3σ, the right answer for a turn-on bias shift (the null alternative); \"nothing\": none of these"
+  echo "(a miss for every row but the clean ones)."
   [ -z "${INJECT_NOTE:-}" ] || { echo; echo "$INJECT_NOTE"; }
   echo
   cat "$md"
