@@ -128,7 +128,7 @@ void run_diagnose(const DiagnoseArgs& a) {
     given = read_coefficients(a.coeffs);
     check_same_unit(given.device, a.coeffs, a.dir);
   }
-  const DiagRun run = run_diagnosis(in, a.coeffs.empty() ? nullptr : &given, table);
+  const DiagRun run = run_diagnosis(in, a.coeffs.empty() ? nullptr : &given, table, a.device_class);
   const bool write_out = write_improved(a, !run.result.findings.empty(), run.improved);
   if (!a.report.empty()) write_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
@@ -162,7 +162,8 @@ const bool registered = add_command(60, [](CLI::App& app) {
   d->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
   d->add_option("--device-class", a->device_class,
-                 "drives: the IMU device class of the in-motion filter runs (as fit drive --device-class); multipos: the "
+                 "bench: the class whose drift prior judges the residual; drives: the IMU device class of the in-motion "
+                 "filter runs (as fit drive --device-class) and of the drift prior; multipos: the "
                  "class whose noise and drift the poses are judged by (as fit multipos --device-class); a class file "
                  "or a built-in class name; default from meta.json device.model");
   d->add_flag("--no-innovations", a->no_innovations,

@@ -199,6 +199,9 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
           {"not_excited", not_excited_json(r.not_excited)},
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "bench fit of this recording" : "given"},
+          {"noise_model", {{"gyro_drift_sigma_rad_s", r.drift_sigma[0]}, {"gyro_drift_tau_s", r.drift_tau[0]},
+                           {"accel_drift_sigma_m_s2", r.drift_sigma[1]}, {"accel_drift_tau_s", r.drift_tau[1]},
+                           {"device_class", run.noise_class}}},
           {"data", {{"parent_blocks", r.parents}, {"sub_blocks", r.subs}, {"data_s", r.data_s}}}};
 }
 

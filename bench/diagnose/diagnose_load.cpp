@@ -67,6 +67,7 @@ DriveRefEpoch to_epoch(const DriveRefRow& r) {
 
 DiagInput load_diag_input(const std::filesystem::path& dir, double parent_s) {
   DiagInput in;
+  in.dir = dir;
   in.meta = read_meta(dir);
   if (in.meta.kind != RecordingKind::bench)
     throw InputError((dir / "meta.json").string(), 0, "kind",

@@ -3,6 +3,8 @@
 #include "bench/bench_recording.hpp"
 #include "bench/diagnose/diagnose_text.hpp"
 #include "bench/diagnose/effects_json.hpp"
+#include "bench/io/imu_class_toml.hpp"
+#include "common/input_error.hpp"
 #include "calibration/bench_fit_effects.hpp"
 #include "common/units.hpp"
 
@@ -12,8 +14,24 @@
 
 namespace calbench {
 
-DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const TableSpec& table) {
+std::string diagnosis_noise_class(const std::string& device_class, const std::string& model,
+                                  const std::filesystem::path& meta_file, NoiseSpec& noise) {
+  try {
+    const ImuClassChoice c = choose_imu_class(device_class, model, meta_file.string());
+    noise = c.cls.noise;
+    return c.cls.name + " (" + c.chosen_by + ")";
+  } catch (const InputError&) {
+    if (!device_class.empty()) throw;
+    noise = adis16488a_noise();
+    return "ADIS16488A, the default: meta.json device.model '" + model + "' is no known class (give --device-class)";
+  }
+}
+
+DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const TableSpec& table,
+                      const std::string& device_class) {
   DiagRun run;
+  DiagnoseOptions opt;
+  run.noise_class = diagnosis_noise_class(device_class, in.meta.device.model, in.dir / "meta.json", opt.noise);
   EffectTerms carried;
   if (coeffs) {
     run.current = *coeffs;
@@ -29,7 +47,6 @@ DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const T
   }
   // Unknown coefficients (σ = ∞) are tested at 0, as the spec says they are applied.
   SensorErrors cur = run.current.errors;
-  DiagnoseOptions opt;
   opt.table = table;
   run.result = diagnose_bench(in.data, cur, carried, opt);
 

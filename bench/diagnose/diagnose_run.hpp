@@ -15,6 +15,7 @@
 namespace calbench {
 
 struct DiagInput {
+  std::filesystem::path dir;  // the recording ("" in memory)
   RecordingMeta meta;
   DiagData data;
   std::vector<BenchBlock> blocks;  // 1 s blocks for the bench fit
@@ -29,14 +30,25 @@ DiagInput load_diag_input(const std::filesystem::path& dir, double parent_s = 1.
 DiagInput simulate_diag_input(const BenchPlan& plan, const SensorErrors& truth, const BenchSimOptions& opt);
 
 struct DiagRun {
+  std::string noise_class;  // the device class whose drift prior judged the residual, and why
   DiagnoseResult result;
   CoefficientSet current;   // what was tested ("before")
   CoefficientSet improved;  // IMPROVED.json
   bool fitted_first = false;
 };
 
-// coeffs == nullptr: fit first with the bench fit (lsq, full model).
-DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const TableSpec& table);
+// The drift prior a recording is judged by: the device class's, chosen as the in-motion filter runs
+// choose it (`device_class`: --device-class, else meta.json device.model); the ADIS16488A's when
+// the model is no known class and none is given. Returns the class's name and why, for the output.
+// (Judged by the ADIS16488A's drift, clean ICM-42688-P drives on the short route were given an
+// established correlated_drift in 22 of 33.) A --device-class that names no class is bad input.
+std::string diagnosis_noise_class(const std::string& device_class, const std::string& model,
+                                  const std::filesystem::path& meta_file, NoiseSpec& noise);
+
+// coeffs == nullptr: fit first with the bench fit (lsq, full model). device_class: as
+// diagnosis_noise_class's ("" = meta.json's model).
+DiagRun run_diagnosis(const DiagInput& in, const CoefficientSet* coeffs, const TableSpec& table,
+                      const std::string& device_class = "");
 
 // --json document: {"findings": [...], "unexplained": [...], "axes": {...}, ...}
 nlohmann::json diagnosis_json(const DiagRun& run);

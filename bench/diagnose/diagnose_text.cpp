@@ -247,7 +247,7 @@ std::string diagnosis_text(const DiagRun& run) {
   const DiagnoseResult& r = run.result;
   std::ostringstream o;
   o << "coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << "; " << r.parents
-    << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\n";
+    << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\nnoise model (drift prior) of " << run.noise_class << "\n";
   for (const auto& x : r.saturation) o << "! " << saturation_sentence(x) << "\n";
   if (r.findings.empty())
     o << (!r.drift_excess.empty() ? std::string("no established finding: see the drift beyond the class's stability below\n") :

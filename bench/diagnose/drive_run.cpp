@@ -2,6 +2,7 @@
 
 #include <ctime>
 
+#include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/diagnose_text.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/fit_drive.hpp"
@@ -50,31 +51,10 @@ DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun&
   return out;
 }
 
-namespace {
-
-// The drift prior the drive is judged by: the device class's, chosen as the in-motion filter runs
-// choose it (--device-class, else meta.json device.model); the ADIS16488A's when the model is no
-// known class and none is given, which the output says. (Judged by the ADIS16488A's drift, clean
-// ICM-42688-P drives on the short route were given an established correlated_drift in 22 of 33.)
-std::string drive_noise_class(const DriveDiagInput& in, NoiseSpec& noise) {
-  try {
-    const ImuClassChoice c = choose_imu_class(in.device_class, in.meta.device.model, (in.dir / "meta.json").string());
-    noise = c.cls.noise;
-    return c.cls.name + " (" + c.chosen_by + ")";
-  } catch (const InputError&) {
-    if (!in.device_class.empty()) throw;
-    noise = adis16488a_noise();
-    return "ADIS16488A, the default: meta.json device.model '" + in.meta.device.model +
-           "' is no known class (give --device-class)";
-  }
-}
-
-}  // namespace
-
 DriveDiagRun run_drive_diagnosis(const DriveDiagInput& in, const DriveCoeffs* coeffs, bool innovations) {
   DriveDiagRun run;
   DriveDiagnoseOptions opt;
-  run.noise_class = drive_noise_class(in, opt.noise);
+  run.noise_class = diagnosis_noise_class(in.device_class, in.meta.device.model, in.dir / "meta.json", opt.noise);
   EffectTerms carried;
   if (coeffs) {
     run.current = coeffs->set;
