@@ -27,7 +27,9 @@ BiasChange bias_change(const DiagnoseResult& r) {
     const TriadErrors& now = a < 3 ? r.improved.gyro : r.improved.accel;
     const TriadErrors& given = a < 3 ? r.base_before.gyro : r.base_before.accel;
     c.change[a] = now.bias(a % 3) - given.bias(a % 3);
-    c.sigma[a] = now.sigma_bias(a % 3);
+    // The drive's σ and the given coefficients' own (their bench fit's): a change beyond 3σ of both
+    // is a change of the unit, not of the estimates.
+    c.sigma[a] = std::hypot(now.sigma_bias(a % 3), given.sigma_bias(a % 3));
     if (c.sigma[a] > 0 && std::abs(c.change[a]) > 3 * c.sigma[a]) c.beyond_3sigma.push_back(a);
   }
   return c;

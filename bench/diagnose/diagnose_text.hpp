@@ -44,7 +44,8 @@ std::string axis_table_text(const DiagnoseResult& r, const std::function<std::st
 // Drives with --coeffs: the bias re-estimated against the given coefficients (the null alternative
 // "a turn-on bias shift", in every drive model, so a term whose regressor is nearly constant on the
 // drive — g-sensitivity to f_z ≈ −g on a level road — is credited only with what its variation
-// explains). change = improved − given, per axis gyro x … accel z (SI), and the axes beyond 3σ.
+// explains). change = improved − given, per axis gyro x … accel z (SI); σ of the drive's estimate and
+// of the given bias (their bench fit's σ) together; the axes beyond 3σ.
 struct BiasChange {
   double change[6] = {}, sigma[6] = {};
   std::vector<int> beyond_3sigma;

@@ -12,7 +12,8 @@
 # with the bench fit of the same simulated unit on the diagnosis plan (--coeffs), so the injected change is
 # the only change since the bench.
 # Writes docs/validation/diagnose-inject-confusion.md (VALIDATION_NAME=OTHER.md), stamped.
-# Usage: bench/diagnose/inject_confusion.sh [BUILD_DIR]     env: INJECT_SEEDS (default 5), INJECT_PLANS
+# Usage: bench/diagnose/inject_confusion.sh [BUILD_DIR]     env: INJECT_SEEDS (default 5), INJECT_PLANS,
+#   INJECT_EXTRA_PLAN, INJECT_KINDS (bench, drive or both; with it the runs are appended to INJECT_RUNS)
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"
 command="$(env | { grep -E '^INJECT_' || true; } | sort | tr '\n' ' ')bench/diagnose/inject_confusion.sh $*"
@@ -60,8 +61,10 @@ drive_classes=(
 )
 # INJECT_TABLE_ONLY=1: no new runs, the table from the per-run file already there (a run stopped early).
 if [ -z "${INJECT_TABLE_ONLY:-}" ]; then
-: > "$runs"
+[ -n "${INJECT_KINDS:-}" ] || : > "$runs"
+kinds=${INJECT_KINDS:-bench drive}  # INJECT_KINDS=drive: the drive rows only (appended to INJECT_RUNS)
 for plan in ${INJECT_PLANS:-diagnose}; do
+  [[ " $kinds " == *" bench "* ]] || break
   for s in $(seq 1 "$seeds"); do
     "$cb" simulate bench --plan "$here/bench/plans/$plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
     for c in "${bench_classes[@]}"; do
@@ -78,7 +81,7 @@ for plan in ${INJECT_PLANS:-diagnose}; do
   done
 done
 for s in $(seq 1 "$seeds"); do
-  [ -n "$extra_plan" ] || break
+  [ -n "$extra_plan" ] && [[ " $kinds " == *" bench "* ]] || break
   "$cb" simulate bench --plan "$here/bench/plans/$extra_plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
   for c in "${extra_classes[@]}"; do
     if [ -n "${c#*|}" ]; then
@@ -92,6 +95,7 @@ for s in $(seq 1 "$seeds"); do
   done
 done
 for s in $(seq 1 "$seeds"); do
+  [[ " $kinds " == *" drive "* ]] || break
   "$cb" simulate drive --route "$here/tests/data/drive_diag_level.toml" --truth random --seed "$((3700 + s))" --out "$work/drive" --force >/dev/null
   "$cb" simulate bench --plan "$here/bench/plans/diagnose.toml" --truth "$work/drive/truth.json" --seed "$((3800 + s))" --out "$work/bench" --force >/dev/null
   "$cb" fit bench "$work/bench" --out "$work/bench.json" >/dev/null
