@@ -63,27 +63,11 @@ drive_classes=(
 if [ -z "${INJECT_TABLE_ONLY:-}" ]; then
 [ -n "${INJECT_KINDS:-}" ] || : > "$runs"
 kinds=${INJECT_KINDS:-bench drive}  # INJECT_KINDS=drive: the drive rows only (appended to INJECT_RUNS)
-for plan in ${INJECT_PLANS:-diagnose}; do
-  [[ " $kinds " == *" bench "* ]] || break
-  for s in $(seq 1 "$seeds"); do
-    "$cb" simulate bench --plan "$here/bench/plans/$plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
-    for c in "${bench_classes[@]}"; do
-      row="bench $plan: ${c%%|*}"
-      if [ -n "${c#*|}" ]; then
-        # shellcheck disable=SC2086
-        python3 "$inj" "$work/clean" "$work/inj" ${c#*|} --force
-      else
-        rm -rf "$work/inj"; cp -r "$work/clean" "$work/inj"
-      fi
-      "$cb" diagnose "$work/inj" --json > "$work/out.json"
-      score "$row" "$work/out.json"
-    done
-  done
-done
-for s in $(seq 1 "$seeds"); do
-  [ -n "$extra_plan" ] && [[ " $kinds " == *" bench "* ]] || break
-  "$cb" simulate bench --plan "$here/bench/plans/$extra_plan.toml" --truth random --seed "$((3600 + s))" --out "$work/clean" --force >/dev/null
-  for c in "${extra_classes[@]}"; do
+bench_rows() {  # PLAN SEED CLASS...: one clean recording of the plan, each class injected into it and diagnosed
+  local plan=$1 seed=$2 c
+  shift 2
+  "$cb" simulate bench --plan "$here/bench/plans/$plan.toml" --truth random --seed "$seed" --out "$work/clean" --force >/dev/null
+  for c in "$@"; do
     if [ -n "${c#*|}" ]; then
       # shellcheck disable=SC2086
       python3 "$inj" "$work/clean" "$work/inj" ${c#*|} --force
@@ -91,9 +75,17 @@ for s in $(seq 1 "$seeds"); do
       rm -rf "$work/inj"; cp -r "$work/clean" "$work/inj"
     fi
     "$cb" diagnose "$work/inj" --json > "$work/out.json"
-    score "bench $extra_plan: ${c%%|*}" "$work/out.json"
+    score "bench $plan: ${c%%|*}" "$work/out.json"
   done
-done
+}
+if [[ " $kinds " == *" bench "* ]]; then
+  for plan in ${INJECT_PLANS:-diagnose}; do
+    for s in $(seq 1 "$seeds"); do bench_rows "$plan" "$((3600 + s))" "${bench_classes[@]}"; done
+  done
+  if [ -n "$extra_plan" ]; then
+    for s in $(seq 1 "$seeds"); do bench_rows "$extra_plan" "$((3600 + s))" "${extra_classes[@]}"; done
+  fi
+fi
 for s in $(seq 1 "$seeds"); do
   [[ " $kinds " == *" drive "* ]] || break
   "$cb" simulate drive --route "$here/tests/data/drive_diag_level.toml" --truth random --seed "$((3700 + s))" --out "$work/drive" --force >/dev/null
