@@ -97,11 +97,15 @@ nlohmann::json withdrawn_json(const std::vector<DiagWithdrawn>& ws) {
                    {"delta_chi2_when_accepted", w.delta_chi2_when_accepted},
                    {"delta_chi2_final", w.delta_chi2_final},
                    {"why", withdrawn_why_key(w.why)}});
-    if (w.why == WithdrawnWhy::follows_condition)
-      out.back()["follows"] = {{"condition", w.condition},
-                               {"axis", std::string(1, "xyz"[w.axis])},
-                               {"r", w.condition_r},
-                               {"fisher_z", w.condition_z}};
+    if (w.why == WithdrawnWhy::follows_condition) {
+      out.back()["follows"] = {{"condition", w.condition}, {"axis", std::string(1, "xyz"[w.axis])}, {"r", w.condition_r}};
+      if (w.condition_dchi2 > 0) {
+        out.back()["follows"]["gls_delta_chi2"] = w.condition_dchi2;
+        out.back()["follows"]["drift_gain"] = w.drift_gain;
+      } else {
+        out.back()["follows"]["fisher_z"] = w.condition_z;
+      }
+    }
   }
   return out;
 }
@@ -127,6 +131,11 @@ std::string withdrawn_text(const DiagWithdrawn& w) {
       return o + ", but an axis of the triad stays unexplained with it: the drift stood in for structure outside "
                  "the catalogue)";
     case WithdrawnWhy::follows_condition:
+      if (w.condition_dchi2 > 0)
+        return o + ", but under the class's drift a bias following " + w.condition + " explains as much on " +
+               std::string(w.term.sensor == 0 ? "gyro " : "accel ") + "xyz"[w.axis] + " (GLS Δχ² " + fmt(w.condition_dchi2) +
+               "; the triad's together reach the drift's gain " + fmt(w.drift_gain) +
+               "): the drift stood in for structure outside the catalogue)";
       return o + ", but its path on " + std::string(w.term.sensor == 0 ? "gyro " : "accel ") + "xyz"[w.axis] +
              " follows " + w.condition + " (r " + fmt(w.condition_r, 2) + ", Fisher z " + fmt(w.condition_z, 2) +
              "): a random wander is not tied to the motion; the drift stood in for structure outside the catalogue)";

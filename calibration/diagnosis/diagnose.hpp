@@ -158,6 +158,9 @@ struct DiagWithdrawn {
   std::string condition;
   int axis = -1;
   double condition_r = 0, condition_z = 0;
+  // Or (condition_dchi2 > 0): the condition's GLS Δχ² under the class's drift on that axis, the
+  // triad's sum of them reaching the drift's own gain (drift_gain, −2 ln L).
+  double condition_dchi2 = 0, drift_gain = 0;
 };
 
 struct DiagUnexplained {
