@@ -89,7 +89,8 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
                                "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}");
   o << "<h1>Diagnosis of " << report::html_escape(title) << "</h1>\n";
   o << "<p>Coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << ". " << r.parents
-    << " blocks of ~1 s, " << r.subs << " sub-blocks of 0.05 s, " << fmt(r.data_s, 4) << " s of plan steps.</p>\n";
+    << " blocks of ~1 s, " << r.subs << " sub-blocks of 0.05 s, " << fmt(r.data_s, 4) << " s of plan steps. Noise model (drift prior) of "
+    << report::html_escape(run.noise_class) << ".</p>\n";
   o << "<h2>Findings</h2>\n";
   if (r.findings.empty()) o << "<p>No finding: the residual is consistent with the model and the sensor's noise.</p>\n";
   for (const auto& f : r.findings) {
