@@ -6,9 +6,7 @@
 #include "bench/diagnose/diagnose_text.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/fit_drive.hpp"
-#include "bench/io/imu_class_toml.hpp"
 #include "bench/io/json_util.hpp"
-#include "common/input_error.hpp"
 #include "calibration/ins/strapdown.hpp"
 #include "common/units.hpp"
 

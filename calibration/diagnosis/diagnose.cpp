@@ -57,14 +57,8 @@ void step_offset_test(const DiagData& d, const Design& D, const Dataset& S, cons
                       const std::vector<int>& cols, AxisStats& st) {
   const int N = static_cast<int>(S.parents.size());
   Eigen::MatrixXd X(N, static_cast<Eigen::Index>(cols.size()));
-  for (int k = 0; k < N; ++k) {
-    const ParentBlock& pb = d.parents[S.parents[k]];
-    for (std::size_t c = 0; c < cols.size(); ++c) {
-      double x = 0;
-      for (int j = pb.first; j < pb.first + pb.count; ++j) x += d.subs[j].n * D.X[S.axis](j, cols[c]);
-      X(k, static_cast<Eigen::Index>(c)) = x / pb.n;
-    }
-  }
+  for (std::size_t c = 0; c < cols.size(); ++c)
+    X.col(static_cast<Eigen::Index>(c)) = parent_means(d, S, D.X[S.axis].col(cols[c]));
   const auto Lt = S.L.triangularView<Eigen::Lower>();
   X = Lt.solve(X);
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qx(X);
