@@ -423,8 +423,7 @@ ObsContext InMotionFilter::obs_context() const {
   c.C_mb = n_.C_mb;
   c.lever = lever_;
   c.set_layout(layout_);
-  const Vec3 w_ie_b = predicted_body_attitude(c).transpose() * ins::earth_rate_ned_at(nav_.state().lat);
-  c.w_eb_b = n_.C_mb * w_last_ - w_ie_b;
+  c.w_eb_b = body_rate_wrt_earth(nav_.state(), n_.C_mb, w_last_);
   c.a_ned = a_last_;
   return c;
 }

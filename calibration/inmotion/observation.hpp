@@ -35,7 +35,7 @@ struct ObsContext {
   const ins::NavState* mems = nullptr;  // nominal MEMS INS state at the epoch
   Mat3 C_mb = Mat3::Identity();         // current mounting estimate
   Vec3 lever = Vec3::Zero();
-  Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes
+  Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes (body_rate_wrt_earth)
   Vec3 a_ned = Vec3::Zero();            // acceleration (NED) over the last IMU interval (the time-offset block)
   // The filter's layout (set_layout): its size and where the blocks the observations read are
   // (−1: not in the layout): the navigation blocks, the mounting (−1: not estimated), and the gyro
@@ -86,5 +86,20 @@ ins::NavState mems_state_from_reference(const RefObs& r, const Mat3& C_mb, const
 
 // Reference body attitude predicted from the MEMS INS: C_nb = C_nm·C_mbᵀ.
 inline Mat3 predicted_body_attitude(const ObsContext& c) { return c.mems->C_nb() * c.C_mb.transpose(); }
+
+// The reference body's rate w.r.t. the Earth, reference body axes, from the corrected MEMS rate ω_m
+// (MEMS axes): ω_eb^b = C_mb·(ω_m − C_mn·ω_ie^n) (ObsContext::w_eb_b).
+Vec3 body_rate_wrt_earth(const ins::NavState& mems, const Mat3& C_mb, const Vec3& w_m);
+
+// The lever-arm velocity r × ω_eb^b depends on the attitude and the mounting through ω_eb^b
+// itself: with Ĉ_mb = (I − δμ×)·C_mb and Ĉ_mn = C_mn·(I + φ×),
+//   ω̂_eb^b = ω_eb^b + ω_eb^b×δμ + C_bn·(ω_ie^n×)·φ,
+//   δ(r × ω̂_eb^b) = (r×)·C_bn·(ω_ie^n×)·φ + (r×)·(ω_eb^b×)·δμ = J_att·φ + J_mount·δμ.
+// Eq 14 and the NHC add these through their lever-arm terms; of the same size as the mounting's
+// term through Ĉ_nb (|ω|·|r|·|δμ|), so leaving them out biases the mounting (issue 34).
+struct LeverRateJacobian {
+  Mat3 att, mount;
+};
+LeverRateJacobian lever_rate_jacobian(const ObsContext& c, const Vec3& lever);
 
 }  // namespace calbench::inmotion
