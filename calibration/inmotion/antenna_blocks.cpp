@@ -8,10 +8,10 @@
 // the prediction to the fix's true time: p̂_b(t − δt̂) ≈ p̂_b − v·δt̂, v̂_b(t − δt̂) ≈ v̂_b − a·δt̂.
 // Errors are estimate minus truth (δℓ = ℓ̂ − ℓ, δt̂ − δt); with u_ℓ = Ĉ_nb·ℓ̂, w_ℓ = Ĉ_nb(ω × ℓ̂):
 //   z_pos += −u_ℓ − v̂·δt̂;  H_ℓ = −Ĉ_nb,        H_att += −u_ℓ×,  H_mount += u_ℓ×·Ĉ_nb,  H_δt = −v̂, H_v += −δt̂·I
-//   z_vel += −w_ℓ − a·δt̂;   H_ℓ = −Ĉ_nb·[ω×],   H_att += −w_ℓ× + Ĉ_nb·J_att(ℓ̂),
-//                           H_mount += w_ℓ×·Ĉ_nb + Ĉ_nb·J_mount(ℓ̂),  H_δt = −a
+//   z_vel += −w_ℓ − a·δt̂;   H_ℓ = −Ĉ_nb·[ω×],   H_att += −w_ℓ×,  H_mount += w_ℓ×·Ĉ_nb,  H_δt = −a,
+//                           H += Ĉ_nb·J(ℓ̂)
 // (the attitude and mounting terms are those of eqs 13–14 for the lever's part ℓ̂; J: ω_eb's own
-// dependence on φ and δμ, lever_rate_jacobian in observation.hpp). Where the
+// dependence on the state, lever_rate_jacobian in observation.hpp). Where the
 // filter sets the MEMS position from a fix (start, heading re-alignment) it adds Ĉ_nb·ℓ̂ + v·δt̂,
 // and the position error starts as Ĉ_nb·δℓ + v·δ(δt) (BlockSpec::position_offset).
 #include "calibration/inmotion/inmotion_filter.hpp"
@@ -39,11 +39,7 @@ BlockSpec lever_arm_block() {
     H.block<3, 3>(0, off) = type == 0 ? Mat3(-C_nb) : Mat3(-C_nb * ins::skew(o.c.w_eb_b));
     H.block<3, 3>(0, o.c.att) -= ins::skew(u);
     if (o.c.mount >= 0) H.block<3, 3>(0, o.c.mount) += ins::skew(u) * C_nb;
-    if (type == 1) {
-      const LeverRateJacobian J = lever_rate_jacobian(o.c, l);
-      H.block<3, 3>(0, o.c.att) += C_nb * J.att;
-      if (o.c.mount >= 0) H.block<3, 3>(0, o.c.mount) += C_nb * J.mount;
-    }
+    if (type == 1) H += C_nb * lever_rate_jacobian(o.c, l);
   };
   b.total = slice_total<3>;
   b.position_offset = [](const Nominal&, const Mat3Ref& C_nb, const Vec3Ref&, int, Eigen::MatrixXd& A) { A = C_nb; };

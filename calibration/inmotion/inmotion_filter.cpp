@@ -423,7 +423,7 @@ ObsContext InMotionFilter::obs_context() const {
   c.C_mb = n_.C_mb;
   c.lever = lever_;
   c.set_layout(layout_);
-  c.w_eb_b = body_rate_wrt_earth(nav_.state(), n_.C_mb, w_last_);
+  set_body_rate(c, layout_, corr_, w_last_);
   c.a_ned = a_last_;
   return c;
 }

@@ -6,12 +6,12 @@
 //   v^b = C_bn·(v_m^n − C_nb·(ω_eb^b × r)) = C_bn·v_m^n − ω_eb^b × r,
 //   z = S·v̂^b − 0 = H·δx + n,   S = [0 1 0; 0 0 1],   n ~ N(0, σ²·I₂).
 // With Ĉ_nb = (I − φ_b×)·C_nb, φ_b = φ − C_nb·δμ (obs_position.cpp), Ĉ_bn = C_bn·(I + φ_b×), and
-// −ω̂_eb^b × r = r × ω̂_eb^b moving with φ and δμ as lever_rate_jacobian (observation.hpp) says:
-//   δv^b = C_bn·δv − C_bn·(v_m×)·φ + C_bn·(v_m×)·C_nb·δμ + J_att·φ + J_mount·δμ,
+// −ω̂_eb^b × r = r × ω̂_eb^b moving with φ, δμ and the gyro's sensor model as lever_rate_jacobian
+// (observation.hpp) says, J:
+//   δv^b = C_bn·δv − C_bn·(v_m×)·φ + C_bn·(v_m×)·C_nb·δμ + J·δx,
 // so H has rows in the velocity, the attitude AND the mounting block: once the vehicle moves, a
 // mounting pitch or yaw error shows as a vertical or lateral velocity of the vehicle, which is what
-// makes them observable without an attitude reference (Shin 2001; Niu et al. 2007; the gyro sensor
-// model's part of ω_eb^b in the lever-arm term is neglected, as in eq 14).
+// makes them observable without an attitude reference (Shin 2001; Niu et al. 2007).
 // σ: the vehicle's departure from the constraint (sideslip, suspension, a reference point off
 // the rear axle), not a sensor's noise; 0.1 m/s for a car by default (InMotionConfig::nhc_sigma).
 #include "calibration/inmotion/observation.hpp"
@@ -27,10 +27,10 @@ ObservationM<2> nhc_observation(const ObsContext& c, double sigma) {
   const Vec3 v_b = C_bn * v_m - c.w_eb_b.cross(c.lever);
   o.z = v_b.tail<2>();
   const Mat3 Cv = C_bn * ins::skew(v_m);
-  o.H.block<2, 3>(0, c.vel) = C_bn.bottomRows<2>();
-  const LeverRateJacobian J = lever_rate_jacobian(c, c.lever);
-  o.H.block<2, 3>(0, c.att) = (J.att - Cv).bottomRows<2>();
-  if (c.mount >= 0) o.H.block<2, 3>(0, c.mount) = (Cv * C_nb + J.mount).bottomRows<2>();
+  o.H = lever_rate_jacobian(c, c.lever).bottomRows<2>();
+  o.H.block<2, 3>(0, c.vel) += C_bn.bottomRows<2>();
+  o.H.block<2, 3>(0, c.att) -= Cv.bottomRows<2>();
+  if (c.mount >= 0) o.H.block<2, 3>(0, c.mount) += (Cv * C_nb).bottomRows<2>();
   o.R = Eigen::Matrix2d::Identity() * (sigma * sigma);
   return o;
 }

@@ -7,6 +7,7 @@
 // axes), subtracts the reference's reading, and gives the Jacobian H w.r.t. the error state:
 //   z = predicted − reference = H·δx + noise.
 #pragma once
+#include "calibration/inmotion/error_model.hpp"
 #include "calibration/inmotion/state_layout.hpp"
 #include "calibration/ins/strapdown.hpp"
 
@@ -35,7 +36,10 @@ struct ObsContext {
   const ins::NavState* mems = nullptr;  // nominal MEMS INS state at the epoch
   Mat3 C_mb = Mat3::Identity();         // current mounting estimate
   Vec3 lever = Vec3::Zero();
-  Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes (body_rate_wrt_earth)
+  Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes (set_body_rate)
+  // ∂ω̂_eb^b/∂δx (3 × the layout's size; empty: none): how the estimated body rate moves with the
+  // attitude, the mounting and the gyro's sensor model (set_body_rate).
+  Eigen::Matrix<double, 3, Eigen::Dynamic> w_eb_jac;
   Vec3 a_ned = Vec3::Zero();            // acceleration (NED) over the last IMU interval (the time-offset block)
   // The filter's layout (set_layout): its size and where the blocks the observations read are
   // (−1: not in the layout): the navigation blocks, the mounting (−1: not estimated), and the gyro
@@ -88,18 +92,16 @@ ins::NavState mems_state_from_reference(const RefObs& r, const Mat3& C_mb, const
 inline Mat3 predicted_body_attitude(const ObsContext& c) { return c.mems->C_nb() * c.C_mb.transpose(); }
 
 // The reference body's rate w.r.t. the Earth, reference body axes, from the corrected MEMS rate ω_m
-// (MEMS axes): ω_eb^b = C_mb·(ω_m − C_mn·ω_ie^n) (ObsContext::w_eb_b).
-Vec3 body_rate_wrt_earth(const ins::NavState& mems, const Mat3& C_mb, const Vec3& w_m);
+// (MEMS axes, corrected by `corr`, the filter's sensor model): ω_eb^b = C_mb·(ω_m − C_mn·ω_ie^n), and its
+// Jacobian w.r.t. the error state. With Ĉ_mb = (I − δμ×)·C_mb, Ĉ_mn = C_mn·(I + φ×) and the gyro
+// blocks' part of ω̂_m (their own transition columns, BlockSpec::accumulate: F_φx = −C_nm·∂ω̂_m/∂x):
+//   δω_eb^b = C_bn·(ω_ie^n×)·φ + (ω_eb^b×)·δμ + C_mb·∂ω̂_m/∂x·δx_gyro.
+// The lever-arm velocity r × ω_eb^b of eq 14 and the NHC moves with all three: the mounting's and
+// the gyro M's parts are as large as the mounting's term through Ĉ_nb (|ω|·|r|·|δμ|), and a
+// common rotation of both triads is a mounting rotation only when both are there (issue 34).
+void set_body_rate(ObsContext& c, const StateLayout& L, const SensorCorrection& corr, const Vec3& w_m);
 
-// The lever-arm velocity r × ω_eb^b depends on the attitude and the mounting through ω_eb^b
-// itself: with Ĉ_mb = (I − δμ×)·C_mb and Ĉ_mn = C_mn·(I + φ×),
-//   ω̂_eb^b = ω_eb^b + ω_eb^b×δμ + C_bn·(ω_ie^n×)·φ,
-//   δ(r × ω̂_eb^b) = (r×)·C_bn·(ω_ie^n×)·φ + (r×)·(ω_eb^b×)·δμ = J_att·φ + J_mount·δμ.
-// Eq 14 and the NHC add these through their lever-arm terms; of the same size as the mounting's
-// term through Ĉ_nb (|ω|·|r|·|δμ|), so leaving them out biases the mounting (issue 34).
-struct LeverRateJacobian {
-  Mat3 att, mount;
-};
-LeverRateJacobian lever_rate_jacobian(const ObsContext& c, const Vec3& lever);
+// ∂(r × ω̂_eb^b)/∂δx = (r×)·ObsContext::w_eb_jac (3 × the layout's size; zero where it is empty).
+Eigen::Matrix<double, 3, Eigen::Dynamic> lever_rate_jacobian(const ObsContext& c, const Vec3& lever);
 
 }  // namespace calbench::inmotion

@@ -22,9 +22,9 @@
 // ½(FT)² (|F̃|³T²/6 ≲ 1e-5 with |F̃| ≲ 0.1 /s at these scales), and the accumulator's attitude at
 // the start of each IMU interval where the strapdown rotates within it (|f^n| error ≈ ω·Δt·|f|/2,
 // 0.35 rad/s · 1 ms · 9.9 m/s² / 2 = 1.7e-3 m/s², 1.7e-5 /s in the scaled velocity-attitude
-// entries; at 10 ms it is 10× that and shows), so an entry agrees within 2e-5 /s + 1 % of itself; H is exact up to the neglected gyro error in the lever-arm rate
-// (the MEMS rate is held; the lever-arm rate ω_eb^b does move with the attitude and the mounting,
-// as in the filter) and the rounding of the central difference, so 1e-6 + 1e-4 relative. The
+// entries; at 10 ms it is 10× that and shows), so an entry agrees within 2e-5 /s + 1 % of itself; H is exact
+// (the lever-arm rate ω_eb^b moves with the attitude, the mounting and the gyro's sensor model, as in
+// the filter) up to the rounding of the central difference, so 1e-6 + 1e-4 relative. The
 // entries that carry the physics are 1e-3 … 0.1 in these units: a flipped sign, a missing factor
 // or a transposed block is off by the entry itself, 50× and more beyond the tolerance (checked by
 // hand: flipping the sign of nav_block's f^n× or of obs_nhc.cpp's mounting term fails the test).
@@ -274,18 +274,18 @@ void check_H(bool augmented, bool antenna = false) {
   const State x0 = nominal_values(L);
   const Vec s = scales(L);
   const Vec3 lever(-0.9, 0.35, -0.6);
-  // The corrected MEMS rate (the filter's last IMU interval); ω_eb^b follows the state's attitude
-  // and mounting as in the filter (body_rate_wrt_earth), so eq 14's and the NHC's lever-arm rate
-  // terms are perturbed with them.
-  const Vec3 w_m(0.03, -0.04, 0.3);
+  // The raw MEMS rate, corrected by each state's own sensor model; ω_eb^b follows the state's
+  // attitude, mounting and gyro model as in the filter (set_body_rate), so eq 14's and the NHC's
+  // lever-arm rate terms are perturbed with them.
   auto context = [&](const State& x) {
     ObsContext c;
     c.mems = &x.nav;
     c.C_mb = x.n.C_mb;
     c.lever = lever;
-    c.w_eb_b = body_rate_wrt_earth(x.nav, x.n.C_mb, w_m);
-    c.a_ned = Vec3(1.5, -2.0, 0.3);
     c.set_layout(L);
+    const SensorCorrection corr = sensor_correction(L, x.n);
+    set_body_rate(c, L, corr, corr.apply(kGyro, kRawRate, 1.0));
+    c.a_ned = Vec3(1.5, -2.0, 0.3);
     return c;
   };
   // The reference epoch the nominal predicts (z(x̂) = 0; the differences do not depend on it).
