@@ -6,7 +6,7 @@
 //   v^b = C_bn·(v_m^n − C_nb·(ω_eb^b × r)) = C_bn·v_m^n − ω_eb^b × r,
 //   z = S·v̂^b − 0 = H·δx + n,   S = [0 1 0; 0 0 1],   n ~ N(0, σ²·I₂).
 // With Ĉ_nb = (I − φ_b×)·C_nb, φ_b = φ − C_nb·δμ (obs_position.cpp), Ĉ_bn = C_bn·(I + φ_b×), and
-// −ω̂_eb^b × r = r × ω̂_eb^b moving with φ, δμ and the gyro's sensor model as lever_rate_jacobian
+// −ω̂_eb^b × r = r × ω̂_eb^b moving with φ, δμ and the gyro's sensor model (bias, drift, M columns) as lever_rate_jacobian
 // (observation.hpp) says, J:
 //   δv^b = C_bn·δv − C_bn·(v_m×)·φ + C_bn·(v_m×)·C_nb·δμ + J·δx,
 // so H has rows in the velocity, the attitude AND the mounting block: once the vehicle moves, a

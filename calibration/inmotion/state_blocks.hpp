@@ -71,7 +71,9 @@ struct BlockSpec {
   void (*compensate)(const Nominal& n, int off, SensorCorrection& c) = nullptr;
   // Its part of the transition over one IMU interval: adds to its own columns of the accumulator
   // (3 rows: the navigation rows its error feeds, `size` columns) what dynamics reads back as the
-  // interval's mean, or nullptr.
+  // interval's mean, or nullptr. Contract: a sensor S's block writes −C·∂x̂_S/∂δx·dt from s.CA[S]
+  // and s.x[S] only (x̂_S the corrected output), nothing from the other sensor's fields; set_body_rate
+  // (observation.hpp) reads the gyro blocks' columns of one sample with the accelerometer's zero.
   void (*accumulate)(const ImuSample& s, SumRef sum) = nullptr;
   // Its entries of F (continuous time) and Q (discrete, over the step) for one propagation step.
   void (*dynamics)(const BlockDynamics& d, const filter::BlockLayout& L, int off, MatRef F, MatRef Q) = nullptr;

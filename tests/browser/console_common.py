@@ -12,7 +12,7 @@ import urllib.parse
 
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service as ChromeService
-from selenium.common.exceptions import StaleElementReferenceException
+from selenium.common.exceptions import StaleElementReferenceException, WebDriverException
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support import expected_conditions as EC
 from selenium.webdriver.support.ui import WebDriverWait
@@ -98,6 +98,24 @@ def fresh(read, attempts=20):
                 raise
 
 
+def page_left(old):
+    """A WebDriverWait condition: the page `old` (its html element) belongs to has been replaced.
+    Chromium reports an element of a document navigated away from either as stale or, while the new
+    document loads, as "Node with given id does not belong to the document" (a plain
+    WebDriverException, which EC.staleness_of does not take for staleness): both mean the page left."""
+    def gone(_):
+        try:
+            old.is_enabled()
+            return False
+        except StaleElementReferenceException:
+            return True
+        except WebDriverException as e:
+            if "does not belong to the document" in str(e):
+                return True
+            raise
+    return gone
+
+
 def confirm_prompt(d, pid):
     """Press a prompt's confirm button on /live and wait for the page it leads to. The live table is
     redrawn by server-sent events every few seconds (heartbeats, times left), so a button found just
@@ -110,7 +128,7 @@ def confirm_prompt(d, pid):
         except StaleElementReferenceException:
             if attempt == 19:
                 raise
-    WebDriverWait(d, 30).until(EC.staleness_of(old))
+    WebDriverWait(d, 30).until(page_left(old))
 
 
 def follow_slot(d, slot, timeout_s=120):
