@@ -20,7 +20,6 @@ namespace calbench::inmotion {
 
 ObservationM<2> nhc_observation(const ObsContext& c, double sigma) {
   ObservationM<2> o;
-  o.H.setZero(2, c.n_states);
   const Mat3 C_nb = predicted_body_attitude(c);
   const Mat3 C_bn = C_nb.transpose();
   const Vec3& v_m = c.mems->v;

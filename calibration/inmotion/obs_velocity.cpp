@@ -5,6 +5,8 @@
 //   z = δv − u×φ + u×C_nb·δμ + C_nb·J·δx.
 #include "calibration/inmotion/observation.hpp"
 
+#include <stdexcept>
+
 #include "calibration/ins/nav_math.hpp"
 
 namespace calbench::inmotion {
@@ -26,13 +28,12 @@ void set_body_rate(ObsContext& c, const StateLayout& L, const SensorCorrection& 
 }
 
 Eigen::Matrix<double, 3, Eigen::Dynamic> lever_rate_jacobian(const ObsContext& c, const Vec3& lever) {
-  if (c.w_eb_jac.cols() != c.n_states) return Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, c.n_states);
+  if (c.w_eb_jac.cols() != c.n_states) throw std::logic_error("ObsContext built without set_body_rate");
   return ins::skew(lever) * c.w_eb_jac;
 }
 
 Observation velocity_observation(const ObsContext& c, const RefObs& r) {
   Observation o;
-  o.H.setZero(3, c.n_states);
   const Mat3 C_nb = predicted_body_attitude(c);
   const Vec3 u = C_nb * c.w_eb_b.cross(c.lever);
   o.z = (c.mems->v - u) - r.v_ned;

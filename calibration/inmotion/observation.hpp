@@ -37,7 +37,7 @@ struct ObsContext {
   Mat3 C_mb = Mat3::Identity();         // current mounting estimate
   Vec3 lever = Vec3::Zero();
   Vec3 w_eb_b = Vec3::Zero();           // body rate w.r.t. Earth, reference body axes (set_body_rate)
-  // ∂ω̂_eb^b/∂δx (3 × the layout's size; empty: none): how the estimated body rate moves with the
+  // ∂ω̂_eb^b/∂δx (3 × the layout's size): how the estimated body rate moves with the
   // attitude, the mounting and the gyro's sensor model (set_body_rate).
   Eigen::Matrix<double, 3, Eigen::Dynamic> w_eb_jac;
   Vec3 a_ned = Vec3::Zero();            // acceleration (NED) over the last IMU interval (the time-offset block)
@@ -101,7 +101,8 @@ inline Mat3 predicted_body_attitude(const ObsContext& c) { return c.mems->C_nb()
 // common rotation of both triads is a mounting rotation only when both are there (issue 34).
 void set_body_rate(ObsContext& c, const StateLayout& L, const SensorCorrection& corr, const Vec3& w_m);
 
-// ∂(r × ω̂_eb^b)/∂δx = (r×)·ObsContext::w_eb_jac (3 × the layout's size; zero where it is empty).
+// ∂(r × ω̂_eb^b)/∂δx = (r×)·ObsContext::w_eb_jac (3 × the layout's size). A context built without
+// set_body_rate is a programming error (std::logic_error), not a zero: its terms would be lost silently.
 Eigen::Matrix<double, 3, Eigen::Dynamic> lever_rate_jacobian(const ObsContext& c, const Vec3& lever);
 
 }  // namespace calbench::inmotion

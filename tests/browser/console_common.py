@@ -116,6 +116,13 @@ def page_left(old):
     return gone
 
 
+def click_and_wait(d, id_, timeout_s):
+    """Click the button with this id and wait for the page it leads to (the old page goes)."""
+    old = d.find_element(By.TAG_NAME, "html")
+    d.find_element(By.ID, id_).click()
+    WebDriverWait(d, timeout_s).until(page_left(old))
+
+
 def confirm_prompt(d, pid):
     """Press a prompt's confirm button on /live and wait for the page it leads to. The live table is
     redrawn by server-sent events every few seconds (heartbeats, times left), so a button found just

@@ -34,7 +34,7 @@ if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.whi
     print("chromium / chromedriver not installed: skipped")
     sys.exit(77)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, confirm_prompt, follow_slot, free_port, page_left, fresh, run  # noqa: E402
+from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, click_and_wait, confirm_prompt, follow_slot, free_port, fresh, run  # noqa: E402
 
 
 def set_status(db, serial="SIMW1"):
@@ -151,10 +151,7 @@ def main():
             return WebDriverWait(d, 15).until(EC.presence_of_element_located((By.ID, id_))).text
 
         def submit(id_):
-            """Click a form's button and wait for the page it leads to (the old page goes stale)."""
-            old = d.find_element(By.TAG_NAME, "html")
-            d.find_element(By.ID, id_).click()
-            WebDriverWait(d, 15).until(page_left(old))
+            click_and_wait(d, id_, 15)
 
         # Not logged in: every page leads to the login form.
         d.get(base + "/queue")
