@@ -302,6 +302,13 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "noise and the robust gate\")")
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->option_text("auto|on|off");
+  d->add_option("--unobservable-rotation", a->unobservable_rotation,
+                 "hold (default): the common rotation of both triads against the mounting and the MEMS attitude, which "
+                 "no in-motion observation tells, keeps the uncertainty its priors give (its covariance carried along at "
+                 "every correction; docs/in-motion.md, \"The triads' common rotation\"); ekf: the plain EKF, which learns it "
+                 "from its own moving linearisation point (overconfident M skews), for comparison")
+      ->check(CLI::IsMember({"hold", "ekf"}))
+      ->option_text("hold|ekf");
   d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)")->check(finite_pos);
   d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)")->check(finite_pos);
   d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)")->check(finite_pos);

@@ -494,6 +494,9 @@ DriveResult fit_drive(const FitDriveArgs& a) {
   if (a.adaptive != "auto" && a.adaptive != "on" && a.adaptive != "off")
     throw InputError("--adaptive", 0, "", "expected auto, on or off, got '" + a.adaptive + "'");
   cfg.adaptive.enabled = a.adaptive == "on" || (a.adaptive == "auto" && gnss);
+  if (a.unobservable_rotation != "hold" && a.unobservable_rotation != "ekf")
+    throw InputError("--unobservable-rotation", 0, "", "expected hold or ekf, got '" + a.unobservable_rotation + "'");
+  cfg.hold_unobservable_rotation = a.unobservable_rotation == "hold";
   nlohmann::json models;
   if (!a.drift_models.empty()) models = apply_drift_models(a.drift_models, cfg);
   // correlated_drift (drift σ, τ beyond the data sheet's) becomes the filter's first-order drift
@@ -813,6 +816,16 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
         {"scale_end", an.scale()},
         {"scale_max", an.max_scale_reached()},
         {"increases", an.increases()}};
+  }
+  {
+    const Vec3 se = f->unobservable_rotation_sigma(), sp = f->unobservable_rotation_sigma_prior();
+    if (se.any())
+      j["unobservable_rotation"] = {
+          {"option", a.unobservable_rotation},
+          {"what", "a common rotation of both triads (M's antisymmetric parts) against the mounting and the MEMS attitude: "
+                   "no in-motion observation tells it, only the priors (docs/in-motion.md, \"The triads' common rotation\")"},
+          {"sigma_deg", {se(0) / kDeg, se(1) / kDeg, se(2) / kDeg}},
+          {"sigma_prior_deg", {sp(0) / kDeg, sp(1) / kDeg, sp(2) / kDeg}}};
   }
   if (!models.is_null()) j["drift_models"] = models;
 

@@ -46,6 +46,8 @@ struct FitDriveArgs {
   // Adaptive process noise (calibration/inmotion/adaptive_noise.hpp): "on", "off", or "auto" = on
   // with GNSS aiding, off against a reference INS (whose inconsistencies are findings for diagnose).
   std::string adaptive = "auto";
+  // The triads' common rotation (calibration/inmotion/gauge.hpp): "hold" (default) or "ekf".
+  std::string unobservable_rotation = "hold";
   double prior_gyro_bias_dps = 0, prior_accel_bias_mg = 0;  // > 0: override the bias priors
   // Antenna blocks (--estimate lever,time; docs/in-motion.md "Lever arm and time offset"): "" none,
   // else a comma list of lever (the lever arm, prior σ lever_arm_sigma m per axis) and time (the

@@ -1,4 +1,5 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
+#include "calibration/inmotion/gauge.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -219,6 +220,7 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
     align_.level_t0 = first.t;
   }
   refresh_correctors();
+  rot_sigma_prior_ = inmotion::unobservable_rotation_sigma(P_, unobservable_rotation(layout_, n_));
 }
 
 void InMotionFilter::refresh_correctors() { corr_ = sensor_correction(layout_, n_); }
@@ -860,10 +862,18 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
 }
 
 void InMotionFilter::feedback(const Vec& dx) {
+  // The unobservable rotation's direction before the feedback (gauge.hpp).
+  const Mat N_before = cfg_.hold_unobservable_rotation ? unobservable_rotation(layout_, n_) : Mat();
   // Each block feeds its own estimate back (state_blocks.cpp).
   for (const BlockSpec* b : layout_.specs)
     if (b->feedback) b->feedback(n_, layout_.L.offset(static_cast<int>(b->id)), dx);
   refresh_correctors();
+  // Its conditional covariance moves with it: no information on it from moving the linearisation point.
+  if (N_before.size() && carry_unobservable_rotation(P_, N_before, unobservable_rotation(layout_, n_)).any()) p_symmetric_ = true;
+}
+
+Vec3 InMotionFilter::unobservable_rotation_sigma() const {
+  return inmotion::unobservable_rotation_sigma(P_, unobservable_rotation(layout_, n_));
 }
 
 void InMotionFilter::propagate_drift_nominal(double T) { propagate_drift(drift_, layout_, n_, T); }

@@ -136,6 +136,10 @@ struct InMotionConfig {
   // taken as exact), and blocks declared outside the filter's files, appended to the layout.
   bool mounting = true;
   std::vector<BlockSpec> extra_blocks;
+  // The common rotation of both triads against the mounting and the MEMS attitude, which in-motion
+  // data cannot tell (gauge.hpp): its conditional covariance carried along at every feedback, so
+  // that the filter never learns it beyond its priors (on), or the plain EKF's covariance (off).
+  bool hold_unobservable_rotation = true;
   // The antenna blocks (antenna_blocks.cpp; docs/in-motion.md, "Lever arm and time offset"): the
   // GNSS antenna's lever-arm correction (3 states, prior σ lever_arm_sigma per axis, m) and the
   // IMU–GNSS time offset (1 state, prior σ time_offset_sigma, s). Off: the nominal lever arm and
@@ -315,6 +319,11 @@ class InMotionFilter {
   const InnovationRecord& last_innovation(int type) const { return innov_[type]; }
   const AlignmentReport& alignment() const { return align_; }
   // The adaptive process noise: its scale now, the largest it reached, how often it was raised.
+  // The conditional σ (rad) of the triads' common rotation ε in the current covariance (gauge.hpp);
+  // zeros when the layout lacks the blocks it moves.
+  Vec3 unobservable_rotation_sigma() const;
+  // The same in the initial covariance (the priors').
+  Vec3 unobservable_rotation_sigma_prior() const { return rot_sigma_prior_; }
   const AdaptiveNoise& adaptive_noise() const { return adapt_; }
   // Re-alignments and forced recoveries, in time order.
   const std::vector<Recovery>& recoveries() const { return recoveries_; }
@@ -425,6 +434,7 @@ class InMotionFilter {
     Nominal n;  // nav unused
   };
   Snapshot lvl_snap_;  // at the end of levelling (restart_at_heading)
+  Vec3 rot_sigma_prior_ = Vec3::Zero();  // unobservable_rotation_sigma_prior()
   Vec3 lvl_dth_ = Vec3::Zero(), lvl_dv_ = Vec3::Zero();
   double lvl_T_ = 0, lvl_f2_ = 0;  // levelling sums: time, Σ|f|²·dt
   StandstillDetector lvl_still_;   // the levelling window's samples, for the standstill rule

@@ -35,6 +35,7 @@
 #include <functional>
 #include <string>
 
+#include "calibration/inmotion/gauge.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/inmotion/state_blocks.hpp"
@@ -353,6 +354,22 @@ void check_H(bool augmented, bool antenna = false) {
     EXPECT_GT(k_att / k, 1e-5);  // the attitude's entries are well above the tolerance below
     const std::vector<std::string> rows = {"w_eb[0]", "w_eb[1]", "w_eb[2]"};
     expect_close(Jn * S / k, J * S / k, 1e-7, 1e-4, L, "d(w_eb)" + layout_name(augmented, antenna), &rows);
+  }
+  // The triads' common rotation (gauge.hpp) is invisible to every observation at its linearisation
+  // point: H·N = 0 (the analytic H, checked against finite differences below), relative to what the
+  // same H makes of the rotation's parts one at a time (Σ_j |H_j·N_j|, 1e-4…20 here). A wrong sign in
+  // any of N's four parts leaves a residue of the size of that part.
+  {
+    const Mat Ng = unobservable_rotation(L, x0.n);
+    ASSERT_EQ(Ng.rows(), N);
+    ASSERT_EQ(Ng.cols(), 3);
+    for (const Obs& o : all) {
+      const Mat H = o.H(x0);
+      Mat parts = Mat::Zero(H.rows(), 3);
+      for (int j = 0; j < N; ++j) parts += (H.col(j) * Ng.row(j)).cwiseAbs();
+      if (parts.maxCoeff() == 0) continue;  // zero velocity: no attitude, M or mounting column
+      EXPECT_LT((H * Ng).cwiseAbs().maxCoeff(), 1e-9 * parts.maxCoeff()) << o.name << layout_name(augmented, antenna);
+    }
   }
   for (const Obs& o : all) {
     const Mat H = o.H(x0);

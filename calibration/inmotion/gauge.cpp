@@ -1,0 +1,60 @@
+// The in-motion filter's unobservable rotation and its covariance (gauge.hpp).
+#include "calibration/inmotion/gauge.hpp"
+
+#include <cmath>
+
+#include "calibration/inmotion/inmotion_filter.hpp"
+#include "calibration/ins/nav_math.hpp"
+
+namespace calbench::inmotion {
+
+Eigen::MatrixXd unobservable_rotation(const StateLayout& s, const Nominal& n) {
+  const int att = s.offset(Block::att), mg = s.offset(Block::Mg), ma = s.offset(Block::Ma), mu = s.offset(Block::mount);
+  if (att < 0 || mg < 0 || ma < 0 || mu < 0 || n.nav == nullptr) return {};
+  const Eigen::Matrix3d C_nm = n.nav->C_nb();
+  const Eigen::Matrix3d Ig = Eigen::Matrix3d::Identity() + n.mat3(mg), Ia = Eigen::Matrix3d::Identity() + n.mat3(ma);
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(s.size(), 3);
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d e = Eigen::Vector3d::Unit(k);
+    const Eigen::Matrix3d ex = ins::skew(e);
+    const Eigen::Matrix3d dMg = Ig * ex, dMa = Ia * ex;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {  // M row by row
+        N(mg + 3 * i + j, k) = dMg(i, j);
+        N(ma + 3 * i + j, k) = dMa(i, j);
+      }
+    N.block<3, 1>(att, k) = -C_nm * e;
+    N.block<3, 1>(mu, k) = -n.C_mb * e;
+  }
+  return N;
+}
+
+namespace {
+// S = (NᵀP⁻¹N)⁻¹, false when P or NᵀP⁻¹N is not positive definite.
+bool conditional(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N, Eigen::Matrix3d& S) {
+  const Eigen::LLT<Eigen::MatrixXd> Pl(P);
+  if (Pl.info() != Eigen::Success) return false;
+  const Eigen::Matrix3d I = N.transpose() * Pl.solve(N);
+  const Eigen::LLT<Eigen::Matrix3d> Il(I);
+  if (Il.info() != Eigen::Success || !I.allFinite()) return false;
+  S = Il.solve(Eigen::Matrix3d::Identity());
+  return S.allFinite();
+}
+}  // namespace
+
+Eigen::Vector3d carry_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::MatrixXd& N_before, const Eigen::MatrixXd& N_after) {
+  Eigen::Matrix3d S;
+  if (N_before.size() == 0 || N_after.size() == 0 || !conditional(P, N_before, S)) return Eigen::Vector3d::Zero();
+  P.noalias() += N_after * S * N_after.transpose();
+  P.noalias() -= N_before * S * N_before.transpose();
+  P = 0.5 * (P + P.transpose()).eval();
+  return S.diagonal().cwiseSqrt();
+}
+
+Eigen::Vector3d unobservable_rotation_sigma(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N) {
+  Eigen::Matrix3d S;
+  if (N.size() == 0 || !conditional(P, N, S)) return Eigen::Vector3d::Zero();
+  return S.diagonal().cwiseSqrt();
+}
+
+}  // namespace calbench::inmotion
