@@ -29,22 +29,29 @@ Eigen::MatrixXd unobservable_rotation(const StateLayout& s, const Nominal& n) {
   return N;
 }
 
-namespace {
-// S = (NᵀP⁻¹N)⁻¹, false when P or NᵀP⁻¹N is not positive definite.
-bool conditional(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N, Eigen::Matrix3d& S) {
+bool unobservable_rotation_covariance(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N, Eigen::Matrix3d& S_out) {
+  if (N.size() == 0) return false;
   const Eigen::LLT<Eigen::MatrixXd> Pl(P);
   if (Pl.info() != Eigen::Success) return false;
   const Eigen::Matrix3d I = N.transpose() * Pl.solve(N);
   const Eigen::LLT<Eigen::Matrix3d> Il(I);
   if (Il.info() != Eigen::Success || !I.allFinite()) return false;
-  S = Il.solve(Eigen::Matrix3d::Identity());
-  return S.allFinite();
+  const Eigen::Matrix3d S = Il.solve(Eigen::Matrix3d::Identity());
+  if (!S.allFinite()) return false;
+  S_out = S;
+  return true;
 }
-}  // namespace
+
+void restore_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::MatrixXd& N, const Eigen::Matrix3d& S) {
+  Eigen::Matrix3d S_now;
+  if (!unobservable_rotation_covariance(P, N, S_now)) return;
+  P.noalias() += N * (S - S_now) * N.transpose();
+  P = 0.5 * (P + P.transpose()).eval();
+}
 
 Eigen::Vector3d carry_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::MatrixXd& N_before, const Eigen::MatrixXd& N_after) {
   Eigen::Matrix3d S;
-  if (N_before.size() == 0 || N_after.size() == 0 || !conditional(P, N_before, S)) return Eigen::Vector3d::Zero();
+  if (N_after.size() == 0 || !unobservable_rotation_covariance(P, N_before, S)) return Eigen::Vector3d::Zero();
   P.noalias() += N_after * S * N_after.transpose();
   P.noalias() -= N_before * S * N_before.transpose();
   P = 0.5 * (P + P.transpose()).eval();
@@ -53,7 +60,7 @@ Eigen::Vector3d carry_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::Mat
 
 Eigen::Vector3d unobservable_rotation_sigma(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N) {
   Eigen::Matrix3d S;
-  if (N.size() == 0 || !conditional(P, N, S)) return Eigen::Vector3d::Zero();
+  if (!unobservable_rotation_covariance(P, N, S)) return Eigen::Vector3d::Zero();
   return S.diagonal().cwiseSqrt();
 }
 

@@ -49,6 +49,16 @@ Eigen::MatrixXd unobservable_rotation(const StateLayout& s, const Nominal& n);
 // or a zero vector when it did nothing.
 Eigen::Vector3d carry_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::MatrixXd& N_before, const Eigen::MatrixXd& N_after);
 
+// The conditional covariance S = (NᵀP⁻¹N)⁻¹ of ε in P; false (S untouched) when N is empty or P or
+// NᵀP⁻¹N is not positive definite.
+bool unobservable_rotation_covariance(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N, Eigen::Matrix3d& S);
+
+// After a change of P that is not a Bayesian update (the gate's forced widening of the navigation
+// block, D·P·D, which would otherwise make information along N out of nothing): P ← P − N·S(P)·Nᵀ +
+// N·S·Nᵀ, the conditional covariance of ε set back to S (the one before the change). Nothing when
+// S(P) cannot be formed.
+void restore_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::MatrixXd& N, const Eigen::Matrix3d& S);
+
 // The conditional σ of ε (rad, per component) in P: the square roots of the diagonal of
 // (NᵀP⁻¹N)⁻¹; a zero vector when N is empty.
 Eigen::Vector3d unobservable_rotation_sigma(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N);

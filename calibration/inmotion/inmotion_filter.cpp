@@ -551,7 +551,12 @@ bool InMotionFilter::reference(const RefObs& r_in) {
         (nu.dot(Sx.solve(nu)) > cfg_.gate_nis ? lo : hi) = lam;
       }
       p_symmetric_ = false;
+      const Mat Nrot = cfg_.hold_unobservable_rotation ? unobservable_rotation(layout_, n_) : Mat();
+      Eigen::Matrix3d S_rot;
+      const bool hold = unobservable_rotation_covariance(P_, Nrot, S_rot);
       scale_navigation(P_, std::sqrt(hi));
+      // The widening is no information: the unobservable rotation keeps its covariance (gauge.hpp).
+      if (hold) restore_unobservable_rotation(P_, Nrot, S_rot);
       static const char* tn[3] = {"position", "velocity", "attitude"};
       recoveries_.push_back({r.t, std::string("lost track: ") + tn[type] + " rejected by the gate for " +
                                       std::to_string(static_cast<int>(cfg_.gate_recover_s)) + " s",
