@@ -2,6 +2,7 @@
 //                        [--smooth] [--window T0:T1] [--drift-models MODELS.json] [--json]
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -112,6 +113,15 @@ void print_summary(const DriveResult& r, const std::string& out) {
       }
     std::cout << " of 24 coefficients (drive share of the information: > 80 % drive, < 20 % "
               << (p["mode"] == "input set" ? "bench" : "prior") << ")\n";
+  }
+  if (j.contains("unobservable_rotation")) {
+    const auto& u = j["unobservable_rotation"];
+    char b[200];
+    std::snprintf(b, sizeof b, "%.2f, %.2f, %.2f deg about MEMS x, y, z (priors %.2f, %.2f, %.2f deg)", u["sigma_deg"][0].get<double>(),
+                  u["sigma_deg"][1].get<double>(), u["sigma_deg"][2].get<double>(), u["sigma_prior_deg"][0].get<double>(),
+                  u["sigma_prior_deg"][1].get<double>(), u["sigma_prior_deg"][2].get<double>());
+    std::cout << "  common rotation  sigma " << b << ": both triads' skews against the mounting, not observable in motion; "
+              << (u["option"] == "hold" ? "held at its priors" : "plain EKF (--unobservable-rotation ekf): overconfident") << "\n";
   }
   if (j.contains("drift_models"))
     for (const auto& m : j["drift_models"]["axes"]) {
