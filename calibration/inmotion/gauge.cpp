@@ -2,6 +2,7 @@
 #include "calibration/inmotion/gauge.hpp"
 
 #include <cmath>
+#include <vector>
 
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/ins/nav_math.hpp"
@@ -31,9 +32,19 @@ Eigen::MatrixXd unobservable_rotation(const StateLayout& s, const Nominal& n) {
 
 bool unobservable_rotation_covariance(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N, Eigen::Matrix3d& S_out) {
   if (N.size() == 0) return false;
-  const Eigen::LLT<Eigen::MatrixXd> Pl(P);
+  // States whose variance is exactly zero (unused exp-cosine aux axes, a drift of σ 0) have zero
+  // rows and columns in P: factorise over the others; N must not reach into them.
+  std::vector<int> keep;
+  for (int i = 0; i < P.rows(); ++i)
+    if (P(i, i) > 0)
+      keep.push_back(i);
+    else if (N.row(i).any())
+      return false;
+  const Eigen::MatrixXd Pk = P(keep, keep);
+  const Eigen::MatrixXd Nk = N(keep, Eigen::all);
+  const Eigen::LLT<Eigen::MatrixXd> Pl(Pk);
   if (Pl.info() != Eigen::Success) return false;
-  const Eigen::Matrix3d I = N.transpose() * Pl.solve(N);
+  const Eigen::Matrix3d I = Nk.transpose() * Pl.solve(Nk);
   const Eigen::LLT<Eigen::Matrix3d> Il(I);
   if (Il.info() != Eigen::Success || !I.allFinite()) return false;
   const Eigen::Matrix3d S = Il.solve(Eigen::Matrix3d::Identity());

@@ -13,8 +13,9 @@
 // only the priors do (the bench's M, the mounting's, the levelled tilt's). In the error state
 // ("estimate minus truth") the direction is, per component ε_k (column k of N, layout size × 3),
 //   δM_g = (I + M̂_g)·(e_k×),  δM_a = (I + M̂_a)·(e_k×),  φ = −Ĉ_nm·e_k,  δμ = −Ĉ_mb·e_k,  0 elsewhere.
-// Every observation's H·N is 0 at the point it is linearised at (tests/unit/calibration/
-// inmotion_jacobian_test.cpp), and the propagation does not add information along N.
+// Every observation's H·N is 0 at the point it is linearised at (asserted for eqs 13–15, the NHC,
+// zero velocity and zero rate in tests/unit/calibration/inmotion_jacobian_test.cpp; the course
+// update's row by hand), and the propagation does not add information along N (measured).
 //
 // Where the EKF still gains it: N moves with the estimate (its attitude part −Ĉ_nm·e_k turns with
 // every heading correction), while the feedback leaves P as it was, so information P held about
@@ -24,8 +25,9 @@
 // drive: the conditional σ of ε fell from 0.52° to 0.18° within a minute of motion, and the
 // coefficients of M's antisymmetric part missed the truth by up to 8σ.
 //
-// The remedy, in the spirit of their observability-constrained EKF: at each feedback the
-// conditional covariance of ε moves with its direction,
+// The remedy, in the spirit of their observability-constrained EKF: at each feedback (and when the
+// levelling or the restart at the first heading set the attitude) the conditional covariance of ε
+// moves with its direction,
 //   P ← P − N⁻·S·N⁻ᵀ + N⁺·S·N⁺ᵀ,  S = (N⁻ᵀ·P⁻¹·N⁻)⁻¹,
 // N⁻ and N⁺ the direction before and after the feedback. P − N⁻·S·N⁻ᵀ is P conditioned on ε (positive
 // semidefinite), so P stays a covariance, and N⁺ᵀP⁻¹N⁺ = N⁻ᵀP⁻¹N⁻: the information along the
@@ -49,8 +51,9 @@ Eigen::MatrixXd unobservable_rotation(const StateLayout& s, const Nominal& n);
 // or a zero vector when it did nothing.
 Eigen::Vector3d carry_unobservable_rotation(Eigen::MatrixXd& P, const Eigen::MatrixXd& N_before, const Eigen::MatrixXd& N_after);
 
-// The conditional covariance S = (NᵀP⁻¹N)⁻¹ of ε in P; false (S untouched) when N is empty or P or
-// NᵀP⁻¹N is not positive definite.
+// The conditional covariance S = (NᵀP⁻¹N)⁻¹ of ε in P, over the states of nonzero variance (an exact
+// zero on P's diagonal is a zero row and column); false (S untouched) when N is empty, reaches a
+// state of zero variance, or P there or NᵀP⁻¹N is not positive definite.
 bool unobservable_rotation_covariance(const Eigen::MatrixXd& P, const Eigen::MatrixXd& N, Eigen::Matrix3d& S);
 
 // After a change of P that is not a Bayesian update (the gate's forced widening of the navigation

@@ -619,7 +619,9 @@ void InMotionFilter::finish_levelling(const RefObs& r) {
   const double roll = std::atan2(-f(1), -f(2)), pitch = std::atan2(f(0), std::hypot(f(1), f(2)));
   const Mat3 C_nm = ins::dcm_from_rpy(Vec3(roll, pitch, 0.0));
   ins::NavState& s = nav_.state();
+  const Mat N_placeholder = cfg_.hold_unobservable_rotation ? unobservable_rotation(layout_, n_) : Mat();
   s.q_nb = ins::Quat(C_nm);
+  carry_rotation(N_placeholder);
   s.lat = r.lat;
   s.lon = r.lon;
   s.h = r.h;
@@ -644,7 +646,7 @@ void InMotionFilter::finish_levelling(const RefObs& r) {
     feedback(dx);
     align_.level_gyro_bias = true;
   }
-  lvl_snap_ = Snapshot{P_, n_};
+  lvl_snap_ = Snapshot{P_, n_, s.q_nb};
   phase_ = Phase::heading_unknown;
 }
 
@@ -798,15 +800,24 @@ bool InMotionFilter::bank_reference(const RefObs& r) {
 
 void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const std::string& reason, const std::string& how) {
   ins::NavState& s = nav_.state();
-  p_symmetric_ = false;  // the rotation of the NED blocks need not keep P exactly symmetric
   if (phase_ == Phase::heading_unknown && cfg_.restart_at_heading) {
     // Keep the attitude (the standstill's tilt), forget the sensor-error states' standstill.
     P_ = lvl_snap_.P;
     ins::NavState* nav = n_.nav;
     n_ = lvl_snap_.n;
-    n_.nav = nav;
     refresh_correctors();
+    // P is the levelling's, the attitude is now's: the rotation's direction then, carried to now.
+    Mat N_then;
+    if (cfg_.hold_unobservable_rotation) {
+      ins::NavState then = s;
+      then.q_nb = lvl_snap_.q_nb;
+      n_.nav = &then;
+      N_then = unobservable_rotation(layout_, n_);
+    }
+    n_.nav = nav;
+    carry_rotation(N_then);
   }
+  p_symmetric_ = false;  // the rotation of the NED blocks need not keep P exactly symmetric
   const Mat3 C_nm = s.C_nb();
   const double dpsi = std::remainder(cog - ins::rpy_from_dcm(C_nm * n_.C_mb.transpose())(2), 2 * units::kPi);
   Mat3 R;
@@ -866,15 +877,23 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
                              (fix_vel ? "the fix's" : "turned with the heading")});
 }
 
+void InMotionFilter::carry_rotation(const Mat& N_before) {
+  if (N_before.size() && carry_unobservable_rotation(P_, N_before, unobservable_rotation(layout_, n_)).any()) p_symmetric_ = true;
+}
+
 void InMotionFilter::feedback(const Vec& dx) {
-  // The unobservable rotation's direction before the feedback (gauge.hpp).
-  const Mat N_before = cfg_.hold_unobservable_rotation ? unobservable_rotation(layout_, n_) : Mat();
+  // The unobservable rotation's direction before the feedback (gauge.hpp); it moves only with the
+  // attitude, the two M and the mounting.
+  bool turns = false;
+  for (Block b : {Block::att, Block::Mg, Block::Ma, Block::mount})
+    if (const int o = off(b); o >= 0) turns = turns || dx.segment(o, b == Block::Mg || b == Block::Ma ? 9 : 3).any();
+  const Mat N_before = cfg_.hold_unobservable_rotation && turns ? unobservable_rotation(layout_, n_) : Mat();
   // Each block feeds its own estimate back (state_blocks.cpp).
   for (const BlockSpec* b : layout_.specs)
     if (b->feedback) b->feedback(n_, layout_.L.offset(static_cast<int>(b->id)), dx);
   refresh_correctors();
   // Its conditional covariance moves with it: no information on it from moving the linearisation point.
-  if (N_before.size() && carry_unobservable_rotation(P_, N_before, unobservable_rotation(layout_, n_)).any()) p_symmetric_ = true;
+  carry_rotation(N_before);
 }
 
 Vec3 InMotionFilter::unobservable_rotation_sigma() const {

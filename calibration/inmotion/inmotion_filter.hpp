@@ -318,12 +318,12 @@ class InMotionFilter {
   std::vector<Standstill> standstills() const;
   const InnovationRecord& last_innovation(int type) const { return innov_[type]; }
   const AlignmentReport& alignment() const { return align_; }
-  // The adaptive process noise: its scale now, the largest it reached, how often it was raised.
   // The conditional σ (rad) of the triads' common rotation ε in the current covariance (gauge.hpp);
   // zeros when the layout lacks the blocks it moves.
   Vec3 unobservable_rotation_sigma() const;
   // The same in the initial covariance (the priors').
   Vec3 unobservable_rotation_sigma_prior() const { return rot_sigma_prior_; }
+  // The adaptive process noise: its scale now, the largest it reached, how often it was raised.
   const AdaptiveNoise& adaptive_noise() const { return adapt_; }
   // Re-alignments and forced recoveries, in time order.
   const std::vector<Recovery>& recoveries() const { return recoveries_; }
@@ -361,6 +361,9 @@ class InMotionFilter {
   template <int M>
   Eigen::Matrix<double, Eigen::Dynamic, M> pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H);
   void feedback(const Vec& dx);
+  // After the nominal moved other than by feedback (levelling, the restart at the heading): the
+  // unobservable rotation's conditional covariance moved from direction N_before to the current one.
+  void carry_rotation(const Mat& N_before);
   // The observation context at the current nominal state (reference epochs, vehicle constraints).
   ObsContext obs_context() const;
   // Vehicle constraints (vehicle_constraints.cpp): every IMU sample, the fix speed of every
@@ -432,6 +435,7 @@ class InMotionFilter {
   struct Snapshot {
     Mat P;
     Nominal n;  // nav unused
+    ins::Quat q_nb = ins::Quat::Identity();  // the MEMS attitude then (the direction of the unobservable rotation)
   };
   Snapshot lvl_snap_;  // at the end of levelling (restart_at_heading)
   Vec3 rot_sigma_prior_ = Vec3::Zero();  // unobservable_rotation_sigma_prior()
