@@ -48,7 +48,7 @@ except ImportError:
     sys.exit(77)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, click_and_wait, confirm_prompt, follow_slot, free_port, run  # noqa: E402
+from console_common import CB, PROMPT_PLAN, SRC, Http, chromium, click_and_wait, confirm_prompt, follow_slot, free_port, fresh, run  # noqa: E402
 if not (shutil.which("chromedriver") and (shutil.which("chromium") or shutil.which("chromium-browser"))):
     print("chromium / chromedriver not installed: skipped")
     sys.exit(77)
@@ -89,23 +89,33 @@ def live_run(d, http, base, work, pgport, env, text, admin, psql_as):
         except Exception:
             raise SystemExit("no prompt on /live: " + d.find_element(By.TAG_NAME, "main").text[:800]
                              + "\n--- station log:\n" + station_log()[-2000:])
-        assert "turn the fixture's clamp in slot 1" in prompt.text, prompt.text
-        live = d.find_element(By.ID, "live").text
-        assert "line-7" in live, live[:800]
+        def read_live():  # every value of the fragment from one version of it
+            pr = d.find_element(By.CSS_SELECTOR, "#live .prompt")
+            s1 = d.find_element(By.CSS_SELECTOR, slot(1))
+            s2 = d.find_element(By.CSS_SELECTOR, slot(2))
+            return {"prompt": pr.text, "live": d.find_element(By.ID, "live").text,
+                    "started": d.find_element(By.CSS_SELECTOR, "#live section.run p.muted").text,
+                    "s1": s1.text, "s1_state": s1.get_attribute("data-state"),
+                    "s1_check": s1.find_element(By.CSS_SELECTOR, "td.check").text,
+                    "s1_beat": s1.find_elements(By.CSS_SELECTOR, "td")[-1].text,
+                    "s2": s2.text, "s2_state": s2.get_attribute("data-state"),
+                    "s2_why": s2.find_element(By.CSS_SELECTOR, "td.why").text,
+                    "pid": pr.get_attribute("data-prompt"),
+                    "csrf": pr.find_element(By.CSS_SELECTOR, "form input[name=csrf]").get_attribute("value")}
+        v = fresh(read_live)
+        assert "turn the fixture's clamp in slot 1" in v["prompt"], v["prompt"]
+        assert "line-7" in v["live"], v["live"][:800]
         # The server stamps who wrote the rows: the station's login.
-        started = d.find_element(By.CSS_SELECTOR, "#live section.run p.muted").text
-        assert "by login st1" in started, started
-        s1 = d.find_element(By.CSS_SELECTOR, slot(1))
-        assert s1.get_attribute("data-state") == "waiting", s1.text
-        assert s1.find_element(By.CSS_SELECTOR, "td.check").text.startswith("0 ≤ 0"), s1.text
-        beat = s1.find_elements(By.CSS_SELECTOR, "td")[-1].text  # the heartbeat column: parsed, fresh
-        assert re.fullmatch(r"\d+ s ago", beat) and int(beat.split()[0]) < 30, f"heartbeat {beat!r}: {s1.text}"
-        s2 = d.find_element(By.CSS_SELECTOR, slot(2))
-        assert s2.get_attribute("data-state") == "failed", s2.text
-        assert "PROD_ID" in s2.find_element(By.CSS_SELECTOR, "td.why").text, s2.text
-        pid = prompt.get_attribute("data-prompt")
+        assert "by login st1" in v["started"], v["started"]
+        assert v["s1_state"] == "waiting", v["s1"]
+        assert v["s1_check"].startswith("0 ≤ 0"), v["s1"]
+        beat = v["s1_beat"]  # the heartbeat column: parsed, fresh
+        assert re.fullmatch(r"\d+ s ago", beat) and int(beat.split()[0]) < 30, f"heartbeat {beat!r}: {v['s1']}"
+        assert v["s2_state"] == "failed", v["s2"]
+        assert "PROD_ID" in v["s2_why"], v["s2"]
+        pid = v["pid"]
         cookie = "calbench_session=" + d.get_cookie("calbench_session")["value"]
-        csrf = prompt.find_element(By.CSS_SELECTOR, "form input[name=csrf]").get_attribute("value")
+        csrf = v["csrf"]
         # In the store: every row written as st1 (stamped by the server), the prompt asked by st1.
         assert admin("calbench", "SELECT string_agg(DISTINCT login, ',') FROM station_progress") == "st1"
         assert admin("calbench", f"SELECT created_login || '|' || state FROM station_prompts WHERE id = {pid}") == "st1|waiting"
