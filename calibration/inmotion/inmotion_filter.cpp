@@ -878,16 +878,15 @@ void InMotionFilter::realign(const RefObs& r, double cog, double sigma, const st
 }
 
 void InMotionFilter::carry_rotation(const Mat& N_before) {
-  if (N_before.size() && carry_unobservable_rotation(P_, N_before, unobservable_rotation(layout_, n_)).any()) p_symmetric_ = true;
+  if (N_before.size() == 0) return;
+  const Mat N_after = unobservable_rotation(layout_, n_);
+  if (N_after == N_before) return;  // nothing it depends on moved (attitude, the two M, mounting)
+  if (carry_unobservable_rotation(P_, N_before, N_after).any()) p_symmetric_ = true;
 }
 
 void InMotionFilter::feedback(const Vec& dx) {
-  // The unobservable rotation's direction before the feedback (gauge.hpp); it moves only with the
-  // attitude, the two M and the mounting.
-  bool turns = false;
-  for (Block b : {Block::att, Block::Mg, Block::Ma, Block::mount})
-    if (const int o = off(b); o >= 0) turns = turns || dx.segment(o, b == Block::Mg || b == Block::Ma ? 9 : 3).any();
-  const Mat N_before = cfg_.hold_unobservable_rotation && turns ? unobservable_rotation(layout_, n_) : Mat();
+  // The unobservable rotation's direction before the feedback (gauge.hpp).
+  const Mat N_before = cfg_.hold_unobservable_rotation ? unobservable_rotation(layout_, n_) : Mat();
   // Each block feeds its own estimate back (state_blocks.cpp).
   for (const BlockSpec* b : layout_.specs)
     if (b->feedback) b->feedback(n_, layout_.L.offset(static_cast<int>(b->id)), dx);

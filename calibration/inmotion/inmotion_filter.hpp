@@ -361,8 +361,9 @@ class InMotionFilter {
   template <int M>
   Eigen::Matrix<double, Eigen::Dynamic, M> pht(const Eigen::Matrix<double, M, Eigen::Dynamic>& H);
   void feedback(const Vec& dx);
-  // After the nominal moved other than by feedback (levelling, the restart at the heading): the
-  // unobservable rotation's conditional covariance moved from direction N_before to the current one.
+  // After the nominal moved (feedback, levelling, the restart at the heading): the unobservable
+  // rotation's conditional covariance moved from direction N_before to the current one; nothing when
+  // N_before is empty or the direction did not move.
   void carry_rotation(const Mat& N_before);
   // The observation context at the current nominal state (reference epochs, vehicle constraints).
   ObsContext obs_context() const;
