@@ -17,10 +17,12 @@ error), at the reference epochs (50 Hz) inside each window. Truth only scores: n
 docs/validation/peer-kf-gins.md).
 
 Usage: bench/drive/peer_outages.py --kf-gins /path/to/KF-GINS [--peer "i2Nav-WHU/KF-GINS COMMIT"]
-       [--seeds 1,2,3,4,5] [--device-class ADIS16488A] [--route bench/routes/rtk_town.toml]
+       [--seeds 1,2,3,4,5 [--seeds 6,7,8,9,10 ...]] [--device-class ADIS16488A] [--route bench/routes/rtk_town.toml]
        [--outages 60:90,95:125,195:225] [--standstill 25] [--work DIR]
-The summary table's rows name the class and the seeds, so that the tables of several runs (classes,
-seed sets) can stand in one file.
+Each seed set is a section ("## CLASS, seeds ...": the outages, then the summary, whose rows name
+the class and the seeds, so that the output of several runs can stand in one file); with more than
+one --seeds, a last section "## CLASS, all seeds" pools their outages, with the paired comparison
+against KF-GINS with the standstill gyro bias (outages below it, the sign test's p).
 Environment: CALBENCH (the executable; default build/calbench).
 """
 import argparse
@@ -161,10 +163,96 @@ def median(v):
     return s[n // 2] if n % 2 else 0.5 * (s[n // 2 - 1] + s[n // 2])
 
 
+def drive(exe, a, work, windows, seed):
+    """One seed: simulate (once per --work folder), remove the fixes, run both tools, score them.
+    Returns [(seed, T0, T1, {tool: largest error, m})], one per window."""
+    d = os.path.join(work, "%s_s%d" % (a.device_class, seed))
+    if not os.path.exists(os.path.join(d, "meta.json")):
+        run([exe, "simulate", "drive", "--route", a.route, "--truth", "random", "--seed", str(seed), "--device-class",
+             a.device_class, "--out", d], d + ".sim.log")
+    c = d + "_outages"
+    outage_copy(d, c, windows)
+    lever = json.load(open(os.path.join(d, "meta.json")))["mounting"]["lever_arm_m"]
+    sols = {}
+    for tool, obs in (("calbench", "pos,vel"), ("calbench pos", "pos")):
+        series = "%s_series_%s.csv" % (c, obs.replace(",", "_"))
+        run([exe, "fit", "drive", c, "--aiding", "gnss", "--obs", obs, "--series", series, "--series-every", "0.02",
+             "--outages", "none", "--out", "%s_RESULT_%s.json" % (c, obs.replace(",", "_"))], series + ".log")
+        sols[tool] = calbench_antenna(series, lever)
+    for tool, extra in (("KF-GINS", []), ("KF-GINS still", ["--standstill", str(a.standstill)])):
+        k = c + ("_kf" if not extra else "_kf_still")
+        run([exe, "export", "kf-gins", c, "--out", k, "--force"] + extra, k + ".export.log")
+        run([a.kf_gins, os.path.join(k, "kf-gins.yaml")], k + ".run.log")
+        sols[tool] = kfgins_antenna(os.path.join(k, "KF_GINS_Navresult.nav"), lever)
+    truth = rows(os.path.join(d, "reference.csv"))
+    return [(seed, w0, w1, {tool: largest_error(sol, truth, w0, w1)[0] for tool, sol in sols.items()})
+            for (w0, w1) in windows]
+
+
+def sign_test(wins, n):
+    """Two-sided p of the sign test: the chance of a split at least this uneven in n fair coin tosses."""
+    k = min(wins, n - wins)
+    return min(1.0, 2.0 * sum(math.comb(n, j) for j in range(k + 1)) / 2.0 ** n)
+
+
+NAMES = ("calbench, pos+vel fixes", "calbench, position only", "KF-GINS, position",
+         "KF-GINS, position, gyro bias from the opening %g s")
+
+
+def report(a, which, table, route):
+    """The Markdown section of one seed set: the outages and the summary; for the pooled set
+    ("all seeds") the summary only, with the paired comparison."""
+    names = NAMES[:3] + (NAMES[3] % a.standstill,)
+    print("## %s, %s" % (a.device_class, which))
+    print()
+    if which == "all seeds":
+        print("The %d outages of the seed sets above together. Paired: per outage, is calbench's largest error below" % len(table))
+        print("that of KF-GINS with the standstill gyro bias (its better start)? The sign test's two-sided p is the")
+        print("chance of a split at least this uneven if neither tool were better.")
+    else:
+        print("Route `%s`, %s, `--truth random --device-class %s` (raw: no coefficient set), GNSS aiding only." % (route, which, a.device_class))
+        print("Outages: the fixes with T0 < t <= T1 removed from gnss.csv for both tools. Error: largest horizontal")
+        print("distance of the antenna (reference body origin) from reference.csv during the window, m.")
+        print("KF-GINS (%s) cannot align itself: `export kf-gins` starts it from reference.csv's state at the first" % a.peer)
+        print("epoch; calbench levels itself on the opening standstill and finds its heading from the fixes.")
+        print()
+        print("| seed | outage (s) | %s |" % " | ".join(n + " (m)" for n in names))
+        print("|---:|---|" + "---:|" * len(names))
+        for seed, w0, w1, e in table:
+            print("| %d | %g–%g | %s |" % (seed, w0, w1, " | ".join("%.2f" % e[t] for t in TOOLS)))
+    print()
+    if which == "all seeds":
+        print("| tool (%s, %s) | median of the per-outage maxima (m) | largest (m) | mean (m) | outages below KF-GINS with the standstill gyro bias | sign test p |"
+              % (a.device_class, which))
+        print("|---|---:|---:|---:|---:|---:|")
+    else:
+        print("| tool (%s, %s) | median of the per-outage maxima (m) | largest (m) | outages at or below the better KF-GINS run |"
+              % (a.device_class, which))
+        print("|---|---:|---:|---:|")
+    n = len(table)
+    for tool, name in zip(TOOLS, names):
+        e = [r[3][tool] for r in table]
+        cells = ["%.2f" % median(e), "%.2f" % max(e)]
+        if which == "all seeds":
+            cells.append("%.2f" % (sum(e) / n))
+            if tool.startswith("KF-GINS"):
+                cells += ["", ""]
+            else:
+                below = sum(1 for r in table if r[3][tool] < r[3]["KF-GINS still"])
+                cells += ["%d of %d" % (below, n), "%.2f" % sign_test(below, n)]
+        else:
+            cells.append("" if tool.startswith("KF-GINS") else "%d of %d" % (
+                sum(1 for r in table if r[3][tool] <= min(r[3]["KF-GINS"], r[3]["KF-GINS still"])), n))
+        print("| %s, %s, %s | %s |" % (name, a.device_class, which, " | ".join(cells)))
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--kf-gins", required=True, help="the KF-GINS executable")
-    ap.add_argument("--seeds", default="1,2,3,4,5", help="simulation seeds (default 1,2,3,4,5)")
+    ap.add_argument("--seeds", action="append",
+                    help="simulation seeds of one seed set (default 1,2,3,4,5); repeat for several sets: a section "
+                         "each, then the pooled summary of all of them")
     ap.add_argument("--device-class", default="ADIS16488A",
                     help="the simulated unit's IMU class (simulate drive --device-class; both filters take their noise from it "
                          "through meta.json; default ADIS16488A)")
@@ -178,65 +266,20 @@ def main():
     exe = os.environ.get("CALBENCH", "build/calbench")
     try:
         windows = [tuple(float(x) for x in w.split(":")) for w in a.outages.split(",")]
-        seeds = [int(s) for s in a.seeds.split(",")]
+        seed_sets = [[int(s) for s in seeds.split(",")] for seeds in (a.seeds or ["1,2,3,4,5"])]
     except ValueError:
         ap.error("--outages T0:T1,... and --seeds N,... must be numbers")
     if any(len(w) != 2 or not w[0] < w[1] for w in windows):
         ap.error("--outages: each window T0:T1 with T0 < T1")
     work = a.work or tempfile.mkdtemp(prefix="peer_outages.")
     os.makedirs(work, exist_ok=True)
-    table, errs = [], {t: [] for t in TOOLS}
-    for seed in seeds:
-        d = os.path.join(work, "%s_s%d" % (a.device_class, seed))
-        if not os.path.exists(os.path.join(d, "meta.json")):
-            run([exe, "simulate", "drive", "--route", a.route, "--truth", "random", "--seed", str(seed), "--device-class",
-                 a.device_class, "--out", d], d + ".sim.log")
-        c = d + "_outages"
-        kept, removed = outage_copy(d, c, windows)
-        sols = {}
-        for tool, obs in (("calbench", "pos,vel"), ("calbench pos", "pos")):
-            series = "%s_series_%s.csv" % (c, obs.replace(",", "_"))
-            run([exe, "fit", "drive", c, "--aiding", "gnss", "--obs", obs, "--series", series, "--series-every", "0.02",
-                 "--outages", "none", "--out", "%s_RESULT_%s.json" % (c, obs.replace(",", "_"))], series + ".log")
-            sols[tool] = series
-        kf = {}
-        for tool, extra in (("KF-GINS", []), ("KF-GINS still", ["--standstill", str(a.standstill)])):
-            k = c + ("_kf" if not extra else "_kf_still")
-            run([exe, "export", "kf-gins", c, "--out", k, "--force"] + extra, k + ".export.log")
-            run([a.kf_gins, os.path.join(k, "kf-gins.yaml")], k + ".run.log")
-            kf[tool] = os.path.join(k, "KF_GINS_Navresult.nav")
-
-        lever = json.load(open(os.path.join(d, "meta.json")))["mounting"]["lever_arm_m"]
-        truth = rows(os.path.join(d, "reference.csv"))
-        sols = {tool: calbench_antenna(path, lever) for tool, path in sols.items()}
-        for tool, path in kf.items():
-            sols[tool] = kfgins_antenna(path, lever)
-        for (w0, w1) in windows:
-            e = {tool: largest_error(sol, truth, w0, w1)[0] for tool, sol in sols.items()}
-            for tool in TOOLS:
-                errs[tool].append(e[tool])
-            table.append((seed, w0, w1, e))
-    route = os.path.basename(a.route)
-    print("Route `%s`, seeds %s, `--truth random --device-class %s` (raw: no coefficient set), GNSS aiding only." % (route, a.seeds, a.device_class))
-    print("Outages: the fixes with T0 < t <= T1 removed from gnss.csv for both tools. Error: largest horizontal")
-    print("distance of the antenna (reference body origin) from reference.csv during the window, m.")
-    print("KF-GINS (%s) cannot align itself: `export kf-gins` starts it from reference.csv's state at the first" % a.peer)
-    print("epoch; calbench levels itself on the opening standstill and finds its heading from the fixes.")
-    print()
-    names = ("calbench, pos+vel fixes", "calbench, position only", "KF-GINS, position",
-             "KF-GINS, position, gyro bias from the opening %g s" % a.standstill)
-    print("| seed | outage (s) | %s |" % " | ".join(n + " (m)" for n in names))
-    print("|---:|---|" + "---:|" * len(names))
-    for seed, w0, w1, e in table:
-        print("| %d | %g–%g | %s |" % (seed, w0, w1, " | ".join("%.2f" % e[t] for t in TOOLS)))
-    print()
-    print("| tool (%s, seeds %s) | median of the per-outage maxima (m) | largest (m) | outages at or below the better KF-GINS run |"
-          % (a.device_class, a.seeds))
-    print("|---|---:|---:|---:|")
-    for tool, name in zip(TOOLS, names):
-        lower = "" if tool.startswith("KF-GINS") else "%d of %d" % (
-            sum(1 for r in table if r[3][tool] <= min(r[3]["KF-GINS"], r[3]["KF-GINS still"])), len(table))
-        print("| %s, %s, seeds %s | %.2f | %.2f | %s |" % (name, a.device_class, a.seeds, median(errs[tool]), max(errs[tool]), lower))
+    pooled = []
+    for seeds in seed_sets:
+        table = [row for seed in seeds for row in drive(exe, a, work, windows, seed)]
+        pooled += table
+        report(a, "seeds " + ",".join(str(s) for s in seeds), table, os.path.basename(a.route))
+    if len(seed_sets) > 1:
+        report(a, "all seeds", pooled, os.path.basename(a.route))
     if not a.work:
         shutil.rmtree(work)
 
