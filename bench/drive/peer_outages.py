@@ -192,23 +192,40 @@ def drive(exe, a, work, windows, seed):
 def sign_test(wins, n):
     """Two-sided p of the sign test: the chance of a split at least this uneven in n fair coin tosses."""
     k = min(wins, n - wins)
-    return min(1.0, 2.0 * sum(math.comb(n, j) for j in range(k + 1)) / 2.0 ** n)
+    return min(1.0, 2.0 * sum(math.comb(n, j) for j in range(k + 1)) / 2.0 ** n) if n else 1.0
+
+
+def paired(pairs):
+    """(below, n, p) of calbench against the peer over (calbench, peer) pairs, compared as printed (to
+    the centimetre): ties are dropped from n, as the sign test does."""
+    below = sum(1 for c, k in pairs if round(c, 2) < round(k, 2))
+    n = sum(1 for c, k in pairs if round(c, 2) != round(k, 2))
+    return below, n, sign_test(below, n)
+
+
+def p_text(p):
+    return "%.3f" % p if p >= 0.001 else "< 0.001"
 
 
 NAMES = ("calbench, pos+vel fixes", "calbench, position only", "KF-GINS, position",
          "KF-GINS, position, gyro bias from the opening %g s")
+POOLED = "all seeds"
 
 
 def report(a, which, table, route):
     """The Markdown section of one seed set: the outages and the summary; for the pooled set
-    ("all seeds") the summary only, with the paired comparison."""
+    (POOLED) the summary only, with the paired comparisons."""
     names = NAMES[:3] + (NAMES[3] % a.standstill,)
     print("## %s, %s" % (a.device_class, which))
     print()
-    if which == "all seeds":
-        print("The %d outages of the seed sets above together. Paired: per outage, is calbench's largest error below" % len(table))
-        print("that of KF-GINS with the standstill gyro bias (its better start)? The sign test's two-sided p is the")
-        print("chance of a split at least this uneven if neither tool were better.")
+    if which == POOLED:
+        seeds = sorted({r[0] for r in table})
+        print("The %d outages (%d drives) of the seed sets above together. Paired against KF-GINS with the standstill" % (len(table), len(seeds)))
+        print("gyro bias (its better start): per outage, is calbench's largest error below KF-GINS's; per drive, is the")
+        print("mean of its outages' largest errors below? Compared as printed (to the centimetre); ties are left out")
+        print("of the count. The sign test's two-sided p is the chance of a split at least this uneven if neither tool")
+        print("were better. The outages of one drive share its unit and its alignment, so the per-drive test is the")
+        print("one that treats its samples as independent.")
     else:
         print("Route `%s`, %s, `--truth random --device-class %s` (raw: no coefficient set), GNSS aiding only." % (route, which, a.device_class))
         print("Outages: the fixes with T0 < t <= T1 removed from gnss.csv for both tools. Error: largest horizontal")
@@ -221,10 +238,10 @@ def report(a, which, table, route):
         for seed, w0, w1, e in table:
             print("| %d | %g–%g | %s |" % (seed, w0, w1, " | ".join("%.2f" % e[t] for t in TOOLS)))
     print()
-    if which == "all seeds":
-        print("| tool (%s, %s) | median of the per-outage maxima (m) | largest (m) | mean (m) | outages below KF-GINS with the standstill gyro bias | sign test p |"
+    if which == POOLED:
+        print("| tool (%s, %s) | median of the per-outage maxima (m) | largest (m) | mean (m) | outages below KF-GINS with the standstill gyro bias | sign test p, outages | drives below it | sign test p, drives |"
               % (a.device_class, which))
-        print("|---|---:|---:|---:|---:|---:|")
+        print("|---|---:|---:|---:|---:|---:|---:|---:|")
     else:
         print("| tool (%s, %s) | median of the per-outage maxima (m) | largest (m) | outages at or below the better KF-GINS run |"
               % (a.device_class, which))
@@ -233,13 +250,17 @@ def report(a, which, table, route):
     for tool, name in zip(TOOLS, names):
         e = [r[3][tool] for r in table]
         cells = ["%.2f" % median(e), "%.2f" % max(e)]
-        if which == "all seeds":
+        if which == POOLED:
             cells.append("%.2f" % (sum(e) / n))
             if tool.startswith("KF-GINS"):
-                cells += ["", ""]
+                cells += ["", "", "", ""]
             else:
-                below = sum(1 for r in table if r[3][tool] < r[3]["KF-GINS still"])
-                cells += ["%d of %d" % (below, n), "%.2f" % sign_test(below, n)]
+                below, m, p = paired([(r[3][tool], r[3]["KF-GINS still"]) for r in table])
+                drives = {}
+                for r in table:
+                    drives.setdefault(r[0], []).append((r[3][tool], r[3]["KF-GINS still"]))
+                db, dm, dp = paired([(sum(c for c, _ in v) / len(v), sum(k for _, k in v) / len(v)) for v in drives.values()])
+                cells += ["%d of %d" % (below, m), p_text(p), "%d of %d" % (db, dm), p_text(dp)]
         else:
             cells.append("" if tool.startswith("KF-GINS") else "%d of %d" % (
                 sum(1 for r in table if r[3][tool] <= min(r[3]["KF-GINS"], r[3]["KF-GINS still"])), n))
@@ -271,6 +292,10 @@ def main():
         ap.error("--outages T0:T1,... and --seeds N,... must be numbers")
     if any(len(w) != 2 or not w[0] < w[1] for w in windows):
         ap.error("--outages: each window T0:T1 with T0 < T1")
+    every = [s for seeds in seed_sets for s in seeds]
+    if len(set(every)) != len(every):
+        ap.error("--seeds: a seed given twice (%s); the pooled summary would count its drive twice"
+                 % ", ".join(sorted({str(s) for s in every if every.count(s) > 1})))
     work = a.work or tempfile.mkdtemp(prefix="peer_outages.")
     os.makedirs(work, exist_ok=True)
     pooled = []
@@ -279,7 +304,7 @@ def main():
         pooled += table
         report(a, "seeds " + ",".join(str(s) for s in seeds), table, os.path.basename(a.route))
     if len(seed_sets) > 1:
-        report(a, "all seeds", pooled, os.path.basename(a.route))
+        report(a, POOLED, pooled, os.path.basename(a.route))
     if not a.work:
         shutil.rmtree(work)
 
