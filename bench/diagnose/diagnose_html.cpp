@@ -106,6 +106,10 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
     o << "<h2>Drift beyond the class's stability (not established)</h2>\n";
     for (const auto& x : r.drift_excess) o << "<p>" << report::html_escape(drift_excess_sentence(x)) << "</p>\n";
   }
+  if (!r.drift_noted.empty()) {
+    o << "<h2>Notes (not findings)</h2>\n";
+    for (const auto& x : r.drift_noted) o << "<p>" << report::html_escape(drift_note_sentence(x)) << "</p>\n";
+  }
   if (!r.saturation.empty()) {
     o << "<h2>Range exceeded</h2>\n";
     for (const auto& x : r.saturation) o << "<p>" << report::html_escape(saturation_sentence(x)) << "</p>\n";

@@ -28,6 +28,7 @@ nlohmann::json not_excited_json(const std::vector<NotExcited>& v) {
 nlohmann::json drift_figures_json(const DiagDriftExcess& x) {
   nlohmann::json j = {{"change", x.change},   {"class_stability", x.stability}, {"ratio", x.change / x.stability},
                       {"null_mean", x.null_mean}, {"null_sd", x.null_sd},       {"z", x.z},
+                      {"null_exceed", x.null_exceed},
                       {"gain", x.gain},       {"drift_sigma", x.sigma},         {"drift_tau_s", x.tau_s}};
   if (x.has_temperature)
     j["temperature"] = {{"change_c", x.temperature_change},
@@ -171,6 +172,12 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
     drift_excess.back().update(drift_figures_json(x));
     drift_excess.back()["sentence"] = drift_excess_sentence(x);
   }
+  nlohmann::json drift_noted = nlohmann::json::array();
+  for (const auto& x : r.drift_noted) {
+    drift_noted.push_back({{"sensor", kSensor[x.sensor]}, {"axis", kAxis[x.axis]}, {"status", "noted, not a finding"}});
+    drift_noted.back().update(drift_figures_json(x));
+    drift_noted.back()["sentence"] = drift_note_sentence(x);
+  }
   nlohmann::json axes = nlohmann::json::object();
   for (int a = 0; a < 6; ++a) {
     auto st = [](const AxisStats& s) {
@@ -189,12 +196,14 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
       if (x.sensor * 3 + x.axis == a) {
         ax["drift"] = drift_figures_json(x);
         ax["drift"]["reported"] = drift_excess_reported(x);
+        ax["drift"]["noted"] = drift_excess_noted(x);
       }
   }
   return {{"findings", findings},
           {"unexplained", unexplained},
           {"saturation", saturation},
           {"drift_excess", drift_excess},
+          {"drift_noted", drift_noted},
           {"withdrawn", withdrawn_json(r.withdrawn)},
           {"not_excited", not_excited_json(r.not_excited)},
           {"axes", axes},

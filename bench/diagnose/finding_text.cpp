@@ -170,6 +170,33 @@ std::string saturation_sentence(const DiagSaturation& x) {
          " s) left out of the diagnosis";
 }
 
+namespace {
+// The temperature bias term's clause of a drift sentence (empty when it was not tried or gained nothing).
+std::string drift_temperature_clause(const DiagDriftExcess& x, double k, const std::string& unit) {
+  if (!x.has_temperature || x.temperature_dchi2 <= 0) return "";
+  return "; the temperature bias term gives " + fmt(x.temperature_coef * k) + " ± " + fmt(x.temperature_coef_sigma * k, 2) + unit +
+         " per °C, " + fmt(x.temperature_change_total() * k) + unit + " over the " + fmt(x.temperature_change) +
+         " °C of the run (Δχ² " + fmt(x.temperature_dchi2, 2) + ", not established)";
+}
+}  // namespace
+
+std::string drift_note_sentence(const DiagDriftExcess& x) {
+  using diagnose_out::kAxis, diagnose_out::kSensor;
+  const double k = diagnose_out::disp(1.0, x.sensor);
+  const std::string unit = std::string(" ") + diagnose_out::disp_unit(x.sensor);
+  std::string o = std::string("note, not a finding: ") + kSensor[x.sensor] + " " + kAxis[x.axis] + "'s bias moved " +
+                  fmt(x.change * k) + unit + " over the run (" + fmt(x.change / x.stability, 2) +
+                  "× the class's in-run bias stability, " + fmt(x.stability * k) + unit + ")";
+  if (x.null_sd > 0)
+    o += "; the class's own drift moves it that far on this recording in " + fmt(100 * x.null_exceed, 2) + " % of draws (" +
+         fmt(x.null_mean * k) + " ± " + fmt(x.null_sd * k, 2) + unit + ")";
+  o += drift_temperature_clause(x, k, unit);
+  if (x.temperature_or_drift() || (x.has_temperature && x.temperature_dchi2 >= kDriftNoteChi2))
+    return o + "; temperature or drift, not told apart (the path's correlation with the recorded temperature r " +
+           fmt(x.temperature_r, 2) + "): the record does not separate a warm-up of this size from the class's drift";
+  return o + ": the class's drift or an effect a drift imitates, not told apart";
+}
+
 std::string drift_excess_sentence(const DiagDriftExcess& x) {
   using diagnose_out::kAxis, diagnose_out::kSensor;
   const double k = diagnose_out::disp(1.0, x.sensor);
@@ -182,10 +209,7 @@ std::string drift_excess_sentence(const DiagDriftExcess& x) {
                   (x.gain > 0 ? "a drift of that axis alone " + fmt(x.sigma / x.stability, 2) + "× the class's (τ " + fmt(x.tau_s) +
                                     " s) fits better by Δ(−2 ln L) " + fmt(x.gain) + ", below the evidence a finding needs"
                               : std::string("no larger drift fits better: the record is too short to tell"));
-  if (x.has_temperature && x.temperature_dchi2 > 0)
-    o += "; the temperature bias term gives " + fmt(x.temperature_coef * k) + " ± " + fmt(x.temperature_coef_sigma * k, 2) + unit +
-         " per °C, " + fmt(x.temperature_change_total() * k) + unit + " over the " + fmt(x.temperature_change) +
-         " °C of the run (Δχ² " + fmt(x.temperature_dchi2, 2) + ", not established)";
+  o += drift_temperature_clause(x, k, unit);
   if (x.temperature_or_drift())
     return o + "; the path follows the recorded temperature (r " + fmt(x.temperature_r, 2) +
            "): temperature or drift, not told apart";

@@ -43,6 +43,8 @@ std::string saturation_sentence(const DiagSaturation& x);
 // "drift beyond the class's stability, not established: gyro z's bias moved 19.6 °/h over the
 // run, 3.8× …; it follows the recorded temperature (…): temperature or drift, not told apart".
 std::string drift_excess_sentence(const DiagDriftExcess& x);
+// A bias change beyond 2× the class's stability that its own drift also makes (drift_excess_noted): a note.
+std::string drift_note_sentence(const DiagDriftExcess& x);
 
 // A spec's sentence (effect_registry.hpp) with {who} and {condition} filled in.
 std::string fill_sentence(const char* tmpl, const std::string& who, const std::string& condition);

@@ -295,12 +295,14 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
   std::mt19937_64 rng(0x36d1f7u + static_cast<unsigned>(a));
   std::normal_distribution<double> n01;
   double m1 = 0, m2 = 0;
+  int reach = 0;
   for (int i = 0; i < kDriftExcessDraws; ++i) {
     Eigen::VectorXd n(N);
     for (int k = 0; k < N; ++k) n(k) = n01(rng);
     const Eigen::VectorXd rP = S0.L.triangularView<Eigen::Lower>() * n;
     const Eigen::VectorXd q = diag::smoothed_drift(P.d.parents, S0, rP);
     const double range = q.maxCoeff() - q.minCoeff();
+    reach += range >= x.change;
     m1 += range;
     m2 += range * range;
   }
@@ -309,6 +311,7 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
   x.null_mean = m1;
   x.null_sd = sd;
   x.z = (x.change - m1) / sd;
+  x.null_exceed = static_cast<double>(reach) / kDriftExcessDraws;
   auto fit_with = [&](const Dataset& S) {
     std::vector<const Dataset*> p;
     for (int b = 0; b < kAxes; ++b) p.push_back(b == a ? &S : &search.all[b]);
@@ -360,6 +363,12 @@ bool drift_excess_reported(const DiagDriftExcess& x) {
   const double limit = kDriftExcessFactor * x.stability;
   return (x.change > limit && x.z >= kDriftExcessZ) ||
          (x.has_temperature && x.temperature_dchi2 >= kDriftTemperatureChi2 && x.temperature_change_total() > limit);
+}
+
+bool drift_excess_noted(const DiagDriftExcess& x) {
+  const double limit = kDriftExcessFactor * x.stability;
+  return !drift_excess_reported(x) &&
+         ((x.change > limit && x.null_exceed <= kDriftNoteTail) || (x.has_temperature && x.temperature_dchi2 >= kDriftNoteChi2 && x.temperature_change_total() > limit));
 }
 
 void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOptions& opt) {
@@ -633,6 +642,7 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     DiagDriftExcess x = drift_excess(problem, search, a, drift_sigma[triad]);
     res.drift_checked.push_back(x);
     if (drift_excess_reported(x)) res.drift_excess.push_back(x);
+    if (drift_excess_noted(x)) res.drift_noted.push_back(x);
   }
   for (auto& f : res.findings) finding_status(f, res, opt);
   return res;
