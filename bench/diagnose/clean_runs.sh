@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Issue 36, acceptance 2: clean simulated recordings through `calbench diagnose --json`, counting
-# established findings (the target is 0), partial findings and unexplained axes.
+# established findings (the target is 0), partial findings, unexplained axes and drift notes (not findings;
+# their names are listed with the rest, "… drift noted").
 # Bench: CLEAN_BENCH recordings (default 100), plans in turn from CLEAN_PLANS (default "diagnose factory
 # wedge"), --truth random. Drive: CLEAN_DRIVE recordings (default 100), routes in turn from CLEAN_ROUTES
 # (default: tests/data/drive_diag_route.toml, tests/data/drive_diag_level.toml, bench/routes/short.toml),
@@ -71,11 +72,13 @@ for (kind, src), rs in rows.items():
     secs = sorted(r[3] for r in rs)
     names = collections.Counter(x for r in rs for x in r[4].split("; ") if x)
     tot[kind, "n"] += n; tot[kind, "e"] += e; tot[kind, "r"] += sum(1 for r in rs if r[0])
+    tot[kind, "notes"] += sum(r[5] for r in rs); tot[kind, "noted"] += sum(1 for r in rs if r[5])
     print(f"| {kind} | {src} | {n} | {e} | {sum(1 for r in rs if r[0])} | {p} | {u} | {sum(r[5] for r in rs)} | {secs[len(secs)//2]:.1f} | {', '.join(f'{k} ({v})' for k, v in sorted(names.items())) or '–'} |")
 print()
 for kind in ("bench", "drive"):
     if tot[kind, "n"]:
-        print(f"**Clean {kind} recordings: {tot[kind, 'n']}, established findings {tot[kind, 'e']} (in {tot[kind, 'r']} recordings).**")
+        print(f"**Clean {kind} recordings: {tot[kind, 'n']}, established findings {tot[kind, 'e']} (in {tot[kind, 'r']} recordings).**"
+              f" Drift notes (not findings): {tot[kind, 'notes']} in {tot[kind, 'noted']} recordings.")
         print()
 PY
 cat "$md"

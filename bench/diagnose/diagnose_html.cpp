@@ -92,7 +92,9 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
     << " blocks of ~1 s, " << r.subs << " sub-blocks of 0.05 s, " << fmt(r.data_s, 4) << " s of plan steps. Noise model (drift prior) of "
     << report::html_escape(run.noise_class) << ".</p>\n";
   o << "<h2>Findings</h2>\n";
-  if (r.findings.empty()) o << "<p>No finding: the residual is consistent with the model and the sensor's noise.</p>\n";
+  if (r.findings.empty())
+    o << "<p>No finding" << (r.unexplained.empty() ? ": the residual is consistent with the model and the sensor's noise" : " from the catalogue")
+      << (r.drift_noted.empty() ? "" : "; see the notes (not findings) below") << ".</p>\n";
   for (const auto& f : r.findings) {
     o << "<h3>" << effect_name(f.term.effect) << " (" << f.status << ")</h3><p>" << report::html_escape(finding_sentence(f)) << "</p>\n";
     o << "<p>Evidence: Δχ² " << fmt(f.delta_chi2) << ", ΔBIC " << fmt(f.delta_bic) << ", held-out Δχ² "

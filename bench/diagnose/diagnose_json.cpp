@@ -28,7 +28,7 @@ nlohmann::json not_excited_json(const std::vector<NotExcited>& v) {
 nlohmann::json drift_figures_json(const DiagDriftExcess& x) {
   nlohmann::json j = {{"change", x.change},   {"class_stability", x.stability}, {"ratio", x.change / x.stability},
                       {"null_mean", x.null_mean}, {"null_sd", x.null_sd},       {"z", x.z},
-                      {"null_exceed", x.null_exceed},
+                      {"null_exceed", std::isfinite(x.null_exceed) ? nlohmann::json(x.null_exceed) : nlohmann::json(nullptr)},
                       {"gain", x.gain},       {"drift_sigma", x.sigma},         {"drift_tau_s", x.tau_s}};
   if (x.has_temperature)
     j["temperature"] = {{"change_c", x.temperature_change},
@@ -174,7 +174,10 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
   }
   nlohmann::json drift_noted = nlohmann::json::array();
   for (const auto& x : r.drift_noted) {
-    drift_noted.push_back({{"sensor", kSensor[x.sensor]}, {"axis", kAxis[x.axis]}, {"status", "noted, not a finding"}});
+    drift_noted.push_back({{"sensor", kSensor[x.sensor]},
+                           {"axis", kAxis[x.axis]},
+                           {"status", drift_note_temperature(x) ? "noted, not a finding: temperature or drift, not told apart"
+                                                                : "noted, not a finding: drift or an effect a drift imitates, not told apart"}});
     drift_noted.back().update(drift_figures_json(x));
     drift_noted.back()["sentence"] = drift_note_sentence(x);
   }

@@ -254,12 +254,13 @@ std::string diagnosis_text(const DiagRun& run) {
   if (r.findings.empty())
     o << (!r.drift_excess.empty() ? std::string("no established finding: see the drift beyond the class's stability below\n") :
           r.unexplained.empty() ? std::string("no finding") + (r.saturation.empty() ? "" : " in the rest of the recording") +
-                                      ": the residual is consistent with the model and the sensor's noise" +
-                                      (r.drift_noted.empty() ? "" : "; a bias change beyond 2× the class's stability is noted below") + "\n"
+                                      ": the residual is consistent with the model and the sensor's noise\n"
                                 : "no catalogue finding, but the residual is NOT consistent: see unexplained below\n");
   for (const auto& f : r.findings) o << "* " << finding_sentence(f) << "\n";
   for (const auto& x : r.drift_excess) o << "~ " << drift_excess_sentence(x) << "\n";
-  for (const auto& x : r.drift_noted) o << "- " << drift_note_sentence(x) << "\n";
+  if (!r.drift_noted.empty())
+    o << "notes (not findings): a bias change beyond 2× the class's stability in the tail of its own drift\n";
+  for (const auto& x : r.drift_noted) o << "~ " << drift_note_sentence(x) << "\n";
   for (const auto& w : r.withdrawn) o << withdrawn_text(w) << "\n";
   for (const auto& u : r.unexplained) {
     o << "? unexplained (no catalogue effect explains it): " << kSensor[u.sensor] << " " << kAxis[u.axis] << " residual χ²/dof " << fmt(u.chi2_dof)

@@ -187,13 +187,17 @@ std::string drift_note_sentence(const DiagDriftExcess& x) {
   std::string o = std::string("note, not a finding: ") + kSensor[x.sensor] + " " + kAxis[x.axis] + "'s bias moved " +
                   fmt(x.change * k) + unit + " over the run (" + fmt(x.change / x.stability, 2) +
                   "× the class's in-run bias stability, " + fmt(x.stability * k) + unit + ")";
-  if (x.null_sd > 0)
-    o += "; the class's own drift moves it that far on this recording in " + fmt(100 * x.null_exceed, 2) + " % of draws (" +
-         fmt(x.null_mean * k) + " ± " + fmt(x.null_sd * k, 2) + unit + ")";
+  o += "; the class's own drift moves it that far on this recording in " +
+       (x.null_exceed_count == 0 ? std::string("none") : std::to_string(x.null_exceed_count)) + " of " +
+       std::to_string(kDriftExcessDraws) + " draws (" + fmt(100 * x.null_exceed, 2) + " %; " + fmt(x.null_mean * k) + " ± " +
+       fmt(x.null_sd * k, 2) + unit + ")";
   o += drift_temperature_clause(x, k, unit);
-  if (x.temperature_or_drift() || (x.has_temperature && x.temperature_dchi2 >= kDriftNoteChi2))
-    return o + "; temperature or drift, not told apart (the path's correlation with the recorded temperature r " +
-           fmt(x.temperature_r, 2) + "): the record does not separate a warm-up of this size from the class's drift";
+  if (x.follows_temperature)
+    return o + "; the path follows the recorded temperature (r " + fmt(x.temperature_r, 2) +
+           "): temperature or drift, not told apart";
+  if (drift_note_temperature(x))
+    return o + "; the path does not follow the temperature closely (r " + fmt(x.temperature_r, 2) +
+           "), the temperature term fits it all the same: temperature or drift, not told apart";
   return o + ": the class's drift or an effect a drift imitates, not told apart";
 }
 

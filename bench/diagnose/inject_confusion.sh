@@ -5,7 +5,9 @@
 #   established: a finding with "established": true (its names listed; for a term outside the
 #                catalogue any established name is wrong; for warm-up the temperature term is right),
 #   partial:     findings, none established (not told apart from an alternative),
-#   unexplained: an axis reported as unexplained,  nothing: no finding and nothing unexplained.
+#   unexplained: an axis reported as unexplained,  range exceeded, bias change beyond 3σ (drives),
+#   noted only:  none of these, but a drift note (drift_noted: not a finding),
+#   nothing said: none of these and no note.
 # Bench rows: the diagnosis plan (bench/plans/diagnose.toml; INJECT_PLANS="diagnose factory" for more),
 # then the rows of INJECT_EXTRA_PLAN (default lowrate, bench/plans/lowrate.toml: clean and the dead band).
 # Drive rows: the level test route tests/data/drive_diag_level.toml (every grade 0, f_z ≈ −g), diagnosed

@@ -311,6 +311,7 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
   x.null_mean = m1;
   x.null_sd = sd;
   x.z = (x.change - m1) / sd;
+  x.null_exceed_count = reach;
   x.null_exceed = static_cast<double>(reach) / kDriftExcessDraws;
   auto fit_with = [&](const Dataset& S) {
     std::vector<const Dataset*> p;
@@ -367,8 +368,7 @@ bool drift_excess_reported(const DiagDriftExcess& x) {
 
 bool drift_excess_noted(const DiagDriftExcess& x) {
   const double limit = kDriftExcessFactor * x.stability;
-  return !drift_excess_reported(x) &&
-         ((x.change > limit && x.null_exceed <= kDriftNoteTail) || (x.has_temperature && x.temperature_dchi2 >= kDriftNoteChi2 && x.temperature_change_total() > limit));
+  return !drift_excess_reported(x) && x.change > limit && x.null_exceed <= kDriftNoteTail;  // NaN (not drawn): false
 }
 
 void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOptions& opt) {
