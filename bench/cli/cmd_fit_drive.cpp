@@ -319,8 +319,8 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "from its own moving linearisation point (overconfident M skews), for comparison")
       ->check(CLI::IsMember({"hold", "ekf"}))
       ->option_text("hold|ekf");
-  d->add_option("--sigma-pos", a->sigma_pos, "reference position 1-sigma, m (default: sigma column, else 0.1)")->check(finite_pos);
-  d->add_option("--sigma-vel", a->sigma_vel, "reference velocity 1-sigma, m/s (default: sigma column, else 0.02)")->check(finite_pos);
+  d->add_option("--sigma-pos", a->sigma_pos, "reference or fix position 1-sigma, m (default: sigma column, else 0.1 for reference.csv, 2 for gnss.csv)")->check(finite_pos);
+  d->add_option("--sigma-vel", a->sigma_vel, "reference or fix velocity 1-sigma, m/s (default: sigma column, else 0.02 for reference.csv, 0.1 for gnss.csv)")->check(finite_pos);
   d->add_option("--sigma-att", a->sigma_att_deg, "reference attitude 1-sigma, deg (default: sigma column, else 0.01)")->check(finite_pos);
   d->add_option("--drift-models", a->drift_models,
                  "identified drift models (MODELS.json of `calbench identify --out`, or a coefficients.json with "

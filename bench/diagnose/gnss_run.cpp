@@ -232,6 +232,11 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
   DiagnoseResult& r = run.core;
   r.improved = run.current.errors;
   if (coeffs) r.improved_terms = coeffs->carried;  // the filter ran with them compensated: estimates add to them
+  if (!coeffs)  // b and M: none given, and the filter's fit of them on this drive is not a calibration: not known
+    for (TriadErrors* te : {&r.improved.gyro, &r.improved.accel}) {
+      te->sigma_bias.setConstant(kUnknownSigma);
+      te->sigma_M.setConstant(kUnknownSigma);
+    }
   for (std::size_t s = 0; s < run.search.model.size(); ++s) {
     const int h = run.search.model[s];
     const CandidateRow& row = rows[idx[h]];

@@ -260,14 +260,15 @@ DeterminedBy determined_by(const inmotion::ParameterPriors& prior, const inmotio
                            const std::optional<CoefficientSet>& bench) {
   DeterminedBy d;
   d.rule = "drive share of the information 1-(sigma_post/sigma_prior)^2: < 0.2 bench (prior when there is no "
-           "input set), > 0.8 drive, else both";
+           "input set or its sigma is unknown), > 0.8 drive, else both";
   const auto& names = inmotion::prior_parameter_names();
   const inmotion::ParameterPriors parent = bench ? inmotion::sigma_of(bench->errors) : inmotion::ParameterPriors{};
   for (std::size_t k = 0; k < names.size(); ++k) {
     const double p = inmotion::prior_value(prior, k), q = inmotion::prior_value(post, k);
     const double ratio = q / p, share = std::clamp(1.0 - ratio * ratio, 0.0, 1.0);
-    const char* stage = share > 0.8 ? "drive" : share >= 0.2 ? "both" : bench ? "bench" : "prior";
     const double ps = bench && k < 24 ? inmotion::prior_value(parent, k) : kUnknownSigma;
+    // An input set's coefficient with σ unknown (null) gave no information: its prior was the class's.
+    const char* stage = share > 0.8 ? "drive" : share >= 0.2 ? "both" : bench && (k >= 24 || std::isfinite(ps)) ? "bench" : "prior";
     (k < 24 ? d.coefficients : d.mounting)[names[k]] =
         CoefficientStage{stage, std::isfinite(ps) ? std::optional<double>(ps) : std::nullopt, p, q, ratio, share};
   }

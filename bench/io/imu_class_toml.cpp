@@ -52,14 +52,17 @@ ImuClass parse_table(const toml::table& root, const std::string& file) {
   // file holding a data sheet's figures gives bit for bit the same NoiseSpec.
   const toml::table& g = section(r, root, "gyro");
   r.check_keys(g, "gyro.", {"arw_deg_sqrt_h", "bias_stability_deg_h", "bias_tau_s", "range_deg_s", "lsb_deg_s"});
-  c.noise.gyro.white_density = r.num(g, "gyro.", "arw_deg_sqrt_h", std::nullopt, 0, kBig) * kDeg / kSqrtHour;
+  // White noise must be positive: no sensor is noiseless, and a zero level leaves the standstill
+  // detection and every noise-weighted test without a scale (1e-6 °/√h, 1e-7 m/s/√h: far below any
+  // navigation-grade part).
+  c.noise.gyro.white_density = r.num(g, "gyro.", "arw_deg_sqrt_h", std::nullopt, 1e-6, kBig) * kDeg / kSqrtHour;
   c.noise.gyro.drift_sigma = r.num(g, "gyro.", "bias_stability_deg_h", std::nullopt, 0, kBig) * kDegPerHour;
   c.noise.gyro.drift_tau_s = r.num(g, "gyro.", "bias_tau_s", std::nullopt, 1e-3, kBig);
   c.noise.gyro.range = r.num(g, "gyro.", "range_deg_s", std::nullopt, 1e-6, kBig) * kDeg;
   c.noise.gyro.lsb = r.num(g, "gyro.", "lsb_deg_s", std::nullopt, 0, kBig) * kDeg;
   const toml::table& a = section(r, root, "accel");
   r.check_keys(a, "accel.", {"vrw_m_s_sqrt_h", "bias_stability_mg", "bias_tau_s", "range_g", "lsb_g"});
-  c.noise.accel.white_density = r.num(a, "accel.", "vrw_m_s_sqrt_h", std::nullopt, 0, kBig) / kSqrtHour;
+  c.noise.accel.white_density = r.num(a, "accel.", "vrw_m_s_sqrt_h", std::nullopt, 1e-7, kBig) / kSqrtHour;
   c.noise.accel.drift_sigma = r.num(a, "accel.", "bias_stability_mg", std::nullopt, 0, kBig) * kMilliG;
   c.noise.accel.drift_tau_s = r.num(a, "accel.", "bias_tau_s", std::nullopt, 1e-3, kBig);
   c.noise.accel.range = r.num(a, "accel.", "range_g", std::nullopt, 1e-6, kBig) * kG0;

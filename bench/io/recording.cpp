@@ -284,6 +284,18 @@ void require_time_position(TableSource& c, int& t, int& lat, int& lon, int& h) {
   lon = c.require("lon_deg");
   h = c.require("h_m");
 }
+// A position off the Earth or a σ that is no σ is a broken file, not a fix: refused with file, line
+// and field (the ranges of meta.json's site: latitude ±90°, height ±1e5 m; longitude −180…360°).
+void check_position(TableSource& c, double lat, double lon, double h) {
+  if (std::abs(lat) > 90) c.fail_at("lat_deg", "latitude outside ±90°");
+  if (!(lon >= -180 && lon <= 360)) c.fail_at("lon_deg", "longitude outside −180…360°");
+  if (std::abs(h) > 1e5) c.fail_at("h_m", "height outside ±1e5 m");
+}
+double sigma_value(TableSource& c, int slot, const char* name) {
+  const double v = c.value(slot);
+  if (!(v > 0)) c.fail_at(name, "a 1-sigma must be positive");
+  return v;
+}
 }  // namespace
 
 DriveRefReader::DriveRefReader(const fs::path& file, bool digest) : csv_(open_table(file, digest)) {
@@ -304,14 +316,14 @@ bool DriveRefReader::next(DriveRefRow& r) {
   r.lat_deg = csv_->value(lat_);
   r.lon_deg = csv_->value(lon_);
   r.h_m = csv_->value(h_);
-  if (std::abs(r.lat_deg) > 90) csv_->fail_at("lat_deg", "latitude outside ±90°");
+  check_position(*csv_, r.lat_deg, r.lon_deg, r.h_m);
   for (int i = 0; i < 3; ++i) {
     r.v_ned(i) = csv_->value(v_[i]);
     r.rpy_deg(i) = csv_->value(att_[i]);
   }
-  r.sigma_pos_m = sp_ >= 0 ? csv_->value(sp_) : nan;
-  r.sigma_vel_m_s = sv_ >= 0 ? csv_->value(sv_) : nan;
-  r.sigma_att_deg = sa_ >= 0 ? csv_->value(sa_) : nan;
+  r.sigma_pos_m = sp_ >= 0 ? sigma_value(*csv_, sp_, "sigma_pos_m") : nan;
+  r.sigma_vel_m_s = sv_ >= 0 ? sigma_value(*csv_, sv_, "sigma_vel_m_s") : nan;
+  r.sigma_att_deg = sa_ >= 0 ? sigma_value(*csv_, sa_, "sigma_att_deg") : nan;
   return true;
 }
 
@@ -336,11 +348,12 @@ bool GnssReader::next(GnssRow& r) {
   r.lat_deg = csv_->value(lat_);
   r.lon_deg = csv_->value(lon_);
   r.h_m = csv_->value(h_);
+  check_position(*csv_, r.lat_deg, r.lon_deg, r.h_m);
   if (v_[0] >= 0 && v_[1] >= 0 && v_[2] >= 0) r.v_ned = Vec3(csv_->value(v_[0]), csv_->value(v_[1]), csv_->value(v_[2]));
   else r.v_ned.reset();
-  r.sigma_h_m = sh_ >= 0 ? csv_->value(sh_) : nan;
-  r.sigma_v_m = sv_ >= 0 ? csv_->value(sv_) : nan;
-  r.sigma_vel_m_s = svel_ >= 0 ? csv_->value(svel_) : nan;
+  r.sigma_h_m = sh_ >= 0 ? sigma_value(*csv_, sh_, "sigma_h_m") : nan;
+  r.sigma_v_m = sv_ >= 0 ? sigma_value(*csv_, sv_, "sigma_v_m") : nan;
+  r.sigma_vel_m_s = svel_ >= 0 ? sigma_value(*csv_, svel_, "sigma_vel_m_s") : nan;
   return true;
 }
 

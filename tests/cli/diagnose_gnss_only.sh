@@ -56,6 +56,10 @@ f = one("late", "time_offset")
 assert abs(f["value"] - 0.008) <= 3 * f["sigma"] and f["sigma"] < 0.002, f
 imp = json.load(open(f"{d}/late_imp.json"))
 assert abs(imp["time_offset"]["s"] - f["value"]) < 1e-12, imp["time_offset"]
+# Without --coeffs, b and M were not calibrated here: their sigma is null (not known), never 0 (exact),
+# so that fit drive --coeffs IMPROVED.json takes the class's priors for them.
+for tri in ("gyro", "accel"):
+    assert imp[tri]["sigma_bias"] == [None] * 3 and imp[tri]["sigma_M"] == [[None] * 3] * 3, imp[tri]
 f = one("lever", "lever_arm")
 # meta.json's lever arm (reference body axes) 0.1 m off in x and -y; rtk_town mounts the IMU at yaw
 # -90 deg, so in IMU axes the MEMS sits at (-0.1, -0.1, 0) from where meta.json says (the drawn

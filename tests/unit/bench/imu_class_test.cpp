@@ -135,6 +135,8 @@ TEST(ImuClass, BadFilesNameFileLineAndKey) {
     EXPECT_EQ(e.field(), "accel.bias_stability_mg");
     EXPECT_EQ(e.line(), 26u);  // the line of the key in adis16488a.toml
   }
+  EXPECT_EQ(refused("arw_deg_sqrt_h = 0.26", "arw_deg_sqrt_h = 0").field(), "gyro.arw_deg_sqrt_h") << "no sensor is noiseless";
+  EXPECT_EQ(refused("vrw_m_s_sqrt_h = 0.029", "vrw_m_s_sqrt_h = 1e-30").field(), "accel.vrw_m_s_sqrt_h");
   EXPECT_EQ(refused("gyro_bias_deg_s = 0.5", "gyro_bias_deg_s = -0.5").field(), "priors.gyro_bias_deg_s");
   EXPECT_EQ(refused("gyro_bias_deg_s = 0.5", "gyro_bias_deg_s = 0").field(), "priors.gyro_bias_deg_s");
   EXPECT_EQ(refused("gyro_bias_deg_s = 0.5", "gyro_bias_deg_s = nan").field(), "priors.gyro_bias_deg_s");

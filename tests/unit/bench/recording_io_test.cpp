@@ -179,6 +179,44 @@ TEST(RecordingIo, DriveIncrementsRoundTripWithGnss) {
   EXPECT_EQ(g.sigma_vel_m_s, 0.1);
 }
 
+// A fix off the Earth or a σ that is no σ is refused with file, line and field (a user's gnss.csv
+// with lat 400 or a negative σ was read as a fix before).
+TEST(RecordingIo, GnssAndReferenceRowsOffTheEarthOrWithNonPositiveSigmaAreRefused) {
+  TempDir d;
+  const std::string head = "t_s,lat_deg,lon_deg,h_m,vn_m_s,ve_m_s,vd_m_s,sigma_h_m,sigma_v_m,sigma_vel_m_s\n";
+  const std::string good = "0,40.1,116.2,50,0,0,0,0.02,0.03,0.05\n";
+  auto refused_field = [&](const std::string& row) {
+    write_file(d.path() / "gnss.csv", head + good + row);
+    GnssReader gr(d.path() / "gnss.csv");
+    GnssRow g;
+    EXPECT_TRUE(gr.next(g));
+    try {
+      gr.next(g);
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), 3u) << e.what();
+      return e.field();
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(refused_field("1,400,116.2,50,0,0,0,0.02,0.03,0.05\n"), "lat_deg");
+  EXPECT_EQ(refused_field("1,40.1,-200,50,0,0,0,0.02,0.03,0.05\n"), "lon_deg");
+  EXPECT_EQ(refused_field("1,40.1,116.2,2e6,0,0,0,0.02,0.03,0.05\n"), "h_m");
+  EXPECT_EQ(refused_field("1,40.1,116.2,50,0,0,0,-0.02,0.03,0.05\n"), "sigma_h_m");
+  EXPECT_EQ(refused_field("1,40.1,116.2,50,0,0,0,0.02,0,0.05\n"), "sigma_v_m");
+  EXPECT_EQ(refused_field("1,40.1,116.2,50,0,0,0,0.02,0.03,-1\n"), "sigma_vel_m_s");
+  EXPECT_EQ(refused_field("1,40.1,359.9,50,0,0,0,0.02,0.03,0.05\n"), "(accepted)") << "longitude 0-360 is a longitude";
+  write_file(d.path() / "reference.csv",
+             "t_s,lat_deg,lon_deg,h_m,vn_m_s,ve_m_s,vd_m_s,roll_deg,pitch_deg,yaw_deg,sigma_pos_m\n0,40,116,50,0,0,0,0,0,0,0\n");
+  DriveRefReader dr(d.path() / "reference.csv");
+  DriveRefRow ref;
+  try {
+    dr.next(ref);
+    ADD_FAILURE() << "a zero sigma_pos_m was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "sigma_pos_m");
+  }
+}
+
 TEST(RecordingIo, ReadsForeignLayoutCommentsReorderedAndUnknownColumns) {
   TempDir d;
   write_file(d.path() / "meta.json", kBenchMeta);
