@@ -151,6 +151,9 @@ ImuClassChoice choose_imu_class(const std::string& option, const std::string& mo
     if (std::filesystem::is_regular_file(option, ec)) return {load_imu_class(option), "--device-class " + option};
     for (const ImuClass& c : builtin_imu_classes())
       if (imu_class_matches(c, option)) return {c, "--device-class " + option};
+    if (option.find('/') != std::string::npos || option.ends_with(".toml"))  // meant as a file
+      throw InputError(option, 0, "--device-class",
+                       "no such class file; known classes by name: " + known_imu_classes_text());
     throw InputError("--device-class", 0, "",
                      "'" + option + "' is neither a class file nor a known class; known classes: " + known_imu_classes_text());
   }

@@ -120,6 +120,13 @@ TEST(ImuClass, UnknownModelIsBadInputListingTheClasses) {
   EXPECT_EQ(choose_imu_class(kDir + "/kvh1750.toml", "unknown", "m.json").cls.name, "KVH 1750");
   EXPECT_EQ(choose_imu_class("icm42688p", "unknown", "m.json").cls.name, "ICM-42688-P");
   EXPECT_THROW(choose_imu_class("no-such-class", "ADIS16488A", "m.json"), InputError);
+  try {  // a path that is not there is a missing file, named as such
+    choose_imu_class("classes/mine.toml", "ADIS16488A", "m.json");
+    ADD_FAILURE() << "a missing class file was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "classes/mine.toml");
+    EXPECT_NE(e.message().find("no such class file"), std::string::npos) << e.message();
+  }
 }
 
 TEST(ImuClass, BadFilesNameFileLineAndKey) {
