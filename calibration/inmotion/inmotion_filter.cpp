@@ -520,7 +520,9 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     rec.status = InnovationRecord::used;
     if (in_bank_) {  // a heading hypothesis: its innovations' log-likelihood, and no adaptive noise
       // (a wrong heading would buy itself noise to explain its misfit)
-      loglik_ -= 0.5 * (nis + std::log(rec.S.determinant()));
+      const double term = -0.5 * (nis + std::log(rec.S.determinant()));
+      loglik_ += term;
+      if (!(nis <= cfg_.gate_nis)) bank_rejected_[type] = term;
     } else if (phase_ == Phase::aligned) {
       // The adaptive process noise sees every innovation once the heading is known, a rejected one
       // capped at the gate. Not before: standing with a placeholder heading, the first metres of
@@ -754,7 +756,20 @@ void InMotionFilter::start_bank(const RefObs& r) {
 }
 
 bool InMotionFilter::bank_reference(const RefObs& r) {
-  for (auto& h : bank_.f) h->reference(r);
+  for (auto& h : bank_.f) {
+    std::fill(std::begin(h->bank_rejected_), std::end(h->bank_rejected_), std::numeric_limits<double>::quiet_NaN());
+    h->reference(r);
+  }
+  // An innovation type every hypothesis rejected at the gate (a gross outlier: a fix 100 m off) says
+  // nothing about which heading is right, and its term, large in all of them, would decide between
+  // them by how near each happened to pass: it leaves every likelihood (the contaminated-normal
+  // model's reading of an outlier: a constant, whatever the state). Otherwise the terms stay.
+  for (int type = 0; type < 3; ++type) {
+    bool all = !bank_.f.empty();
+    for (const auto& h : bank_.f) all = all && std::isfinite(h->bank_rejected_[type]);
+    if (all)
+      for (auto& h : bank_.f) h->loglik_ -= h->bank_rejected_[type];
+  }
   const double T = r.t - bank_.t0;
   if (T < cfg_.align_bank_min_s) return false;
   std::vector<std::size_t> order(bank_.f.size());

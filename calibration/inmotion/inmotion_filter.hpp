@@ -457,6 +457,9 @@ class InMotionFilter {
   } bank_;
   bool in_bank_ = false;  // this filter is one hypothesis of a bank
   double loglik_ = 0;     // its innovations' log-likelihood since the bank started
+  // This epoch's log-likelihood terms of the innovations this hypothesis rejected, per observation
+  // type (NaN: not rejected): a fix every hypothesis rejects is an outlier, not evidence between them.
+  double bank_rejected_[3] = {0, 0, 0};
   double last_realign_t_ = -1e300;
   bool motion_check_ = true;  // the heading σ is checked at the next start of motion
   double last_course_t_ = -1e300;
