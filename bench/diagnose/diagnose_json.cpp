@@ -28,7 +28,7 @@ nlohmann::json not_excited_json(const std::vector<NotExcited>& v) {
 nlohmann::json drift_figures_json(const DiagDriftExcess& x) {
   nlohmann::json j = {{"change", x.change},   {"class_stability", x.stability}, {"ratio", x.change / x.stability},
                       {"null_mean", x.null_mean}, {"null_sd", x.null_sd},       {"z", x.z},
-                      {"null_exceed", std::isfinite(x.null_exceed) ? nlohmann::json(x.null_exceed) : nlohmann::json(nullptr)},
+                      {"null_exceed", x.null_exceed_count >= 0 ? nlohmann::json(x.null_exceed()) : nlohmann::json(nullptr)},
                       {"gain", x.gain},       {"drift_sigma", x.sigma},         {"drift_tau_s", x.tau_s}};
   if (x.has_temperature)
     j["temperature"] = {{"change_c", x.temperature_change},
@@ -164,6 +164,22 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                           {"seconds_left_out", x.excluded_s},
                           {"sentence", saturation_sentence(x)}});
   }
+  nlohmann::json low_input = nullptr;  // not tested: no gyro axis passed the screen
+  if (r.low_input.tested) {
+    nlohmann::json ax = nlohmann::json::array();
+    for (const auto& x : r.low_input.axes)
+      ax.push_back({{"axis", kAxis[x.axis]}, {"width_grid", x.width}, {"not_sensed_up_to", x.below_max},
+                    {"sensed_from", x.above_min > 0 ? nlohmann::json(x.above_min) : nlohmann::json(nullptr)},
+                    {"sub_blocks", x.blocks}, {"screen_delta_chi2", x.screen_gain}});
+    low_input = {{"verdict", r.low_input.verdict}, {"axes", ax}, {"delta_score", r.low_input.delta_score},
+                 {"penalty", r.low_input.penalty}, {"catalogue_would_name", r.low_input.competing},
+                 {"catalogue_left_unexplained", [&] {
+                    nlohmann::json u = nlohmann::json::array();
+                    for (int a : r.low_input.catalogue_unexplained) u.push_back(std::string("gyro ") + kAxis[a]);
+                    return u;
+                  }()},
+                 {"sentence", low_input_sentence(r.low_input)}};
+  }
   nlohmann::json drift_excess = nlohmann::json::array();
   for (const auto& x : r.drift_excess) {
     drift_excess.push_back({{"sensor", kSensor[x.sensor]},
@@ -205,6 +221,7 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
   return {{"findings", findings},
           {"unexplained", unexplained},
           {"saturation", saturation},
+          {"low_input", low_input},
           {"drift_excess", drift_excess},
           {"drift_noted", drift_noted},
           {"withdrawn", withdrawn_json(r.withdrawn)},

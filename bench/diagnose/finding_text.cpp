@@ -1,5 +1,6 @@
 #include "bench/diagnose/finding_text.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -170,6 +171,43 @@ std::string saturation_sentence(const DiagSaturation& x) {
          " s) left out of the diagnosis";
 }
 
+std::string low_input_sentence(const DiagLowInput& x) {
+  const double k = 1.0 / units::kDeg;
+  // Axes with the same band share it: "x, y, z: inputs up to … not sensed, from … sensed".
+  std::vector<std::pair<std::string, std::string>> groups;  // band → axes
+  std::string axes;
+  for (const auto& a : x.axes) {
+    const std::string ax(1, "xyz"[a.axis]);
+    axes += (axes.empty() ? "" : ", ") + ax;
+    const std::string band = "inputs up to " + fmt(a.below_max * k, 3) + " °/s not sensed" +
+                             (a.above_min > 0 ? ", from " + fmt(a.above_min * k, 3) + " °/s sensed" : "");
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == band; });
+    if (it == groups.end()) groups.emplace_back(band, ax);
+    else it->second += ", " + ax;
+  }
+  std::string bands;
+  for (const auto& [band, who] : groups)
+    bands += (bands.empty() ? "" : "; ") + (groups.size() > 1 ? who + ": " : std::string()) + band;
+  // What the catalogue's model did with the record as is: "named A, B and left gyro z unexplained".
+  std::string names, left;
+  for (const auto& c : x.competing) names += (names.empty() ? "" : ", ") + c;
+  for (int a : x.catalogue_unexplained) left += (left.empty() ? "gyro " : ", ") + std::string(1, "xyz"[a]);
+  std::string named = names.empty() ? "" : "named " + names;
+  if (!left.empty()) named += (named.empty() ? "" : " and ") + std::string("left ") + left + " unexplained";
+  const std::string who = "gyro " + axes + ": ";
+  const std::string what = "the output does not follow the smallest rate inputs (" + bands +
+                           "): a dead band or threshold, outside the catalogue";
+  const std::string by = fmt(std::abs(x.delta_score), 3);
+  if (std::string(x.verdict) == "not sensed")
+    return who + what + "; the record with those inputs taken as not sensed fits better than the catalogue's model by Δ(−2 ln L) " +
+           by + " (one parameter per axis charged), and the rest of the diagnosis is of that record" +
+           (named.empty() ? "" : "; the catalogue alone would have " + named);
+  if (std::string(x.verdict) == "cannot tell")
+    return who + "the reading that " + what + ", fits within Δ(−2 ln L) " + by + " of the catalogue's model: not told apart" +
+           (names.empty() ? "" : " (the catalogue's model " + named + "; those findings are partial)");
+  return who + "the smallest inputs are sensed (the record with them taken as not sensed fits worse by Δ(−2 ln L) " + by + ")";
+}
+
 namespace {
 // The temperature bias term's clause of a drift sentence (empty when it was not tried or gained nothing).
 std::string drift_temperature_clause(const DiagDriftExcess& x, double k, const std::string& unit) {
@@ -189,7 +227,7 @@ std::string drift_note_sentence(const DiagDriftExcess& x) {
                   "× the class's in-run bias stability, " + fmt(x.stability * k) + unit + ")";
   o += "; the class's own drift moves it that far on this recording in " +
        (x.null_exceed_count == 0 ? std::string("none") : std::to_string(x.null_exceed_count)) + " of " +
-       std::to_string(kDriftExcessDraws) + " draws (" + fmt(100 * x.null_exceed, 2) + " %; " + fmt(x.null_mean * k) + " ± " +
+       std::to_string(kDriftExcessDraws) + " draws (" + fmt(100 * x.null_exceed(), 2) + " %; " + fmt(x.null_mean * k) + " ± " +
        fmt(x.null_sd * k, 2) + unit + ")";
   o += drift_temperature_clause(x, k, unit);
   if (x.follows_temperature)

@@ -39,6 +39,8 @@ const char* withdrawn_why_key(WithdrawnWhy w);
 // outputs; 100 % of those steps' sub-blocks frozen) where the reference reached 300 °/s:
 // saturation, not a polynomial; steps 10, 11 (16 s) left out of the diagnosis".
 std::string saturation_sentence(const DiagSaturation& x);
+// Issue 36, the smallest inputs (DiagLowInput): the verdict, the bands and what the catalogue names instead.
+std::string low_input_sentence(const DiagLowInput& x);
 
 // "drift beyond the class's stability, not established: gyro z's bias moved 19.6 °/h over the
 // run, 3.8× …; it follows the recorded temperature (…): temperature or drift, not told apart".

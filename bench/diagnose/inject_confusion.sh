@@ -6,6 +6,8 @@
 #                catalogue any established name is wrong; for warm-up the temperature term is right),
 #   partial:     findings, none established (not told apart from an alternative),
 #   unexplained: an axis reported as unexplained,  range exceeded, bias change beyond 3σ (drives),
+#   smallest inputs not sensed: the low-input test (JSON low_input) found the gyro output does not
+#                follow its smallest inputs (a dead band or threshold, outside the catalogue),
 #   noted only:  none of these, but a drift note (drift_noted: not a finding),
 #   nothing said: none of these and no note.
 # Bench rows: the diagnosis plan (bench/plans/diagnose.toml; INJECT_PLANS="diagnose factory" for more),
@@ -38,7 +40,9 @@ une = sorted({f"{u['sensor']} {u['axis']}" for u in d["unexplained"]})
 sat = sorted({f"{x['sensor']} {x['axis']}" for x in d.get("saturation", [])})
 bias = sorted(a.replace("_", " ") for a in d.get("bias_since_coefficients", {}).get("beyond_3sigma", []))
 note = sorted({f"{x['sensor']} {x['axis']}" for x in d.get("drift_noted", [])})
-print("\t".join([row, "; ".join(est), "; ".join(par), "; ".join(une), "; ".join(sat), "; ".join(bias), "; ".join(note)]))
+lo = d.get("low_input") or {}
+low = sorted({f"{lo['verdict']} gyro {x['axis']}" for x in lo.get("axes", [])}) if lo.get("verdict") in ("not sensed", "cannot tell") else []
+print("\t".join([row, "; ".join(est), "; ".join(par), "; ".join(une), "; ".join(sat), "; ".join(bias), "; ".join(note), "; ".join(low)]))
 PY
 }
 bench_classes=(
@@ -112,10 +116,10 @@ python3 - "$runs" > "$md" <<'PY'
 import sys, collections
 rows = collections.OrderedDict()
 for line in open(sys.argv[1]):
-    row, est, par, une, sat, bias, note = (line.rstrip("\n").split("\t") + [""] * 6)[:7]
-    rows.setdefault(row, []).append((est, par, une, sat, bias, note))
-print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | bias change beyond 3σ | noted only (not a finding) | nothing said | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) | bias change since --coeffs beyond 3σ (runs) | drift noted (runs) |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    row, est, par, une, sat, bias, note, low = (line.rstrip("\n").split("\t") + [""] * 7)[:8]
+    rows.setdefault(row, []).append((est, par, une, sat, bias, low, note))
+print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | bias change beyond 3σ | smallest inputs not sensed | noted only (not a finding) | nothing said | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) | bias change since --coeffs beyond 3σ (runs) | smallest inputs (runs) | drift noted (runs) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 def tally(xs):
     c = collections.Counter(n for x in xs for n in x.split("; ") if n)
     return ", ".join(f"{k} ({v})" for k, v in sorted(c.items())) or "–"
@@ -123,8 +127,9 @@ for row, rs in rows.items():
     n = len(rs)
     e = sum(1 for r in rs if r[0]); p = sum(1 for r in rs if not r[0] and r[1]); u = sum(1 for r in rs if r[2])
     x = sum(1 for r in rs if r[3]); b = sum(1 for r in rs if r[4])
-    o = sum(1 for r in rs if r[5] and not any(r[:5])); z = sum(1 for r in rs if not any(r))
-    print(f"| {row} | {n} | {e} | {p} | {u} | {x} | {b} | {o} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} | {tally(r[3] for r in rs)} | {tally(r[4] for r in rs)} | {tally(r[5] for r in rs)} |")
+    lo = sum(1 for r in rs if "not sensed" in r[5])
+    o = sum(1 for r in rs if r[6] and not any(r[:6])); z = sum(1 for r in rs if not any(r))
+    print(f"| {row} | {n} | {e} | {p} | {u} | {x} | {b} | {lo} | {o} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} | {tally(r[3] for r in rs)} | {tally(r[4] for r in rs)} | {tally(r[5] for r in rs)} | {tally(r[6] for r in rs)} |")
 PY
 cat "$md"
 {
@@ -137,7 +142,11 @@ cat "$md"
   echo "with the unit's bench coefficients): the bias re-estimated on the drive differs from the bench's by more"
   echo "than 3σ, the right answer for a turn-on bias shift (the null alternative); \"noted only\": nothing of"
   echo "these, but a note that the drift model absorbed a bias change beyond 2× the class's stability which the"
-  echo "class's own drift also makes (not a finding; it says what it cannot tell apart); \"nothing said\": none"
+  echo "class's own drift also makes (not a finding; it says what it cannot tell apart); \"smallest inputs not"
+  echo "sensed\": the gyro output does not follow its smallest rate inputs (a dead band or threshold, outside the"
+  echo "catalogue), found and the rest diagnosed with them taken as not sensed (\"cannot tell\" in the names column:"
+  echo "that reading fits as well as the catalogue's findings, which are then not told apart from it, partial);"
+  echo "\"nothing said\": none"
   echo "of these (a miss for every row but the clean ones)."
   [ -z "${INJECT_NOTE:-}" ] || { echo; echo "$INJECT_NOTE"; }
   echo

@@ -10,6 +10,7 @@
 #include "calibration/diagnosis/condition_correlation.hpp"
 #include "calibration/diagnosis/greedy_search.hpp"
 #include "calibration/diagnosis/residual_stats.hpp"
+#include "common/units.hpp"
 
 // The bench side of the diagnosis: the design and its datasets come from bench_design.cpp, the
 // linear problem from diagnosis_engine.cpp; here the bench's residual statistics (systematic RMS
@@ -312,7 +313,6 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
   x.null_sd = sd;
   x.z = (x.change - m1) / sd;
   x.null_exceed_count = reach;
-  x.null_exceed = static_cast<double>(reach) / kDriftExcessDraws;
   auto fit_with = [&](const Dataset& S) {
     std::vector<const Dataset*> p;
     for (int b = 0; b < kAxes; ++b) p.push_back(b == a ? &S : &search.all[b]);
@@ -358,6 +358,119 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
   return x;
 }
 
+// Issue 36, the smallest inputs (DiagLowInput): the widths tried, × the Earth rate. 1.25 Ω takes
+// the statics (the Earth rate alone) as not sensed; the larger ones add low-rate steps.
+constexpr double kLowInputGrid[] = {1.25, 2.5, 5.0, 10.0, 20.0};
+
+// The screen: per gyro axis, the width whose "not sensed" correction gains most on the base model
+// (bias and scale/misalignment) at the parent level under the class's drift (the whitened GLS
+// χ² of the parent means); axes whose gain reaches min_delta_chi2, and the hypothesis's penalty.
+// `built`: the gyro datasets under the class's drift when the search still has them (else built here).
+DiagLowInput low_input_screen(const DiagData& d, const Design& D, const DiagnoseOptions& opt, double sigma,
+                              double tau, const std::vector<Dataset>* built) {
+  DiagLowInput lo;
+  const int n = static_cast<int>(d.subs.size());
+  for (int a = 0; a < 3; ++a) {
+    const Dataset own = built ? Dataset{} : build_dataset(d, D, a, kSubsetAll, sigma, tau, opt);
+    const Dataset& S0 = built ? (*built)[a] : own;
+    const auto Lt = S0.L.triangularView<Eigen::Lower>();
+    const int N = static_cast<int>(S0.parents.size());
+    Eigen::MatrixXd X(N, kBase);
+    for (int c = 0; c < kBase; ++c) X.col(c) = parent_means(d, S0, D.X[a].col(c));
+    X = Lt.solve(X);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qx(X);
+    qx.setThreshold(1e-9);
+    const Eigen::MatrixXd Q = qx.householderQ() * Eigen::MatrixXd::Identity(N, qx.rank());
+    auto chi2 = [&](const Eigen::VectorXd& z) {
+      const Eigen::VectorXd zw = Lt.solve(parent_means(d, S0, z));
+      return zw.squaredNorm() - (Q.transpose() * zw).squaredNorm();
+    };
+    const double chi0 = chi2(D.z[a]);
+    DiagLowInput::Axis best;
+    best.axis = a;
+    int last = -1;
+    for (double k : kLowInputGrid) {
+      const double width = k * units::kEarthRate;
+      Eigen::VectorXd z = D.z[a];
+      int count = 0;
+      double below_max = 0, above_min = std::numeric_limits<double>::infinity();
+      for (int j = 0; j < n; ++j) {
+        const double w = d.subs[j].w(a);
+        if (std::abs(w) < width) {
+          z(j) += w;
+          ++count;
+          below_max = std::max(below_max, std::abs(w));
+        } else {
+          above_min = std::min(above_min, std::abs(w));
+        }
+      }
+      if (count == last || count == 0 || count == n) continue;
+      last = count;
+      const double gain = chi0 - chi2(z);
+      if (gain > best.screen_gain) {
+        best.screen_gain = gain;
+        best.width = width;
+        best.below_max = below_max;
+        best.above_min = std::isfinite(above_min) ? above_min : 0;
+        best.blocks = count;
+      }
+    }
+    if (best.screen_gain < opt.min_delta_chi2) continue;
+    lo.axes.push_back(best);
+    lo.penalty += greedy_term_penalty(1, S0.n_low + S0.n_high, opt.penalty_per_param);
+  }
+  return lo;
+}
+
+// The test (DiagLowInput): the whole diagnosis redone on the record with the screened inputs taken
+// as not sensed, and the verdict; `res` becomes that diagnosis when it fits decisively better.
+void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors& current, const EffectTerms& carried,
+                      const DiagnoseOptions& opt, double sigma, double tau, const std::vector<Dataset>* built,
+                      DiagnoseResult& res) {
+  DiagLowInput lo = low_input_screen(data, D, opt, sigma, tau, built);
+  if (lo.axes.empty()) return;
+  lo.tested = true;
+  std::copy(res.after, res.after + 3, lo.catalogue_after);
+  for (const auto& u : res.unexplained)
+    if (u.sensor == 0) lo.catalogue_unexplained.push_back(u.axis);
+  DiagData corrected = data;
+  for (const auto& x : lo.axes)
+    for (auto& s : corrected.subs)
+      if (std::abs(s.w(x.axis)) < x.width) s.gyro(x.axis) += s.w(x.axis);
+  DiagnoseOptions o1 = opt;
+  o1.low_input_check = false;
+  DiagnoseResult r1 = diagnose_bench(corrected, current, carried, o1);
+  lo.delta_score = res.score - (r1.score + lo.penalty);
+  auto in = [](const DiagnoseResult& r, const Term& t) {
+    for (const auto& f : r.findings)
+      if (f.term.effect == t.effect && f.term.sensor == t.sensor && f.term.axis == t.axis) return true;
+    return false;
+  };
+  // Gyro findings (a g-sensitivity, a gyro drift) the corrected record does without.
+  std::vector<DiagFinding*> without;
+  for (auto& f : res.findings)
+    if (f.term.sensor == 0 && !in(r1, f.term)) {
+      without.push_back(&f);
+      lo.competing.push_back(f.term.label());
+    }
+  if (lo.delta_score >= opt.ambiguity_chi2) {
+    lo.verdict = "not sensed";
+    r1.low_input = std::move(lo);
+    res = std::move(r1);
+    return;
+  }
+  lo.verdict = lo.delta_score > -opt.ambiguity_chi2 ? "cannot tell" : "sensed";
+  if (std::string(lo.verdict) == "cannot tell") {
+    for (DiagFinding* f : without) {
+      f->low_input_alternative = true;
+      finding_status(*f, res, opt);
+    }
+  } else {
+    lo.competing.clear();
+  }
+  res.low_input = std::move(lo);
+}
+
 }  // namespace
 
 bool drift_excess_reported(const DiagDriftExcess& x) {
@@ -368,7 +481,7 @@ bool drift_excess_reported(const DiagDriftExcess& x) {
 
 bool drift_excess_noted(const DiagDriftExcess& x) {
   const double limit = kDriftExcessFactor * x.stability;
-  return !drift_excess_reported(x) && x.change > limit && x.null_exceed <= kDriftNoteTail;  // NaN (not drawn): false
+  return !drift_excess_reported(x) && x.change > limit && x.null_exceed() <= kDriftNoteTail;  // NaN (not drawn): false
 }
 
 void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOptions& opt) {
@@ -376,7 +489,7 @@ void finding_status(DiagFinding& f, const DiagnoseResult& res, const DiagnoseOpt
   f.remainder_is_noise = true;
   for (const auto& u : res.unexplained)
     if (u.sensor == f.report_sensor && (f.report_axis < 0 || u.axis == f.report_axis)) f.remainder_is_noise = false;
-  f.status = !f.alternatives.empty()                                                       ? "not told apart"
+  f.status = !f.alternatives.empty() || f.low_input_alternative                             ? "not told apart"
              : f.explained_fraction >= opt.established_cut && f.remainder_is_noise ? "established"
                                                                                          : "partial";
 }
@@ -645,6 +758,10 @@ DiagnoseResult diagnose_bench(const DiagData& data, const SensorErrors& current,
     if (drift_excess_noted(x)) res.drift_noted.push_back(x);
   }
   for (auto& f : res.findings) finding_status(f, res, opt);
+  res.score = search.total_score();
+  if (opt.low_input_check)
+    check_low_inputs(data, D, current, carried, opt, drift_sigma[0], drift_tau[0],
+                     ds[0] == drift_sigma[0] && tau[0] == drift_tau[0] ? &all : nullptr, res);
   return res;
 }
 

@@ -42,6 +42,9 @@ struct DiagnoseOptions {
   // 1 − rms_after/rms_before, the sweep's own "cut ≥ 80 %" criterion) and that axis's remainder is
   // consistent with its noise model; otherwise it is "partial" (docs/diagnosis.md, "Decision rules").
   double established_cut = 0.8;
+  // Issue 36, the smallest inputs (DiagLowInput): test whether the gyros' output follows their
+  // smallest rate inputs, the search redone with them taken as not sensed.
+  bool low_input_check = true;
 };
 
 struct AxisStats {
@@ -133,6 +136,9 @@ struct DiagFinding {
     double delta_score = 0, drift_sigma = 0, drift_tau_s = 0;
     const char* verdict = "";  // "temperature", "drift" or "cannot tell" (|Δ| < ambiguity_chi2)
   } versus_drift;
+  // The record with the gyros' smallest inputs taken as not sensed (DiagLowInput) fits within
+  // ambiguity_chi2 of this model and does without this finding: not told apart from it.
+  bool low_input_alternative = false;
 };
 
 // Why an accepted term was given up.
@@ -204,6 +210,41 @@ std::vector<DiagSaturation> find_saturation(const DiagData& d, const double (&wh
 // The recording without those steps (parents and sub-blocks renumbered).
 DiagData without_steps(const DiagData& d, const std::vector<int>& steps);
 
+// Issue 36, the smallest inputs: a gyro whose output does not follow its smallest rate inputs (a
+// dead band or a threshold: no term of the catalogue, whose terms are smooth in the input). On
+// statics the input is the Earth rate, whose vertical part is exactly what an isotropic
+// g-sensitivity of −Ω·sin L/g gives, and a larger drift absorbs short low-rate steps: the catalogue
+// names those when the Earth rate is not sensed. Screen per gyro axis: the base model's GLS fit
+// (the class's drift) with the sub-blocks whose |reference rate| about the axis lies below a width
+// on the grid Ω·{1.25, 2.5, 5, 10, 20} taken as not sensed (measured + reference there); the
+// width with the largest gain, kept when the gain reaches min_delta_chi2. Then the whole diagnosis
+// is redone on the record so corrected, and the two compare by the penalised −2 ln L of their
+// final models (DiagnoseResult::score), the hypothesis charged one parameter per axis:
+//   corrected better by ≥ ambiguity_chi2: "not sensed": that diagnosis is the result (this record
+//     attached), and what the catalogue alone would have named is listed;
+//   within ambiguity_chi2: "cannot tell": this record's diagnosis, its findings that the corrected
+//     one does without are not told apart from the hypothesis (DiagFinding::low_input_alternative);
+//   worse by ≥ ambiguity_chi2: "sensed" (JSON only).
+struct DiagLowInput {
+  struct Axis {
+    int axis = 0;             // gyro axis
+    double width = 0;         // the grid width (rad/s): inputs below it taken as not sensed
+    double below_max = 0;     // largest |input| among them on this record (rad/s)
+    double above_min = 0;     // smallest |input| above the width on this record (rad/s; 0: none)
+    int blocks = 0;           // sub-blocks taken as not sensed
+    double screen_gain = 0;   // the screen's Δχ² (base model)
+  };
+  bool tested = false;
+  std::vector<Axis> axes;
+  double delta_score = 0;     // −2 ln L (penalised) of the record as is minus the corrected one's, less the penalty
+  double penalty = 0;         // one parameter per axis
+  const char* verdict = "";   // "not sensed", "cannot tell", "sensed"
+  std::vector<std::string> competing;  // findings of the record as is that the corrected one does without
+  // The record as is: its gyro axes' final statistics and those it left unexplained.
+  AxisStats catalogue_after[3];
+  std::vector<int> catalogue_unexplained;
+};
+
 // Issue 36, drift against the class's stability: on an axis with no finding of its own and not
 // unexplained, the drift the class's noise model absorbed (its smoothed path in the final residual).
 // When it moved the bias by more than kDriftExcessFactor × the class's in-run bias stability over
@@ -224,8 +265,9 @@ struct DiagDriftExcess {
   // The change against its distribution under the class's noise model (kDriftExcessDraws draws of
   // the parent residual through the same smoother): mean, standard deviation, z.
   double null_mean = 0, null_sd = 0, z = 0;
-  double null_exceed = std::numeric_limits<double>::quiet_NaN();  // share of those draws reaching the change (NaN: not drawn)
-  int null_exceed_count = 0;       // how many of the kDriftExcessDraws draws reach it
+  int null_exceed_count = -1;      // how many of the kDriftExcessDraws draws reach it (−1: not drawn)
+  // The share of the draws reaching the change (NaN: not drawn).
+  double null_exceed() const;
   bool has_temperature = false;
   double temperature_change = 0;   // max − min of the recorded temperature over the blocks (°C)
   double temperature_r = 0;        // correlation of the path with the temperature
@@ -267,6 +309,10 @@ bool drift_excess_noted(const DiagDriftExcess& x);
 inline bool drift_note_temperature(const DiagDriftExcess& x) {
   return x.follows_temperature || (x.has_temperature && x.temperature_dchi2 >= kDriftNoteChi2);
 }
+inline double DiagDriftExcess::null_exceed() const {
+  return null_exceed_count < 0 ? std::numeric_limits<double>::quiet_NaN()
+                               : static_cast<double>(null_exceed_count) / kDriftExcessDraws;
+}
 inline bool DiagDriftExcess::temperature_or_drift() const {
   return follows_temperature || (has_temperature && temperature_dchi2 >= kDriftTemperatureChi2);
 }
@@ -295,6 +341,8 @@ struct DiagnoseResult {
   // What the drift model absorbed, for every axis checked (no finding, not unexplained, the class's
   // drift kept): the reported ones and the rest, so that a reader sees the margin (JSON axes.*.drift).
   std::vector<DiagDriftExcess> drift_checked;
+  DiagLowInput low_input;                        // the smallest inputs' test (tested: it ran)
+  double score = 0;                              // penalised −2 ln L of the final model (its own record)
   AxisStats before[6], after[6];                 // gyro x,y,z, accel x,y,z
   std::vector<ConditionCorrelation> correlations_before[6];
   SensorErrors base_before;                      // coefficients used for "before"
