@@ -37,7 +37,9 @@ par += [f"drift beyond stability {x['sensor']} {x['axis']}" for x in d.get("drif
 une = [f"{u['sensor']} {u['axis']}" for u in d["unexplained"]]
 sat = [f"{x['sensor']} {x['axis']} range exceeded" for x in d.get("saturation", [])]
 note = [f"{x['sensor']} {x['axis']} drift noted" for x in d.get("drift_noted", [])]
-print("\t".join([kind, src, seed, f"{float(sec):.1f}", str(len(est)), str(len(par)), str(len(une)), "; ".join(est + [p + " (partial)" for p in par] + [u + " unexplained" for u in une] + sat + note), str(len(note))]))
+lo = d.get("low_input") or {}
+low = [f"gyro {x['axis']} smallest inputs {lo['verdict']}" for x in lo.get("axes", [])] if lo.get("verdict") in ("not sensed", "cannot tell") else []
+print("\t".join([kind, src, seed, f"{float(sec):.1f}", str(len(est)), str(len(par)), str(len(une)), "; ".join(est + [p + " (partial)" for p in par] + [u + " unexplained" for u in une] + sat + low + note), str(len(note))]))
 PY
 }
 # CLEAN_TABLE_ONLY=1: no new runs, the table from the per-run file already there (a run stopped early).
@@ -87,7 +89,8 @@ cat "$md"
   echo "0 established findings. \"partial findings\" include a drift beyond the class's stability (reported, never"
   echo "established); a plateau (range exceeded) is listed by name. \"drift notes\": the drift model absorbed a"
   echo "bias change beyond 2× the class's stability that its own drift also makes (a note, not a finding: on a"
-  echo "clean unit it is the class's drift).${CLEAN_NOTE:+ $CLEAN_NOTE}"
+  echo "clean unit it is the class's drift). \"smallest inputs not sensed\" (a false alarm on a clean unit) or"
+  echo "\"cannot tell\" are listed by name.${CLEAN_NOTE:+ $CLEAN_NOTE}"
   echo
   cat "$md"
 } | "$here/scripts/validation-stamp" "${VALIDATION_NAME:-diagnose-clean-runs.md}" \
