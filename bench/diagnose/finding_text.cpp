@@ -179,8 +179,9 @@ std::string low_input_sentence(const DiagLowInput& x) {
   for (const auto& a : x.axes) {
     const std::string ax(1, "xyz"[a.axis]);
     axes += (axes.empty() ? "" : ", ") + ax;
-    const std::string band = "inputs up to " + fmt(a.below_max * k, 3) + " °/s not sensed" +
-                             (a.above_min > 0 ? ", from " + fmt(a.above_min * k, 3) + " °/s sensed" : "");
+    // The best of the widths tried: the largest input it takes as not sensed, the smallest as sensed.
+    const std::string band = "taken as not sensed up to " + fmt(a.below_max * k, 3) + " °/s" +
+                             (a.above_min > 0 ? ", as sensed from " + fmt(a.above_min * k, 3) + " °/s" : "");
     auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == band; });
     if (it == groups.end()) groups.emplace_back(band, ax);
     else it->second += ", " + ax;
@@ -196,15 +197,17 @@ std::string low_input_sentence(const DiagLowInput& x) {
   if (!left.empty()) named += (named.empty() ? "" : " and ") + std::string("left ") + left + " unexplained";
   const std::string who = "gyro " + axes + ": ";
   const std::string what = "the output does not follow the smallest rate inputs (" + bands +
-                           "): a dead band or threshold, outside the catalogue";
+                           "; the best of widths Ω·1.25 to Ω·20): a dead band or threshold, outside the catalogue";
   const std::string by = fmt(std::abs(x.delta_score), 3);
+  const std::string signed_by = fmt(x.delta_score, 3);
   if (std::string(x.verdict) == "not sensed")
     return who + what + "; the record with those inputs taken as not sensed fits better than the catalogue's model by Δ(−2 ln L) " +
-           by + " (one parameter per axis charged), and the rest of the diagnosis is of that record" +
+           by + " (one parameter per axis charged), and the rest of the diagnosis, figures included, is of that record" +
            (named.empty() ? "" : "; the catalogue alone would have " + named);
   if (std::string(x.verdict) == "cannot tell")
-    return who + "the reading that " + what + ", fits within Δ(−2 ln L) " + by + " of the catalogue's model: not told apart" +
-           (names.empty() ? "" : " (the catalogue's model " + named + "; those findings are partial)");
+    return who + "the reading that " + what + ", fits within " + fmt(DiagnoseOptions{}.ambiguity_chi2) + " of the catalogue's model (Δ(−2 ln L) " + signed_by +
+           ", > 0: the reading fits better): not told apart" +
+           (names.empty() ? "" : " (the catalogue's model " + named + "; those findings are not told apart from it)");
   return who + "the smallest inputs are sensed (the record with them taken as not sensed fits worse by Δ(−2 ln L) " + by + ")";
 }
 

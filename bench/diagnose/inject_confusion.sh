@@ -118,7 +118,7 @@ rows = collections.OrderedDict()
 for line in open(sys.argv[1]):
     row, est, par, une, sat, bias, note, low = (line.rstrip("\n").split("\t") + [""] * 7)[:8]
     rows.setdefault(row, []).append((est, par, une, sat, bias, low, note))
-print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | bias change beyond 3σ | smallest inputs not sensed | noted only (not a finding) | nothing said | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) | bias change since --coeffs beyond 3σ (runs) | smallest inputs (runs) | drift noted (runs) |")
+print("| injected (by inject_effects.py) | runs | established (any) | partial only | unexplained (any) | range exceeded | bias change beyond 3σ | smallest inputs not sensed or not told apart | noted only (not a finding) | nothing said | established names (runs) | partial names (runs) | unexplained axes (runs) | range exceeded (runs) | bias change since --coeffs beyond 3σ (runs) | smallest inputs (runs) | drift noted (runs) |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 def tally(xs):
     c = collections.Counter(n for x in xs for n in x.split("; ") if n)
@@ -127,7 +127,7 @@ for row, rs in rows.items():
     n = len(rs)
     e = sum(1 for r in rs if r[0]); p = sum(1 for r in rs if not r[0] and r[1]); u = sum(1 for r in rs if r[2])
     x = sum(1 for r in rs if r[3]); b = sum(1 for r in rs if r[4])
-    lo = sum(1 for r in rs if "not sensed" in r[5])
+    lo = sum(1 for r in rs if r[5])
     o = sum(1 for r in rs if r[6] and not any(r[:6])); z = sum(1 for r in rs if not any(r))
     print(f"| {row} | {n} | {e} | {p} | {u} | {x} | {b} | {lo} | {o} | {z} | {tally(r[0] for r in rs)} | {tally(r[1] for r in rs)} | {tally(r[2] for r in rs)} | {tally(r[3] for r in rs)} | {tally(r[4] for r in rs)} | {tally(r[5] for r in rs)} | {tally(r[6] for r in rs)} |")
 PY
@@ -144,8 +144,8 @@ cat "$md"
   echo "these, but a note that the drift model absorbed a bias change beyond 2× the class's stability which the"
   echo "class's own drift also makes (not a finding; it says what it cannot tell apart); \"smallest inputs not"
   echo "sensed\": the gyro output does not follow its smallest rate inputs (a dead band or threshold, outside the"
-  echo "catalogue), found and the rest diagnosed with them taken as not sensed (\"cannot tell\" in the names column:"
-  echo "that reading fits as well as the catalogue's findings, which are then not told apart from it, partial);"
+  echo "catalogue), found and the rest diagnosed with them taken as not sensed, or (\"cannot tell\" in the names"
+  echo "column) that reading fits as well as the catalogue's model, whose gyro findings are then not told apart from it;"
   echo "\"nothing said\": none"
   echo "of these (a miss for every row but the clean ones)."
   [ -z "${INJECT_NOTE:-}" ] || { echo; echo "$INJECT_NOTE"; }

@@ -362,12 +362,26 @@ DiagDriftExcess drift_excess(const BenchProblem& P, const GreedySearch<BenchProb
 // the statics (the Earth rate alone) as not sensed; the larger ones add low-rate steps.
 constexpr double kLowInputGrid[] = {1.25, 2.5, 5.0, 10.0, 20.0};
 
+// The rate gyro axis a receives: the reference through the tested scale and misalignment, row a of
+// (I + M)·ω (a turn about another axis reaches it through M; a dead band acts on what it receives).
+double received_rate(const SubBlock& s, int a, const Mat3& M) { return s.w(a) + M.row(a).dot(s.w); }
+
+// The record with the inputs of the hypothesis's axes taken as not sensed: measured + received rate
+// where the received rate is below the axis's width.
+DiagData not_sensed(const DiagData& d, const std::vector<DiagLowInput::Axis>& axes, const Mat3& M) {
+  DiagData c = d;
+  for (const auto& x : axes)
+    for (auto& s : c.subs)
+      if (const double r = received_rate(s, x.axis, M); std::abs(r) < x.width) s.gyro(x.axis) += r;
+  return c;
+}
+
 // The screen: per gyro axis, the width whose "not sensed" correction gains most on the base model
 // (bias and scale/misalignment) at the parent level under the class's drift (the whitened GLS
-// χ² of the parent means); axes whose gain reaches min_delta_chi2, and the hypothesis's penalty.
+// χ² of the parent means); axes whose gain reaches min_delta_chi2, each charged one parameter.
 // `built`: the gyro datasets under the class's drift when the search still has them (else built here).
-DiagLowInput low_input_screen(const DiagData& d, const Design& D, const DiagnoseOptions& opt, double sigma,
-                              double tau, const std::vector<Dataset>* built) {
+DiagLowInput low_input_screen(const DiagData& d, const Design& D, const Mat3& M, const DiagnoseOptions& opt,
+                              double sigma, double tau, const std::vector<Dataset>* built) {
   DiagLowInput lo;
   const int n = static_cast<int>(d.subs.size());
   for (int a = 0; a < 3; ++a) {
@@ -395,13 +409,13 @@ DiagLowInput low_input_screen(const DiagData& d, const Design& D, const Diagnose
       int count = 0;
       double below_max = 0, above_min = std::numeric_limits<double>::infinity();
       for (int j = 0; j < n; ++j) {
-        const double w = d.subs[j].w(a);
-        if (std::abs(w) < width) {
-          z(j) += w;
+        const double r = received_rate(d.subs[j], a, M);
+        if (std::abs(r) < width) {
+          z(j) += r;
           ++count;
-          below_max = std::max(below_max, std::abs(w));
+          below_max = std::max(below_max, std::abs(r));
         } else {
-          above_min = std::min(above_min, std::abs(w));
+          above_min = std::min(above_min, std::abs(r));
         }
       }
       if (count == last || count == 0 || count == n) continue;
@@ -416,10 +430,16 @@ DiagLowInput low_input_screen(const DiagData& d, const Design& D, const Diagnose
       }
     }
     if (best.screen_gain < opt.min_delta_chi2) continue;
+    best.penalty = greedy_term_penalty(1, S0.n_low + S0.n_high, opt.penalty_per_param);
     lo.axes.push_back(best);
-    lo.penalty += greedy_term_penalty(1, S0.n_low + S0.n_high, opt.penalty_per_param);
   }
   return lo;
+}
+
+double low_input_penalty(const std::vector<DiagLowInput::Axis>& axes) {
+  double p = 0;
+  for (const auto& x : axes) p += x.penalty;
+  return p;
 }
 
 // The test (DiagLowInput): the whole diagnosis redone on the record with the screened inputs taken
@@ -427,41 +447,67 @@ DiagLowInput low_input_screen(const DiagData& d, const Design& D, const Diagnose
 void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors& current, const EffectTerms& carried,
                       const DiagnoseOptions& opt, double sigma, double tau, const std::vector<Dataset>* built,
                       DiagnoseResult& res) {
-  DiagLowInput lo = low_input_screen(data, D, opt, sigma, tau, built);
+  const Mat3& M = current.gyro.M;
+  DiagLowInput lo = low_input_screen(data, D, M, opt, sigma, tau, built);
   if (lo.axes.empty()) return;
   lo.tested = true;
   std::copy(res.after, res.after + 3, lo.catalogue_after);
   for (const auto& u : res.unexplained)
     if (u.sensor == 0) lo.catalogue_unexplained.push_back(u.axis);
-  DiagData corrected = data;
-  for (const auto& x : lo.axes)
-    for (auto& s : corrected.subs)
-      if (std::abs(s.w(x.axis)) < x.width) s.gyro(x.axis) += s.w(x.axis);
   DiagnoseOptions o1 = opt;
   o1.low_input_check = false;
-  DiagnoseResult r1 = diagnose_bench(corrected, current, carried, o1);
-  lo.delta_score = res.score - (r1.score + lo.penalty);
-  auto in = [](const DiagnoseResult& r, const Term& t) {
-    for (const auto& f : r.findings)
-      if (f.term.effect == t.effect && f.term.sensor == t.sensor && f.term.axis == t.axis) return true;
-    return false;
+  auto rediagnose = [&](const std::vector<DiagLowInput::Axis>& axes) {
+    return diagnose_bench(not_sensed(data, axes, M), current, carried, o1);
   };
-  // Gyro findings (a g-sensitivity, a gyro drift) the corrected record does without.
-  std::vector<DiagFinding*> without;
-  for (auto& f : res.findings)
-    if (f.term.sensor == 0 && !in(r1, f.term)) {
-      without.push_back(&f);
-      lo.competing.push_back(f.term.label());
+  DiagnoseResult r1 = rediagnose(lo.axes);
+  lo.delta_score = res.score - (r1.score + low_input_penalty(lo.axes));
+  // Every axis must earn its place: after a joint win, an axis whose removal costs less than
+  // ambiguity_chi2 (a real effect of its own passed its screen) is dropped, one at a time.
+  if (lo.delta_score >= opt.ambiguity_chi2)
+    for (std::size_t i = 0; i < lo.axes.size() && lo.axes.size() > 1;) {
+      std::vector<DiagLowInput::Axis> fewer = lo.axes;
+      fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(i));
+      DiagnoseResult r2 = rediagnose(fewer);
+      const double loss = (r2.score + low_input_penalty(fewer)) - (r1.score + low_input_penalty(lo.axes));
+      if (loss >= opt.ambiguity_chi2) {
+        ++i;
+        continue;
+      }
+      lo.axes = std::move(fewer);
+      r1 = std::move(r2);
+      i = 0;
     }
+  lo.penalty = low_input_penalty(lo.axes);
+  lo.delta_score = res.score - (r1.score + lo.penalty);
+  auto same = [](const DiagnoseResult& r, const Term& t) -> const DiagFinding* {
+    for (const auto& f : r.findings)
+      if (f.term.effect == t.effect && f.term.sensor == t.sensor && f.term.axis == t.axis) return &f;
+    return nullptr;
+  };
+  // Gyro findings (a g-sensitivity, a gyro drift) the corrected record does without, or gives
+  // another value (beyond 2σ of this one's: a real g-sensitivity plus the missing Earth rate).
+  std::vector<DiagFinding*> competing;
+  for (auto& f : res.findings) {
+    if (f.term.sensor != 0) continue;
+    const DiagFinding* g = same(r1, f.term);
+    bool moved = false;
+    if (g && g->value.size() == f.value.size())
+      for (std::size_t k = 0; k < f.value.size(); ++k)
+        moved = moved || (k < f.sigma.size() && std::isfinite(f.sigma[k]) && std::abs(g->value[k] - f.value[k]) > 2 * f.sigma[k]);
+    if (g && !moved) continue;
+    competing.push_back(&f);
+    lo.competing.push_back(f.term.label() + (g ? " (another value)" : ""));
+  }
   if (lo.delta_score >= opt.ambiguity_chi2) {
     lo.verdict = "not sensed";
     r1.low_input = std::move(lo);
     res = std::move(r1);
     return;
   }
-  lo.verdict = lo.delta_score > -opt.ambiguity_chi2 ? "cannot tell" : "sensed";
-  if (std::string(lo.verdict) == "cannot tell") {
-    for (DiagFinding* f : without) {
+  const bool cannot_tell = lo.delta_score > -opt.ambiguity_chi2;
+  lo.verdict = cannot_tell ? "cannot tell" : "sensed";
+  if (cannot_tell) {
+    for (DiagFinding* f : competing) {
       f->low_input_alternative = true;
       finding_status(*f, res, opt);
     }

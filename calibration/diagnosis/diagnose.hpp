@@ -214,16 +214,20 @@ DiagData without_steps(const DiagData& d, const std::vector<int>& steps);
 // dead band or a threshold: no term of the catalogue, whose terms are smooth in the input). On
 // statics the input is the Earth rate, whose vertical part is exactly what an isotropic
 // g-sensitivity of −Ω·sin L/g gives, and a larger drift absorbs short low-rate steps: the catalogue
-// names those when the Earth rate is not sensed. Screen per gyro axis: the base model's GLS fit
-// (the class's drift) with the sub-blocks whose |reference rate| about the axis lies below a width
-// on the grid Ω·{1.25, 2.5, 5, 10, 20} taken as not sensed (measured + reference there); the
-// width with the largest gain, kept when the gain reaches min_delta_chi2. Then the whole diagnosis
-// is redone on the record so corrected, and the two compare by the penalised −2 ln L of their
-// final models (DiagnoseResult::score), the hypothesis charged one parameter per axis:
+// names those when the Earth rate is not sensed. The input an axis receives is row a of (I + M)·ω
+// with the tested M (a turn about another axis reaches it through the misalignment). Screen per
+// gyro axis: the base model's GLS fit at the parent level (the class's drift) with the sub-blocks
+// whose received rate lies below a width on the grid Ω·{1.25, 2.5, 5, 10, 20} taken as not sensed
+// (measured + received rate there); the width with the largest gain, kept when the gain reaches
+// min_delta_chi2. Then the whole diagnosis is redone on the record so corrected, and the two
+// compare by the penalised −2 ln L of their final models (DiagnoseResult::score), the hypothesis
+// charged one parameter per axis; after a joint win each axis must earn its place (dropped, one at
+// a time, when leaving it out costs less than ambiguity_chi2):
 //   corrected better by ≥ ambiguity_chi2: "not sensed": that diagnosis is the result (this record
 //     attached), and what the catalogue alone would have named is listed;
-//   within ambiguity_chi2: "cannot tell": this record's diagnosis, its findings that the corrected
-//     one does without are not told apart from the hypothesis (DiagFinding::low_input_alternative);
+//   within ambiguity_chi2: "cannot tell": this record's diagnosis; its gyro findings that the
+//     corrected one does without, or gives a value beyond 2σ of theirs, are not told apart from the
+//     hypothesis (DiagFinding::low_input_alternative);
 //   worse by ≥ ambiguity_chi2: "sensed" (JSON only).
 struct DiagLowInput {
   struct Axis {
@@ -233,11 +237,12 @@ struct DiagLowInput {
     double above_min = 0;     // smallest |input| above the width on this record (rad/s; 0: none)
     int blocks = 0;           // sub-blocks taken as not sensed
     double screen_gain = 0;   // the screen's Δχ² (base model)
+    double penalty = 0;       // its charge: one parameter, ln(rows) (the width's choice among 5 is not charged)
   };
   bool tested = false;
   std::vector<Axis> axes;
   double delta_score = 0;     // −2 ln L (penalised) of the record as is minus the corrected one's, less the penalty
-  double penalty = 0;         // one parameter per axis
+  double penalty = 0;         // Σ of the axes' charges
   const char* verdict = "";   // "not sensed", "cannot tell", "sensed"
   std::vector<std::string> competing;  // findings of the record as is that the corrected one does without
   // The record as is: its gyro axes' final statistics and those it left unexplained.

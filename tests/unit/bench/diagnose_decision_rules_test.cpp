@@ -12,6 +12,7 @@
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/finding_text.hpp"
 #include "bench/io/plan_toml.hpp"
+#include "common/imu_error_sim.hpp"
 #include "common/units.hpp"
 
 namespace calbench {
@@ -130,27 +131,29 @@ TEST(DiagnoseDecisionRules, StepOffsetTestReportsAStepwiseRemainder) {
 }
 
 // The step-offset test's families and the smallest inputs (issue 36, the dead band): a gyro rate
-// dead band of 0.01 °/s on the true rate, made here on the sub-block means (the output lacks the
-// rate where |ω| < 0.01 °/s). On the diagnosis plan only the Earth rate falls inside it (12 °/h in
+// dead band of 0.01 °/s on the rate the axis receives (row z of (I + M)·ω, the unit's own M), made
+// here on the sub-block means (the output lacks that rate where it is below 0.01 °/s). On the diagnosis plan only the Earth rate falls inside it (12 °/h in
 // 8-s statics). The low-rate plan (bench/plans/lowrate.toml: ±0.005 and ±0.05 °/s steps) holds the
 // input there for 16 s: the catalogue's model must leave the axis unexplained by the static family
 // of the step-offset test (low-rate steps turn at < 1 °/s; its χ² shared over fewer degrees of
 // freedom than all steps'), and the low-input test must find that gyro z does not sense its
-// smallest inputs, with the band bracketing 0.01 °/s; nothing established on the gyro. Clean: no
-// axis below 10⁻⁴, nothing unexplained, the smallest inputs not found unsensed.
+// smallest inputs, with the band bracketing 0.01 °/s within 10 %; nothing established on the gyro. Clean: no
+// axis below 10⁻⁴, nothing unexplained, the smallest inputs not found unsensed (verdict none or sensed).
 TEST(DiagnoseDecisionRules, StepFamiliesFindADeadBand) {
   const std::uint64_t seed = 3613;
   const TableSpec table = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/lowrate.toml").table;
   const DiagRun clean = run_diagnosis(clean_input(seed, "lowrate"), nullptr, table);
   for (int a = 0; a < 6; ++a) EXPECT_GT(clean.result.after[a].step_p, 1e-4) << "clean axis " << a;
   EXPECT_TRUE(clean.result.unexplained.empty());
-  EXPECT_STRNE(clean.result.low_input.verdict, "not sensed");
+  const std::string clean_verdict = clean.result.low_input.verdict;
+  EXPECT_TRUE(clean_verdict.empty() || clean_verdict == "sensed") << clean_verdict;
   DiagInput in = clean_input(seed, "lowrate");
   const double width = 0.01 * units::kDeg;
+  const Mat3 M = draw_random_unit(seed).gyro.M;  // the unit's own: the band acts on what the axis receives
   int touched = 0;
   for (auto& s : in.data.subs)
-    if (std::abs(s.w(2)) < width) {
-      s.gyro(2) -= s.w(2);
+    if (const double r = s.w(2) + M.row(2).dot(s.w); std::abs(r) < width) {
+      s.gyro(2) -= r;
       ++touched;
     }
   ASSERT_GT(touched, 100);
@@ -168,8 +171,10 @@ TEST(DiagnoseDecisionRules, StepFamiliesFindADeadBand) {
   for (const auto& x : lo.axes)
     if (x.axis == 2) {
       found_z = true;
-      EXPECT_LT(x.below_max, width);
-      EXPECT_TRUE(x.above_min >= width || x.above_min == 0) << "the band must bracket the dead band's width";
+      // The widths tried are a factor 2 apart and a few sub-blocks lie near the edge: the inputs
+      // taken as not sensed and those taken as sensed must bracket the band within 10 %.
+      EXPECT_LT(x.below_max, 1.1 * width);
+      EXPECT_TRUE(x.above_min > 0.9 * width || x.above_min == 0) << "the band must bracket the dead band's width";
     }
   EXPECT_TRUE(found_z);
   for (const auto& f : r.result.findings) EXPECT_FALSE(f.report_sensor == 0 && std::strcmp(f.status, "established") == 0) << f.term.label();
@@ -186,9 +191,10 @@ TEST(DiagnoseDecisionRules, SmallestInputsNotSensedInsteadOfCatalogueNames) {
   const TableSpec table = load_plan(std::string(CALBENCH_SOURCE_DIR) + "/bench/plans/lowrate.toml").table;
   DiagInput in = clean_input(seed, "lowrate");
   const double width = 0.01 * units::kDeg;
+  const Mat3 M = draw_random_unit(seed).gyro.M;
   for (auto& s : in.data.subs)
     for (int i = 0; i < 3; ++i)
-      if (std::abs(s.w(i)) < width) s.gyro(i) -= s.w(i);
+      if (const double r = s.w(i) + M.row(i).dot(s.w); std::abs(r) < width) s.gyro(i) -= r;
   const DiagRun r = run_diagnosis(in, nullptr, table);
   const DiagLowInput& lo = r.result.low_input;
   std::printf("dead band 0.01 deg/s on gyros x, y, z: %s\n", low_input_sentence(lo).c_str());
