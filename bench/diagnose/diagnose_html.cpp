@@ -112,7 +112,7 @@ void write_diagnosis_report(const std::filesystem::path& html, const DiagInput& 
     o << "<h2>Notes (not findings)</h2>\n";
     for (const auto& x : r.drift_noted) o << "<p>" << report::html_escape(drift_note_sentence(x)) << "</p>\n";
   }
-  if (const std::string v = r.low_input.verdict; v == "not sensed" || v == "cannot tell")
+  if (r.low_input.stated())
     o << "<h2>Smallest inputs</h2>\n<p>" << report::html_escape(low_input_sentence(r.low_input)) << "</p>\n";
   if (!r.saturation.empty()) {
     o << "<h2>Range exceeded</h2>\n";

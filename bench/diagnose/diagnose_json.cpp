@@ -165,14 +165,14 @@ nlohmann::json diagnosis_json(const DiagRun& run) {
                           {"sentence", saturation_sentence(x)}});
   }
   nlohmann::json low_input = nullptr;  // not tested: no gyro axis passed the screen
-  if (r.low_input.tested) {
+  if (r.low_input.tested()) {
     nlohmann::json ax = nlohmann::json::array();
     for (const auto& x : r.low_input.axes)
       ax.push_back({{"axis", kAxis[x.axis]}, {"width_grid", x.width}, {"not_sensed_up_to", x.below_max},
                     {"sensed_from", x.above_min > 0 ? nlohmann::json(x.above_min) : nlohmann::json(nullptr)},
                     {"sub_blocks", x.blocks}, {"screen_delta_chi2", x.screen_gain}});
     low_input = {{"verdict", r.low_input.verdict}, {"axes", ax}, {"delta_score", r.low_input.delta_score},
-                 {"penalty", r.low_input.penalty}, {"catalogue_would_name", r.low_input.competing},
+                 {"penalty", r.low_input.penalty()}, {"catalogue_would_name", r.low_input.competing},
                  {"catalogue_left_unexplained", [&] {
                     nlohmann::json u = nlohmann::json::array();
                     for (int a : r.low_input.catalogue_unexplained) u.push_back(std::string("gyro ") + kAxis[a]);

@@ -251,8 +251,7 @@ std::string diagnosis_text(const DiagRun& run) {
   o << "coefficients tested: " << (run.fitted_first ? "bench fit of this recording" : "given") << "; " << r.parents
     << " blocks, " << fmt(r.data_s, 4) << " s of plan steps\nnoise model (drift prior) of " << run.noise_class << "\n";
   for (const auto& x : r.saturation) o << "! " << saturation_sentence(x) << "\n";
-  const std::string low_input(r.low_input.verdict);
-  if (low_input == "not sensed" || low_input == "cannot tell") o << "! " << low_input_sentence(r.low_input) << "\n";
+  if (r.low_input.stated()) o << "! " << low_input_sentence(r.low_input) << "\n";
   if (r.findings.empty())
     o << (!r.drift_excess.empty() ? std::string("no established finding: see the drift beyond the class's stability below\n") :
           r.unexplained.empty() ? std::string("no finding") + (r.saturation.empty() ? "" : " in the rest of the recording") +

@@ -50,6 +50,20 @@ Eigen::VectorXd smoothed_drift(const DiagData& d, const Dataset& S, const Eigen:
   return diag::smoothed_drift(d.parents, S, parent_means(d, S, r));
 }
 
+// An orthonormal basis of the span of axis S.axis's design columns `cols` at the parent level
+// (their parent means), whitened by the residual's Cholesky factor: what a GLS fit of those columns
+// removes from a whitened parent residual.
+Eigen::MatrixXd whitened_column_basis(const DiagData& d, const Design& D, const Dataset& S, const std::vector<int>& cols) {
+  const int N = static_cast<int>(S.parents.size());
+  Eigen::MatrixXd X(N, static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t c = 0; c < cols.size(); ++c)
+    X.col(static_cast<Eigen::Index>(c)) = parent_means(d, S, D.X[S.axis].col(cols[c]));
+  X = S.L.triangularView<Eigen::Lower>().solve(X);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qx(X);
+  qx.setThreshold(1e-9);
+  return qx.householderQ() * Eigen::MatrixXd::Identity(N, qx.rank());
+}
+
 // Issue 36, the remainder's power: one offset per plan step (AxisStats::step_q), for the three
 // families of steps. The indicators and the model's columns (parent means) are whitened by the
 // residual's Cholesky factor; the indicators' part outside the columns' span is what the test
@@ -57,14 +71,8 @@ Eigen::VectorXd smoothed_drift(const DiagData& d, const Dataset& S, const Eigen:
 void step_offset_test(const DiagData& d, const Design& D, const Dataset& S, const Eigen::VectorXd& rw,
                       const std::vector<int>& cols, AxisStats& st) {
   const int N = static_cast<int>(S.parents.size());
-  Eigen::MatrixXd X(N, static_cast<Eigen::Index>(cols.size()));
-  for (std::size_t c = 0; c < cols.size(); ++c)
-    X.col(static_cast<Eigen::Index>(c)) = parent_means(d, S, D.X[S.axis].col(cols[c]));
   const auto Lt = S.L.triangularView<Eigen::Lower>();
-  X = Lt.solve(X);
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qx(X);
-  qx.setThreshold(1e-9);
-  const Eigen::MatrixXd Qx = qx.householderQ() * Eigen::MatrixXd::Identity(N, qx.rank());
+  const Eigen::MatrixXd Qx = whitened_column_basis(d, D, S, cols);
   // A step is static when none of its parent blocks turns (|ω| ≤ 1 °/s: the Earth rate only).
   std::map<int, bool> turns;
   for (int k = 0; k < N; ++k) {
@@ -388,13 +396,7 @@ DiagLowInput low_input_screen(const DiagData& d, const Design& D, const Mat3& M,
     const Dataset own = built ? Dataset{} : build_dataset(d, D, a, kSubsetAll, sigma, tau, opt);
     const Dataset& S0 = built ? (*built)[a] : own;
     const auto Lt = S0.L.triangularView<Eigen::Lower>();
-    const int N = static_cast<int>(S0.parents.size());
-    Eigen::MatrixXd X(N, kBase);
-    for (int c = 0; c < kBase; ++c) X.col(c) = parent_means(d, S0, D.X[a].col(c));
-    X = Lt.solve(X);
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qx(X);
-    qx.setThreshold(1e-9);
-    const Eigen::MatrixXd Q = qx.householderQ() * Eigen::MatrixXd::Identity(N, qx.rank());
+    const Eigen::MatrixXd Q = whitened_column_basis(d, D, S0, {0, 1, 2, 3});  // the base columns (kBase)
     auto chi2 = [&](const Eigen::VectorXd& z) {
       const Eigen::VectorXd zw = Lt.solve(parent_means(d, S0, z));
       return zw.squaredNorm() - (Q.transpose() * zw).squaredNorm();
@@ -436,12 +438,6 @@ DiagLowInput low_input_screen(const DiagData& d, const Design& D, const Mat3& M,
   return lo;
 }
 
-double low_input_penalty(const std::vector<DiagLowInput::Axis>& axes) {
-  double p = 0;
-  for (const auto& x : axes) p += x.penalty;
-  return p;
-}
-
 // The test (DiagLowInput): the whole diagnosis redone on the record with the screened inputs taken
 // as not sensed, and the verdict; `res` becomes that diagnosis when it fits decisively better.
 void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors& current, const EffectTerms& carried,
@@ -450,7 +446,6 @@ void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors&
   const Mat3& M = current.gyro.M;
   DiagLowInput lo = low_input_screen(data, D, M, opt, sigma, tau, built);
   if (lo.axes.empty()) return;
-  lo.tested = true;
   std::copy(res.after, res.after + 3, lo.catalogue_after);
   for (const auto& u : res.unexplained)
     if (u.sensor == 0) lo.catalogue_unexplained.push_back(u.axis);
@@ -460,7 +455,7 @@ void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors&
     return diagnose_bench(not_sensed(data, axes, M), current, carried, o1);
   };
   DiagnoseResult r1 = rediagnose(lo.axes);
-  lo.delta_score = res.score - (r1.score + low_input_penalty(lo.axes));
+  lo.delta_score = res.score - (r1.score + DiagLowInput::penalty_of(lo.axes));
   // Every axis must earn its place: after a joint win, an axis whose removal costs less than
   // ambiguity_chi2 (a real effect of its own passed its screen) is dropped, one at a time.
   if (lo.delta_score >= opt.ambiguity_chi2)
@@ -468,7 +463,7 @@ void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors&
       std::vector<DiagLowInput::Axis> fewer = lo.axes;
       fewer.erase(fewer.begin() + static_cast<std::ptrdiff_t>(i));
       DiagnoseResult r2 = rediagnose(fewer);
-      const double loss = (r2.score + low_input_penalty(fewer)) - (r1.score + low_input_penalty(lo.axes));
+      const double loss = (r2.score + DiagLowInput::penalty_of(fewer)) - (r1.score + DiagLowInput::penalty_of(lo.axes));
       if (loss >= opt.ambiguity_chi2) {
         ++i;
         continue;
@@ -477,8 +472,7 @@ void check_low_inputs(const DiagData& data, const Design& D, const SensorErrors&
       r1 = std::move(r2);
       i = 0;
     }
-  lo.penalty = low_input_penalty(lo.axes);
-  lo.delta_score = res.score - (r1.score + lo.penalty);
+  lo.delta_score = res.score - (r1.score + lo.penalty());
   auto same = [](const DiagnoseResult& r, const Term& t) -> const DiagFinding* {
     for (const auto& f : r.findings)
       if (f.term.effect == t.effect && f.term.sensor == t.sensor && f.term.axis == t.axis) return &f;

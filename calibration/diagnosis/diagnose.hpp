@@ -15,6 +15,7 @@
 // candidate passes. correlated_drift is a candidate on the noise side (a larger drift σ chosen by
 // maximum likelihood).
 #pragma once
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -239,15 +240,23 @@ struct DiagLowInput {
     double screen_gain = 0;   // the screen's Δχ² (base model)
     double penalty = 0;       // its charge: one parameter, ln(rows) (the width's choice among 5 is not charged)
   };
-  bool tested = false;
-  std::vector<Axis> axes;
+  std::vector<Axis> axes;     // empty: no axis passed the screen, not tested
   double delta_score = 0;     // −2 ln L (penalised) of the record as is minus the corrected one's, less the penalty
-  double penalty = 0;         // Σ of the axes' charges
   const char* verdict = "";   // "not sensed", "cannot tell", "sensed"
   std::vector<std::string> competing;  // findings of the record as is that the corrected one does without
   // The record as is: its gyro axes' final statistics and those it left unexplained.
   AxisStats catalogue_after[3];
   std::vector<int> catalogue_unexplained;
+  bool tested() const { return !axes.empty(); }
+  // The hypothesis's charge: Σ of the axes'.
+  static double penalty_of(const std::vector<Axis>& axes) {
+    double p = 0;
+    for (const auto& x : axes) p += x.penalty;
+    return p;
+  }
+  double penalty() const { return penalty_of(axes); }
+  // The verdict the text and the report state ("sensed" is in the JSON only).
+  bool stated() const { return std::strcmp(verdict, "not sensed") == 0 || std::strcmp(verdict, "cannot tell") == 0; }
 };
 
 // Issue 36, drift against the class's stability: on an axis with no finding of its own and not
