@@ -330,6 +330,9 @@ nlohmann::json drive_diagnosis_json(const DriveDiagInput& in, const DriveDiagRun
                           {"white_sigma_per_sample", r.white_sigma[a]}, {"white_scale", R.white_scale[a]},
                           {"block_noise_sigma", R.block_noise_sigma[a]},
                           {"correlations_before", cb}, {"correlations_after", ca}};
+    if (const auto& ct = R.condition_test[a]; ct.tested)
+      axes[kAxisName[a]]["condition_test"] = {{"condition", ct.condition}, {"delta_chi2", ct.dchi2}, {"r", ct.r},
+                                              {"level", DriveDiagnoseResult::kConditionTestLevel}};
   }
   j["axes"] = axes;
   nlohmann::json segs = nlohmann::json::array();

@@ -350,6 +350,17 @@ std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& r
     o << "\n";
   }
   o << axis_table_text(r, [](int s, double v) { return fmt(disp(v, s)) + " " + disp_unit(s); });
+  // The closest an axis came to the remainder's condition test without reaching it (how far the
+  // recording was from calling an axis unexplained).
+  int near = -1;
+  for (int a = 0; a < 6; ++a)
+    if (R.condition_test[a].tested && R.condition_test[a].dchi2 < DriveDiagnoseResult::kConditionTestLevel &&
+        (near < 0 || R.condition_test[a].dchi2 > R.condition_test[near].dchi2))
+      near = a;
+  if (near >= 0)
+    o << "remainder against the motion conditions (GLS, unexplained at Δχ² ≥ " << fmt(DriveDiagnoseResult::kConditionTestLevel, 3)
+      << ", false alarm 10⁻³ per recording): largest below it " << kSensor[near / 3] << " " << kAxis[near % 3] << " "
+      << R.condition_test[near].condition << " Δχ² " << fmt(R.condition_test[near].dchi2, 3) << "\n";
   o << "per motion class (mean residual z-score before → after, |z| > 3 marked):\n";
   for (const auto& sg : R.segments) {
     o << "  " << sg.motion << " (" << fmt(sg.seconds, 4) << " s):";

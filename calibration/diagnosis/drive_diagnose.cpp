@@ -203,7 +203,7 @@ ConditionGls best_condition_gls(const DriveDiagData& data, const Design& D, cons
 }
 
 // Issue 36 (drives): the χ²₁ level of the condition test, see "Unexplained" below.
-constexpr double kConditionTestChi2 = 19.1;
+constexpr double kConditionTestChi2 = DriveDiagnoseResult::kConditionTestLevel;
 
 }  // namespace
 
@@ -505,14 +505,15 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
   // generalised least squares under the same noise model (both whitened by its Cholesky factor, the
   // model's columns projected out of the condition): Δχ² = (ũ·r̃)²/‖ũ‖², χ²₁ under the noise
   // model. On an axis with no finding and not already unexplained, Δχ² ≥ kConditionTestChi2 makes
-  // the axis unexplained with that condition named: 19.1 is the χ²₁ quantile of a family-wise
-  // false-alarm rate of 10⁻³ per recording over its 6 axes × 13 conditions (α = 1.3·10⁻⁵ each).
-  // It names no term, so it needs less than a catalogue term's 40 (which also buys the names).
+  // the axis unexplained with that condition named (the level: DriveDiagnoseResult::kConditionTestLevel,
+  // a family-wise false-alarm rate of 10⁻³ per recording); every tested axis keeps its figure
+  // (condition_test). It names no term, so it needs less than a catalogue term's 40 (which also buys the names).
   {
     const std::vector<int> mp = model_params(D, model);
     for (int a = 0; a < kAxes; ++a) {
       if (diag::axis_reported(res, a)) continue;
       const ConditionGls best = best_condition_gls(data, D, all[a], a, r_after[a], mp);
+      out.condition_test[a] = {true, best.name, best.dchi2, best.r};
       if (best.dchi2 < kConditionTestChi2) continue;
       DiagUnexplained u = diag::unexplained_axis(a, res.after[a], out.correlations_after[a]);
       u.condition_test = best.name;

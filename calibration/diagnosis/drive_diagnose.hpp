@@ -70,6 +70,19 @@ struct DriveDiagnoseResult {
   // averaged down), not of blocks.
   std::vector<char> rms_lowpass;
   std::vector<int> shown_on;  // per finding: axis (gyro x..accel z) its RMS figures are given for
+  // Issue 36, the remainder's condition test on each axis with no finding and not unexplained by its
+  // χ² (tested = false otherwise): the motion condition whose block values best explain the final
+  // residual by GLS under the noise model, its Δχ² (χ²₁) and Pearson r. Δχ² ≥ kConditionTestLevel
+  // makes the axis unexplained; below it the figure says how far the axis was from that.
+  struct ConditionTest {
+    bool tested = false;
+    std::string condition;
+    double dchi2 = 0, r = 0;
+  };
+  ConditionTest condition_test[6];
+  // 19.1: the χ²₁ quantile of a family-wise false-alarm rate of 10⁻³ per recording over its
+  // 6 axes × 13 conditions (α = 1.3·10⁻⁵ each).
+  static constexpr double kConditionTestLevel = 19.1;
 };
 
 // `current`: coefficients to test (b, M) and the extra terms they already carry.
