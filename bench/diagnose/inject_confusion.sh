@@ -67,6 +67,7 @@ extra_classes=(
 )
 drive_classes=(
   "speed-dependent bias gyro z, 1 °/h per m/s|speed --sensor gyro --axis z --k 1"
+  "speed-dependent bias gyro z, 2 °/h per m/s|speed --sensor gyro --axis z --k 2"
   "speed-dependent bias gyro z, 3 °/h per m/s|speed --sensor gyro --axis z --k 3"
   "turn-on bias shift gyro x, 30 °/h|shift --sensor gyro --axis x --bias 30"
 )
