@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "bench/bench_recording.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/drive_run.hpp"
@@ -165,7 +166,8 @@ const bool registered = add_command(60, [](CLI::App& app) {
                  "bench: the class whose drift prior judges the residual; drives: the IMU device class of the in-motion "
                  "filter runs (as fit drive --device-class) and of the drift prior; multipos: the "
                  "class whose noise and drift the poses are judged by (as fit multipos --device-class); a class file "
-                 "or a built-in class name; default from meta.json device.model");
+                 "or a built-in class name; default from meta.json device.model")
+      ->check(non_empty());
   d->add_flag("--no-innovations", a->no_innovations,
               "drives: skip the in-motion filter runs whose innovation statistics are reported (before/after the "
               "new terms)");

@@ -139,7 +139,8 @@ const bool registered = add_command(30, [](CLI::App& app) {
   mp->add_option("--out", m->out, "write the coefficients here (coefficients.json schema, with a \"multipos\" key)");
   mp->add_option("--plot", m->plot, "write an SVG plot of the static poses found and the motion between them");
   mp->add_option("--device-class", m->device_class,
-                 "device class file (or built-in class name) when meta.json device.model is not a known class");
+                 "device class file (or built-in class name) when meta.json device.model is not a known class")
+      ->check(non_empty());
   mp->add_option("--exclude-pose", m->exclude_poses, "leave static pose K (0-based, as listed) out of the accelerometer fit; repeatable")
       ->check(whole_number(0, 1000000));
   mp->add_option("--exclude-rotation", m->exclude_rotations, "leave rotation K (between poses K and K+1) out of the gyro fit; repeatable")

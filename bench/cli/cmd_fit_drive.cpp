@@ -249,7 +249,8 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_option("--device-class", a->device_class,
                  "IMU device class: a class file (bench/imu_classes/<name>.toml or your own, docs/in-motion.md \"Device "
                  "classes\") or the name or alias of a built-in class; default: the class of meta.json device.model "
-                 "(an unknown model is bad input). Its noise, drift, raw priors and stability allowances are the fit's");
+                 "(an unknown model is bad input). Its noise, drift, raw priors and stability allowances are the fit's")
+      ->check(non_empty());
   d->add_option("--thresholds", a->thresholds,
                  "approval thresholds (JSON, the file of `db approve --thresholds`) the approval preview judges the "
                  "result by; default: the built-in limits of the recording's device class (meta.json device.model)");

@@ -33,7 +33,8 @@ const bool registered = add_command(11, [](CLI::App& app) {
   d->add_option("--device-class", a->device_class,
                  "the simulated unit's IMU class: a class file (bench/imu_classes/<name>.toml) or the name or alias of a "
                  "built-in class; its white noise, in-run drift, ranges and LSB, and with --truth random its data-sheet "
-                 "spread; meta.json device.model names it (default ADIS16488A)");
+                 "spread; meta.json device.model names it (default ADIS16488A)")
+      ->check(non_empty());
   d->add_option("--units", a->units,
                  "several MEMS units on the vehicle against one reference: unit k (1..N) with errors and mounting "
                  "from --seed + k-1, turned 90° in yaw from the last, 0.15 m round the route's lever arm; writes "

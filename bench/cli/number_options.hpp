@@ -105,4 +105,13 @@ inline CLI::Validator iso8601_utc() {
       "ISO8601-UTC");
 }
 
+// A name or path that must not be empty (an empty --device-class was taken as "not given").
+inline CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        return v.find_first_not_of(" \t") == std::string::npos ? "expected a value, got an empty one" : std::string();
+      },
+      "TEXT");
+}
+
 }  // namespace calbench::cli

@@ -22,6 +22,12 @@ expect 2 "folder: is a folder, not a database file" "$CALBENCH" db devices --db 
 "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 2 --until 40 --out rec > /dev/null
 expect 2 "folder: is a folder: give a file name" "$CALBENCH" fit drive rec --out folder
 expect 2 "nowhere/r.json: cannot write: the folder nowhere does not exist" "$CALBENCH" fit drive rec --out nowhere/r.json
+# An empty --device-class is bad input, not "not given" (every command that takes it).
+expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" fit drive rec --device-class "" --out e.json
+expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" diagnose rec --device-class ""
+expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" simulate drive --out e --device-class " "
+expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" fit multipos rec --device-class ""
+[ ! -e e.json ] && [ ! -e e ] || fail "an output written on an empty --device-class"
 ls | grep -q '\.tmp\.' && fail "temporary file left behind"
 printf '[plan]\nname = 3\n' > bad.toml
 expect 2 "station not started (nothing ran): bad.toml:2" "$CALBENCH" station run --emulated --plan bad.toml --db s.db --out st
