@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/convert_recording.hpp"
 #include "bench/io/json_util.hpp"
@@ -28,7 +29,8 @@ const bool registered = add_command(96, [](CLI::App& app) {
       "when complete");
   sub->add_option("DIR", a->dir, "recording folder (meta.json and its tables)")->required();
   sub->add_option("--to", a->to, "target form: h5 or csv")->required()->check(CLI::IsMember({"h5", "csv"}));
-  sub->add_option("--out", a->out, "new recording folder (must not exist; default: DIR-h5 or DIR-csv beside DIR)");
+  sub->add_option("--out", a->out, "new recording folder (must not exist; default: DIR-h5 or DIR-csv beside DIR)")
+      ->check(non_empty());
   sub->add_flag("--json", a->json, "machine output");
   sub->callback([a] {
     std::signal(SIGINT, on_convert_signal);

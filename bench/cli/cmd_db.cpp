@@ -414,7 +414,8 @@ const bool registered = add_command(70, [](CLI::App& app) {
   add_operator_option(set, *a);
   auto* exp = leaf(db, "export", "write a set as coefficients.json", a, cmd_export);
   exp->add_option("SET", a->set, "coefficient set id")->required()->check(set_id());
-  exp->add_option("--out", a->out, "output file")->required();
+  exp->add_option("--out", a->out, "output file")->required()
+      ->check(non_empty());
   leaf(db, "fleet", "distribution of every coefficient across devices, outliers flagged (robust z > 3.5)", a, cmd_fleet)
       ->add_flag("--json", a->json, "machine-readable output");
   auto* imp = leaf(db, "import-inmotion", "store an in-motion fit result (RESULT.json) against its device", a,

@@ -51,7 +51,7 @@ void run_diagnose_gnss(const DiagnoseArgs& a, const std::optional<DriveCoeffs>& 
   const bool write_out = write_improved(a, !run.core.findings.empty(), run.improved);
   if (a.json) {
     auto j = gnss_diagnosis_json(run);
-    j["recording"] = {{"path", a.dir}, {"complete", meta.complete}};
+    j["recording"] = {{"path", a.dir}, {"complete", meta.complete}, {"input_warnings", input_warnings_json()}};
     print_json(j.dump(2));
   } else {
     std::cout << "diagnosis of " << a.dir << "\n" << gnss_diagnosis_text(run);
@@ -82,7 +82,7 @@ void run_diagnose_drive(const DiagnoseArgs& a) {
   if (a.json) {
     auto j = drive_diagnosis_json(in, run);
     j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"reference_rows", in.ref_rows},
-                      {"complete", in.meta.complete}};
+                      {"complete", in.meta.complete}, {"input_warnings", input_warnings_json()}};
     print_json(j.dump(2));
   } else {
     std::cout << "diagnosis of " << a.dir << "\n" << drive_diagnosis_text(in, run);
@@ -105,7 +105,7 @@ void run_diagnose_multipos(const DiagnoseArgs& a) {
   const bool write_out = write_improved(a, !run.result.core.findings.empty(), run.improved);
   if (a.json) {
     auto j = multipos_diagnosis_json(run);
-    j["recording"] = {{"path", a.dir}, {"kind", "multipos"}};
+    j["recording"] = {{"path", a.dir}, {"kind", "multipos"}, {"input_warnings", input_warnings_json()}};
     print_json(j.dump(2));
   } else {
     std::cout << "diagnosis of " << a.dir << " (multipos)\n" << multipos_diagnosis_text(run);
@@ -134,7 +134,8 @@ void run_diagnose(const DiagnoseArgs& a) {
   if (!a.report.empty()) write_diagnosis_report(a.report, in, run, a.dir);
   if (a.json) {
     auto j = diagnosis_json(run);
-    j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"complete", in.meta.complete}};
+    j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"complete", in.meta.complete},
+                      {"input_warnings", input_warnings_json()}};
     print_json(j.dump(2));
   } else {
     std::cout << "diagnosis of " << a.dir << "\n" << diagnosis_text(run);
@@ -158,8 +159,10 @@ const bool registered = add_command(60, [](CLI::App& app) {
                 "the drive; a drive also takes an in-motion RESULT.json, mounting included; multipos: fit multipos)")
       ->check(CLI::ExistingFile);
   d->add_flag("--json", a->json, "print findings as JSON on stdout");
-  d->add_option("--report", a->report, "write an HTML report with before/after plots (gnuplot)");
-  d->add_option("--out", a->out, "write IMPROVED.json: coefficients refitted with the new terms as extra keys");
+  d->add_option("--report", a->report, "write an HTML report with before/after plots (gnuplot)")
+      ->check(non_empty());
+  d->add_option("--out", a->out, "write IMPROVED.json: coefficients refitted with the new terms as extra keys")
+      ->check(non_empty());
   d->add_option("--plan", a->plan, "take the bench's accuracy from this plan's [table] instead of meta.json")
       ->check(CLI::ExistingFile);
   d->add_option("--device-class", a->device_class,

@@ -20,7 +20,8 @@ const bool registered = add_command(97, [](CLI::App& app) {
       ->required()
       ->check(CLI::ExistingDirectory);
   k->add_option("--out", a->out, "folder to write (imu.txt, gnss.pos, truth.nav, kf-gins.yaml; KF-GINS writes its results there)")
-      ->required();
+      ->required()
+      ->check(non_empty());
   k->add_option("--start", a->start_s,
                 "start time of KF-GINS, s on the recording clock: its initial state is the first reference epoch (else fix) "
                 "at or after it (default: the first IMU sample)")

@@ -66,7 +66,8 @@ void run_fit_bench_effects(const FitBenchArgs& a, BenchFitOptions opt) {
     j["effects_held_fixed"] = ids;
     j["effects_from"] = a.effects;
     j["recording"] = {{"path", a.dir}, {"imu_rows", in.imu_rows}, {"reference_rows", in.ref_rows},
-                      {"rows_in_steps", in.used_rows}, {"complete", in.meta.complete}};
+                      {"rows_in_steps", in.used_rows}, {"complete", in.meta.complete},
+                      {"input_warnings", input_warnings_json()}};
     print_json(j.dump(2));
   } else {
     std::cout << "bench fit (" << a.method << ", model " << a.model << ") of " << a.dir << ": " << in.imu_rows
@@ -95,7 +96,8 @@ void run_fit_bench(const FitBenchArgs& a) {
   if (a.json) {
     auto j = bench_result_json(r, c);
     j["recording"] = {{"path", a.dir}, {"imu_rows", data.imu_rows}, {"reference_rows", data.ref_rows},
-                      {"rows_in_steps", data.used_rows}, {"complete", data.meta.complete}};
+                      {"rows_in_steps", data.used_rows}, {"complete", data.meta.complete},
+                      {"input_warnings", input_warnings_json()}};
     print_json(j.dump(2));
   } else {
     std::cout << "bench fit (" << a.method << ", model " << a.model << ") of " << a.dir << ": " << data.imu_rows
@@ -113,7 +115,8 @@ const bool registered = add_command(30, [](CLI::App& app) {
   auto* b = fit->add_subcommand("bench", "Factory calibration from a bench recording: gyro drift, skews, scale; "
                                          "accelerometer bias, skews, scale; each with its 1σ");
   b->add_option("dir", a->dir, "bench recording folder (CSV or HDF5)")->required()->check(CLI::ExistingDirectory);
-  b->add_option("--out", a->out, "write the coefficients here (coefficients.json schema)");
+  b->add_option("--out", a->out, "write the coefficients here (coefficients.json schema)")
+      ->check(non_empty());
   b->add_option("--method", a->method, "lsq: generalised least squares; ekf: the paper's sequential EKF")
       ->check(CLI::IsMember({"lsq", "ekf"}));
   b->add_option("--model", a->model, "paper: gyro drift + 6 skews (eq 1–3); full: plus scale factors")
@@ -136,8 +139,10 @@ const bool registered = add_command(30, [](CLI::App& app) {
   mp->add_option("dir", m->dir, "multipos recording folder (meta.json kind \"multipos\", imu.csv)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  mp->add_option("--out", m->out, "write the coefficients here (coefficients.json schema, with a \"multipos\" key)");
-  mp->add_option("--plot", m->plot, "write an SVG plot of the static poses found and the motion between them");
+  mp->add_option("--out", m->out, "write the coefficients here (coefficients.json schema, with a \"multipos\" key)")
+      ->check(non_empty());
+  mp->add_option("--plot", m->plot, "write an SVG plot of the static poses found and the motion between them")
+      ->check(non_empty());
   mp->add_option("--device-class", m->device_class,
                  "device class file (or built-in class name) when meta.json device.model is not a known class")
       ->check(non_empty());

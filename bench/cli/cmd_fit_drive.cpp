@@ -234,7 +234,8 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "correlated_drift) are compensated on the IMU samples, bench-only keys ignored with a note; a multi-unit "
                  "drive: a folder with SLOT/COEFFS.json or SLOT/RESULT.json per unit")
       ->check(CLI::ExistingPath);
-  d->add_option("--out", a->out, "RESULT.json to write (a multi-unit drive: a folder)")->required();
+  d->add_option("--out", a->out, "RESULT.json to write (a multi-unit drive: a folder)")->required()
+      ->check(non_empty());
   CLI::Option* obs = d->add_option("--obs", a->obs,
                                    "observations to use: any of pos,vel,att (eqs 13, 14, 15) and the vehicle constraints nhc "
                                    "(non-holonomic: no lateral/vertical velocity of the vehicle while moving) and zupt (zero "

@@ -571,8 +571,10 @@ const bool registered = add_command(40, [](CLI::App& app) {
       ->check(finite_number());
   sub->add_flag("--no-allan", a->no_allan, "skip the Allan deviation");
   sub->add_flag("--json", a->json_out, "print the result as JSON on stdout");
-  sub->add_option("--plot", a->plot, "write a Fig. 3-like PNG here (and OUT-allan.png), with gnuplot");
-  sub->add_option("--out", a->out, "write the shaping filters (MODELS.json, key drift_models)");
+  sub->add_option("--plot", a->plot, "write a Fig. 3-like PNG here (and OUT-allan.png), with gnuplot")
+      ->check(non_empty());
+  sub->add_option("--out", a->out, "write the shaping filters (MODELS.json, key drift_models)")
+      ->check(non_empty());
   sub->callback([a] { run_identify(*a); });
 });
 

@@ -20,7 +20,8 @@ struct TargetOptions {
   CLI::App* app = nullptr;
   void add(CLI::App* a, MultiposTarget& t) {
     app = a;
-    a->add_option("--out", t.out, "recording folder to write")->required();
+    a->add_option("--out", t.out, "recording folder to write")->required()
+      ->check(non_empty());
     a->add_option("--rate", t.rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
     // Required: fit multipos takes the noise of the class named here, and the serial keys the unit's
     // coefficient sets in the database ("unknown" would merge every unit's).
@@ -69,7 +70,8 @@ const bool registered = add_command(95, [](CLI::App& app) {
   k->add_option("--imu", a->imu, "IMU file: t, dtheta xyz (rad), dvel xyz (m/s)")->required()->check(CLI::ExistingFile);
   k->add_option("--truth", a->truth, "truth.nav: week, t, lat, lon (deg), h, vn, ve, vd, roll, pitch, yaw (deg)")->required()->check(CLI::ExistingFile);
   k->add_option("--gnss", a->gnss, "GNSS .pos: t, lat, lon (deg), h, std n/e/u (m)")->check(CLI::ExistingFile);
-  k->add_option("--out", a->out, "recording folder to write")->required();
+  k->add_option("--out", a->out, "recording folder to write")->required()
+      ->check(non_empty());
   k->add_option("--rate", a->rate_hz, "IMU rate, Hz (default: from the median interval)")->check(finite_positive());
   k->add_option("--model", a->model, "device model for meta.json");
   k->add_option("--serial", a->serial, "device serial for meta.json");

@@ -135,7 +135,8 @@ const bool registered = add_command(50, [](CLI::App& app) {
       q->add_option("--horizon", a->horizon, "navigation horizon S, s (default 600; not with the outage QC)")->check(finite_positive());
   add_outage_options(q, a->outage, a->outages);
   q->add_flag("--json", a->json, "machine output");
-  q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)");
+  q->add_option("--plot", a->plot, "write a PNG with one curve per set (gnuplot)")
+      ->check(non_empty());
   q->callback([a, horizon] {
     a->horizon_given = horizon->count() > 0;
     run(*a);

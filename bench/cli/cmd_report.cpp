@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "bench/approval_thresholds.hpp"
+#include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/report/db_report.hpp"
@@ -19,7 +20,8 @@ const bool registered = add_command(90, [](CLI::App& app) {
   auto a = std::make_shared<ReportArgs>();
   auto* sub = app.add_subcommand("report", "printable HTML report of a device (or of the fleet) from the database");
   sub->add_option("SERIAL", a->target, "device serial number, or `fleet` for the fleet report")->required();
-  sub->add_option("--html", a->html, "output HTML file (self-contained, plots embedded)")->required();
+  sub->add_option("--html", a->html, "output HTML file (self-contained, plots embedded)")->required()
+      ->check(non_empty());
   sub->add_option("--db", a->db, "database: a SQLite file or a postgresql:// URI (default: $CALBENCH_DB, else ./calbench.db)");
   sub->add_option("--thresholds", a->thresholds,
                   "approval thresholds (JSON, as for `db approve`) for the verdict; default: the built-in limits of the device's class");

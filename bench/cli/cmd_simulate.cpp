@@ -74,7 +74,8 @@ const bool registered = add_command(10, [](CLI::App& app) {
   auto* b = sim->add_subcommand("bench", "Simulate a bench run: the two-axis table executing PLAN with an ADIS16488A on it");
   b->add_option("--plan", a->plan, "plan file (TOML), e.g. bench/plans/factory.toml")->required()->check(CLI::ExistingFile);
   b->add_option("--truth", a->truth, "coefficients.json of the simulated unit, or 'random' to draw one")->required();
-  b->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, truth.json)")->required();
+  b->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, truth.json)")->required()
+      ->check(non_empty());
   b->add_option("--seed", a->seed, "random seed (noise, drift, and the unit for --truth random)")
       ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
   b->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");

@@ -15,7 +15,8 @@ const bool registered = add_command(11, [](CLI::App& app) {
                                          "FOG-grade reference INS/GNSS, GNSS fixes, with mounting and lever arm");
   d->add_option("--route", a->route, "route file (TOML), e.g. bench/routes/default.toml")->required()->check(CLI::ExistingFile);
   d->add_option("--truth", a->truth, "coefficients.json of the simulated unit (optional key \"mounting\"), or 'random'")->required();
-  d->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, gnss.csv, truth.json)")->required();
+  d->add_option("--out", a->out, "recording folder to write (meta.json, imu.csv, reference.csv, gnss.csv, truth.json)")->required()
+      ->check(non_empty());
   d->add_option("--seed", a->seed, "random seed (noise, drift, and the unit and mounting for --truth random)")
       ->check(whole_number(0, std::numeric_limits<std::uint64_t>::max()));
   d->add_option("--serial", a->serial, "device serial to write (default: from the truth, or SIM-<seed>)");

@@ -198,7 +198,8 @@ const bool registered = add_command(20, [](CLI::App& app) {
   run->add_option("--out", a->out,
                   "output folder: recording/, COEFFS.json (a fixture: one folder per slot); an existing run there is "
                   "refused without --force")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(non_empty());
   run->add_flag("--force", a->force, "replace an earlier run in --out");
   add_operator_option(run, a->o.operator_name,
                   "who runs the station, recorded with the run and the set (default: $CALBENCH_OPERATOR, else the OS user)");

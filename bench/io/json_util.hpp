@@ -4,9 +4,18 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "bench/io/input_warning.hpp"
 #include "common/json_fields.hpp"  // the typed getters, for the many readers that include this header
 
 namespace calbench {
+
+// The input warnings this process said (a cut last line dropped, …) for a command's --json:
+// [{file, line, message}], so that a script sees what the standard error said.
+inline nlohmann::json input_warnings_json() {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& w : input_warnings()) a.push_back({{"file", w.file}, {"line", w.line}, {"message", w.message}});
+  return a;
+}
 
 // Parse a JSON file; syntax errors become InputError with the line and column.
 nlohmann::json read_json_file(const std::filesystem::path& file);

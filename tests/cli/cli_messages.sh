@@ -28,6 +28,19 @@ expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" diagnose
 expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" simulate drive --out e --device-class " "
 expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" fit multipos rec --device-class ""
 [ ! -e e.json ] && [ ! -e e ] || fail "an output written on an empty --device-class"
+# An empty output path is bad input, not "no output" (every --out, --report, --plot, --html).
+expect 2 "--out: expected a value, got an empty one" "$CALBENCH" diagnose rec --out ""
+expect 2 "--report: expected a value, got an empty one" "$CALBENCH" diagnose rec --report ""
+expect 2 "--out: expected a value, got an empty one" "$CALBENCH" fit drive rec --out ""
+# A cut last line is dropped with a warning; --json says so (recording.input_warnings).
+cp -r rec cut && head -c -7 rec/imu.csv > cut/imu.csv
+"$CALBENCH" diagnose cut --no-innovations --json > cut.json 2> cut.err
+grep -q "imu.csv:[0-9]*: last line has no line end" cut.err || fail "no warning on the cut last line"
+python3 - <<'PY' || fail "--json does not carry the input warning"
+import json
+w = json.load(open("cut.json"))["recording"]["input_warnings"]
+assert len(w) == 1 and w[0]["file"].endswith("cut/imu.csv") and w[0]["line"] > 1 and "no line end" in w[0]["message"], w
+PY
 ls | grep -q '\.tmp\.' && fail "temporary file left behind"
 printf '[plan]\nname = 3\n' > bad.toml
 expect 2 "station not started (nothing ran): bad.toml:2" "$CALBENCH" station run --emulated --plan bad.toml --db s.db --out st
