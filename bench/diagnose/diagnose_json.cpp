@@ -103,6 +103,17 @@ void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohma
   for (const auto& k : effect_json_keys()) extra.erase(k);
   effects_to_json(r.improved_terms, r.terms_sigma, extra);
   extra["diagnosis"] = diagnosis;
+  // Every term the set carries with the status the diagnosis gave it: a term that is not established
+  // (not told apart, partial) fits this recording but is not proven; whoever applies the set to other
+  // conditions reads it here.
+  nlohmann::json st = nlohmann::json::array();
+  for (const auto& f : r.findings) {
+    nlohmann::json x = {{"effect", effect_name(f.term.effect)}, {"term", f.term.label()}};
+    not_established(f, x);
+    x.erase("sigma");
+    st.push_back(x);
+  }
+  extra["diagnosis"]["finding_status"] = st;
 }
 
 }  // namespace diagnose_out

@@ -298,7 +298,7 @@ std::string drive_finding_sentence(const DiagFinding& f, int shown_sensor) {
          disp_unit(rs) + " → " + fmt(disp(f.rms_after, rs)) + " " + disp_unit(rs) + alternatives_text(f);
 }
 
-std::string gnss_finding_sentence(const DiagFinding& f) {
+std::string gnss_finding_sentence(const DiagFinding& f, double phi) {
   const Term& t = f.term;
   std::string who = t.sensor < 2 ? std::string(kSensor[t.sensor]) : "the IMU";
   if (t.sensor < 2 && f.report_axis >= 0) who += std::string(" ") + kAxis[f.report_axis];
@@ -307,8 +307,14 @@ std::string gnss_finding_sentence(const DiagFinding& f) {
   std::string sg;
   for (std::size_t i = 0; i < f.sigma.size(); ++i) sg += (i ? ", " : "") + fmt(x.drive_display.value(f.sigma[i], k), 2);
   if (f.sigma.size() > 1) sg = "(" + sg + ")";
-  return who + ": " + drive_effect_what(t) + ", " + value_text(f) + ", σ " + sg + " (innovations against the GNSS fixes: Δχ² " +
-         fmt(f.delta_chi2) + ", ΔBIC " + fmt(f.delta_bic) + ")";
+  std::string s = who + ": " + drive_effect_what(t) + ", " + value_text(f) + ", σ " + sg +
+                  " (innovations against the GNSS fixes: Δχ² " + fmt(f.delta_chi2) + ", ΔBIC " + fmt(f.delta_bic);
+  if (phi > 1) s += ", Δχ²/φ " + fmt(f.delta_chi2 / phi) + " against the threshold " + fmt(DriveDiagnoseOptions{}.min_delta_chi2);
+  s += ")";
+  if (std::string(f.status) != "established")
+    s += "; " + std::string(f.status) + ": the innovations stay overdispersed (φ " + fmt(phi) +
+         "), a model error no candidate covers: worth a look, not a correction to apply blindly";
+  return s;
 }
 
 std::string drive_diagnosis_text(const DriveDiagInput& in, const DriveDiagRun& run) {

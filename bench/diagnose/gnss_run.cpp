@@ -261,6 +261,9 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
       f.delta_bic = step.dbic;
       f.report_sensor = t.sensor;
       f.report_axis = t.axis;
+      f.explained_fraction = std::numeric_limits<double>::quiet_NaN();  // no per-axis residual here
+      f.remainder_is_noise = run.remainder_is_noise();
+      f.status = f.remainder_is_noise ? "established" : "partial";
       r.findings.push_back(f);
     };
     if (row.term.effect == EffectId::scale_factor) {
@@ -341,7 +344,11 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
     nlohmann::json x = finding_head_json(f);
     x["evidence"] = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic}, {"overdispersion_phi", run.phi},
                      {"delta_chi2_over_phi", f.delta_chi2 / run.phi}, {"source", "innovations against the GNSS fixes"}};
-    x["sentence"] = gnss_finding_sentence(f);
+    x["established"] = std::string(f.status) == "established";
+    x["status"] = f.status;
+    x["explained_fraction"] = nullptr;  // innovations, not a per-axis residual
+    x["remainder_is_noise"] = f.remainder_is_noise;
+    x["sentence"] = gnss_finding_sentence(f, run.phi);
     fs.push_back(x);
   }
   j["findings"] = fs;
@@ -394,8 +401,8 @@ std::string gnss_diagnosis_text(const GnssDiagRun& run) {
   }
   o << "\n";
   if (r.findings.empty()) o << "no finding: no hypothesis explains the innovations better than the base filter by the threshold\n";
-  for (const DiagFinding& f : r.findings) o << "* " << gnss_finding_sentence(f) << "\n";
-  if (run.phi > 1.5)
+  for (const DiagFinding& f : r.findings) o << "* " << gnss_finding_sentence(f, run.phi) << "\n";
+  if (!run.remainder_is_noise())
     o << "! the innovations of the final model are overdispersed (φ " << fmt(run.phi)
       << ": not white or NIS/dof above 1): the Δχ² were divided by φ before the threshold; the σ are the filter's and "
          "do not include it (scale them by √φ ≈ " << fmt(std::sqrt(run.phi), 2) << " for a conservative figure)\n";

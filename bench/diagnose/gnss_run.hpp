@@ -36,6 +36,11 @@ struct GnssDiagRun {
   std::vector<GnssHypothesis> hypotheses;
   HypothesisSearchResult search;
   double phi = 1;                           // overdispersion of the final model's innovations
+  // Issue 36's rule on the remainder: the final model's innovations read as noise up to φ 1.5; beyond,
+  // every finding is "partial" (it raised the likelihood past the threshold, Δχ²/φ ≥ 40, but a
+  // model error the candidates do not cover remains, and the filter's σ do not include it).
+  static constexpr double kNoisePhi = 1.5;
+  bool remainder_is_noise() const { return phi <= kNoisePhi; }
   std::vector<HypothesisStep> overdispersed;  // accepted, then withdrawn: Δχ²/φ below the threshold
   long epochs = 0, rows = 0;   // innovation epochs (position + velocity) and scalar observations
   DiagnoseResult core;         // findings, withdrawn, improved_terms (the drive's JSON schema)
@@ -46,7 +51,8 @@ struct GnssDiagRun {
 GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs, const std::string& device_class);
 nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run);
 std::string gnss_diagnosis_text(const GnssDiagRun& run);
-// One finding's sentence: what, value ± σ in display units, the Δχ² of the innovations.
-std::string gnss_finding_sentence(const DiagFinding& f);
+// One finding's sentence: what, value ± σ in display units, the Δχ² of the innovations (and Δχ²/φ,
+// the figure the threshold was applied to, when φ > 1), its status when not established.
+std::string gnss_finding_sentence(const DiagFinding& f, double phi);
 
 }  // namespace calbench

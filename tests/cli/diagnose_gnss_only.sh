@@ -52,6 +52,15 @@ def one(n, effect):
     assert len(f) == 1 and len(load(n)["findings"]) == 1, (n, load(n)["findings"])
     assert f[0]["evidence"]["delta_chi2"] >= 40, f[0]
     return f[0]
+# Issue 36's rule on the remainder: a finding is established only while the final model's innovations
+# read as noise (φ ≤ 1.5); IMPROVED.json carries each term's status.
+for n in ("late", "lever", "scale"):
+    j = load(n)
+    for x in j["findings"]:
+        assert x["status"] in ("established", "partial") and x["established"] == (x["status"] == "established"), x
+        assert x["established"] == (j["search"]["overdispersion_phi"] <= 1.5), (n, x, j["search"]["overdispersion_phi"])
+st = json.load(open(f"{d}/late_imp.json"))["diagnosis"]["finding_status"]
+assert [x["status"] for x in st] == [x["status"] for x in load("late")["findings"]], st
 f = one("late", "time_offset")
 assert abs(f["value"] - 0.008) <= 3 * f["sigma"] and f["sigma"] < 0.002, f
 imp = json.load(open(f"{d}/late_imp.json"))
@@ -79,6 +88,8 @@ W="$SHARED/data/rtk-walk-135s"
 if [ -d "$W" ]; then
   "$CALBENCH" diagnose "$W" --json > "$T/walk.json"
   python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); assert j["aiding"] == "gnss" and j["search"]["overdispersion_phi"] >= 1 and "position" in j["innovations"], j["search"]' "$T/walk.json"
+  # Its innovations stay overdispersed: whatever it finds is partial, never established.
+  python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); assert j["search"]["overdispersion_phi"] > 1.5 and all(f["status"] == "partial" and not f["established"] for f in j["findings"]), j["findings"]' "$T/walk.json"
 fi
 
 # Bad input: exit 2 naming the file or option.
