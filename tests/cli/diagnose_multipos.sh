@@ -30,10 +30,12 @@ assert j["unexplained"] == [], j["unexplained"]
 assert j["multipos"]["poses_used"] >= 30 and j["multipos"]["earth_rate_vertical_removed"] is True
 for k, ax in j["axes"].items():
     assert 0.3 < ax["after"]["chi2_per_dof"] < 2.0, (k, ax)
+assert j["noise_model"]["far_above_the_residual"] is False, j["noise_model"]
 PY
 done
 "$CALBENCH" diagnose "$tmp/clean301" > "$tmp/clean.txt"
 grep -q "no finding: the pose residuals are consistent" "$tmp/clean.txt"
+grep -q "far below the noise" "$tmp/clean.txt" && { echo "loose-noise note on a unit of its class's noise"; exit 1; }
 
 # Gyro g-sensitivity on x: 1.5e-5 (rad/s)/(m/s²) along y (0.0084 °/s/g, the ADIS16488A's figure).
 mk gs 304 --gsens x=0,1.5e-5,0
@@ -111,6 +113,9 @@ if [ -f "$D/xsens_acc.mat" ]; then
     --gyro-offset 32768 --gyro-scale 1.5979e-4 --gravity 9.81744 --model "Xsens MTi" --serial XS1 > /dev/null
   "$CALBENCH" diagnose "$tmp/xs" --json > "$tmp/xs.json"
   python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['multipos']['poses_used'] == 41, j['multipos']['poses_used']" "$tmp/xs.json"
+  # Its residuals are far below the class's noise (χ²/dof ≤ 0.19): said, never a bare "consistent".
+  python3 -c "import json,sys; n=json.load(open(sys.argv[1]))['noise_model']; assert n['far_above_the_residual'] and n['class'] == 'Xsens MTi' and n['largest_chi2_per_dof_after'] < 0.25, n" "$tmp/xs.json"
+  "$CALBENCH" diagnose "$tmp/xs" | grep -q "far below the noise the class Xsens MTi assumes"
 fi
 
 # Options of other kinds: exit 2, named.
