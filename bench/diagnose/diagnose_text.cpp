@@ -160,7 +160,14 @@ std::string value_text(const DiagFinding& f) {
   std::string v = f.value.size() == 1 ? fmt(x.drive_display.value(f.value[0], k)) : "(";
   for (std::size_t i = 0; f.value.size() != 1 && i < f.value.size(); ++i)
     v += (i ? ", " : "") + fmt(x.drive_display.value(f.value[i], k));
+  // One value told apart: its σ beside it (a value not told apart has none, as in the JSON).
+  if (f.value.size() == 1 && f.sigma.size() == 1 && f.alternatives.empty() && std::isfinite(f.sigma[0]) && f.sigma[0] > 0 &&
+      x.shape != EffectShape::noise)
+    v += " ± " + fmt(x.drive_display.value(f.sigma[0], k), 2);
   v += std::string(f.value.size() == 1 ? " " : ") ") + x.drive_display.unit[k];
+  // τ < 0: the IMU is early, which "late by τ" leaves the reader to work out.
+  if (t.effect == EffectId::time_offset && f.value.size() == 1 && f.value[0] < 0)
+    v += " (the IMU early by " + fmt(x.drive_display.value(-f.value[0], k)) + " " + x.drive_display.unit[k] + ")";
   return x.shape == EffectShape::noise ? v + ", τ " + drift_tau_text(f) : v;
 }
 
@@ -307,7 +314,8 @@ std::string gnss_finding_sentence(const DiagFinding& f, double phi) {
   std::string sg;
   for (std::size_t i = 0; i < f.sigma.size(); ++i) sg += (i ? ", " : "") + fmt(x.drive_display.value(f.sigma[i], k), 2);
   if (f.sigma.size() > 1) sg = "(" + sg + ")";
-  std::string s = who + ": " + drive_effect_what(t) + ", " + value_text(f) + ", σ " + sg +
+  // value_text gives a single value's σ itself.
+  std::string s = who + ": " + drive_effect_what(t) + ", " + value_text(f) + (f.value.size() == 1 ? "" : ", σ " + sg) +
                   " (innovations against the GNSS fixes: Δχ² " + fmt(f.delta_chi2) + ", ΔBIC " + fmt(f.delta_bic);
   if (phi > 1) s += ", Δχ²/φ " + fmt(f.delta_chi2 / phi) + " against the threshold " + fmt(DriveDiagnoseOptions{}.min_delta_chi2);
   s += ")";
