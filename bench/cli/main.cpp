@@ -126,7 +126,7 @@ std::string nearest_option(CLI::App& root, int argc, char** argv) {
 
 int main(int argc, char** argv) {
   CLI::App app{"calbench: calibration station for MEMS IMUs (ADIS16488A).\n"
-               "Workflow: simulate | station | fit | identify | qc | diagnose | db | provision | report"};
+               "Workflow: simulate | station (emulate: its devices alone) | import, convert, export (other formats) | fit | identify | qc | diagnose | db | provision | report; serve: the web console"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "calbench 0.1.0");
   for (auto& [order, setup] : calbench::cli::registry()) setup(app);
