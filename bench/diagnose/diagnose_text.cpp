@@ -212,6 +212,16 @@ std::string finding_sentence(const DiagFinding& f) {
       if (std::isfinite(f.sigma[k]) && f.alternatives.empty()) o << " ± " << fmt(x.bench_display.value(f.sigma[k], u));
     }
     o << " " << x.bench_display.unit[u] << ")";
+  } else if (f.sigma.size() == f.value.size() && f.alternatives.empty()) {
+    // Components told apart: each with its σ, the unit once ("(0.0903 ± 5.3e-05, …) °/s/g").
+    const DisplayUnit& u = x.bench_display;
+    const int k = f.term.sensor == 1 ? 1 : 0;
+    o << "(";
+    for (std::size_t i = 0; i < f.value.size(); ++i) {
+      o << (i ? ", " : "") << fmt(u.value(f.value[i], k));
+      if (std::isfinite(f.sigma[i])) o << " ± " << fmt(u.value(f.sigma[i], k), 2);
+    }
+    o << ") " << u.unit[k];
   } else {
     o << "(";
     for (std::size_t k = 0; k < f.value.size(); ++k) o << (k ? ", " : "") << human_value(f, f.value[k]);
