@@ -111,7 +111,7 @@ inline CLI::Validator non_empty() {
       [](std::string& v) -> std::string {
         return v.find_first_not_of(" \t") == std::string::npos ? "expected a value, got an empty one" : std::string();
       },
-      "TEXT");
+      "");
 }
 
 }  // namespace calbench::cli

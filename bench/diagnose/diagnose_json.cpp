@@ -91,12 +91,12 @@ nlohmann::json correlations_json(const std::vector<ConditionCorrelation>& c, std
 void not_established(const DiagFinding& f, nlohmann::json& j) {
   // Issue 36: established only when told apart, cutting ≥ established_cut of its axis's systematic
   // residual and leaving a noise-like remainder; "partial" findings carry the fraction they explain.
-  const bool established = f.alternatives.empty() && std::string(f.status) == "established";
+  const bool established = f.told_apart() && std::string(f.status) == "established";
   j["established"] = established;
-  j["status"] = established || f.alternatives.empty() ? f.status : "not told apart";
+  j["status"] = established || f.told_apart() ? f.status : "not told apart";
   j["explained_fraction"] = f.explained_fraction;
   j["remainder_is_noise"] = f.remainder_is_noise;
-  if (!f.alternatives.empty()) j["sigma"] = nullptr;
+  if (!f.told_apart()) j["sigma"] = nullptr;
 }
 
 void improved_extra(nlohmann::json& extra, const DiagnoseResult& r, const nlohmann::json& diagnosis) {

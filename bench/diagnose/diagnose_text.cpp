@@ -161,7 +161,7 @@ std::string value_text(const DiagFinding& f) {
   for (std::size_t i = 0; f.value.size() != 1 && i < f.value.size(); ++i)
     v += (i ? ", " : "") + fmt(x.drive_display.value(f.value[i], k));
   // One value told apart: its σ beside it (a value not told apart has none, as in the JSON).
-  if (f.value.size() == 1 && f.sigma.size() == 1 && f.alternatives.empty() && std::isfinite(f.sigma[0]) && f.sigma[0] > 0 &&
+  if (f.value.size() == 1 && f.sigma.size() == 1 && f.told_apart() && std::isfinite(f.sigma[0]) && f.sigma[0] > 0 &&
       x.shape != EffectShape::noise)
     v += " ± " + fmt(x.drive_display.value(f.sigma[0], k), 2);
   v += std::string(f.value.size() == 1 ? " " : ") ") + x.drive_display.unit[k];
@@ -201,7 +201,7 @@ std::string finding_sentence(const DiagFinding& f) {
   if (f.value.size() == 1) {
     o << human_value(f, f.value[0]);
     // A finding not told apart from an alternative is not established: no σ as if it were.
-    if (std::isfinite(f.sigma[0]) && f.alternatives.empty()) o << " ± " << human_value(f, f.sigma[0]);
+    if (std::isfinite(f.sigma[0]) && f.told_apart()) o << " ± " << human_value(f, f.sigma[0]);
   } else if (x.shape == EffectShape::axis_rows && f.report_axis >= 0 && f.sigma.size() == f.value.size()) {
     // A row of named components (g² products, the other axes): "y 0.37 ± 0.04, z 0.01 ± 0.05 unit".
     const int u = f.term.sensor == 1 ? 1 : 0;
@@ -209,10 +209,10 @@ std::string finding_sentence(const DiagFinding& f) {
     for (std::size_t k = 0; k < f.value.size(); ++k) {
       o << (k ? ", " : "") << effect_component_name(x, f.report_axis, static_cast<int>(k)) << " "
         << fmt(x.bench_display.value(f.value[k], u));
-      if (std::isfinite(f.sigma[k]) && f.alternatives.empty()) o << " ± " << fmt(x.bench_display.value(f.sigma[k], u));
+      if (std::isfinite(f.sigma[k]) && f.told_apart()) o << " ± " << fmt(x.bench_display.value(f.sigma[k], u));
     }
     o << " " << x.bench_display.unit[u] << ")";
-  } else if (f.sigma.size() == f.value.size() && f.alternatives.empty()) {
+  } else if (f.sigma.size() == f.value.size() && f.told_apart()) {
     // Components told apart: each with its σ, the unit once ("(0.0903 ± 5.3e-05, …) °/s/g").
     const DisplayUnit& u = x.bench_display;
     const int k = f.term.sensor == 1 ? 1 : 0;
@@ -327,7 +327,9 @@ std::string gnss_finding_sentence(const DiagFinding& f, double phi) {
   // value_text gives a single value's σ itself.
   std::string s = who + ": " + drive_effect_what(t) + ", " + value_text(f) + (f.value.size() == 1 ? "" : ", σ " + sg) +
                   " (innovations against the GNSS fixes: Δχ² " + fmt(f.delta_chi2) + ", ΔBIC " + fmt(f.delta_bic);
-  if (phi > 1) s += ", Δχ²/φ " + fmt(f.delta_chi2 / phi) + " against the threshold " + fmt(DriveDiagnoseOptions{}.min_delta_chi2);
+  if (phi > 1)
+    s += ", in the final model Δχ² " + fmt(f.delta_chi2_final) + ", /φ " + fmt(f.delta_chi2_final / phi) + " against the threshold " +
+         fmt(DriveDiagnoseOptions{}.min_delta_chi2);
   s += ")";
   if (std::string(f.status) != "established")
     s += "; " + std::string(f.status) + ": the innovations stay overdispersed (φ " + fmt(phi) +

@@ -31,6 +31,9 @@ int finding_axis_index(const DiagFinding& f, const DiagnoseResult& r);
 void finding_value_json(const DiagFinding& f, nlohmann::json& value, nlohmann::json& sigma);
 // A drive finding's effect, sensor, axis ("all" for none), value, σ and unit.
 nlohmann::json finding_head_json(const DiagFinding& f);
+// Issue 36's status of a finding into its JSON: established, status ("not told apart" when it is
+// not told apart from an alternative), explained_fraction, remainder_is_noise; σ null unless told apart.
+void not_established(const DiagFinding& f, nlohmann::json& j);
 // evidence: Δχ², ΔBIC, held-out Δχ², revealing condition and its correlation, the drift's τ
 // (correlated_drift) and the candidates not told apart.
 nlohmann::json finding_evidence_json(const DiagFinding& f);

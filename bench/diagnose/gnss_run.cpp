@@ -258,6 +258,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
       f.sigma = std::move(sigma);
       f.unit = term_unit(t);
       f.delta_chi2 = step.dchi2;
+      f.delta_chi2_final = step.dchi2_final;
       f.delta_bic = step.dbic;
       f.report_sensor = t.sensor;
       f.report_axis = t.axis;
@@ -343,11 +344,9 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
   for (const DiagFinding& f : r.findings) {
     nlohmann::json x = finding_head_json(f);
     x["evidence"] = {{"delta_chi2", f.delta_chi2}, {"delta_bic", f.delta_bic}, {"overdispersion_phi", run.phi},
-                     {"delta_chi2_over_phi", f.delta_chi2 / run.phi}, {"source", "innovations against the GNSS fixes"}};
-    x["established"] = std::string(f.status) == "established";
-    x["status"] = f.status;
+                     {"delta_chi2_final", f.delta_chi2_final}, {"delta_chi2_final_over_phi", f.delta_chi2_final / run.phi}, {"source", "innovations against the GNSS fixes"}};
+    not_established(f, x);
     x["explained_fraction"] = nullptr;  // innovations, not a per-axis residual
-    x["remainder_is_noise"] = f.remainder_is_noise;
     x["sentence"] = gnss_finding_sentence(f, run.phi);
     fs.push_back(x);
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -49,7 +50,10 @@ namespace {
 constexpr double kLooseNoiseChi2 = 0.25;
 double largest_chi2_after(const DiagnoseResult& r) {
   double m = 0;
-  for (int a = 0; a < 4; ++a) m = std::max(m, r.after[a].chi2_dof);
+  for (int a = 0; a < 4; ++a) {
+    if (!std::isfinite(r.after[a].chi2_dof)) return std::numeric_limits<double>::quiet_NaN();  // no note
+    m = std::max(m, r.after[a].chi2_dof);
+  }
   return m;
 }
 }  // namespace
@@ -63,10 +67,7 @@ nlohmann::json multipos_diagnosis_json(const MultiposDiagRun& run) {
     x["evidence"] = finding_evidence_json(f);
     x["rms_before"] = f.rms_before;
     x["rms_after"] = f.rms_after;
-    x["status"] = f.status;
-    x["established"] = std::string(f.status) == "established" && f.alternatives.empty();
-    x["explained_fraction"] = f.explained_fraction;
-    x["remainder_is_noise"] = f.remainder_is_noise;
+    not_established(f, x);
     x["sentence"] = finding_sentence(f);
     findings.push_back(x);
   }
@@ -97,7 +98,7 @@ nlohmann::json multipos_diagnosis_json(const MultiposDiagRun& run) {
           {"withdrawn", withdrawn_json(r.withdrawn)},
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "fit multipos of this recording" : "given"},
-          {"noise_model", {{"class", run.fitted.rec.device_class.value("name", std::string())},
+          {"noise_check", {{"class", run.fitted.rec.device_class.value("name", std::string())},
                            {"largest_chi2_per_dof_after", largest_chi2_after(r)},
                            {"far_above_the_residual", largest_chi2_after(r) < kLooseNoiseChi2}}},
           {"multipos",

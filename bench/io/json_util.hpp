@@ -13,7 +13,8 @@ namespace calbench {
 // [{file, line, message}], so that a script sees what the standard error said.
 inline nlohmann::json input_warnings_json() {
   nlohmann::json a = nlohmann::json::array();
-  for (const auto& w : input_warnings()) a.push_back({{"file", w.file}, {"line", w.line}, {"message", w.message}});
+  for (const auto& w : input_warnings())
+    a.push_back({{"file", w.file}, {"line", w.line > 0 ? nlohmann::json(w.line) : nlohmann::json()}, {"message", w.message}});
   return a;
 }
 

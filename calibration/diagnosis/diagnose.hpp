@@ -115,6 +115,9 @@ struct DiagFinding {
   int report_axis = -1;              // axis the finding is reported on (−1 = all)
   int report_sensor = 0;             // 0 gyro, 1 accel, 2 reference
   double delta_chi2 = 0, delta_bic = 0, heldout_delta_chi2 = 0;
+  // GNSS-only drives: what removing it from the final model costs, the figure the overdispersion
+  // check divides by φ (delta_chi2 is the gain when it was accepted).
+  double delta_chi2_final = 0;
   std::string condition;             // the condition that reveals it
   double condition_r = 0;
   double rms_before = 0, rms_after = 0;  // systematic residual of the reported sensor axis (or all touched)
@@ -140,6 +143,9 @@ struct DiagFinding {
   // The record with the gyros' smallest inputs taken as not sensed (DiagLowInput) fits within
   // ambiguity_chi2 of this model and does without this finding: not told apart from it.
   bool low_input_alternative = false;
+  // Told apart from every alternative (another term, or the smallest inputs not sensed): only then
+  // does the finding carry a σ in the text and the JSON.
+  bool told_apart() const { return alternatives.empty() && !low_input_alternative; }
 };
 
 // Why an accepted term was given up.

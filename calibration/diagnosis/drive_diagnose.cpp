@@ -513,7 +513,7 @@ DriveDiagnoseResult diagnose_drive(const DriveDiagData& data_in, const SensorErr
     for (int a = 0; a < kAxes; ++a) {
       if (diag::axis_reported(res, a)) continue;
       const ConditionGls best = best_condition_gls(data, D, all[a], a, r_after[a], mp);
-      out.condition_test[a] = {true, best.name, best.dchi2, best.r};
+      out.condition_test[a] = {!best.name.empty(), best.name, best.dchi2, best.r};
       if (best.dchi2 < kConditionTestChi2) continue;
       DiagUnexplained u = diag::unexplained_axis(a, res.after[a], out.correlations_after[a]);
       u.condition_test = best.name;

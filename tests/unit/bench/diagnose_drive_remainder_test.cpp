@@ -59,11 +59,13 @@ TEST(DiagnoseDriveRemainder, ASpeedDrivenBiasIsUnexplainedNotADrift) {
   std::printf("speed² bias: %s\n", describe(run).c_str());
 }
 
-// The remainder's condition test (issue 36): a gyro z bias proportional to the speed, 3 °/h per m/s,
-// added to the measured gyro after the simulation on the level test route (3.6 minutes; no catalogue
-// row makes it). The drift absorbs it and the axis's χ² stays near 1; the GLS test against the motion
-// conditions finds the speed. Without it, the same drive's gyro z is tested and stays below the level:
-// the figure (condition_test) is what the report gives as "largest below it".
+// The remainder's condition test (issue 36): a gyro z bias proportional to the speed, added to the
+// measured gyro after the simulation on the level test route (3.6 minutes; no catalogue row makes
+// it). The drift absorbs it and the axis's χ² stays near 1; the GLS test against the motion
+// conditions finds the speed. 1.2 °/h per m/s: on this drive (seed 47) the χ² alone does not call
+// the axis (from 1.5 °/h per m/s it does, and the test is then not reached), so here only the
+// condition test can. Without it, the same drive's gyro z is tested and stays below the level: the
+// figure (condition_test) the report gives as "largest below it".
 TEST(DiagnoseDriveRemainder, ASpeedProportionalGyroBiasFollowsItsCondition) {
   const std::string level = std::string(CALBENCH_SOURCE_DIR) + "/tests/data/drive_diag_level.toml";
   DriveDiagInput in = simulate_drive_diag_input(level, 47, EffectTerms{});
@@ -73,23 +75,23 @@ TEST(DiagnoseDriveRemainder, ASpeedProportionalGyroBiasFollowsItsCondition) {
   EXPECT_LT(c.dchi2, DriveDiagnoseResult::kConditionTestLevel) << c.condition;
   for (const auto& u : clean.result.core.unexplained) EXPECT_FALSE(u.sensor == 0 && u.axis == 2) << describe(clean);
   constexpr double kDegPerHour = 3.14159265358979323846 / 180.0 / 3600.0;
-  for (std::size_t k = 0; k < in.data.subs.size(); ++k) in.data.subs[k].gyro(2) += 3 * kDegPerHour * in.data.sub_speed[k];
+  for (std::size_t k = 0; k < in.data.subs.size(); ++k) in.data.subs[k].gyro(2) += 1.2 * kDegPerHour * in.data.sub_speed[k];
   const DriveDiagRun run = run_drive_diagnosis(in, nullptr);
   const DiagnoseResult& r = run.result.core;
   for (const auto& f : r.findings) EXPECT_FALSE(f.term.touches(0, 2)) << "named: " << describe(run);
+  const auto& t = run.result.condition_test[2];
+  ASSERT_TRUE(t.tested) << describe(run);
+  EXPECT_EQ(t.condition, "speed");
+  EXPECT_GE(t.dchi2, DriveDiagnoseResult::kConditionTestLevel);
   bool gz = false;
   for (const auto& u : r.unexplained)
     if (u.sensor == 0 && u.axis == 2) {
       gz = true;
-      // Either the χ² already calls it, or the condition test does, with the speed named.
-      if (!u.condition_test.empty()) {
-        EXPECT_EQ(u.condition_test, "speed");
-        EXPECT_GE(u.condition_dchi2, DriveDiagnoseResult::kConditionTestLevel);
-      }
+      EXPECT_EQ(u.condition_test, "speed") << describe(run);
     }
   EXPECT_TRUE(gz) << describe(run);
-  std::printf("speed-proportional gyro z: clean Δχ² %.3g (%s); with it: %s\n", c.dchi2, c.condition.c_str(),
-              describe(run).c_str());
+  std::printf("speed-proportional gyro z: clean Δχ² %.3g (%s); with it: %s (speed Δχ² %.3g)\n", c.dchi2, c.condition.c_str(),
+              describe(run).c_str(), t.dchi2);
 }
 
 TEST(DiagnoseDriveRemainder, AGenuineDriftIsStillNamed) {
