@@ -87,6 +87,7 @@ nlohmann::json multipos_diagnosis_json(const MultiposDiagRun& run) {
                                              {"rms_before", R.gyro_rms_before[a]}, {"rms_after", R.gyro_rms_after[a]}};
   axes["accel_gravity_magnitude"] = {{"before", st(r.before[3])}, {"after", st(r.after[3])},
                                      {"rms_before", R.g_rms_before}, {"rms_after", R.g_rms_after}};
+  const double largest = largest_chi2_after(r);
   nlohmann::json poses = nlohmann::json::array();
   for (std::size_t k = 0; k < R.poses.size(); ++k)
     poses.push_back({{"pose", R.poses[k]},
@@ -99,8 +100,8 @@ nlohmann::json multipos_diagnosis_json(const MultiposDiagRun& run) {
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "fit multipos of this recording" : "given"},
           {"noise_check", {{"class", run.fitted.rec.device_class.value("name", std::string())},
-                           {"largest_chi2_per_dof_after", largest_chi2_after(r)},
-                           {"far_above_the_residual", largest_chi2_after(r) < kLooseNoiseChi2}}},
+                           {"largest_chi2_per_dof_after", largest},
+                           {"far_above_the_residual", largest < kLooseNoiseChi2}}},
           {"multipos",
            {{"observations", "static poses: gravity magnitude (accelerometers), mean rate (gyros); rotations not used"},
             {"poses_used", R.poses.size()},
