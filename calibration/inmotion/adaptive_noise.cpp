@@ -16,17 +16,52 @@ void AdaptiveNoise::Window::push(const AdaptiveSample& x) {
   dof += x.dof;
 }
 
-bool AdaptiveNoise::raise(const Window& b) {
-  // Covariance matching: the process-noise part of S scaled so that the predicted innovation
-  // power equals the actual one over the block.
-  const double s = b.trHPH > 0 ? (b.nu2 - b.trR) / b.trHPH : cfg_.max_step;
+namespace {
+// Covariance matching: the factor on the process-noise part of S that makes the predicted
+// innovation power equal the actual one over the block.
+double matching_factor(double nu2, double trR, double trHPH, double none) { return trHPH > 0 ? (nu2 - trR) / trHPH : none; }
+}  // namespace
+
+void AdaptiveNoise::close_all_blocks() {
+  for (Window& w : w_) w.clear();
+}
+
+bool AdaptiveNoise::raise(const Window& b, int type) {
+  const double s = matching_factor(b.nu2, b.trR, b.trHPH, cfg_.max_step);
   if (!(s > 1)) return false;  // R alone explains the excess: nothing for Q to do
-  const double q = std::min(cfg_.max_scale, q_ * std::min(s, cfg_.max_step));
+  // At most the block's NIS ratio: where R dominates S, a modest excess (NIS/dof 2: fixes whose σ
+  // is optimistic as much as an IMU noisier than assumed) would otherwise read as ×36 on the IMU.
+  const double step = std::min({s, b.nis / b.dof, cfg_.max_step});
+  if (!(step > 1)) return false;
+  const double q = std::min(cfg_.max_scale, q_ * step);
   if (q <= q_) return false;
+  events_.push_back(AdaptiveEvent{b.s.back().t, type, q_, q, b.nis / b.dof});
   q_ = q;
   q_max_ = std::max(q_max_, q_);
   ++increases_;
+  close_all_blocks();  // their innovations were predicted under the old q
   return true;
+}
+
+bool AdaptiveNoise::lower(const Window& b, int type) {
+  if (!(q_ > 1) || b.nis > b.dof) return false;
+  const double s = matching_factor(b.nu2, b.trR, b.trHPH, 1.0);
+  const double step = std::clamp(std::isfinite(s) ? s : 1.0, cfg_.min_step_down, cfg_.max_step_down);
+  const double q = std::max(1.0, q_ * step);
+  events_.push_back(AdaptiveEvent{b.s.back().t, type, q_, q, b.nis / b.dof});
+  q_ = q;
+  ++decreases_;
+  return true;
+}
+
+const AdaptiveEvent* AdaptiveNoise::above_fail_since() const {
+  if (!(q_ > kFailScale)) return nullptr;
+  const AdaptiveEvent* since = nullptr;
+  for (const AdaptiveEvent& e : events_) {
+    if (e.q_to > kFailScale && !(e.q_from > kFailScale)) since = &e;
+    if (!(e.q_to > kFailScale)) since = nullptr;
+  }
+  return since;
 }
 
 bool AdaptiveNoise::add(int type, const AdaptiveSample& x) {
@@ -40,23 +75,15 @@ bool AdaptiveNoise::add(int type, const AdaptiveSample& x) {
   if (static_cast<int>(w.s.size()) >= cfg_.min_epochs_early && w.nis > qc::chi2_quantile(w.dof, cfg_.z_early)) {
     const Window b = w;
     w.clear();
-    return raise(b);
+    return raise(b, type);
   }
   // Blocks, not a sliding window: each innovation is tested once at the block's end, so the
   // false-alarm rate of the test is that of one block (a sliding window would test every epoch again).
   if (w.s.back().t - w.s.front().t < cfg_.window_s) return false;
-  const double dt = last_t_ > -1e299 ? std::max(0.0, x.t - last_t_) : 0.0;
-  last_t_ = x.t;
   const Window b = w;
   w.clear();
-  if (b.nis > qc::chi2_quantile(b.dof, cfg_.z_trigger)) return raise(b);
-  if (q_ > 1 && b.nis <= b.dof && dt > 0) {  // consistent, and not even by excess: relax
-    const double q = std::max(1.0, q_ * std::exp(-dt / cfg_.relax_s));
-    const bool changed = q != q_;
-    q_ = q;
-    return changed;
-  }
-  return false;
+  if (b.nis > qc::chi2_quantile(b.dof, cfg_.z_trigger)) return raise(b, type);
+  return lower(b, type);  // consistent, and not even by excess: heal
 }
 
 }  // namespace calbench::inmotion

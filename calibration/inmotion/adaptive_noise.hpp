@@ -13,12 +13,25 @@
 // block of 100 epochs, a false alarm in about one of 70 one-hour drives with two observation types
 // at 10 Hz: the filter is inconsistent, not unlucky), the part of S the process noise feeds,
 // H·P⁻·Hᵀ, is scaled so that the predicted power matches the actual (covariance matching):
-//     s = (Σ νᵀν − Σ tr R) / Σ tr(H·P⁻·Hᵀ),   q ← q·s   (bounded, q ≥ 1),
+//     s = (Σ νᵀν − Σ tr R) / Σ tr(H·P⁻·Hᵀ),   q ← q·min(s, Σ NIS / dof)   (bounded, q ≥ 1):
+// at most the block's NIS ratio per increase, since where R dominates S a modest excess (fixes
+// whose σ is optimistic) would read as a large factor on the IMU's noise,
 // where q multiplies the white-noise densities (squared) that drive the navigation states (ARW on
-// the attitude, VRW on velocity and position). Each increase rests on a new block's evidence.
-// While a block's mean NIS stays at or below its expectation, q relaxes
-// towards 1 with time constant relax_s. On innovations consistent with the model q stays 1 and the
-// filter is the non-adaptive one, bit for bit.
+// the attitude, VRW on velocity and position, and the sampling-time noise, sample_timing.hpp).
+// Each increase rests on a new block's evidence: an increase closes every type's open block, so
+// that innovations predicted under the old q never raise it again (before, the position and the
+// velocity blocks of the same seconds each multiplied q, and a block opened before an increase
+// raised it once more: the real walk went ×10, ×38, ×36, ×3.8, ×6.8 in 5 s, to 3.8·10⁵, on blocks
+// whose mean NIS per degree of freedom was 1.7–5.9).
+// Healing: a block whose mean NIS is at or below its expectation lowers q by the same covariance
+// matching, q ← q·max(s, 0.1) (at least ×0.8, at most ×0.1 per block; q ≥ 1), so q comes back
+// down as soon as the innovations are consistent again instead of creeping back with a slow time
+// constant. On innovations consistent with the model q stays 1 and the filter is the
+// non-adaptive one, bit for bit.
+//
+// A scale far above 1 means the model lacks something; above kFailScale at the end of a fit the
+// filter followed the fixes with the IMU scaled away: fit drive says so and the approval refuses
+// the set (docs/in-motion.md, "Adaptive process noise and the robust gate").
 //
 // Gate-rejected innovations (outliers by the single-epoch gate) enter the block with their NIS
 // and power capped at the gate: one outlier moves nothing, a run of rejections (a filter that
@@ -27,6 +40,7 @@
 // therefore stays a last resort (docs/in-motion.md).
 #pragma once
 #include <deque>
+#include <vector>
 
 namespace calbench::inmotion {
 
@@ -42,7 +56,8 @@ struct AdaptiveNoiseConfig {
                                 // among them stays below that quantile)
   double max_step = 100;     // largest factor of one increase
   double max_scale = 1e6;    // largest q (variance scale; ×1000 on the noise densities)
-  double relax_s = 120;      // e-folding time of q back towards 1 while consistent
+  double min_step_down = 0.1;  // largest decrease of one consistent block (q ← q·max(s, this))
+  double max_step_down = 0.8;  // smallest decrease of one consistent block
 };
 
 // One observation type's innovations, as the adaptation sees them.
@@ -55,20 +70,37 @@ struct AdaptiveSample {
   double trHPH = 0; // tr(H·P⁻·Hᵀ)
 };
 
+// One change of q: when, on which observation type's block, from what to what, and that block's
+// mean NIS per degree of freedom.
+struct AdaptiveEvent {
+  double t = 0;
+  int type = 0;
+  double q_from = 1, q_to = 1, nis_per_dof = 0;
+};
+
 class AdaptiveNoise {
  public:
+  // A scale above this at the end of a fit: the IMU was scaled away (σ ×3.2 on every density).
+  static constexpr double kFailScale = 10;
   explicit AdaptiveNoise(const AdaptiveNoiseConfig& cfg = {}) : cfg_(cfg) {}
   // One innovation of observation type `type` (0..kTypes−1). Returns true when q changed.
   bool add(int type, const AdaptiveSample& s);
-  // Relaxation of q towards 1 up to time t (called with the epochs' times).
   double scale() const { return q_; }
   double max_scale_reached() const { return q_max_; }
   long increases() const { return increases_; }
+  long decreases() const { return decreases_; }
+  // Every change of q, in time order (at most a few per minute: each needs a full block).
+  const std::vector<AdaptiveEvent>& events() const { return events_; }
+  // The start of the current stretch above kFailScale: the increase that crossed it (nullptr when
+  // q is at or below it now).
+  const AdaptiveEvent* above_fail_since() const;
   static constexpr int kTypes = 8;
 
  private:
   struct Window;
-  bool raise(const Window& b);
+  bool raise(const Window& b, int type);
+  bool lower(const Window& b, int type);
+  void close_all_blocks();
   struct Window {
     std::deque<AdaptiveSample> s;
     double nis = 0, nu2 = 0, trR = 0, trHPH = 0;
@@ -78,8 +110,9 @@ class AdaptiveNoise {
   };
   AdaptiveNoiseConfig cfg_;
   Window w_[kTypes];
-  double q_ = 1, q_max_ = 1, last_t_ = -1e300;
-  long increases_ = 0;
+  double q_ = 1, q_max_ = 1;
+  long increases_ = 0, decreases_ = 0;
+  std::vector<AdaptiveEvent> events_;
 };
 
 }  // namespace calbench::inmotion
