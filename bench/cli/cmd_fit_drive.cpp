@@ -167,13 +167,44 @@ void print_summary(const DriveResult& r, const std::string& out) {
       std::cout << "    t " << rec["t_s"].get<double>() << " s: " << rec["reason"].get<std::string>() << " -> "
                 << rec["action"].get<std::string>() << "\n";
   }
-  if (r.adaptive_noise && r.adaptive_noise->scale_max > 1)
-    std::cout << "  adaptive noise   navigation noise variance scaled up " << r.adaptive_noise->increases << " time(s), at most x"
-              << std::setprecision(3) << r.adaptive_noise->scale_max << ", x" << r.adaptive_noise->scale_end << std::setprecision(6)
-              << " at the end\n";
+  if (r.adaptive_noise && r.adaptive_noise->scale_max > 1) {
+    const auto& an = j["adaptive_noise"];
+    std::cout << "  adaptive noise   navigation noise variance scaled up " << r.adaptive_noise->increases << " time(s)";
+    if (an.contains("decreases")) std::cout << " and down " << an["decreases"].get<long>() << " time(s)";
+    std::cout << ", at most x" << std::setprecision(3) << r.adaptive_noise->scale_max << ", x" << r.adaptive_noise->scale_end
+              << std::setprecision(6) << " at the end\n";
+    if (an.value("failed", false)) {
+      std::cout << "  FAILED           the filter ended with the IMU's noise scaled x" << std::setprecision(3)
+                << r.adaptive_noise->scale_end << " (limit " << an["fail_scale"].get<double>() << ")" << std::setprecision(6);
+      if (an.contains("above_fail_since"))
+        std::cout << ", above the limit since t " << an["above_fail_since"]["t_s"].get<double>() << " s ("
+                  << an["above_fail_since"]["observation"].get<std::string>() << " innovations " << std::setprecision(3)
+                  << an["above_fail_since"]["nis_per_dof"].get<double>() << std::setprecision(6) << "x their expectation)";
+      std::cout << ": it followed the fixes and the IMU did not carry the navigation. Its coefficients and NIS do not rest on "
+                   "the IMU; db approve refuses the set. calbench diagnose DIR locates the misfit\n";
+    }
+  }
+  if (j.contains("sample_timing") && j["sample_timing"].value("scanned", false)) {
+    const auto& st = j["sample_timing"];
+    std::cout << "  sample timing    " << std::setprecision(4) << st["read_rate_hz"].get<double>() << " rows/s, "
+              << st["distinct_rate_hz"].get<double>() << " distinct samples/s (" << st["repeated_rows"].get<long>()
+              << " repeated reads); stamps " << std::setprecision(3) << st["sigma_ms"].get<double>()
+              << " ms about the sensor's clock; the filter takes " << st["used_ms"].get<double>() << " ms ("
+              << st["source"].get<std::string>() << ")" << std::setprecision(6) << "\n";
+  }
+  if (j.contains("gnss_velocity_latency")) {
+    const auto& gl = j["gnss_velocity_latency"];
+    std::cout << "  GNSS velocity    describes the motion " << std::setprecision(3) << gl["used_s"].get<double>() * 1e3
+              << " ms before its stamp (" << gl["source"].get<std::string>() << "; best " << gl["best_s"].get<double>() * 1e3
+              << " ms: RMS against the position differences " << gl["rms_at_best_m_s"].get<double>() << " m/s, at 0 "
+              << gl["rms_at_zero_m_s"].get<double>() << " m/s)" << std::setprecision(6) << "\n";
+  }
   for (const auto& [k, v] : r.nis) {
     std::cout << "  NIS " << k << ": mean " << std::setprecision(3) << v.mean_nis.value_or(std::nan("")) << std::setprecision(6)
-              << " (expected " << v.expected_nis.value_or(std::nan("")) << "), " << v.rejected.value_or(0) << " rejected";
+              << " (expected " << v.expected_nis.value_or(std::nan(""));
+    if (r.adaptive_noise && r.adaptive_noise->scale_end > 1)
+      std::cout << ", with the navigation noise scaled x" << std::setprecision(3) << r.adaptive_noise->scale_end << std::setprecision(6);
+    std::cout << "), " << v.rejected.value_or(0) << " rejected";
     if (j.contains("vehicle_constraints") && (k == "nhc" || k == "zupt" || k == "zero_rate"))
       std::cout << ", " << v.epochs.value_or(0) << " used";
     if (v.forced.value_or(0) > 0) std::cout << ", " << *v.forced << " forced after a run of rejections";
@@ -255,9 +286,20 @@ const bool registered = add_command(31, [](CLI::App& app) {
   d->add_option("--thresholds", a->thresholds,
                  "approval thresholds (JSON, the file of `db approve --thresholds`) the approval preview judges the "
                  "result by; default: the built-in limits of the recording's device class (meta.json device.model)");
+  d->add_option("--sample-time", a->sample_time,
+                 "sigma of the IMU stamps about the sensor's own clock (a logger stamps a sample when it reads it): "
+                 "auto (default: measured from the recording's stamps and repeated reads in the noise scan; 0 for "
+                 "regular stamps), off, or milliseconds. The filter adds process noise sigma^2 x (change of rate)^2 per "
+                 "step: nothing at rest, large in shaky motion (docs/in-motion.md, \"Real loggers\")")
+      ->check(non_empty());
+  d->add_option("--gnss-vel-latency", a->gnss_vel_latency,
+                 "GNSS aiding: how long before its stamp a fix's velocity describes the motion: auto (default: measured "
+                 "from gnss.csv, the velocities against the position differences; 0 when the fixes do not tell), off, or "
+                 "milliseconds")
+      ->check(non_empty());
   d->add_flag("!--no-noise-scan", a->measure_noise,
-              "do not measure the white noise on the recording's standstills (default: measured, and used where it "
-              "differs from the class by more than 2x)");
+              "do not scan the recording before the fit: neither the white noise on its standstills (default: measured, "
+              "and used where it differs from the class by more than 2x) nor the sample timing (--sample-time auto: 0)");
   d->add_option("--series", a->series, "write the estimate time series (t_s, one column per state, and sigma_*) to CSV");
   d->add_option("--series-every", a->series_every_s,
                 "with --series (forward pass): also a row every SECONDS of IMU data between the epochs the filter used "

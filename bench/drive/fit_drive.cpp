@@ -12,6 +12,7 @@
 #include "bench/drive/drive_series.hpp"
 #include "bench/drive/drive_stream.hpp"
 #include "bench/drive/qc_drive.hpp"
+#include "bench/drive/recording_scan.hpp"
 #include "bench/drive/reference_info.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/drift_models_json.hpp"
@@ -279,21 +280,25 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
                        bool gnss, const nlohmann::json& unit);
 
-// The white noise of the unit measured on the standstills of the whole recording (a pass over
-// imu.csv before the fit; calibration/identification/standstill_noise.hpp), and RESULT.json's
-// "white_noise": the class's and the measured level per axis, the standstills used, and what the
-// filter takes.
-identification::NoiseMeasurement scan_white_noise(const fs::path& dir, const RecordingMeta& meta, const NoiseSpec& cls) {
-  identification::StandstillDetector det(cls);
-  ImuReader rd(dir / "imu.csv", meta.imu_rate_hz);  // imu.csv, or the imu dataset of recording.h5
-  ImuRecord r;
-  const bool inc = rd.form() == ImuForm::increments;
-  while (rd.next(r)) {
-    if (inc && !(r.dt > 0)) continue;
-    det.add(r.t, inc ? Vec3(r.gyro / r.dt) : r.gyro, inc ? Vec3(r.accel / r.dt) : r.accel);
-  }
-  det.finish();
-  return identification::measure_white_noise(det.standstills(), cls);
+// "--sample-time" / "--gnss-vel-latency": auto (the measured value), off (0), or milliseconds.
+double timing_option(const std::string& v, const char* opt, double measured) {
+  if (v == "auto") return measured;
+  if (v == "off") return 0.0;
+  double ms = 0;
+  if (!parse_finite_number(v, ms) || ms < 0 || ms > 1000) throw InputError(opt, 0, "", "expected auto, off, or milliseconds in 0 … 1000, got '" + v + "'");
+  return ms * 1e-3;
+}
+
+const char* adaptive_type_name(int type) {
+  static const char* const names[] = {"position", "velocity", "attitude", "nhc", "zupt", "zero_rate"};
+  return type >= 0 && type < 6 ? names[type] : "other";
+}
+
+nlohmann::json adaptive_events_json(const inmotion::AdaptiveNoise& an) {
+  nlohmann::json ev = nlohmann::json::array();
+  for (const inmotion::AdaptiveEvent& e : an.events())
+    ev.push_back({{"t_s", e.t}, {"observation", adaptive_type_name(e.type)}, {"from", e.q_from}, {"to", e.q_to}, {"nis_per_dof", e.nis_per_dof}});
+  return ev;
 }
 
 nlohmann::json white_noise_json(const identification::NoiseMeasurement& m, bool scanned) {
@@ -430,11 +435,21 @@ DriveResult fit_drive(const FitDriveArgs& a) {
   const ImuClassChoice cls = choose_imu_class(a.device_class, meta0.device.model, (dir / "meta.json").string());
   inmotion::InMotionConfig cfg;
   // The unit learned from the data: white noise measured on the standstills.
-  identification::NoiseMeasurement wn;
-  if (a.measure_noise) wn = scan_white_noise(dir, meta0, cls.cls.noise);
-  else wn = identification::measure_white_noise({}, cls.cls.noise);
+  // And the logger's: its stamps' scatter (sample_timing) and, on GNSS, the fix velocity's latency.
+  RecordingScan scan;
+  if (a.measure_noise) scan = scan_recording(dir, meta0, cls.cls.noise);
+  else scan.noise = identification::measure_white_noise({}, cls.cls.noise);
+  const identification::NoiseMeasurement& wn = scan.noise;
   cfg.noise = identification::apply_measured_noise(cls.cls.noise, wn);
-  nlohmann::json unit = {{"device_class", imu_class_json(cls)}, {"white_noise", white_noise_json(wn, a.measure_noise)}};
+  cfg.sample_time_sigma = timing_option(a.sample_time, "--sample-time", scan.scanned ? scan.timing.sigma_s : 0.0);
+  nlohmann::json unit = {{"device_class", imu_class_json(cls)},
+                         {"white_noise", white_noise_json(wn, a.measure_noise)},
+                         {"sample_timing", sample_timing_json(scan.timing, scan.scanned, cfg.sample_time_sigma, a.sample_time)}};
+  if (gnss) {
+    const identification::GnssVelocityLatency lat = scan_gnss_velocity_latency(dir);
+    cfg.gnss_vel_latency_s = timing_option(a.gnss_vel_latency, "--gnss-vel-latency", lat.latency_s);
+    unit["gnss_velocity_latency"] = gnss_velocity_latency_json(lat, cfg.gnss_vel_latency_s, a.gnss_vel_latency);
+  }
   if (gnss) {  // GNSS defaults where gnss.csv has no sigma columns
     cfg.ref_sigma_pos = 2.0;
     cfg.ref_sigma_vel = 0.1;
@@ -683,6 +698,8 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   r.recording.digest = folder_digest(dir);
   j["device_class"] = unit["device_class"];
   j["white_noise"] = unit["white_noise"];
+  j["sample_timing"] = unit["sample_timing"];
+  if (unit.contains("gnss_velocity_latency")) j["gnss_velocity_latency"] = unit["gnss_velocity_latency"];
   r.reference_system = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
   r.window_s = std::make_pair(t_first, t_last);
   r.observations = a.obs;
@@ -816,7 +833,13 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
                    "the navigation states' white-noise variances scaled when a 10 s block's NIS is beyond its chi-square quantile at p = 1e-5"},
         {"scale_end", an.scale()},
         {"scale_max", an.max_scale_reached()},
-        {"increases", an.increases()}};
+        {"increases", an.increases()},
+        {"decreases", an.decreases()},
+        {"fail_scale", inmotion::AdaptiveNoise::kFailScale},
+        {"failed", an.scale() > inmotion::AdaptiveNoise::kFailScale},
+        {"events", adaptive_events_json(an)}};
+    if (const inmotion::AdaptiveEvent* e = an.above_fail_since())
+      j["adaptive_noise"]["above_fail_since"] = {{"t_s", e->t}, {"observation", adaptive_type_name(e->type)}, {"nis_per_dof", e->nis_per_dof}};
   }
   {
     const Vec3 se = f->unobservable_rotation_sigma(), sp = f->unobservable_rotation_sigma_prior();

@@ -46,6 +46,9 @@ struct FitDriveArgs {
   // Adaptive process noise (calibration/inmotion/adaptive_noise.hpp): "on", "off", or "auto" = on
   // with GNSS aiding, off against a reference INS (whose inconsistencies are findings for diagnose).
   std::string adaptive = "auto";
+  // The logger's sample timing (identification/sample_timing.hpp) and the GNSS velocity's latency
+  // (identification/gnss_velocity_latency.hpp): "auto" = measured from the recording, "off", or ms.
+  std::string sample_time = "auto", gnss_vel_latency = "auto";
   // The triads' common rotation (calibration/inmotion/gauge.hpp): "hold" (default) or "ekf".
   std::string unobservable_rotation = "hold";
   double prior_gyro_bias_dps = 0, prior_accel_bias_mg = 0;  // > 0: override the bias priors

@@ -25,12 +25,24 @@ void FAccumulator::add(const StateLayout& L, const Mat3& C_nb, const SensorCorre
   for (const BlockSpec* b : L.specs)
     if (b->accumulate) b->accumulate(s, sum.middleCols(L.L.offset(static_cast<int>(b->id)), b->size));
   f_n += C_nb * f_b * dt;
+  if (track_jumps) {
+    if (have_m) {
+      const Vec3 jw = C_nb * (w_b - m_w), jf = C_nb * (f_b - m_f);
+      jump_w += jw * jw.transpose();
+      jump_f += jf * jf.transpose();
+    }
+    m_w = w_b;
+    m_f = f_b;
+    have_m = true;
+  }
   T += dt;
 }
 
 void FAccumulator::clear() {
   T = 0;
   f_n.setZero();
+  jump_w.setZero();
+  jump_f.setZero();
   sum.setZero();
 }
 

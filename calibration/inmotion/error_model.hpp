@@ -51,6 +51,13 @@ struct ImuSample {
 struct FAccumulator {
   double T = 0;
   Vec3 f_n = Vec3::Zero();                 // ∫ f^n dt
+  // Sampling-time noise (identification/sample_timing.hpp), when track_jumps: Σ over the interval's
+  // steps of (C·Δm)(C·Δm)ᵀ, Δm the change of the step's mean rate from the previous step's, for the
+  // gyro (jump_w) and the accelerometer (jump_f), NED. The last step's means outlive clear().
+  bool track_jumps = false;
+  Mat3 jump_w = Mat3::Zero(), jump_f = Mat3::Zero();
+  Vec3 m_w = Vec3::Zero(), m_f = Vec3::Zero();
+  bool have_m = false;
   Eigen::Matrix<double, 3, Eigen::Dynamic> sum;  // 3 × the layout's size (zero columns: a block without accumulate)
   // Sized (and zeroed) for a layout of n states.
   void resize(int n);

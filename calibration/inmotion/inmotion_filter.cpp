@@ -202,6 +202,7 @@ InMotionFilter::InMotionFilter(const InMotionConfig& cfg, const Mat3& C_mb, cons
   nav_.reset(mems_state_from_reference(first, n_.C_mb, lever_));
 
   acc_.resize(N_);
+  acc_.track_jumps = cfg_.sample_time_sigma > 0;
   // Initial covariance: each block its own (state_blocks.cpp), in layout order.
   P_.setZero(N_, N_);
   const BlockInit in{cfg_, first, drift_, C_nb, first.sigma_pos > 0 ? first.sigma_pos : cfg_.ref_sigma_pos,
@@ -258,6 +259,7 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
   nav_.update(dth, dv, dt);
   w_last_ = dth / dt;
   a_last_ = (nav_.state().v - v0) / dt;
+  if (cfg_.gnss_vel_latency_s != 0) vel_hist_.push(t, nav_.state().v - v0);
   acc_.add(layout_, C0, corr_, w_last_, dv / dt, dt);  // each block's part of the transition (BlockSpec::accumulate)
   nav_.state().t = t;
   if (acc_.T >= cfg_.cov_dt) {
@@ -447,6 +449,9 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     const Mat3 C_ref = ins::dcm_from_rpy(r.rpy) * ins::quat_from_rotvec(n_.C_mb * w_last_ * dt).toRotationMatrix();
     r.rpy = ins::rpy_from_dcm(C_ref);
   }
+  // A GNSS velocity describing the motion gnss_vel_latency_s before its stamp (velocity_latency.hpp).
+  if (cfg_.gnss_vel_latency_s != 0 && !r.has_att && r.has_vel)
+    r.v_ned += vel_hist_.change(r_in.t - cfg_.gnss_vel_latency_s, nav_.state().t);
   if (!(r.sigma_pos > 0)) r.sigma_pos = cfg_.ref_sigma_pos;
   if (!(r.sigma_vel > 0)) r.sigma_vel = cfg_.ref_sigma_vel;
   if (!(r.sigma_att > 0)) r.sigma_att = cfg_.ref_sigma_att;

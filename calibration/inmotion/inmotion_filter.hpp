@@ -18,6 +18,7 @@
 #include "calibration/inmotion/observation.hpp"
 #include "calibration/inmotion/priors.hpp"
 #include "calibration/inmotion/standstill.hpp"
+#include "calibration/inmotion/velocity_latency.hpp"
 #include "common/noise_spec.hpp"
 #include "common/sensor_model.hpp"
 
@@ -35,6 +36,12 @@ struct DriftPrior {
 
 struct InMotionConfig {
   NoiseSpec noise = adis16488a_noise();  // white-noise densities (process noise)
+  // σ of the IMU stamps about the sensor's clock, s (identification/sample_timing.hpp): process
+  // noise σ²·|Δm|² per step on velocity and attitude, Δm the step's change of mean rate. 0: none.
+  double sample_time_sigma = 0;
+  // GNSS fixes: their velocity describes the motion this long before their stamp, s
+  // (velocity_latency.hpp; identification/gnss_velocity_latency.hpp measures it). 0: at the stamp.
+  double gnss_vel_latency_s = 0;
   // In-run drift models per axis; defaults from `noise` (identified models may replace them).
   std::optional<std::array<DriftPrior, 3>> gyro_drift, accel_drift;
   // Prior 1σ of the constant parameters, relative to the data the filter sees (priors.hpp): the
@@ -418,6 +425,7 @@ class InMotionFilter {
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
   Vec3 a_last_ = Vec3::Zero();  // NED acceleration of the MEMS over the last IMU interval
+  VelocityHistory vel_hist_;    // the INS's velocity changes, for a lagging GNSS velocity
   double last_obs_t_ = -1e300;
   ConsistencyStats stats_[3];
   // Vehicle constraints: stats of nhc, zupt, zero rate; the standstill detector and what it found;

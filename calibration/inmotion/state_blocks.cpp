@@ -73,6 +73,8 @@ BlockSpec vel_block() {
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef, MatRef Q) {
     const double qa = d.cfg.noise.accel.white_density;
     for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qa * qa * d.T * d.q_nav;
+    const double st = d.cfg.sample_time_sigma;  // sampling-time noise (identification/sample_timing.hpp)
+    if (st > 0) Q.block<3, 3>(off, off) += st * st * d.q_nav * d.acc.jump_f;
   };
   b.total = [](const Nominal& n, int, double* x) { put3(n.nav->v, x); };
   return b;
@@ -98,6 +100,8 @@ BlockSpec att_block() {
   b.dynamics = [](const BlockDynamics& d, const filter::BlockLayout&, int off, MatRef, MatRef Q) {
     const double qg = d.cfg.noise.gyro.white_density;
     for (int i = 0; i < 3; ++i) Q(off + i, off + i) = qg * qg * d.T * d.q_nav;
+    const double st = d.cfg.sample_time_sigma;
+    if (st > 0) Q.block<3, 3>(off, off) += st * st * d.q_nav * d.acc.jump_w;
   };
   b.total = [](const Nominal& n, int, double* x) { put3(ins::rpy_from_dcm(n.nav->C_nb()), x); };
   return b;

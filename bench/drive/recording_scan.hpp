@@ -1,0 +1,36 @@
+// What fit drive learns of the unit and its logger from the recording before the fit (issue 34's
+// white noise, issue 53's timing): one pass over the IMU table gives the white noise on the
+// standstills (identification/standstill_noise.hpp) and the stamps' scatter about the sensor's
+// clock (identification/sample_timing.hpp); gnss.csv alone gives how long before its stamp a fix's
+// velocity describes the motion (identification/gnss_velocity_latency.hpp). RESULT.json carries
+// each with where it came from ("white_noise", "sample_timing", "gnss_velocity_latency").
+#pragma once
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/io/recording.hpp"
+#include "calibration/identification/gnss_velocity_latency.hpp"
+#include "calibration/identification/sample_timing.hpp"
+#include "calibration/identification/standstill_noise.hpp"
+
+namespace calbench {
+
+struct RecordingScan {
+  identification::NoiseMeasurement noise;
+  identification::SampleTiming timing;
+  bool scanned = false;
+};
+
+// One pass over the recording's IMU table (imu.csv or recording.h5's imu dataset).
+RecordingScan scan_recording(const fs::path& dir, const RecordingMeta& meta, const NoiseSpec& cls);
+
+// The GNSS velocity's latency, from gnss.csv (one pass; the file is small).
+identification::GnssVelocityLatency scan_gnss_velocity_latency(const fs::path& dir);
+
+// RESULT.json "sample_timing" and "gnss_velocity_latency": the measurement, the rule, and what the
+// filter takes. `option` is the --sample-time / --gnss-vel-latency value ("auto" or seconds).
+nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option);
+nlohmann::json gnss_velocity_latency_json(const identification::GnssVelocityLatency& l, double used_s, const std::string& option);
+
+}  // namespace calbench

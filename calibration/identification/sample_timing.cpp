@@ -1,0 +1,93 @@
+#include "calibration/identification/sample_timing.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace calbench::identification {
+
+namespace {
+constexpr std::size_t kMinRun = 32;  // a shorter run (cut by a gap) is not fitted
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const std::size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
+  return v[m];
+}
+}  // namespace
+
+void SampleTimingEstimator::add(double t, const Vec3& w, const Vec3& f) {
+  ++s_.rows;
+  if (s_.rows == 1) t_first_ = t;
+  t_last_ = t;
+  const bool repeat = have_prev_ && w == w_prev_ && f == f_prev_;
+  w_prev_ = w;
+  f_prev_ = f;
+  have_prev_ = true;
+  if (repeat) {
+    ++s_.repeated;
+    return;
+  }
+  ++distinct_;
+  if (!run_.empty()) {
+    const double dt = t - run_.back();
+    // A gap (a step over 5× the previous one) ends the run: the line does not reach across it.
+    if (!(dt > 0) || (last_dt_ > 0 && dt > 5 * last_dt_)) close_run();
+    last_dt_ = dt > 0 ? dt : last_dt_;
+  }
+  run_.push_back(t);
+  if (run_.size() == kRun) close_run();
+}
+
+void SampleTimingEstimator::close_run() {
+  const std::size_t n = run_.size();
+  if (n >= kMinRun) {
+    // Least-squares line t = a + b·k over the run, about its middle (well conditioned).
+    const double k0 = 0.5 * static_cast<double>(n - 1);
+    double st = 0, skt = 0, skk = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double x = static_cast<double>(k) - k0;
+      st += run_[k];
+      skt += x * (run_[k] - run_[0]);
+      skk += x * x;
+    }
+    const double a = st / static_cast<double>(n), b = skt / skk;
+    std::vector<double> r(n);
+    for (std::size_t k = 0; k < n; ++k) r[k] = run_[k] - (a + b * (static_cast<double>(k) - k0));
+    // The residuals' σ, a stamp far off (beyond 5 robust σ: a stall, a skipped read) left out.
+    const double med = median(r);
+    std::vector<double> dev(n);
+    for (std::size_t k = 0; k < n; ++k) dev[k] = std::abs(r[k] - med);
+    const double cut = 5 * 1.4826 * median(dev);
+    double ss = 0, mean = 0;
+    std::size_t m = 0;
+    for (double x : r)
+      if (std::abs(x - med) <= cut) {
+        mean += x;
+        ++m;
+      }
+    mean /= static_cast<double>(std::max<std::size_t>(m, 1));
+    for (double x : r)
+      if (std::abs(x - med) <= cut) ss += (x - mean) * (x - mean);
+    run_sigma_.push_back(m > 2 ? std::sqrt(ss / static_cast<double>(m - 2)) : 0.0);
+  }
+  run_.clear();
+}
+
+SampleTiming SampleTimingEstimator::result() const {
+  SampleTiming s = s_;
+  SampleTimingEstimator tail = *this;  // the open run counts too
+  tail.close_run();
+  s.runs = tail.run_sigma_.size();
+  const double span = t_last_ - t_first_;
+  if (span > 0 && s.rows > 1) {
+    s.read_rate_hz = static_cast<double>(s.rows - 1) / span;
+    s.distinct_rate_hz = static_cast<double>(distinct_ - 1) / span;
+  }
+  const double sigma = median(tail.run_sigma_);
+  s.regular = !(sigma >= kFloorS);
+  s.sigma_s = s.regular ? 0.0 : sigma;
+  return s;
+}
+
+}  // namespace calbench::identification
