@@ -8,6 +8,7 @@
 #include "common/coefficients_codec.hpp"
 #include "common/input_error.hpp"
 #include "common/json_parse.hpp"
+#include "calibration/inmotion/adaptive_noise.hpp"
 #include "common/units.hpp"
 
 namespace calbench::db {
@@ -149,6 +150,16 @@ void nis_reasons(const std::map<std::string, NisConsistency>& nis, const FitQual
   }
 }
 
+// A run whose filter scaled the IMU's noise beyond the limit is no calibration: its consistent NIS
+// was bought by following the fixes (calibration/inmotion/adaptive_noise.hpp).
+void adaptive_reasons(const AdaptiveNoiseSummary& a, std::vector<std::string>& why) {
+  if (!(a.scale_end > inmotion::AdaptiveNoise::kFailScale)) return;
+  why.push_back("in-motion filter: the navigation noise variance was scaled ×" + fmt(a.scale_end, 3) +
+                " at the end of the fit (limit " + fmt(inmotion::AdaptiveNoise::kFailScale) +
+                "): the filter followed the fixes with the IMU's noise scaled away, so its coefficients and NIS do not "
+                "rest on the IMU (RESULT.json adaptive_noise; docs/in-motion.md, \"Adaptive process noise\")");
+}
+
 struct Display {
   double unit;
   const char* name;
@@ -257,6 +268,11 @@ FitEvidence fit_evidence(Store& store, const CoefficientSetRecord& set) {
       const std::string rw = "in-motion run " + std::to_string(run->id) + " consistency";
       try {
         ev.nis = nis_consistency_from_json(parse_json_text(run->consistency_json, rw), rw);
+        if (!run->result_json.empty()) {
+          const DriveResult dr = drive_result_from_json(parse_json_text(run->result_json, "in-motion run " + std::to_string(run->id)),
+                                                        "in-motion run " + std::to_string(run->id));
+          if (dr.adaptive_noise) ev.adaptive = dr.adaptive_noise;
+        }
       } catch (const InputError& e) {
         ev.problems.push_back(std::string("innovation consistency unreadable: ") + e.what());
       }
@@ -283,6 +299,7 @@ std::vector<std::string> fit_quality_reasons(const CoefficientSetRecord& set, co
   else if (q.require_fit_quality && set.source == SetSource::bench && !ev.multipos_chi2)
     why.push_back("bench fit quality not recorded with the set (no fit_quality in its coefficients: refit with calbench fit bench)");
   if (ev.nis) nis_reasons(*ev.nis, q, why);
+  if (ev.adaptive) adaptive_reasons(*ev.adaptive, why);
   if (ev.parent && set.source == SetSource::combined) parent_reasons(set, *ev.parent, q, why);
   return why;
 }

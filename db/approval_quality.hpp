@@ -66,6 +66,10 @@ struct FitEvidence {
   // residuals under the class's white noise and drift ("accel_chi2_dof_class") and of the rotations'
   // gravity-direction residuals ("gyro_chi2_dof"), judged by the bench limits max_chi2_dof.
   std::optional<std::pair<double, double>> multipos_chi2;    // accel, gyro
+  // The in-motion run's adaptive noise scale at the end of its fit (RESULT.json adaptive_noise):
+  // above inmotion::AdaptiveNoise::kFailScale the filter followed the fixes with the IMU's noise
+  // scaled away, and the set is refused whatever its NIS (issue 53).
+  std::optional<AdaptiveNoiseSummary> adaptive;
   std::vector<std::string> problems;                         // evidence that could not be read (refuses)
 };
 FitEvidence fit_evidence(Store& store, const CoefficientSetRecord& set);

@@ -72,6 +72,7 @@ nlohmann::json approval_preview(const DriveResult& r, const std::optional<Coeffi
   set.payload_json = in.coefficients.canonical_json;
   db::FitEvidence ev;
   ev.nis = r.nis;
+  if (r.adaptive_noise) ev.adaptive = r.adaptive_noise;
   if (input) {
     db::CoefficientSetRecord parent;  // id 0: the input set, not yet a stored one
     parent.serial = input->device.serial;

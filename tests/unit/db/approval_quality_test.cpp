@@ -125,5 +125,27 @@ TEST(DbApprovalQuality, NisBandPerObservation) {
   EXPECT_THROW(parse_thresholds(R"({"combined": {"max_move_sigmas": "1"}})", "t"), InputError);
 }
 
+TEST(DbApprovalQuality, AFilterThatScaledTheImuAwayIsRefused) {
+  // Consistent NIS bought by the adaptive noise (the real walk before issue 53: ×3.5e5 at the end)
+  // is no calibration; a scale that came back down (the same walk now: ×18.8 at most, ×1 at the
+  // end) is not a reason.
+  std::map<std::string, NisConsistency> nis;
+  nis["position"].mean_nis = 3.01;
+  nis["position"].expected_nis = 3;
+  nis["position"].epochs = 470;
+  CoefficientSetRecord set;
+  FitEvidence ev;
+  ev.nis = nis;
+  ev.adaptive = AdaptiveNoiseSummary{};
+  ev.adaptive->scale_max = 6.44e5;
+  ev.adaptive->scale_end = 3.5e5;
+  auto why = fit_quality_reasons(set, ev, default_thresholds().quality);
+  ASSERT_EQ(why.size(), 1u);
+  EXPECT_EQ(count_with(why, "in-motion filter: the navigation noise variance was scaled ×3.5e+05 at the end of the fit (limit 10)"), 1);
+  ev.adaptive->scale_max = 18.8;
+  ev.adaptive->scale_end = 1;
+  EXPECT_TRUE(fit_quality_reasons(set, ev, default_thresholds().quality).empty());
+}
+
 }  // namespace
 }  // namespace calbench::db
