@@ -41,6 +41,14 @@ const bool registered = add_command(11, [](CLI::App& app) {
                  "from --seed + k-1, turned 90° in yaw from the last, 0.15 m round the route's lever arm; writes "
                  "units.json, reference.csv once and one recording folder per unit (docs/recording-units.md)")
       ->check(whole_number(1, 16));
+  d->add_option("--logger-read-hz", a->logger_read_hz,
+                 "a logger polling the IMU: it reads R times per second (each interval within +-30 %) and stamps each "
+                 "row with its read time; reads faster than the sensor repeat samples (real loggers do; the fit "
+                 "measures it, fit drive --sample-time). Default: rows at the sensor's own instants")
+      ->check(finite_positive());
+  d->add_flag("--gnss-velocity-from-positions", a->gnss_velocity_from_positions,
+              "the receiver's velocity is the difference of consecutive fix positions (it lags its stamp by half a fix "
+              "interval; sigma that of the difference), as some receivers give it (fit drive --gnss-vel-latency)");
   d->callback([a] {
     const SimulateDriveSummary s = simulate_drive_recording(*a);
     if (a->units > 1)

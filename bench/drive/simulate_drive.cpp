@@ -4,6 +4,7 @@
 
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/route_toml.hpp"
+#include "bench/drive/sim_logger.hpp"
 #include "bench/io/coefficients_json.hpp"
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/effects/effect_registry.hpp"
@@ -158,16 +159,22 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
 
   SimulateDriveSummary sum;
   drivesim::DriveSinks sinks;
+  std::vector<PollingLogger> loggers;
+  for (std::size_t k = 0; k < writers.size(); ++k)
+    loggers.emplace_back(a.logger_read_hz, a.seed + k, [&, k](const ImuRecord& r) {
+      writers[k]->imu(r);
+      if (k == 0) {
+        ++sum.imu_rows;
+        sum.duration_s = r.t;
+      }
+    });
+  DifferencingReceiver receiver(a.gnss_velocity_from_positions);
   sinks.imu = [&](const drivesim::SimImu& m) {
     ImuRecord r;
     r.t = m.t;
     r.gyro = m.gyro;
     r.accel = m.accel;
-    writers[static_cast<std::size_t>(m.unit)]->imu(r);
-    if (m.unit == 0) {
-      ++sum.imu_rows;
-      sum.duration_s = m.t;
-    }
+    loggers[static_cast<std::size_t>(m.unit)].sample(r);
   };
   sinks.reference = [&](const drivesim::SimRef& s) {
     DriveRefRow r;
@@ -193,10 +200,11 @@ SimulateDriveSummary simulate_drive_recording(const SimulateDriveArgs& a) {
     g.sigma_h_m = s.sigma_h;
     g.sigma_v_m = s.sigma_v;
     g.sigma_vel_m_s = s.sigma_vel;
-    w.gnss(g);
+    w.gnss(receiver.fix(g));
     ++sum.gnss_rows;
   };
   drivesim::simulate_drive(cfg, sinks, a.until_s);
+  for (PollingLogger& l : loggers) l.finish(1.0 / rf.imu_rate_hz);
   w.finish();
   if (several) {
     // The drive's reference once: out/reference.csv (and gnss.csv), the same file in every unit's

@@ -29,6 +29,10 @@ struct SimulateDriveArgs {
   // reference once, one recording folder per unit; docs/recording-units.md), unit k with the errors
   // and mounting drawn from seed + k, turned 90°·k in yaw and 0.15 m round the route's lever arm.
   int units = 1;
+  // The logger and receiver of sim_logger.hpp: reads per second of a logger polling the IMU (0:
+  // the sensor's own instants), and fix velocities formed from the positions.
+  double logger_read_hz = 0;
+  bool gnss_velocity_from_positions = false;
 };
 
 struct SimulateDriveSummary {
