@@ -88,8 +88,10 @@ W="$SHARED/data/rtk-walk-135s"
 if [ -d "$W" ]; then
   "$CALBENCH" diagnose "$W" --json > "$T/walk.json"
   python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); assert j["aiding"] == "gnss" and j["search"]["overdispersion_phi"] >= 1 and "position" in j["innovations"], j["search"]' "$T/walk.json"
-  # Its innovations stay overdispersed: whatever it finds is partial, never established.
-  python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); assert j["search"]["overdispersion_phi"] > 1.5 and len(j["findings"]) >= 1 and all(f["status"] == "partial" and not f["established"] for f in j["findings"]), j["findings"]' "$T/walk.json"
+  # Its innovations stay overdispersed: whatever it finds is partial, never established (since the
+  # fit measures the logger's timing and the velocity's latency, issue 53, the antenna hypotheses are
+  # withdrawn against that remainder: nothing is named).
+  python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); assert j["search"]["overdispersion_phi"] > 1.5 and all(f["status"] == "partial" and not f["established"] for f in j["findings"]), j["findings"]' "$T/walk.json"
 fi
 
 # Bad input: exit 2 naming the file or option.
