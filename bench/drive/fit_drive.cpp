@@ -449,6 +449,9 @@ DriveResult fit_drive(const FitDriveArgs& a) {
     const identification::GnssVelocityLatency lat = scan_gnss_velocity_latency(dir);
     cfg.gnss_vel_latency_s = timing_option(a.gnss_vel_latency, "--gnss-vel-latency", lat.latency_s);
     unit["gnss_velocity_latency"] = gnss_velocity_latency_json(lat, cfg.gnss_vel_latency_s, a.gnss_vel_latency);
+  } else if (a.gnss_vel_latency != "auto") {
+    timing_option(a.gnss_vel_latency, "--gnss-vel-latency", 0.0);  // bad input whatever the aiding
+    input_warning("--gnss-vel-latency", 0, "has no effect here: the drive is aided by reference.csv, not GNSS fixes");
   }
   if (gnss) {  // GNSS defaults where gnss.csv has no sigma columns
     cfg.ref_sigma_pos = 2.0;

@@ -32,6 +32,11 @@ expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" fit mult
 expect 2 "--out: expected a value, got an empty one" "$CALBENCH" diagnose rec --out ""
 expect 2 "--report: expected a value, got an empty one" "$CALBENCH" diagnose rec --report ""
 expect 2 "--out: expected a value, got an empty one" "$CALBENCH" fit drive rec --out ""
+# The logger's timing and the velocity latency (issue 53): auto, off or milliseconds, nothing else.
+expect 2 "--sample-time: expected auto, off, or milliseconds in 0 … 1000, got 'fast'" "$CALBENCH" fit drive rec --sample-time fast --out e.json
+expect 2 "--gnss-vel-latency: expected auto, off, or milliseconds in 0 … 1000, got '-5'" "$CALBENCH" fit drive rec --gnss-vel-latency -5 --out e.json
+expect 2 "--sample-time: expected a value, got an empty one" "$CALBENCH" fit drive rec --sample-time "" --out e.json
+[ ! -e e.json ] || fail "an output written on a bad --sample-time"
 # A cut last line is dropped with a warning; --json says so (recording.input_warnings).
 cp -r rec cut && head -c -7 rec/imu.csv > cut/imu.csv
 "$CALBENCH" diagnose cut --no-innovations --json > cut.json 2> cut.err
