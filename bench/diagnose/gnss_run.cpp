@@ -198,6 +198,8 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     return run_filter(model, std::vector<double>(pf.theta.data(), pf.theta.data() + pf.theta.size()));
   };
   const FilterRun& base = filter({});
+  for (const char* k : {"sample_timing", "gnss_velocity_latency", "adaptive_noise"})
+    if (base.result.extra.contains(k)) run.logger[k] = base.result.extra[k];
   run.epochs = static_cast<long>(base.x[0].size() + base.x[1].size());
   run.rows = 3 * run.epochs;
   if (base.x[0].empty())
@@ -380,7 +382,38 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
                         {"after", innovation_stats_json(run.innovations.after[k])},
                         {"sentence", innovation_sentence(k, run.innovations)}};
   j["innovations"] = inn;
+  j["logger"] = run.logger;
   return j;
+}
+
+// The logger and receiver properties every run of the diagnosis modelled, as fit drive measured
+// them, and where the base filter needed its noise raised (issue 53, items 1 and 5).
+std::string logger_sentence(const nlohmann::json& l) {
+  std::ostringstream o;
+  if (l.contains("sample_timing") && l["sample_timing"].value("scanned", false)) {
+    const auto& st = l["sample_timing"];
+    o << "logger (measured, modelled in every run): IMU stamps " << fmt(st["sigma_ms"].get<double>(), 3)
+      << " ms about the sensor's clock (" << st["repeated_rows"].get<long>() << " of " << st["rows"].get<long>()
+      << " rows repeated reads)";
+    if (l.contains("gnss_velocity_latency")) {
+      const auto& g = l["gnss_velocity_latency"];
+      o << "; the fix velocity " << fmt(1e3 * g["used_s"].get<double>(), 3) << " ms late ("
+        << (g.value("established", false) ? "measured" : "not established: taken at its stamp") << ")";
+    }
+    o << "\n";
+  }
+  if (l.contains("adaptive_noise") && l["adaptive_noise"].value("scale_max", 1.0) > 1) {
+    const auto& an = l["adaptive_noise"];
+    o << "base filter's navigation noise: scaled up to x" << fmt(an["scale_max"].get<double>(), 3) << ", x"
+      << fmt(an["scale_end"].get<double>(), 3) << " at the end";
+    int n = 0;
+    for (const auto& e : an.value("events", nlohmann::json::array()))
+      if (e["to"].get<double>() > e["from"].get<double>() && n++ < 4)
+        o << (n == 1 ? "; raised at " : ", ") << fmt(e["t_s"].get<double>(), 4) << " s (" << e["observation"].get<std::string>()
+          << ", NIS/dof " << fmt(e["nis_per_dof"].get<double>(), 3) << ")";
+    o << (an.value("failed", false) ? " — above the fail scale at the end: the IMU did not carry the navigation\n" : "\n");
+  }
+  return o.str();
 }
 
 std::string gnss_diagnosis_text(const GnssDiagRun& run) {
@@ -409,6 +442,7 @@ std::string gnss_diagnosis_text(const GnssDiagRun& run) {
   o << "in-motion filter innovations (GNSS-aided; " << (run.innovations.compared ? "base → final model" : "no finding")
     << ", " << fmt(run.cpu_s, 2) << " s CPU):\n";
   for (int k = 0; k < 2; ++k) o << "  " << innovation_sentence(k, run.innovations) << "\n";
+  o << logger_sentence(run.logger);
   return o.str();
 }
 

@@ -45,6 +45,9 @@ struct GnssDiagRun {
   long epochs = 0, rows = 0;   // innovation epochs (position + velocity) and scalar observations
   DiagnoseResult core;         // findings, withdrawn, improved_terms (the drive's JSON schema)
   DriveInnovations innovations;  // before: the base filter; after: the final model's
+  // What the base filter's fit measured of the logger and receiver (issue 53: RESULT.json
+  // sample_timing, gnss_velocity_latency; modelled in every run) and its adaptive noise scale.
+  nlohmann::json logger;
   double cpu_s = 0;
 };
 
