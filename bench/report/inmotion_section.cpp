@@ -1,5 +1,7 @@
 #include "bench/report/inmotion_section.hpp"
 
+#include "calibration/inmotion/adaptive_noise.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -359,6 +361,23 @@ std::string consistency_table(const std::map<std::string, NisConsistency>& nis, 
   return h.str();
 }
 
+// The adaptive noise scale the run's filter ended with (issue 53): beside the NIS, which a filter
+// that scaled the IMU away keeps consistent by following the fixes.
+std::string adaptive_part(const std::optional<AdaptiveNoiseSummary>& a, const InMotionRun& r) {
+  if (!a || !(a->scale_max > 1)) return "";
+  const bool failed = a->scale_end > inmotion::AdaptiveNoise::kFailScale;
+  std::ostringstream h;
+  h << "<p class=\"" << (failed ? "fail" : "note") << "\" id=\"adaptive-" << r.id << "\" data-verdict=\""
+    << (failed ? "failed" : "ok") << "\">Adaptive process noise: the navigation noise variance was scaled up to ×"
+    << num(a->scale_max, 3) << " and ended at ×" << num(a->scale_end, 3) << " (limit "
+    << num(inmotion::AdaptiveNoise::kFailScale, 3) << " at the end). "
+    << (failed ? "FAILED: the filter followed the fixes with the IMU's noise scaled away; the NIS above is not evidence "
+                 "that the IMU model holds, and the set is refused at approval."
+               : "The NIS above is that of a filter whose IMU carried the navigation at the end.")
+    << "</p>\n";
+  return h.str();
+}
+
 }  // namespace
 
 std::string inmotion_section(Store& store, const InMotionRun& r, const CoefficientSetRecord& set,
@@ -371,7 +390,8 @@ std::string inmotion_section(Store& store, const InMotionRun& r, const Coefficie
     << (set.parent_id ? ", parent set " + std::to_string(*set.parent_id) : std::string()) << ")</h3>\n"
     << run_table(r, res) << stage_table(r, set, sets, stored) << (res.outages && res.cpe.sets.empty() ? std::string() : cpe_part(res.cpe, res, r))  // GNSS-only: outages only
     << outage_part(res.outages, r) << "<h4>QC metrics</h4>\n"
-    << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(res.nis, r);
+    << qc_table(store.qc_of_inmotion_run(r.id), "qc-inmotion-" + std::to_string(r.id)) << consistency_table(res.nis, r)
+    << adaptive_part(res.adaptive_noise, r);
   return h.str();
 }
 

@@ -119,6 +119,24 @@ import json; p = json.load(open("r.json"))["consistency"]["position"]
 print(json.dumps({"inmotion": {"mean_nis_per_dof": {"position": [p["mean_nis"] / p["expected_nis"] * 1.5, 100]}}}))' > band.json
 expect 1 "in-motion NIS position: .* outside the band" "$CALBENCH" db approve $n1 --operator qc-anna --thresholds band.json
 grep -q "NIS velocity" err.txt && { cat err.txt; fail "velocity named though its band is the default"; }
+# A run whose filter ended with the IMU's noise scaled away (issue 53: the real walk before, ×3.5e5
+# with NIS 3.01) is refused whatever its NIS, and the device report says FAILED beside the NIS.
+python3 - <<'PY'
+import json
+r = json.load(open("r.json"))
+r["adaptive_noise"] = {"enabled": True, "option": "auto", "scale_max": 6.44e5, "scale_end": 3.5e5, "increases": 6}
+json.dump(r, open("scaled.json", "w"))
+PY
+"$CALBENCH" db import-inmotion scaled.json > /dev/null
+n3=$(sqlite3 "$CALBENCH_DB" "SELECT MAX(id) FROM coefficient_sets")
+expect 1 "in-motion filter: the navigation noise variance was scaled ×3.5e+05 at the end of the fit (limit 10)" \
+  "$CALBENCH" db approve $n3 --operator qc-anna
+grep -q "NIS position" err.txt && { cat err.txt; fail "the scaled run's NIS named: it was consistent"; }
+"$CALBENCH" report 4242 --html scaled.html > /dev/null
+python3 - <<'PY' || fail "report: the adaptive scale"
+h = open("scaled.html").read()
+assert 'data-verdict="failed">Adaptive process noise' in h and "ended at ×350000" in h, "adaptive"
+PY
 
 # Malformed thresholds and fit_quality: exit 2 naming the file and the key.
 echo '{"bench": {"max_chi2_dof": {"gyro": -1}}}' > t1.json
