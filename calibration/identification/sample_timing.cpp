@@ -8,7 +8,8 @@ namespace calbench::identification {
 namespace {
 constexpr std::size_t kMinRun = 32;  // a shorter run (cut by a gap) is not fitted
 
-double median(std::vector<double> v) {
+// The median of v (reordered in place).
+double median_in_place(std::vector<double>& v) {
   if (v.empty()) return 0;
   const std::size_t m = v.size() / 2;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
@@ -52,13 +53,16 @@ void SampleTimingEstimator::close_run() {
       skk += x * x;
     }
     const double a = st / static_cast<double>(n), b = skt / skk;
-    std::vector<double> r(n);
+    std::vector<double>& r = scratch_r_;
+    r.resize(n);
     for (std::size_t k = 0; k < n; ++k) r[k] = run_[k] - (a + b * (static_cast<double>(k) - k0));
     // The residuals' σ, a stamp far off (beyond 5 robust σ: a stall, a skipped read) left out.
-    const double med = median(r);
-    std::vector<double> dev(n);
+    scratch_m_ = r;
+    const double med = median_in_place(scratch_m_);
+    std::vector<double>& dev = scratch_dev_;
+    dev.resize(n);
     for (std::size_t k = 0; k < n; ++k) dev[k] = std::abs(r[k] - med);
-    const double cut = 5 * 1.4826 * median(dev);
+    const double cut = 5 * 1.4826 * median_in_place(dev);
     double ss = 0, mean = 0;
     std::size_t m = 0;
     for (double x : r)
@@ -84,7 +88,7 @@ SampleTiming SampleTimingEstimator::result() const {
     s.read_rate_hz = static_cast<double>(s.rows - 1) / span;
     s.distinct_rate_hz = static_cast<double>(distinct_ - 1) / span;
   }
-  const double sigma = median(tail.run_sigma_);
+  const double sigma = median_in_place(tail.run_sigma_);
   s.regular = !(sigma >= kFloorS);
   s.sigma_s = s.regular ? 0.0 : sigma;
   return s;

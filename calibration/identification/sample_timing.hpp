@@ -47,7 +47,8 @@ class SampleTimingEstimator {
  private:
   void close_run();
   std::vector<double> run_;        // stamps of the current run's distinct samples
-  std::vector<double> run_sigma_;  // each closed run's robust σ
+  std::vector<double> run_sigma_;  // each closed run's σ
+  std::vector<double> scratch_r_, scratch_dev_, scratch_m_;  // reused by close_run
   SampleTiming s_;
   double t_first_ = 0, t_last_ = 0, last_dt_ = 0;
   std::size_t distinct_ = 0;
