@@ -179,7 +179,9 @@ void print_summary(const DriveResult& r, const std::string& out) {
       if (an.contains("above_fail_since"))
         std::cout << ", above the limit since t " << an["above_fail_since"]["t_s"].get<double>() << " s ("
                   << an["above_fail_since"]["observation"].get<std::string>() << " innovations " << std::setprecision(3)
-                  << an["above_fail_since"]["nis_per_dof"].get<double>() << std::setprecision(6) << "x their expectation)";
+                  << an["above_fail_since"]["nis_per_dof"].get<double>() << "x their expectation, at "
+                  << an["above_fail_since"].value("speed_m_s", 0.0) << " m/s turning " << an["above_fail_since"].value("turn_rate_deg_s", 0.0)
+                  << " deg/s)" << std::setprecision(6);
       std::cout << ": it followed the fixes and the IMU did not carry the navigation. Its coefficients and NIS do not rest on "
                    "the IMU; db approve refuses the set. calbench diagnose DIR locates the misfit\n";
     }

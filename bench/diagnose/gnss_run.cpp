@@ -410,7 +410,8 @@ std::string logger_sentence(const nlohmann::json& l) {
     for (const auto& e : an.value("events", nlohmann::json::array()))
       if (e["to"].get<double>() > e["from"].get<double>() && n++ < 4)
         o << (n == 1 ? "; raised at " : ", ") << fmt(e["t_s"].get<double>(), 4) << " s (" << e["observation"].get<std::string>()
-          << ", NIS/dof " << fmt(e["nis_per_dof"].get<double>(), 3) << ")";
+          << ", NIS/dof " << fmt(e["nis_per_dof"].get<double>(), 3) << ", " << fmt(e.value("speed_m_s", 0.0), 2) << " m/s, turning "
+          << fmt(e.value("turn_rate_deg_s", 0.0), 2) << " °/s, " << fmt(e.value("accel_m_s2", 0.0), 2) << " m/s²)";
     o << (an.value("failed", false) ? " — above the fail scale at the end: the IMU did not carry the navigation\n" : "\n");
   }
   return o.str();

@@ -297,7 +297,8 @@ const char* adaptive_type_name(int type) {
 nlohmann::json adaptive_events_json(const inmotion::AdaptiveNoise& an) {
   nlohmann::json ev = nlohmann::json::array();
   for (const inmotion::AdaptiveEvent& e : an.events())
-    ev.push_back({{"t_s", e.t}, {"observation", adaptive_type_name(e.type)}, {"from", e.q_from}, {"to", e.q_to}, {"nis_per_dof", e.nis_per_dof}});
+    ev.push_back({{"t_s", e.t}, {"observation", adaptive_type_name(e.type)}, {"from", e.q_from}, {"to", e.q_to}, {"nis_per_dof", e.nis_per_dof},
+                  {"speed_m_s", e.speed}, {"turn_rate_deg_s", e.turn_rate / units::kDeg}, {"accel_m_s2", e.accel}});
   return ev;
 }
 
@@ -842,7 +843,8 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
         {"failed", an.scale() > inmotion::AdaptiveNoise::kFailScale},
         {"events", adaptive_events_json(an)}};
     if (const inmotion::AdaptiveEvent* e = an.above_fail_since())
-      j["adaptive_noise"]["above_fail_since"] = {{"t_s", e->t}, {"observation", adaptive_type_name(e->type)}, {"nis_per_dof", e->nis_per_dof}};
+      j["adaptive_noise"]["above_fail_since"] = {{"t_s", e->t}, {"observation", adaptive_type_name(e->type)}, {"nis_per_dof", e->nis_per_dof},
+                                                 {"speed_m_s", e->speed}, {"turn_rate_deg_s", e->turn_rate / units::kDeg}};
   }
   {
     const Vec3 se = f->unobservable_rotation_sigma(), sp = f->unobservable_rotation_sigma_prior();

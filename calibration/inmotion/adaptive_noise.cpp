@@ -13,6 +13,9 @@ void AdaptiveNoise::Window::push(const AdaptiveSample& x) {
   nu2 += x.nu2;
   trR += x.trR;
   trHPH += x.trHPH;
+  speed += x.speed;
+  turn += std::abs(x.turn_rate);
+  accel += x.accel;
   dof += x.dof;
 }
 
@@ -21,6 +24,11 @@ namespace {
 // innovation power equal the actual one over the block.
 double matching_factor(double nu2, double trR, double trHPH, double none) { return trHPH > 0 ? (nu2 - trR) / trHPH : none; }
 }  // namespace
+
+AdaptiveEvent AdaptiveNoise::event(const Window& b, int type, double from, double to) {
+  const double n = static_cast<double>(std::max<std::size_t>(b.s.size(), 1));
+  return AdaptiveEvent{b.s.back().t, type, from, to, b.nis / b.dof, b.speed / n, b.turn / n, b.accel / n};
+}
 
 void AdaptiveNoise::close_all_blocks() {
   for (Window& w : w_) w.clear();
@@ -35,7 +43,7 @@ bool AdaptiveNoise::raise(const Window& b, int type) {
   if (!(step > 1)) return false;
   const double q = std::min(cfg_.max_scale, q_ * step);
   if (q <= q_) return false;
-  events_.push_back(AdaptiveEvent{b.s.back().t, type, q_, q, b.nis / b.dof});
+  events_.push_back(event(b, type, q_, q));
   q_ = q;
   q_max_ = std::max(q_max_, q_);
   ++increases_;
@@ -48,7 +56,7 @@ bool AdaptiveNoise::lower(const Window& b, int type) {
   const double s = matching_factor(b.nu2, b.trR, b.trHPH, 1.0);
   const double step = std::clamp(std::isfinite(s) ? s : 1.0, cfg_.min_step_down, cfg_.max_step_down);
   const double q = std::max(1.0, q_ * step);
-  events_.push_back(AdaptiveEvent{b.s.back().t, type, q_, q, b.nis / b.dof});
+  events_.push_back(event(b, type, q_, q));
   q_ = q;
   ++decreases_;
   return true;

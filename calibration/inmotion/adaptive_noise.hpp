@@ -68,6 +68,8 @@ struct AdaptiveSample {
   double nu2 = 0;   // νᵀν (scaled like the NIS when capped)
   double trR = 0;   // tr R
   double trHPH = 0; // tr(H·P⁻·Hᵀ)
+  // The motion at the epoch, for reporting where the noise was raised (no part in the rule).
+  double speed = 0, turn_rate = 0, accel = 0;  // m/s, rad/s (about the vertical), m/s² (horizontal)
 };
 
 // One change of q: when, on which observation type's block, from what to what, and that block's
@@ -76,6 +78,9 @@ struct AdaptiveEvent {
   double t = 0;
   int type = 0;
   double q_from = 1, q_to = 1, nis_per_dof = 0;
+  // The block's motion: mean speed (m/s), mean |turn rate| (rad/s), mean horizontal |acceleration|
+  // (m/s²) over its epochs (issue 53, item 5: where the innovations grow).
+  double speed = 0, turn_rate = 0, accel = 0;
 };
 
 class AdaptiveNoise {
@@ -100,10 +105,11 @@ class AdaptiveNoise {
   struct Window;
   bool raise(const Window& b, int type);
   bool lower(const Window& b, int type);
+  static AdaptiveEvent event(const Window& b, int type, double from, double to);
   void close_all_blocks();
   struct Window {
     std::deque<AdaptiveSample> s;
-    double nis = 0, nu2 = 0, trR = 0, trHPH = 0;
+    double nis = 0, nu2 = 0, trR = 0, trHPH = 0, speed = 0, turn = 0, accel = 0;
     int dof = 0;
     void push(const AdaptiveSample& x);
     void clear() { *this = Window{}; }

@@ -535,7 +535,10 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       const double cap = nis > cfg_.gate_nis ? cfg_.gate_nis / nis : 1.0;
       // (the trace of the product expression, Eigen's diagonal-only sums, as measured: HPHt.trace()
       // sums in another order and moves the walk's results at the last digit)
-      adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace()});
+      const Vec3& v = nav_.state().v;
+      const Vec3 w_n = nav_.state().C_nb() * w_last_;
+      adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace(),
+                                      std::hypot(v(0), v(1)), w_n(2), std::hypot(a_last_(0), a_last_(1))});
     }
     if (!(nis <= cfg_.gate_nis)) {
       if (st.rejected_since < 0) st.rejected_since = r.t;

@@ -24,6 +24,12 @@ grep -q "GNSS velocity    describes the motion" "$T/walk.txt"
 ! grep -q "FAILED" "$T/walk.txt"
 "$CALBENCH" fit drive "$W" --adaptive off --sample-time off --gnss-vel-latency off --out "$T/walk_off.json" > /dev/null
 "$CALBENCH" fit drive "$W" --adaptive off --out "$T/walk_physics.json" > /dev/null
+# Without the two properties the adaptation still ends far above its limit on the walk's first minute:
+# said in plain words, with when it began and the motion there, and refused by the approval preview.
+"$CALBENCH" fit drive "$W" --sample-time off --gnss-vel-latency off --window 0:60 --out "$T/walk_fail.json" > "$T/walk_fail.txt"
+grep -q "FAILED           the filter ended with the IMU's noise scaled x.* above the limit since t .* m/s turning" "$T/walk_fail.txt"
+grep -q "in-motion filter: the navigation noise variance was scaled ×.* at the end of the fit (limit 10)" "$T/walk_fail.txt"
+python3 -c 'import json,sys; a=json.load(open(sys.argv[1]))["adaptive_noise"]; assert a["failed"] and a["scale_end"] > 10 and a["above_fail_since"]["t_s"] > 0, a' "$T/walk_fail.json"
 cp -r "$W" "$T/walk_outlier"
 python3 - "$T/walk_outlier/gnss.csv" <<'PY'
 import sys
