@@ -194,6 +194,9 @@ void print_summary(const DriveResult& r, const std::string& out) {
               << " ms about the sensor's clock; the filter takes " << st["used_ms"].get<double>() << " ms ("
               << st["source"].get<std::string>() << ")" << std::setprecision(6) << "\n";
   }
+  if (j.contains("sample_timing") && !j["sample_timing"].value("scanned", false))
+    std::cout << "  sample timing    not measured (--no-noise-scan): the filter takes " << j["sample_timing"]["used_ms"].get<double>()
+              << " ms (--sample-time MS gives it)\n";
   if (j.contains("gnss_velocity_latency")) {
     const auto& gl = j["gnss_velocity_latency"];
     std::cout << "  GNSS velocity    describes the motion " << std::setprecision(3) << gl["used_s"].get<double>() * 1e3

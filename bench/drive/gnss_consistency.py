@@ -10,6 +10,7 @@ mounting angles (3) within 3 sigma of the truth. Prints a Markdown table (stdout
 
 Usage: bench/drive/gnss_consistency.py CALBENCH [--seeds 1,2,3,4,5] [--routes short,rtk_town]
        [--grades rtk,rtk10,1hz] [--classes ADIS16488A,ICM-42688-P,...] [--obs pos,vel] [--extra-args "..."]
+       [--sim-args "--logger-read-hz R --gnss-velocity-from-positions"]
        [--real DIR ...]
 """
 import argparse
@@ -83,6 +84,9 @@ def main():
     ap.add_argument("--classes", default="ADIS16488A", help="device classes to simulate (simulate drive --device-class)")
     ap.add_argument("--obs", default="pos,vel")
     ap.add_argument("--extra-args", default="")
+    ap.add_argument("--sim-args", default="",
+                    help="extra simulate drive options, e.g. \"--logger-read-hz 300 --gnss-velocity-from-positions\" "
+                         "(a real logger and receiver, docs/in-motion.md \"Real loggers\")")
     ap.add_argument("--real", nargs="*", default=[])
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="gnss_consistency.")
@@ -97,7 +101,7 @@ def main():
                     d = os.path.join(work, "drive")
                     shutil.rmtree(d, ignore_errors=True)
                     subprocess.run([a.calbench, "simulate", "drive", "--route", rt, "--truth", "random", "--seed", seed,
-                                    "--device-class", cls, "--out", d], check=True, stdout=subprocess.DEVNULL)
+                                    "--device-class", cls, "--out", d] + a.sim_args.split(), check=True, stdout=subprocess.DEVNULL)
                     os.remove(os.path.join(d, "reference.csv"))
                     res = os.path.join(work, "r.json")
                     subprocess.run([a.calbench, "fit", "drive", d, "--aiding", "gnss", "--obs", a.obs, "--out", res]

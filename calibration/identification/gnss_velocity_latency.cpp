@@ -91,6 +91,11 @@ GnssVelocityLatency measure_gnss_velocity_latency(const std::vector<GnssFixSampl
   out.diff_noise = sigma_h > 0 ? std::sqrt(2.0) * sigma_h / dt_med : 0.0;
   if (n0 < 50) {
     out.reason = "fewer than 50 fixes with a velocity and neighbours to compare";
+  } else if (out.rms_at_best <= 0.7 * out.rms_at_zero && sigma_h > 0 && out.rms_at_best < 0.25 * out.diff_noise) {
+    // The velocities match the position differences far better than those differences' own noise:
+    // they are made from these very positions, and the lag is certain however coarse the fixes.
+    out.established = true;
+    out.latency_s = out.best_s;
   } else if (!(sigma_h > 0) || out.diff_noise > 0.5 * out.rms_at_zero) {
     out.reason = "the fixes' positions are too coarse to tell (their differences' noise " + std::to_string(out.diff_noise) +
                  " m/s against " + std::to_string(out.rms_at_zero) + " m/s)";

@@ -9,7 +9,9 @@
 // t − τ, over the fixes with a velocity whose neighbours are at most 1.5 fix intervals away. The
 // smallest RMS wins; it is taken only when it is at most 0.7× the RMS at τ = 0 (the lag is the
 // larger part of the difference) and the fixes are precise enough to tell: the position
-// differences' own noise, √2·σ_h / Δt, below half the RMS at τ = 0. Otherwise the latency is 0
+// differences' own noise, √2·σ_h / Δt, below half the RMS at τ = 0 — or the best RMS is below a
+// quarter of that noise (the velocities are the differences of these very positions: a receiver
+// that differences its fixes, whose lag is then certain however coarse they are). Otherwise the latency is 0
 // (the fixes do not tell it, or there is none), and the result says why.
 #pragma once
 #include <string>

@@ -3,6 +3,7 @@
 // made here with known timing (fixed seeds).
 #include "calibration/identification/gnss_velocity_latency.hpp"
 #include "calibration/identification/sample_timing.hpp"
+#include "calibration/ins/nav_math.hpp"
 
 #include <gtest/gtest.h>
 
@@ -115,6 +116,21 @@ TEST(GnssVelocityLatency, CoarseFixesDoNotTellIt) {
   const GnssVelocityLatency l = measure_gnss_velocity_latency(fixes(0.125, 2.0, 6));
   EXPECT_FALSE(l.established);
   EXPECT_NE(l.reason.find("too coarse"), std::string::npos) << l.reason;
+}
+
+TEST(GnssVelocityLatency, AReceiverDifferencingItsOwnFixes) {
+  // Coarse fixes (2 m) whose velocity is the difference of the last two: it matches the position
+  // differences at t − Δt/2 to rounding, far below their own noise, so the lag is certain.
+  std::vector<GnssFixSample> f = fixes(0.0, 2.0, 7);
+  for (std::size_t k = 1; k < f.size(); ++k) {
+    const double dt = f[k].t - f[k - 1].t, lat = 0.5 * (f[k].lat + f[k - 1].lat);
+    const ins::Radii r = ins::wgs84_radii(lat);
+    f[k].v_ned = Vec3((f[k].lat - f[k - 1].lat) * (r.RM + f[k].h) / dt, (f[k].lon - f[k - 1].lon) * (r.RN + f[k].h) * std::cos(lat) / dt, 0);
+  }
+  f.erase(f.begin());
+  const GnssVelocityLatency l = measure_gnss_velocity_latency(f);
+  EXPECT_TRUE(l.established) << l.reason;
+  EXPECT_NEAR(l.latency_s, 0.125, 0.006);
 }
 
 }  // namespace
