@@ -678,7 +678,7 @@ Vec3 InMotionFilter::position_offset_blocks(const Mat3& C_nb, const Vec3& v) {
   const Mat3 Prr = P_.block<3, 3>(pos, pos) + G * P_ * G.transpose();
   const Mat rows = G * P_;
   P_.middleRows<3>(pos) += rows;
-  P_.middleCols<3>(pos) = P_.middleRows<3>(pos).transpose();
+  P_.middleCols<3>(pos) = P_.middleRows<3>(pos).transpose().eval();  // they overlap at (pos, pos): no aliasing
   P_.block<3, 3>(pos, pos) = Prr;
   p_symmetric_ = false;
   return d;
