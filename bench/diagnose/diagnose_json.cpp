@@ -1,5 +1,6 @@
 #include <cmath>
 
+#include "calibration/inmotion/obs_names.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/diagnose_text.hpp"
 #include "bench/diagnose/drive_run.hpp"
@@ -283,7 +284,7 @@ nlohmann::json drive_innovations_json(const DriveDiagRun& run) {
   j["compared"] = v.compared;
   j["cpu_s"] = v.cpu_s;
   for (int k = 0; k < 3; ++k)
-    j[kObsName[k]] = {{"before", innovation_stats_json(v.before[k])}, {"after", innovation_stats_json(v.after[k])},
+    j[inmotion::obs_type_name(k)] = {{"before", innovation_stats_json(v.before[k])}, {"after", innovation_stats_json(v.after[k])},
                       {"sentence", innovation_sentence(k, v)}};
   return j;
 }

@@ -1,6 +1,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "calibration/inmotion/obs_names.hpp"
 #include "bench/diagnose/diagnose_run.hpp"
 #include "bench/diagnose/diagnose_text.hpp"
 #include "bench/diagnose/drive_run.hpp"
@@ -111,15 +112,13 @@ const char* condition_phrase(const std::string& c) {
   return c.c_str();
 }
 
-const char* const kObsName[3] = {"position", "velocity", "attitude"};
-
 // One sentence per observation type: NIS/dof, gating, whiteness, worst window, strongest condition.
 std::string innovation_sentence(int type, const DriveInnovations& v) {
   const InnovationStats& b = v.before[type];
   const InnovationStats& a = v.after[type];
   auto arrow = [&](double x, double y, int prec = 3) { return v.compared ? fmt(x, prec) + " → " + fmt(y, prec) : fmt(x, prec); };
   std::ostringstream o;
-  o << kObsName[type] << " innovations: NIS/dof " << arrow(b.nis_per_dof, a.nis_per_dof) << " (1 if consistent), gated "
+  o << inmotion::obs_type_name(type) << " innovations: NIS/dof " << arrow(b.nis_per_dof, a.nis_per_dof) << " (1 if consistent), gated "
     << (v.compared ? std::to_string(b.rejected) + " → " + std::to_string(a.rejected) : std::to_string(b.rejected)) << " of "
     << b.epochs << "; whiteness (Ljung–Box p, worst component) " << arrow(b.ljung_box_p_min, a.ljung_box_p_min, 2)
     << (a.ljung_box_p_min < 0.05 ? " (not white at the 5 % level)" : " (white at the 5 % level)");

@@ -69,7 +69,6 @@ struct InnovationStats;
 namespace calbench::diagnose_out {
 
 // Drive: the observation types of the innovations and one sentence per type.
-extern const char* const kObsName[3];  // position, velocity, attitude
 std::string innovation_sentence(int type, const DriveInnovations& v);
 // The JSON of one observation type's innovation statistics (drive_innovations.hpp).
 nlohmann::json innovation_stats_json(const InnovationStats& s);

@@ -1,3 +1,4 @@
+#include "calibration/inmotion/obs_names.hpp"
 #include "bench/diagnose/gnss_run.hpp"
 
 #include <algorithm>
@@ -378,7 +379,7 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
   inn["compared"] = run.innovations.compared;
   inn["cpu_s"] = run.cpu_s;
   for (int k = 0; k < 2; ++k)
-    inn[kObsName[k]] = {{"before", innovation_stats_json(run.innovations.before[k])},
+    inn[inmotion::obs_type_name(k)] = {{"before", innovation_stats_json(run.innovations.before[k])},
                         {"after", innovation_stats_json(run.innovations.after[k])},
                         {"sentence", innovation_sentence(k, run.innovations)}};
   j["innovations"] = inn;

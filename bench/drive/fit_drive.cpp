@@ -27,6 +27,7 @@
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/identification/standstill_noise.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
+#include "calibration/inmotion/obs_names.hpp"
 #include "common/number_parse.hpp"
 #include "common/units.hpp"
 
@@ -289,15 +290,10 @@ double timing_option(const std::string& v, const char* opt, double measured) {
   return ms * 1e-3;
 }
 
-const char* adaptive_type_name(int type) {
-  static const char* const names[] = {"position", "velocity", "attitude", "nhc", "zupt", "zero_rate"};
-  return type >= 0 && type < 6 ? names[type] : "other";
-}
-
 nlohmann::json adaptive_events_json(const inmotion::AdaptiveNoise& an) {
   nlohmann::json ev = nlohmann::json::array();
   for (const inmotion::AdaptiveEvent& e : an.events())
-    ev.push_back({{"t_s", e.t}, {"observation", adaptive_type_name(e.type)}, {"from", e.q_from}, {"to", e.q_to}, {"nis_per_dof", e.nis_per_dof},
+    ev.push_back({{"t_s", e.t}, {"observation", inmotion::obs_type_name(e.type)}, {"from", e.q_from}, {"to", e.q_to}, {"nis_per_dof", e.nis_per_dof},
                   {"speed_m_s", e.speed}, {"turn_rate_deg_s", e.turn_rate / units::kDeg}, {"accel_m_s2", e.accel}});
   return ev;
 }
@@ -804,24 +800,22 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   j["in_run_drift_end"] = {{"gyro_rad_s", to_json(f->gyro_drift())}, {"accel_m_s2", to_json(f->accel_drift())},
                            {"gyro_total_sigma_rad_s", to_json(f->gyro_total_drift_sigma())}};
   nlohmann::json cons;
-  const char* names[3] = {"position", "velocity", "attitude"};
   const char* eqs[3] = {"13", "14", "15"};
   for (int i = 0; i < 3; ++i) {
     if (!used[i]) continue;
     const auto& c = f->consistency(i);
-    cons[names[i]] = {{"equation", eqs[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
+    cons[inmotion::obs_type_name(i)] = {{"equation", eqs[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
                       {"expected_nis", 3.0},
                       {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
   }
   if (cfg.obs_nhc || cfg.obs_zupt) {
-    const char* cn[3] = {"nhc", "zupt", "zero_rate"};
     const char* ce[3] = {"obs_nhc.cpp", "obs_zupt.cpp (velocity)", "obs_zupt.cpp (angular rate)"};
     const bool on[3] = {cfg.obs_nhc, cfg.obs_zupt, cfg.obs_zupt && cfg.zupt_zero_rate};
     const int dof[3] = {2, 3, 3};
     for (int i = 0; i < 3; ++i) {
       if (!on[i]) continue;
       const auto& c = f->consistency(inmotion::kObsNhc + i);
-      cons[cn[i]] = {{"equation", ce[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
+      cons[inmotion::obs_type_name(inmotion::kObsNhc + i)] = {{"equation", ce[i]}, {"epochs", c.used}, {"rejected", c.rejected}, {"forced", c.forced}, {"mean_nis", c.mean_nis()},
                      {"expected_nis", static_cast<double>(dof[i])},
                      {"fraction_within_95pct", c.used ? static_cast<double>(c.within95) / static_cast<double>(c.used) : 0.0}};
     }
@@ -843,7 +837,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
         {"failed", an.scale() > inmotion::AdaptiveNoise::kFailScale},
         {"events", adaptive_events_json(an)}};
     if (const inmotion::AdaptiveEvent* e = an.above_fail_since())
-      j["adaptive_noise"]["above_fail_since"] = {{"t_s", e->t}, {"observation", adaptive_type_name(e->type)}, {"nis_per_dof", e->nis_per_dof},
+      j["adaptive_noise"]["above_fail_since"] = {{"t_s", e->t}, {"observation", inmotion::obs_type_name(e->type)}, {"nis_per_dof", e->nis_per_dof},
                                                  {"speed_m_s", e->speed}, {"turn_rate_deg_s", e->turn_rate / units::kDeg}};
   }
   {

@@ -68,7 +68,8 @@ nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool sc
 nlohmann::json gnss_velocity_latency_json(const identification::GnssVelocityLatency& l, double used_s, const std::string& option) {
   nlohmann::json j = {
       {"method", "fix velocity against the position differences of consecutive fixes interpolated at t - tau, tau in -0.5..0.5 s; "
-                 "taken when the best RMS is at most 0.7x that at 0 and the position differences' noise is below half of it "
+                 "taken when the best RMS is at most 0.7x that at 0 and either the position differences' noise is below half of it "
+                 "or the best RMS is below a quarter of that noise (velocities differenced from these positions) "
                  "(identification/gnss_velocity_latency.hpp)"},
       {"option", option},
       {"used_s", used_s},

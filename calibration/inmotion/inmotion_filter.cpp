@@ -1,4 +1,5 @@
 #include "calibration/inmotion/inmotion_filter.hpp"
+#include "calibration/inmotion/obs_names.hpp"
 #include "calibration/inmotion/gauge.hpp"
 
 #include <algorithm>
@@ -567,8 +568,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       scale_navigation(P_, std::sqrt(hi));
       // The widening is no information: the unobservable rotation keeps its covariance (gauge.hpp).
       if (hold) restore_unobservable_rotation(P_, Nrot, S_rot);
-      static const char* tn[3] = {"position", "velocity", "attitude"};
-      recoveries_.push_back({r.t, std::string("lost track: ") + tn[type] + " rejected by the gate for " +
+      recoveries_.push_back({r.t, std::string("lost track: ") + obs_type_name(type) + " rejected by the gate for " +
                                       std::to_string(static_cast<int>(cfg_.gate_recover_s)) + " s",
                              "navigation covariance widened x" + factor_text(hi) + " until NIS = gate, epoch used"});
       PHt = pht<3>(H);
