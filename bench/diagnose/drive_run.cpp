@@ -28,7 +28,7 @@ DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun&
     a.qc = false;
     a.write_out = false;
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
-      x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
+      x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status), r.speed, r.turn_rate, r.accel});
     };
     const DriveResult r = fit_drive(a);
     if (r.effects) applied.insert(applied.end(), r.effects->applied.begin(), r.effects->applied.end());  // the terms applied

@@ -5,10 +5,12 @@
 #include <cmath>
 #include <sstream>
 #include <ctime>
+#include <functional>
 #include <limits>
 #include <map>
 
 #include "bench/diagnose/diagnose_text.hpp"
+#include "calibration/diagnosis/innovation_conditions.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/diagnose/finding_text.hpp"
 #include "bench/drive/fit_drive.hpp"
@@ -111,6 +113,51 @@ struct FilterRun {
   std::vector<InnovationSample> x[2];  // position, velocity
 };
 
+// Which of the logger's measured terms a run leaves out (the logger tests).
+struct LoggerOff {
+  bool timing = false, latency = false;
+  bool any() const { return timing || latency; }
+  int key() const { return (timing ? 1 : 0) + (latency ? 2 : 0); }
+};
+
+double deviance_of(const FilterRun& fr) { return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]); }
+
+// The logger's measured terms (issue 53 item 1) as candidates tested by the innovations: the base
+// filter against the same filter with the term off (Δχ², divided by the base run's overdispersion),
+// and where the innovations grow without any of them.
+void logger_tests(GnssDiagRun& run, const FilterRun& base, const std::function<const FilterRun&(const LoggerOff&)>& without) {
+  const nlohmann::json& ex = base.result.extra;
+  double phi = 1;
+  for (int k = 0; k < 2; ++k) phi = std::max(phi, innovation_overdispersion(innovation_stats(base.x[k], nullptr)));
+  run.conditions.phi_base = phi;
+  LoggerOff all;
+  auto test = [&](const char* name, const std::string& value, LoggerOff off) {
+    GnssLoggerTest t;
+    t.name = name;
+    t.value = value;
+    t.dchi2 = deviance_of(without(off)) - deviance_of(base);
+    t.dchi2_over_phi = t.dchi2 / phi;
+    t.confirmed = t.dchi2_over_phi >= DriveDiagnoseOptions{}.min_delta_chi2;
+    run.logger_tests.push_back(t);
+  };
+  if (ex.contains("sample_timing") && ex["sample_timing"].value("used_ms", 0.0) > 0) {
+    all.timing = true;
+    test("sample timing", fmt(ex["sample_timing"]["used_ms"].get<double>(), 3) + " ms", LoggerOff{true, false});
+  }
+  if (ex.contains("gnss_velocity_latency") && ex["gnss_velocity_latency"].value("used_s", 0.0) != 0) {
+    all.latency = true;
+    test("fix velocity latency", fmt(1e3 * ex["gnss_velocity_latency"]["used_s"].get<double>(), 3) + " ms", LoggerOff{false, true});
+  }
+  if (!all.any()) return;
+  const FilterRun& none = without(all);
+  for (int k = 0; k < 2; ++k) run.conditions.without_logger[k] = innovation_conditions(none.x[k]);
+  if (none.result.extra.contains("adaptive_noise")) {
+    run.conditions.without_scale_max = none.result.extra["adaptive_noise"].value("scale_max", 1.0);
+    run.conditions.without_scale_end = none.result.extra["adaptive_noise"].value("scale_end", 1.0);
+  }
+  run.conditions.logger_compared = true;
+}
+
 }  // namespace
 
 GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs, const std::string& device_class) {
@@ -145,10 +192,14 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     if (rows[idx[h]].profiled) profiled = static_cast<int>(h);
   std::map<std::pair<std::vector<int>, std::vector<double>>, FilterRun> runs;
   std::map<std::vector<int>, ProfileFit> profiles;  // per model with the profiled candidate
-  auto run_filter = [&](const std::vector<int>& model, const std::vector<double>& theta) -> const FilterRun& {
+  std::map<int, FilterRun> ablations;              // base model, logger terms off (LoggerOff::key)
+  // A filter run with the logger terms as measured (logger_off: none of the terms named off).
+  auto run_filter = [&](const std::vector<int>& model, const std::vector<double>& theta, const LoggerOff& logger_off = {}) -> const FilterRun& {
     const auto key = std::make_pair(model, theta);
-    const auto it = runs.find(key);
-    if (it != runs.end()) return it->second;
+    if (!logger_off.any()) {
+      const auto it = runs.find(key);
+      if (it != runs.end()) return it->second;
+    }
     FitDriveArgs a;
     a.dir = dir;
     a.aiding = "gnss";
@@ -157,6 +208,8 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     a.qc = false;
     a.write_out = false;
     a.outages.enabled = false;
+    if (logger_off.timing) a.sample_time = "off";
+    if (logger_off.latency) a.gnss_vel_latency = "off";
     if (coeffs) {
       a.coeffs = coeffs->file;
       a.coeffs_set = coeffs->set;
@@ -174,12 +227,12 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     }
     FilterRun fr;
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
-      if (type < 2) fr.x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status)});
+      if (type < 2) fr.x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status), r.speed, r.turn_rate, r.accel});
     };
     fr.result = fit_drive(a);
+    if (logger_off.any()) return ablations[logger_off.key()] = std::move(fr);
     return runs[key] = std::move(fr);
   };
-  auto deviance_of = [](const FilterRun& fr) { return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]); };
   // A model's run: with the profiled candidate at its profile's θ̂ when the model holds it.
   auto filter = [&](const std::vector<int>& model) -> const FilterRun& {
     if (profiled < 0 || std::find(model.begin(), model.end(), profiled) == model.end()) return run_filter(model, {});
@@ -205,6 +258,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
   run.rows = 3 * run.epochs;
   if (base.x[0].empty())
     throw InputError((std::filesystem::path(dir) / "gnss.csv").string(), 0, "", "the GNSS-aided filter took no fix: nothing to diagnose");
+  logger_tests(run, base, [&](const LoggerOff& off) -> const FilterRun& { return run_filter({}, {}, off); });
   DriveDiagnoseOptions opt;
   GreedyPolicy policy = diag::search_policy(opt);
   run.search = hypothesis_search(nparams, run.rows, policy, [&](const std::vector<int>& m) { return deviance_of(filter(m)); });
@@ -329,6 +383,8 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
   for (int k = 0; k < 2; ++k) {
     in.before[k] = innovation_stats(base.x[k], nullptr);
     in.after[k] = innovation_stats(fin.x[k], nullptr);
+    run.conditions.base[k] = innovation_conditions(base.x[k]);
+    run.conditions.final_model[k] = innovation_conditions(fin.x[k]);
   }
   run.cpu_s = in.cpu_s = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   return run;
@@ -384,6 +440,7 @@ nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run) {
                         {"sentence", innovation_sentence(k, run.innovations)}};
   j["innovations"] = inn;
   j["logger"] = run.logger;
+  j["conditions"] = gnss_conditions_json(run);
   return j;
 }
 
@@ -445,6 +502,7 @@ std::string gnss_diagnosis_text(const GnssDiagRun& run) {
     << ", " << fmt(run.cpu_s, 2) << " s CPU):\n";
   for (int k = 0; k < 2; ++k) o << "  " << innovation_sentence(k, run.innovations) << "\n";
   o << logger_sentence(run.logger);
+  o << gnss_conditions_text(run);
   return o.str();
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "bench/diagnose/drive_run.hpp"
+#include "calibration/diagnosis/innovation_conditions.hpp"
 
 namespace calbench {
 
@@ -26,6 +27,25 @@ struct GnssHypothesis {
   int nparams = 0;
   bool tested = true;          // false: not a candidate on this drive (why_not says why)
   std::string why_not;
+};
+
+// A term of the logger or receiver that fit drive measured (sample timing, fix velocity latency),
+// tested by the innovations: the base filter against the same filter without it.
+struct GnssLoggerTest {
+  std::string name, value;  // "sample timing", "1.99 ms"
+  double dchi2 = 0, dchi2_over_phi = 0;
+  bool confirmed = false;   // Δχ²/φ ≥ the finding threshold
+};
+
+// Where the innovations grow by motion condition (innovation_conditions.hpp), per observation type
+// (position, velocity): the base filter, the final model, and the base filter without the logger's
+// terms (logger_compared: some term was measured).
+struct GnssConditions {
+  std::vector<ConditionBreakdown> base[2], final_model[2], without_logger[2];
+  bool logger_compared = false;
+  double phi_base = 1;
+  // The adaptive noise scale the filter without the logger's terms reached, and ended at.
+  double without_scale_max = 1, without_scale_end = 1;
 };
 
 struct GnssDiagRun {
@@ -48,12 +68,18 @@ struct GnssDiagRun {
   // What the base filter's fit measured of the logger and receiver (issue 53: RESULT.json
   // sample_timing, gnss_velocity_latency; modelled in every run) and its adaptive noise scale.
   nlohmann::json logger;
+  std::vector<GnssLoggerTest> logger_tests;
+  GnssConditions conditions;
   double cpu_s = 0;
 };
 
 GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs, const std::string& device_class);
 nlohmann::json gnss_diagnosis_json(const GnssDiagRun& run);
 std::string gnss_diagnosis_text(const GnssDiagRun& run);
+// Where the innovations grow by motion condition, the logger's terms tested, what remains
+// (gnss_conditions.cpp).
+nlohmann::json gnss_conditions_json(const GnssDiagRun& run);
+std::string gnss_conditions_text(const GnssDiagRun& run);
 // One finding's sentence: what, value ± σ in display units, the Δχ² of the innovations (and Δχ²/φ,
 // the figure the threshold was applied to, when φ > 1), its status when not established.
 std::string gnss_finding_sentence(const DiagFinding& f, double phi);

@@ -27,6 +27,9 @@ struct InnovationSample {
   Mat3 S = Mat3::Identity();
   double nis = 0;
   int status = 0;  // 0 used, 1 rejected, 2 forced (inmotion::InnovationRecord::Status)
+  // The filter's motion at the epoch (inmotion::InnovationRecord): horizontal speed m/s, turn rate
+  // about the vertical rad/s, horizontal acceleration m/s² (innovation_conditions.hpp).
+  double speed = 0, turn_rate = 0, accel = 0;
 };
 
 struct InnovationWindow {

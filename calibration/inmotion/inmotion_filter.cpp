@@ -502,6 +502,9 @@ bool InMotionFilter::reference(const RefObs& r_in) {
   }
 
   const ObsContext c = obs_context();
+  const Vec3& v_nav = nav_.state().v;
+  const double speed = std::hypot(v_nav(0), v_nav(1)), turn = (nav_.state().C_nb() * w_last_)(2),
+               accel_h = std::hypot(a_last_(0), a_last_(1));
 
   Vec dx = Vec::Zero(N_);
   const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};
@@ -524,6 +527,9 @@ bool InMotionFilter::reference(const RefObs& r_in) {
     rec.S = HPHt + o.R;
     rec.nis = nis;
     rec.status = InnovationRecord::used;
+    rec.speed = speed;
+    rec.turn_rate = turn;
+    rec.accel = accel_h;
     if (in_bank_) {  // a heading hypothesis: its innovations' log-likelihood, and no adaptive noise
       // (a wrong heading would buy itself noise to explain its misfit)
       const double term = -0.5 * (nis + std::log(rec.S.determinant()));
@@ -536,10 +542,7 @@ bool InMotionFilter::reference(const RefObs& r_in) {
       const double cap = nis > cfg_.gate_nis ? cfg_.gate_nis / nis : 1.0;
       // (the trace of the product expression, Eigen's diagonal-only sums, as measured: HPHt.trace()
       // sums in another order and moves the walk's results at the last digit)
-      const Vec3& v = nav_.state().v;
-      const Vec3 w_n = nav_.state().C_nb() * w_last_;
-      adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace(),
-                                      std::hypot(v(0), v(1)), w_n(2), std::hypot(a_last_(0), a_last_(1))});
+      adapt_.add(type, AdaptiveSample{r.t, nis * cap, 3, nu.squaredNorm() * cap, o.R.trace(), (H * PHt).trace(), speed, turn, accel_h});
     }
     if (!(nis <= cfg_.gate_nis)) {
       if (st.rejected_since < 0) st.rejected_since = r.t;

@@ -210,6 +210,9 @@ struct InnovationRecord {
   Mat3 S = Mat3::Zero();
   double nis = 0;
   Status status = used;
+  // The motion at the epoch (for locating where innovations grow; issue 53 item 5): horizontal speed
+  // (m/s), turn rate about the vertical (rad/s), horizontal acceleration magnitude (m/s²).
+  double speed = 0, turn_rate = 0, accel = 0;
 };
 
 // True when some axis carries an exponential-cosine model: the layout then has the aux blocks.

@@ -29,6 +29,9 @@ m["mounting"]["lever_arm_m"] = [l[0] + 0.1, l[1] - 0.1, l[2]]
 json.dump(m, open(sys.argv[1], "w"), indent=2)
 PY
 sim scale 34 --inject scale_factor:sensor=accel,axis=x,value=2e-3
+# A polling logger (reads at 300 Hz, stamps at the read) and a receiver that differences its
+# positions into its velocity (issue 53): simulate drive's own code path (bench/drive/sim_logger.hpp).
+sim logger 35 --logger-read-hz 300 --gnss-velocity-from-positions
 
 "$CALBENCH" diagnose --help > "$T/help.txt"
 grep -q "GNSS-only" "$T/help.txt"
@@ -37,6 +40,7 @@ grep -q "GNSS-only" "$T/help.txt"
 "$CALBENCH" diagnose "$T/late" --json --out "$T/late_imp.json" > "$T/late.json"
 "$CALBENCH" diagnose "$T/lever" --json > "$T/lever.json"
 "$CALBENCH" diagnose "$T/scale" --coeffs "$T/scale/given.json" --json > "$T/scale.json"
+"$CALBENCH" diagnose "$T/logger" --json > "$T/logger.json"
 "$CALBENCH" diagnose "$T/late" > "$T/late.txt"
 grep -q "time offset" "$T/late.txt"
 python3 - "$T" <<'PY'
@@ -79,6 +83,23 @@ assert max(f["sigma"][:2]) < 0.02, f
 f = one("scale", "scale_factor")
 assert f["sensor"] == "accel" and f["axis"] == "x", f
 assert abs(f["value"] - 2e-3) <= 3 * f["sigma"] and f["sigma"] < 5e-4, f
+# Where the innovations grow (issue 53 item 5): the clean drive grows with no motion condition and
+# has no logger term to test; on the logger's drive the filter without the measured terms has velocity
+# innovations that grow with the motion, the fix velocity's latency is confirmed by the innovations,
+# and the final model's grow with nothing.
+def grows(b): return [c["condition"] for c in b if c["grows"]]
+for n in ("clean", "clean_c"):
+    c = load(n)["conditions"]
+    assert c["logger_tests"] == [] and "without_logger_terms" not in c["position"], c["logger_tests"]
+    for k in ("position", "velocity"):
+        assert grows(c[k]["base"]) == [] and grows(c[k]["final_model"]) == [], (n, k, c[k])
+        assert [x["condition"] for x in c[k]["base"]] == ["motion", "speed", "turn rate", "acceleration"], c[k]["base"]
+c = load("logger")["conditions"]
+t = {x["name"]: x for x in c["logger_tests"]}
+assert set(t) == {"sample timing", "fix velocity latency"}, t
+assert t["fix velocity latency"]["confirmed"] and t["fix velocity latency"]["delta_chi2_over_phi"] >= 40, t
+assert grows(c["velocity"]["without_logger_terms"]) != [], c["velocity"]["without_logger_terms"]
+assert grows(c["velocity"]["final_model"]) == [], c["velocity"]["final_model"]
 print("gnss-only: clean none; time offset", load("late")["findings"][0]["value"], "lever", load("lever")["findings"][0]["value"],
       "scale", load("scale")["findings"][0]["value"])
 PY
@@ -92,6 +113,21 @@ if [ -d "$W" ]; then
   # fit measures the logger's timing and the velocity's latency, issue 53, the antenna hypotheses are
   # withdrawn against that remainder: nothing is named).
   python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); assert j["search"]["overdispersion_phi"] > 1.5 and all(f["status"] == "partial" and not f["established"] for f in j["findings"]), j["findings"]' "$T/walk.json"
+  # Item 5: it names what issue 53 found on the walk: the logger's sample timing and the fix velocity's
+  # latency, each confirmed by the innovations against the same filter without it, and says where the
+  # innovations still grow.
+  python3 - "$T/walk.json" <<'PY'
+import json, sys
+c = json.load(open(sys.argv[1]))["conditions"]
+t = {x["name"]: x for x in c["logger_tests"]}
+assert set(t) == {"sample timing", "fix velocity latency"} and all(x["confirmed"] for x in t.values()), t
+assert all(x["delta_chi2_over_phi"] >= 40 for x in t.values()), t
+assert c["without_logger_terms_adaptive_scale"]["max"] > 10, c["without_logger_terms_adaptive_scale"]
+PY
+  "$CALBENCH" diagnose "$W" > "$T/walk.txt"
+  grep -q "^\* sample timing .* confirmed by the innovations" "$T/walk.txt"
+  grep -q "^\* fix velocity latency .* confirmed by the innovations" "$T/walk.txt"
+  grep -q "^what remains (final model): " "$T/walk.txt"
 fi
 
 # Bad input: exit 2 naming the file or option.
