@@ -192,7 +192,11 @@ void print_summary(const DriveResult& r, const std::string& out) {
               << st["distinct_rate_hz"].get<double>() << " distinct samples/s (" << st["repeated_rows"].get<long>()
               << " repeated reads); stamps " << std::setprecision(3) << st["sigma_ms"].get<double>()
               << " ms about the sensor's clock; the filter takes " << st["used_ms"].get<double>() << " ms ("
-              << st["source"].get<std::string>() << ")" << std::setprecision(6) << "\n";
+              << st["source"].get<std::string>() << ")";
+    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false))
+      std::cout << "; repeated reads dropped, stamps moved " << st["applied"]["stamps_moved_earlier_ms"].get<double>()
+                << " ms earlier (their mean lateness)";
+    std::cout << std::setprecision(6) << "\n";
   }
   if (j.contains("sample_timing") && !j["sample_timing"].value("scanned", false))
     std::cout << "  sample timing    not measured (--no-noise-scan): the filter takes " << j["sample_timing"]["used_ms"].get<double>()

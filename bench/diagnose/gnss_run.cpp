@@ -142,7 +142,12 @@ void logger_tests(GnssDiagRun& run, const FilterRun& base, const std::function<c
   };
   if (ex.contains("sample_timing") && ex["sample_timing"].value("used_ms", 0.0) > 0) {
     all.timing = true;
-    test("sample timing", fmt(ex["sample_timing"]["used_ms"].get<double>(), 3) + " ms", LoggerOff{true, false});
+    const nlohmann::json& st = ex["sample_timing"];
+    std::string v = fmt(st["used_ms"].get<double>(), 3) + " ms";
+    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false))
+      v += " (with it the second reads dropped and the stamps moved " + fmt(st["applied"].value("stamps_moved_earlier_ms", 0.0), 3) +
+           " ms earlier)";
+    test("sample timing", v, LoggerOff{true, false});
   }
   if (ex.contains("gnss_velocity_latency") && ex["gnss_velocity_latency"].value("used_s", 0.0) != 0) {
     all.latency = true;

@@ -106,10 +106,25 @@ bool DriveStream::next(Event& e) {
   } else {
     if (imu_done_) return false;
     ImuRecord r;
-    if (!imu_->next(r)) {
-      imu_done_ = true;
-      return next(e);
+    for (;;) {
+      if (!imu_->next(r)) {
+        imu_done_ = true;
+        return next(e);
+      }
+      // A second read of the sample already read: its interval joins the next distinct sample's.
+      if (drop_repeats_ && imu_->form() == ImuForm::rates && have_raw_ && r.gyro == raw_g_ && r.accel == raw_a_) {
+        skipped_dt_ += r.dt;
+        ++dropped_;
+        continue;
+      }
+      break;
     }
+    raw_g_ = r.gyro;
+    raw_a_ = r.accel;
+    have_raw_ = true;
+    r.dt += skipped_dt_;
+    skipped_dt_ = 0;
+    r.t -= lateness_;
     e.is_ref = false;
     e.t = r.t;
     e.dt = r.dt;
@@ -130,10 +145,10 @@ bool DriveStream::next(Event& e) {
       e.dv = ca_->increment(e.dv, r.dt);
     }
   }
-  // Time stamps moved by a time offset no longer fall on the reference epochs (which they
+  // Time stamps moved by a time offset (or the logger's lateness) no longer fall on the reference epochs (which they
   // typically do in a recording): split the interval that straddles the next epoch there,
   // increments in proportion, so that the epoch is compared at its own time as before.
-  if (comp_ && comp_->time_offset_s() != 0 && have_ref_ && e.dt > 0 && pending_.t > e.t - e.dt + 1e-9 &&
+  if (((comp_ && comp_->time_offset_s() != 0) || lateness_ != 0) && have_ref_ && e.dt > 0 && pending_.t > e.t - e.dt + 1e-9 &&
       pending_.t < e.t - 1e-9) {
     const double a = (pending_.t - (e.t - e.dt)) / e.dt;
     rest_ = e;

@@ -279,7 +279,7 @@ DeterminedBy determined_by(const inmotion::ParameterPriors& prior, const inmotio
 
 DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
-                       bool gnss, const nlohmann::json& unit);
+                       bool gnss, const nlohmann::json& unit, const LoggerCorrection& logger);
 
 // "--sample-time" / "--gnss-vel-latency": auto (the measured value), off (0), or milliseconds.
 double timing_option(const std::string& v, const char* opt, double measured) {
@@ -439,9 +439,16 @@ DriveResult fit_drive(const FitDriveArgs& a) {
   const identification::NoiseMeasurement& wn = scan.noise;
   cfg.noise = identification::apply_measured_noise(cls.cls.noise, wn);
   cfg.sample_time_sigma = timing_option(a.sample_time, "--sample-time", scan.scanned ? scan.timing.sigma_s : 0.0);
+  // A logger that stamps at the read: its second reads dropped and, where they show that it polls
+  // (more than 1 % of the rows), its stamps moved by their mean lateness: a polling logger is never
+  // early, while scatter without second reads may as well be symmetric. Unless --sample-time off;
+  // nothing for regular stamps, so a simulator's are untouched.
+  LoggerCorrection logger;
+  if (a.sample_time != "off" && scan.scanned && !scan.timing.regular)
+    logger = {true, scan.timing.polling() ? scan.timing.lateness_s : 0.0};
   nlohmann::json unit = {{"device_class", imu_class_json(cls)},
                          {"white_noise", white_noise_json(wn, a.measure_noise)},
-                         {"sample_timing", sample_timing_json(scan.timing, scan.scanned, cfg.sample_time_sigma, a.sample_time)}};
+                         {"sample_timing", sample_timing_json(scan.timing, scan.scanned, cfg.sample_time_sigma, a.sample_time, logger)}};
   if (gnss) {
     const identification::GnssVelocityLatency lat = scan_gnss_velocity_latency(dir);
     cfg.gnss_vel_latency_s = timing_option(a.gnss_vel_latency, "--gnss-vel-latency", lat.latency_s);
@@ -531,20 +538,21 @@ DriveResult fit_drive(const FitDriveArgs& a) {
     (s == 0 ? cfg.gyro_drift : cfg.accel_drift) = std::array<inmotion::DriftPrior, 3>{p, p, p};
     fx.drift[sn] = {{"sigma_si", p.sigma}, {"T_s", p.tau_s}};
   }
-  return run_fit(args, cfg, bench, t0, t1, models, fx, pc, gnss, unit);
+  return run_fit(args, cfg, bench, t0, t1, models, fx, pc, gnss, unit, logger);
 }
 
 namespace {
 
 DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, const std::optional<CoefficientSet>& bench,
                        double t0, double t1, const nlohmann::json& models, const InputEffects& fx, const PriorChoice& pc,
-                       bool gnss, const nlohmann::json& unit) {
+                       bool gnss, const nlohmann::json& unit, const LoggerCorrection& logger) {
   using namespace units;
   using Filter = inmotion::InMotionFilter;
   // The series columns of the layout this configuration gives (the filter builds the same one).
   const std::vector<std::string> columns = inmotion::column_names(inmotion::make_layout(cfg));
   DriveStream st(a.dir, bench ? std::optional<SensorErrors>(bench->errors) : std::nullopt, fx.present ? &fx.terms : nullptr,
                  gnss ? Aiding::gnss : Aiding::reference, a.shared_reference, /*digest=*/true);
+  st.set_logger_correction(logger);
   // The reference epochs the QC will need, kept as they pass (the QC then reads no reference.csv;
   // memory bounded by its horizon): from the first epoch of the window over the horizon (in-sample),
   // and around the end of a finite window over the horizon (out-of-sample), each up to and with the
@@ -875,6 +883,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
                  "drive, its state recorded at every fix";
     }
     OutageOptions oo = a.outages;
+    oo.logger = logger;
     if (oos) oo.request.earliest_s = t_last;
     std::optional<Vec3> before_mount;
     if (a.coeffs_mounting_deg) before_mount = a.coeffs_mounting_deg->first;

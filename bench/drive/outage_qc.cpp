@@ -73,9 +73,11 @@ struct OutageRun {
 // The start states carry the aided filter's time stamps (its input set's time offset, if any); a
 // group with another offset starts at the same state a few milliseconds of its own data apart.
 void outage_pass(const std::filesystem::path& dir, const std::vector<QcSet>& sets, const std::vector<std::size_t>& idx,
-                 const std::vector<OutageEpoch>& epochs, const qc::OutagePlan& plan, std::vector<OutageRun>& out) {
+                 const std::vector<OutageEpoch>& epochs, const qc::OutagePlan& plan, const LoggerCorrection& logger,
+                 std::vector<OutageRun>& out) {
   const EffectTerms shift = time_stamp_terms(sets[idx[0]].effects);
   DriveStream st(dir, std::nullopt, time_stamp_offset(shift) != 0 ? &shift : nullptr, Aiding::gnss);
+  st.set_logger_correction(logger);
   const Mat3 C_nom = st.nominal_mounting();
   const Vec3 lever = st.lever_arm();
   std::vector<std::optional<ImuEffectCompensator>> comp = qc_compensators(sets, idx);
@@ -142,7 +144,7 @@ nlohmann::json run_outage_qc(const std::filesystem::path& dir, const std::vector
   const qc::OutagePlan plan = qc::plan_outages(t, eligible, epochs.back().t, o.request);
   std::vector<OutageRun> runs(plan.outages.size(), OutageRun{std::vector<double>(sets.size(), 0.0), std::vector<double>(sets.size(), 0.0), 0, {}});
   if (!plan.outages.empty())
-    for (const auto& g : time_offset_groups(sets)) outage_pass(dir, sets, g, epochs, plan, runs);
+    for (const auto& g : time_offset_groups(sets)) outage_pass(dir, sets, g, epochs, plan, o.logger, runs);
 
   nlohmann::json j;
   j["sample"] = sample;

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/drive/drive_stream.hpp"
 #include "bench/drive/qc_drive.hpp"
 #include "calibration/inmotion/inmotion_filter.hpp"
 #include "calibration/qc/outage_plan.hpp"
@@ -27,6 +28,8 @@ struct OutageOptions {
   // The lengths were given (--outages): one longer than the drive is then bad input; the default
   // lengths that do not fit are listed as not placed.
   bool lengths_given = false;
+  // The logger's corrections the aided filter ran with (its states carry those stamps).
+  LoggerCorrection logger;
 };
 // --outages: "15,30,60" (seconds, each > 0, at most 3600) or "none". InputError naming the option.
 void parse_outage_lengths(const std::string& text, OutageOptions& o);

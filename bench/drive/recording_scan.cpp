@@ -43,12 +43,15 @@ identification::GnssVelocityLatency scan_gnss_velocity_latency(const fs::path& d
   return identification::measure_gnss_velocity_latency(fixes);
 }
 
-nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option) {
+nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option,
+                                  const LoggerCorrection& applied) {
   nlohmann::json j = {
       {"method", "rows repeating the previous row's six values are second reads; the distinct samples' stamps fitted by a line "
                  "over runs of 256 (the sensor's clock); sigma = median over the runs of the residuals' sigma (beyond 5 robust sigma left "
-                 "out); below 10 us: regular (0). Filter: process noise sigma^2 |dm|^2 per step on velocity and attitude "
-                 "(identification/sample_timing.hpp)"},
+                 "out); below 10 us: regular (0). Filter: process noise sigma^2 |dm|^2 per step on velocity and attitude. "
+                 "Lateness: the stamps' mean above their earliest (each run's 1st percentile of the residuals; median over the runs). "
+                 "Where the stamps are not regular (and not --sample-time off) the rows repeating the previous row are dropped "
+                 "and every stamp is moved earlier by the lateness (identification/sample_timing.hpp)"},
       {"scanned", scanned},
       {"option", option},
       {"used_ms", used_s * 1e3}};
@@ -58,9 +61,11 @@ nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool sc
     j["read_rate_hz"] = t.read_rate_hz;
     j["distinct_rate_hz"] = t.distinct_rate_hz;
     j["sigma_ms"] = t.sigma_s * 1e3;
+    j["lateness_ms"] = t.lateness_s * 1e3;
     j["runs"] = t.runs;
     j["regular"] = t.regular;
   }
+  j["applied"] = {{"dropped_repeated_rows", applied.drop_repeats}, {"stamps_moved_earlier_ms", applied.lateness_s * 1e3}};
   j["source"] = option != "auto" ? "--sample-time" : !scanned ? "none (--no-noise-scan)" : t.regular ? "measured: regular stamps (0)" : "measured";
   return j;
 }

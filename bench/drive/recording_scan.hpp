@@ -11,6 +11,7 @@
 
 #include "bench/io/recording.hpp"
 #include "calibration/identification/gnss_velocity_latency.hpp"
+#include "bench/drive/drive_stream.hpp"
 #include "calibration/identification/sample_timing.hpp"
 #include "calibration/identification/standstill_noise.hpp"
 
@@ -30,7 +31,8 @@ identification::GnssVelocityLatency scan_gnss_velocity_latency(const fs::path& d
 
 // RESULT.json "sample_timing" and "gnss_velocity_latency": the measurement, the rule, and what the
 // filter takes. `option` is the --sample-time / --gnss-vel-latency value ("auto" or seconds).
-nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option);
+nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option,
+                                  const LoggerCorrection& applied);
 nlohmann::json gnss_velocity_latency_json(const identification::GnssVelocityLatency& l, double used_s, const std::string& option);
 
 }  // namespace calbench

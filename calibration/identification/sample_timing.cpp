@@ -74,6 +74,13 @@ void SampleTimingEstimator::close_run() {
     for (double x : r)
       if (std::abs(x - med) <= cut) ss += (x - mean) * (x - mean);
     run_sigma_.push_back(m > 2 ? std::sqrt(ss / static_cast<double>(m - 2)) : 0.0);
+    // The earliest kept stamps: the 1st percentile of the kept residuals (at least the 2nd smallest).
+    scratch_m_.clear();
+    for (double x : r)
+      if (std::abs(x - med) <= cut) scratch_m_.push_back(x);
+    const std::size_t q = std::min(scratch_m_.size() - 1, std::max<std::size_t>(1, scratch_m_.size() / 100));
+    std::nth_element(scratch_m_.begin(), scratch_m_.begin() + static_cast<std::ptrdiff_t>(q), scratch_m_.end());
+    run_late_.push_back(mean - scratch_m_[q]);
   }
   run_.clear();
 }
@@ -91,6 +98,7 @@ SampleTiming SampleTimingEstimator::result() const {
   const double sigma = median_in_place(tail.run_sigma_);
   s.regular = !(sigma >= kFloorS);
   s.sigma_s = s.regular ? 0.0 : sigma;
+  s.lateness_s = s.regular ? 0.0 : std::max(0.0, median_in_place(tail.run_late_));
   return s;
 }
 

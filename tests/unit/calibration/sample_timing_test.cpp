@@ -40,6 +40,7 @@ TEST(SampleTiming, ALoggerPollingFasterThanTheSensor) {
   const double Ts = 1.0 / 100.5;
   double t = 0;
   long last = -1, distinct = 0, rows = 0;
+  double late = 0;  // the first reads' lateness after their sample, summed
   Vec3 w = Vec3::Zero(), f = Vec3::Zero();
   while (t < 120) {
     const long k = static_cast<long>(std::floor(t / Ts));
@@ -48,6 +49,7 @@ TEST(SampleTiming, ALoggerPollingFasterThanTheSensor) {
       f = sample(rng);
       last = k;
       ++distinct;
+      late += t - k * Ts;
     }
     e.add(t, w, f);
     ++rows;
@@ -60,6 +62,12 @@ TEST(SampleTiming, ALoggerPollingFasterThanTheSensor) {
   EXPECT_NEAR(r.distinct_rate_hz, 100.5, 0.5);
   EXPECT_GT(r.sigma_s, 1.3e-3);
   EXPECT_LT(r.sigma_s, 2.6e-3);
+  // The stamps' mean lateness above the earliest (about 3.4 ms: the mean residual life of the
+  // 6–9 ms read intervals), against the lateness this stream really had; the second reads show a
+  // polling logger.
+  EXPECT_TRUE(r.polling());
+  EXPECT_NEAR(r.lateness_s, late / static_cast<double>(distinct), 0.4e-3);
+  EXPECT_GT(r.lateness_s, 2.5e-3);
 }
 
 TEST(SampleTiming, JitteredStampsWithoutRepeats) {
@@ -71,6 +79,21 @@ TEST(SampleTiming, JitteredStampsWithoutRepeats) {
   const SampleTiming r = e.result();
   EXPECT_EQ(r.repeated, 0u);
   EXPECT_NEAR(r.sigma_s, 0.577e-3, 0.1e-3);
+  // Without second reads nothing says the scatter is a delay: not a polling logger (fit drive leaves
+  // the stamps where they are), whatever the spread above the earliest.
+  EXPECT_FALSE(r.polling());
+  EXPECT_NEAR(r.lateness_s, 1e-3, 0.1e-3);
+}
+
+TEST(SampleTiming, ConstantDelayIsNotLateness) {
+  // Every stamp 5 ms after the sensor's instant plus a ±0.2 ms scatter: a transport delay moves no
+  // stamp against another, so the lateness seen is the scatter's alone (0.4 ms above the earliest).
+  SampleTimingEstimator e;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-0.2e-3, 0.2e-3);
+  for (int k = 0; k < 30000; ++k) e.add(k * 0.01 + 5e-3 + u(rng), sample(rng), sample(rng));
+  const SampleTiming r = e.result();
+  EXPECT_LT(r.lateness_s, 0.25e-3);
 }
 
 // A walk round a circle of 3 m at 1.3 m/s with a ±0.4 m/s surge at 0.7 Hz, fixes at 4 Hz: the
