@@ -299,7 +299,10 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "sigma of the IMU stamps about the sensor's own clock (a logger stamps a sample when it reads it): "
                  "auto (default: measured from the recording's stamps and repeated reads in the noise scan; 0 for "
                  "regular stamps), off, or milliseconds. The filter adds process noise sigma^2 x (change of rate)^2 per "
-                 "step: nothing at rest, large in shaky motion (docs/in-motion.md, \"Real loggers\")")
+                 "step: nothing at rest, large in shaky motion. Where the stamps are not regular the rows are also "
+                 "corrected (not with off): second reads dropped and, when they show a polling logger, every stamp moved "
+                 "earlier by the stamps' measured mean lateness (RESULT.json sample_timing.applied; docs/in-motion.md, "
+                 "\"Real loggers\")")
       ->check(non_empty());
   d->add_option("--gnss-vel-latency", a->gnss_vel_latency,
                  "GNSS aiding: how long before its stamp a fix's velocity describes the motion: auto (default: measured "
