@@ -190,12 +190,11 @@ void print_summary(const DriveResult& r, const std::string& out) {
     const auto& st = j["sample_timing"];
     std::cout << "  sample timing    " << std::setprecision(4) << st["read_rate_hz"].get<double>() << " rows/s, "
               << st["distinct_rate_hz"].get<double>() << " distinct samples/s (" << st["repeated_rows"].get<long>()
-              << " repeated reads); stamps " << std::setprecision(3) << st["sigma_ms"].get<double>()
+              << " repeated reads); stamp scatter sigma " << std::setprecision(3) << st["sigma_ms"].get<double>()
               << " ms about the sensor's clock; the filter takes " << st["used_ms"].get<double>() << " ms ("
               << st["source"].get<std::string>() << ")";
     if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false))
-      std::cout << "; repeated reads dropped, stamps moved " << st["applied"]["stamps_moved_earlier_ms"].get<double>()
-                << " ms earlier (their mean lateness)";
+      std::cout << "; " << st["applied"].value("rows_dropped", 0L) << " repeated reads dropped";
     std::cout << std::setprecision(6) << "\n";
   }
   if (j.contains("sample_timing") && !j["sample_timing"].value("scanned", false))
@@ -299,10 +298,9 @@ const bool registered = add_command(31, [](CLI::App& app) {
                  "sigma of the IMU stamps about the sensor's own clock (a logger stamps a sample when it reads it): "
                  "auto (default: measured from the recording's stamps and repeated reads in the noise scan; 0 for "
                  "regular stamps), off, or milliseconds. The filter adds process noise sigma^2 x (change of rate)^2 per "
-                 "step: nothing at rest, large in shaky motion. Where the stamps are not regular the rows are also "
-                 "corrected (not with off): second reads dropped and, when they show a polling logger, every stamp moved "
-                 "earlier by the stamps' measured mean lateness (RESULT.json sample_timing.applied; docs/in-motion.md, "
-                 "\"Real loggers\")")
+                 "step: nothing at rest, large in shaky motion. Where the stamps are not regular the rows repeating the "
+                 "previous one are also dropped as second reads (not with off; RESULT.json sample_timing.applied; "
+                 "docs/in-motion.md, \"Real loggers\")")
       ->check(non_empty());
   d->add_option("--gnss-vel-latency", a->gnss_vel_latency,
                  "GNSS aiding: how long before its stamp a fix's velocity describes the motion: auto (default: measured "

@@ -10,6 +10,7 @@
 #include "bench/cli/outage_options.hpp"
 #include "bench/drive/fit_drive.hpp"
 #include "bench/drive/qc_drive.hpp"
+#include "bench/drive/recording_scan.hpp"
 #include "common/input_error.hpp"
 #include "calibration/effects/effect_compensation.hpp"
 
@@ -49,7 +50,9 @@ void run_outages(const QcArgs& a, const std::vector<QcSet>& sets, std::optional<
   f.coeffs = a.coeffs.front() == "none" ? std::string() : a.coeffs.front();
   OutageRecorder rec;
   f.on_epoch = [&rec](const inmotion::InMotionFilter& g, const inmotion::RefObs& r, bool took) { rec.epoch(g, r, took); };
-  fit_drive(f);
+  const DriveResult fitted = fit_drive(f);
+  // The outages navigate the rows as the aided filter read them (the logger's correction, if any).
+  if (fitted.extra.contains("sample_timing")) o.logger = applied_logger_correction(fitted.extra["sample_timing"]);
   const std::string aided_by = "fit drive's GNSS filter over the whole recording with the first --coeffs set (" +
                                a.coeffs.front() + ") as its input, its state recorded at every fix";
   const std::string smp = from ? sample : "in-sample unless the sets were fitted on other data (outages over the whole drive)";

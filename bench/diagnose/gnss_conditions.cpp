@@ -1,6 +1,7 @@
 // `calbench diagnose` on a GNSS-only drive: where the innovations grow by motion condition, the
 // logger's measured terms tested against them, and what remains (issue 53 item 5; JSON and text).
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "bench/diagnose/finding_text.hpp"
@@ -40,8 +41,8 @@ nlohmann::json breakdown_json(const std::vector<ConditionBreakdown>& v) {
   return a;
 }
 
-// "moving 1.1 (230), standstill 0.41 (40), start of motion 2.3 (25); speed 0.2–0.9|0.9–1.2|1.2–1.6 m/s
-// 1 / 1.2 / 1.4; …"
+// "moving 1.1 (230), standstill 0.41 (40), start of motion 2.3 (25); speed (m/s) 0.20–0.90: 1.0,
+// 0.90–1.20: 1.2, 1.20–1.60: 1.4; …" (NIS/dof, epochs in parentheses; the ranges fixed-point).
 std::string breakdown_line(const std::vector<ConditionBreakdown>& v) {
   std::ostringstream o;
   for (std::size_t i = 0; i < v.size(); ++i) {
@@ -52,11 +53,13 @@ std::string breakdown_line(const std::vector<ConditionBreakdown>& v) {
         o << (k ? ", " : "") << c.bins[k].label << " " << fmt(c.bins[k].nis_per_dof, 2) << " (" << c.bins[k].epochs << ")";
       continue;
     }
-    o << c.condition << " ";
-    for (std::size_t k = 0; k < c.bins.size(); ++k)
-      o << (k ? "|" : "") << fmt(display(c, c.bins[k].lo), 2) << "–" << fmt(display(c, c.bins[k].hi), 2);
-    o << " " << unit(c) << " ";
-    for (std::size_t k = 0; k < c.bins.size(); ++k) o << (k ? " / " : "") << fmt(c.bins[k].nis_per_dof, 2);
+    const int decimals = c.condition == "turn rate" ? 1 : 2;
+    char buf[64];
+    o << c.condition << " (" << unit(c) << ")";
+    for (std::size_t k = 0; k < c.bins.size(); ++k) {
+      std::snprintf(buf, sizeof buf, "%s %.*f–%.*f: ", k ? "," : "", decimals, display(c, c.bins[k].lo), decimals, display(c, c.bins[k].hi));
+      o << buf << fmt(c.bins[k].nis_per_dof, 2);
+    }
   }
   return o.str();
 }
@@ -80,7 +83,8 @@ nlohmann::json gnss_conditions_json(const GnssDiagRun& run) {
   }
   nlohmann::json tests = nlohmann::json::array();
   for (const GnssLoggerTest& t : run.logger_tests)
-    tests.push_back({{"name", t.name}, {"value", t.value}, {"delta_chi2", t.dchi2}, {"overdispersion_phi", run.conditions.phi_base},
+    tests.push_back({{"name", t.name}, {"value", t.value}, {"value_ms", t.value_ms}, {"epochs_compared", t.epochs_compared},
+                     {"delta_chi2", t.dchi2}, {"overdispersion_phi", run.conditions.phi_base},
                      {"delta_chi2_over_phi", t.dchi2_over_phi}, {"confirmed", t.confirmed}});
   j["logger_tests"] = tests;
   if (run.conditions.logger_compared)
@@ -91,19 +95,21 @@ nlohmann::json gnss_conditions_json(const GnssDiagRun& run) {
 std::string gnss_conditions_text(const GnssDiagRun& run) {
   const GnssConditions& c = run.conditions;
   std::ostringstream o;
-  o << "where the innovations grow (NIS/dof by motion condition, epochs in brackets; the base filter):\n";
+  o << "where the innovations grow (NIS/dof by motion condition, epochs in parentheses; the base filter):\n";
   for (int k = 0; k < 2; ++k)
     o << "  " << inmotion::obs_type_name(k) << ": " << breakdown_line(c.base[k]) << " — " << grows_text(c.base[k]) << "\n";
   if (c.logger_compared)
     o << "  without the logger's measured terms: position " << grows_text(c.without_logger[0]) << "; velocity "
-      << grows_text(c.without_logger[1]) << "; the navigation noise scaled up to x" << fmt(c.without_scale_max, 3) << ", x"
-      << fmt(c.without_scale_end, 3) << " at the end\n";
+      << grows_text(c.without_logger[1]) << "; there the navigation-noise variance rose to x" << fmt(c.without_scale_max, 3)
+      << " (x" << fmt(c.without_scale_end, 3) << " at the end)" << (c.without_scale_max > 10 ? " and absorbed much of the misfit" : "")
+      << "\n";
   if (!run.logger_tests.empty()) {
     o << "logger physics tested against that (Δχ² of the base filter against the same filter without the term, /φ "
       << fmt(c.phi_base, 3) << "; confirmed at ≥ " << fmt(DriveDiagnoseOptions{}.min_delta_chi2) << "):\n";
     for (const GnssLoggerTest& t : run.logger_tests)
-      o << (t.confirmed ? "* " : "- ") << t.name << " " << t.value << ": Δχ² " << fmt(t.dchi2) << " (" << fmt(t.dchi2_over_phi)
-        << " /φ) — " << (t.confirmed ? "confirmed by the innovations" : t.dchi2 < 0 ? "the innovations fit better without it" : "not confirmed by the innovations")
+      o << (t.confirmed ? "* " : "- ") << t.name << " " << t.value << ": Δχ² " << fmt(t.dchi2) << ", Δχ²/φ " << fmt(t.dchi2_over_phi)
+        << " over the " << t.epochs_compared << " epochs both runs have — "
+        << (t.confirmed ? "confirmed by the innovations" : t.dchi2 < 0 ? "the innovations fit better without it" : "not confirmed by the innovations")
         << "\n";
   } else {
     o << "logger physics: the stamps are regular and the fix velocity is taken at its stamp: nothing of the logger to test\n";

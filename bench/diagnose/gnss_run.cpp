@@ -131,11 +131,19 @@ void logger_tests(GnssDiagRun& run, const FilterRun& base, const std::function<c
   for (int k = 0; k < 2; ++k) phi = std::max(phi, innovation_overdispersion(innovation_stats(base.x[k], nullptr)));
   run.conditions.phi_base = phi;
   LoggerOff all;
-  auto test = [&](const char* name, const std::string& value, LoggerOff off) {
+  auto test = [&](const char* name, const std::string& value, double value_ms, LoggerOff off) {
     GnssLoggerTest t;
     t.name = name;
     t.value = value;
-    t.dchi2 = deviance_of(without(off)) - deviance_of(base);
+    t.value_ms = value_ms;
+    // Over the epochs both runs have: without a term the heading may be chosen at another time.
+    const FilterRun& w = without(off);
+    for (int k = 0; k < 2; ++k) {
+      long n = 0;
+      const auto [d_without, d_base] = paired_deviance(w.x[k], base.x[k], &n);
+      t.dchi2 += d_without - d_base;
+      t.epochs_compared += n;
+    }
     t.dchi2_over_phi = t.dchi2 / phi;
     t.confirmed = t.dchi2_over_phi >= DriveDiagnoseOptions{}.min_delta_chi2;
     run.logger_tests.push_back(t);
@@ -143,15 +151,15 @@ void logger_tests(GnssDiagRun& run, const FilterRun& base, const std::function<c
   if (ex.contains("sample_timing") && ex["sample_timing"].value("used_ms", 0.0) > 0) {
     all.timing = true;
     const nlohmann::json& st = ex["sample_timing"];
-    std::string v = fmt(st["used_ms"].get<double>(), 3) + " ms";
-    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false))
-      v += " (with it the second reads dropped and the stamps moved " + fmt(st["applied"].value("stamps_moved_earlier_ms", 0.0), 3) +
-           " ms earlier)";
-    test("sample timing", v, LoggerOff{true, false});
+    const double sigma_ms = st["used_ms"].get<double>();
+    std::string v = "(stamp scatter σ " + fmt(sigma_ms, 3) + " ms";
+    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false)) v += "; with it the second reads dropped";
+    test("sample timing", v + ")", sigma_ms, LoggerOff{true, false});
   }
   if (ex.contains("gnss_velocity_latency") && ex["gnss_velocity_latency"].value("used_s", 0.0) != 0) {
     all.latency = true;
-    test("fix velocity latency", fmt(1e3 * ex["gnss_velocity_latency"]["used_s"].get<double>(), 3) + " ms", LoggerOff{false, true});
+    const double ms = 1e3 * ex["gnss_velocity_latency"]["used_s"].get<double>();
+    test("fix velocity latency", "(" + fmt(ms, 3) + " ms)", ms, LoggerOff{false, true});
   }
   if (!all.any()) return;
   const FilterRun& none = without(all);
@@ -204,6 +212,9 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     if (!logger_off.any()) {
       const auto it = runs.find(key);
       if (it != runs.end()) return it->second;
+    } else {
+      const auto it = ablations.find(logger_off.key());
+      if (it != ablations.end()) return it->second;
     }
     FitDriveArgs a;
     a.dir = dir;
@@ -283,10 +294,15 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
       if (run.search.steps[k].dchi2_final < run.search.steps[weakest].dchi2_final) weakest = k;
     if (run.search.steps[weakest].dchi2_final / run.phi >= policy.min_delta_chi2) break;
     run.overdispersed.push_back(run.search.steps[weakest]);
+    run.overdispersed_phi.push_back(run.phi);
     run.search.model.erase(run.search.model.begin() + static_cast<long>(weakest));
     run.search.steps.erase(run.search.steps.begin() + static_cast<long>(weakest));
   }
   const FilterRun& fin = filter(final_model);
+  // φ of the final model: when every candidate was withdrawn, that is the base filter's (not the φ of
+  // the last model the withdrawal was judged in).
+  run.phi = std::max(innovation_overdispersion(innovation_stats(fin.x[0], nullptr)),
+                     innovation_overdispersion(innovation_stats(fin.x[1], nullptr)));
 
   // Findings: the final model's estimates, with the Δχ² that accepted each.
   run.improved = run.current;
@@ -366,11 +382,13 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     }
   }
   for (const auto& [list, why] : {std::pair{&run.search.withdrawn, WithdrawnWhy::weak}, std::pair{&run.overdispersed, WithdrawnWhy::overdispersed}})
-    for (const HypothesisStep& w : *list) {
+    for (std::size_t i = 0; i < list->size(); ++i) {
+      const HypothesisStep& w = (*list)[i];
       DiagWithdrawn x;
       x.term = rows[idx[w.candidate]].term;
       x.delta_chi2_when_accepted = w.dchi2;
-      x.delta_chi2_final = why == WithdrawnWhy::overdispersed ? w.dchi2_final / run.phi : w.dchi2_final;
+      // an overdispersed one: against the φ of the model it was judged in
+      x.delta_chi2_final = why == WithdrawnWhy::overdispersed ? w.dchi2_final / run.overdispersed_phi[i] : w.dchi2_final;
       x.why = why;
       r.withdrawn.push_back(x);
     }
@@ -455,9 +473,11 @@ std::string logger_sentence(const nlohmann::json& l) {
   std::ostringstream o;
   if (l.contains("sample_timing") && l["sample_timing"].value("scanned", false)) {
     const auto& st = l["sample_timing"];
-    o << "logger (measured, modelled in every run): IMU stamps " << fmt(st["sigma_ms"].get<double>(), 3)
+    o << "logger (measured, modelled in every run): IMU stamp scatter σ " << fmt(st["sigma_ms"].get<double>(), 3)
       << " ms about the sensor's clock (" << st["repeated_rows"].get<long>() << " of " << st["rows"].get<long>()
-      << " rows repeated reads)";
+      << " rows repeated reads";
+    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false)) o << ", dropped";
+    o << ")";
     if (l.contains("gnss_velocity_latency")) {
       const auto& g = l["gnss_velocity_latency"];
       o << "; the fix velocity " << fmt(1e3 * g["used_s"].get<double>(), 3) << " ms late ("

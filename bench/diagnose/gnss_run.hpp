@@ -32,7 +32,9 @@ struct GnssHypothesis {
 // A term of the logger or receiver that fit drive measured (sample timing, fix velocity latency),
 // tested by the innovations: the base filter against the same filter without it.
 struct GnssLoggerTest {
-  std::string name, value;  // "sample timing", "1.99 ms"
+  std::string name, value;  // "sample timing", "(stamp scatter σ 1.99 ms; …)"
+  double value_ms = 0;      // the stamps' σ, or the velocity's latency
+  long epochs_compared = 0; // innovation epochs both runs have (the Δχ² is over these)
   double dchi2 = 0, dchi2_over_phi = 0;
   bool confirmed = false;   // Δχ²/φ ≥ the finding threshold
 };
@@ -55,13 +57,14 @@ struct GnssDiagRun {
   CoefficientSet current, improved;
   std::vector<GnssHypothesis> hypotheses;
   HypothesisSearchResult search;
-  double phi = 1;                           // overdispersion of the final model's innovations
+  double phi = 1;                           // overdispersion of the final model's innovations (after the withdrawals)
   // Issue 36's rule on the remainder: the final model's innovations read as noise up to φ 1.5; beyond,
   // every finding is "partial" (it raised the likelihood past the threshold, Δχ²/φ ≥ 40, but a
   // model error the candidates do not cover remains, and the filter's σ do not include it).
   static constexpr double kNoisePhi = 1.5;
   bool remainder_is_noise() const { return phi <= kNoisePhi; }
   std::vector<HypothesisStep> overdispersed;  // accepted, then withdrawn: Δχ²/φ below the threshold
+  std::vector<double> overdispersed_phi;      // the φ each was judged against (of the model that held it)
   long epochs = 0, rows = 0;   // innovation epochs (position + velocity) and scalar observations
   DiagnoseResult core;         // findings, withdrawn, improved_terms (the drive's JSON schema)
   DriveInnovations innovations;  // before: the base filter; after: the final model's

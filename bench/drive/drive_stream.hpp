@@ -39,8 +39,7 @@ std::shared_ptr<const SharedReference> load_shared_reference(const fs::path& fil
 // What fit drive corrects of the logger before the filter sees the rows (DriveStream::
 // set_logger_correction; measured by identification::SampleTimingEstimator).
 struct LoggerCorrection {
-  bool drop_repeats = false;
-  double lateness_s = 0;
+  bool drop_repeats = false;  // rows repeating the previous row's six rates are second reads
 };
 
 class DriveStream {
@@ -70,15 +69,11 @@ class DriveStream {
   const DriveRefRow* last_reference_row() const { return have_row_ && !gnss_ ? &row_out_ : nullptr; }
   // The gnss.csv row of the fix last returned (nullptr: reference aiding, or none yet).
   const GnssRow* last_gnss_row() const { return have_row_ && gnss_ ? &gnss_out_ : nullptr; }
-  // The logger's corrections (identification/sample_timing.hpp; issue 53): rows that repeat the
+  // The logger's correction (identification/sample_timing.hpp; issue 53): rows that repeat the
   // previous row's six rates are second reads of one sample and are dropped (their interval joins the
-  // next distinct sample's, so the trapezoid runs between distinct samples), and every IMU stamp is
-  // moved `lateness_s` earlier (the stamps' mean lateness above the earliest ones). Call before the
-  // first next(); rates recordings only (increments are summed as they come).
-  void set_logger_correction(const LoggerCorrection& c) {
-    drop_repeats_ = c.drop_repeats;
-    lateness_ = c.lateness_s;
-  }
+  // next distinct sample's, so the trapezoid runs between distinct samples). Call before the first
+  // next(); rates recordings only (increments are summed as they come).
+  void set_logger_correction(const LoggerCorrection& c) { drop_repeats_ = c.drop_repeats; }
   long dropped_repeats() const { return dropped_; }
   std::optional<std::string> imu_sha256() const { return imu_->sha256(); }
   std::optional<std::string> aiding_sha256() const;
@@ -106,7 +101,7 @@ class DriveStream {
   bool read_epoch();
   double last_imu_t_ = -1e300;
   bool drop_repeats_ = false, have_raw_ = false;
-  double lateness_ = 0, skipped_dt_ = 0;
+  double skipped_dt_ = 0;
   long dropped_ = 0;
   Vec3 raw_g_ = Vec3::Zero(), raw_a_ = Vec3::Zero();  // the last distinct row as read
 };

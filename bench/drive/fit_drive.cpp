@@ -439,13 +439,14 @@ DriveResult fit_drive(const FitDriveArgs& a) {
   const identification::NoiseMeasurement& wn = scan.noise;
   cfg.noise = identification::apply_measured_noise(cls.cls.noise, wn);
   cfg.sample_time_sigma = timing_option(a.sample_time, "--sample-time", scan.scanned ? scan.timing.sigma_s : 0.0);
-  // A logger that stamps at the read: its second reads dropped and, where they show that it polls
-  // (more than 1 % of the rows), its stamps moved by their mean lateness: a polling logger is never
-  // early, while scatter without second reads may as well be symmetric. Unless --sample-time off;
-  // nothing for regular stamps, so a simulator's are untouched.
+  // A logger that stamps at the read: its second reads are dropped (they repeat a sample already
+  // read). Its stamps are left where they are: moving them by their measured mean lateness made the
+  // innovations' likelihood lower on each of four simulated polling loggers (the lateness is
+  // reported, not applied; docs/validation/inmotion-real-walk-cause.md). Not with --sample-time off,
+  // nor for regular stamps (a simulator's are untouched) or increments (two equal increments are
+  // two samples).
   LoggerCorrection logger;
-  if (a.sample_time != "off" && scan.scanned && !scan.timing.regular)
-    logger = {true, scan.timing.polling() ? scan.timing.lateness_s : 0.0};
+  logger.drop_repeats = a.sample_time != "off" && scan.scanned && scan.rates && !scan.timing.regular;
   nlohmann::json unit = {{"device_class", imu_class_json(cls)},
                          {"white_noise", white_noise_json(wn, a.measure_noise)},
                          {"sample_timing", sample_timing_json(scan.timing, scan.scanned, cfg.sample_time_sigma, a.sample_time, logger)}};
@@ -707,6 +708,7 @@ DriveResult run_fit(const FitDriveArgs& a, const inmotion::InMotionConfig& cfg, 
   j["device_class"] = unit["device_class"];
   j["white_noise"] = unit["white_noise"];
   j["sample_timing"] = unit["sample_timing"];
+  j["sample_timing"]["applied"]["rows_dropped"] = st.dropped_repeats();  // as the filter's pass read them
   if (unit.contains("gnss_velocity_latency")) j["gnss_velocity_latency"] = unit["gnss_velocity_latency"];
   r.reference_system = describe_reference(dir, meta, a, cfg, gnss, aiding_stats);
   r.window_s = std::make_pair(t_first, t_last);

@@ -22,6 +22,7 @@ RecordingScan scan_recording(const fs::path& dir, const RecordingMeta& meta, con
   out.noise = identification::measure_white_noise(det.standstills(), cls);
   out.timing = timing.result();
   out.scanned = true;
+  out.rates = !inc;
   return out;
 }
 
@@ -43,15 +44,23 @@ identification::GnssVelocityLatency scan_gnss_velocity_latency(const fs::path& d
   return identification::measure_gnss_velocity_latency(fixes);
 }
 
+LoggerCorrection applied_logger_correction(const nlohmann::json& st) {
+  LoggerCorrection c;
+  if (!st.is_object() || !st.contains("applied")) return c;
+  const nlohmann::json& a = st["applied"];
+  c.drop_repeats = a.value("dropped_repeated_rows", false);
+  return c;
+}
+
 nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option,
                                   const LoggerCorrection& applied) {
   nlohmann::json j = {
       {"method", "rows repeating the previous row's six values are second reads; the distinct samples' stamps fitted by a line "
                  "over runs of 256 (the sensor's clock); sigma = median over the runs of the residuals' sigma (beyond 5 robust sigma left "
                  "out); below 10 us: regular (0). Filter: process noise sigma^2 |dm|^2 per step on velocity and attitude. "
-                 "Lateness: the stamps' mean above their earliest (each run's 1st percentile of the residuals; median over the runs). "
-                 "Where the stamps are not regular (and not --sample-time off) the rows repeating the previous row are dropped "
-                 "and every stamp is moved earlier by the lateness (identification/sample_timing.hpp)"},
+                 "Lateness: the stamps' mean above their earliest (each run's 1st percentile of the residuals; median over the runs), "
+                 "reported, not applied. Where the stamps are not regular (and not --sample-time off) the rows repeating the "
+                 "previous row are dropped as second reads (identification/sample_timing.hpp)"},
       {"scanned", scanned},
       {"option", option},
       {"used_ms", used_s * 1e3}};
@@ -62,10 +71,11 @@ nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool sc
     j["distinct_rate_hz"] = t.distinct_rate_hz;
     j["sigma_ms"] = t.sigma_s * 1e3;
     j["lateness_ms"] = t.lateness_s * 1e3;
+    j["polling"] = t.polling();
     j["runs"] = t.runs;
     j["regular"] = t.regular;
   }
-  j["applied"] = {{"dropped_repeated_rows", applied.drop_repeats}, {"stamps_moved_earlier_ms", applied.lateness_s * 1e3}};
+  j["applied"] = {{"dropped_repeated_rows", applied.drop_repeats}};
   j["source"] = option != "auto" ? "--sample-time" : !scanned ? "none (--no-noise-scan)" : t.regular ? "measured: regular stamps (0)" : "measured";
   return j;
 }

@@ -20,6 +20,9 @@ namespace calbench {
 struct RecordingScan {
   identification::NoiseMeasurement noise;
   identification::SampleTiming timing;
+  // imu.csv holds rates (not increments): a row repeating the previous one can be a second read
+  // only then (two equal increments at rest are two samples).
+  bool rates = true;
   bool scanned = false;
 };
 
@@ -31,6 +34,9 @@ identification::GnssVelocityLatency scan_gnss_velocity_latency(const fs::path& d
 
 // RESULT.json "sample_timing" and "gnss_velocity_latency": the measurement, the rule, and what the
 // filter takes. `option` is the --sample-time / --gnss-vel-latency value ("auto" or seconds).
+// The correction a fit applied, read back from its RESULT.json `sample_timing` (for a QC that
+// navigates the same rows from the fit's states: `calbench qc --outages`).
+LoggerCorrection applied_logger_correction(const nlohmann::json& sample_timing);
 nlohmann::json sample_timing_json(const identification::SampleTiming& t, bool scanned, double used_s, const std::string& option,
                                   const LoggerCorrection& applied);
 nlohmann::json gnss_velocity_latency_json(const identification::GnssVelocityLatency& l, double used_s, const std::string& option);

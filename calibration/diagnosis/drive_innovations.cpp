@@ -183,6 +183,37 @@ double innovation_deviance(const std::vector<InnovationSample>& x) {
   return d;
 }
 
+namespace {
+bool deviance_term(const InnovationSample& e, double& term) {
+  if (!std::isfinite(e.nis)) return false;
+  const double det = e.S.determinant();
+  if (!(det > 0)) return false;
+  term = e.nis + std::log(det);
+  return true;
+}
+}  // namespace
+
+std::pair<double, double> paired_deviance(const std::vector<InnovationSample>& a, const std::vector<InnovationSample>& b,
+                                          long* shared) {
+  std::pair<double, double> d{0, 0};
+  long n = 0;
+  std::size_t j = 0;
+  for (const InnovationSample& x : a) {
+    while (j < b.size() && b[j].t < x.t - 1e-6) ++j;
+    if (j == b.size()) break;
+    if (std::abs(b[j].t - x.t) > 1e-6) continue;
+    double ta = 0, tb = 0;
+    if (deviance_term(x, ta) && deviance_term(b[j], tb)) {
+      d.first += ta;
+      d.second += tb;
+      ++n;
+    }
+    ++j;
+  }
+  if (shared) *shared = n;
+  return d;
+}
+
 HypothesisSearchResult hypothesis_search(const std::vector<int>& nparams, long rows, const GreedyPolicy& policy,
                                          const std::function<double(const std::vector<int>&)>& deviance) {
   HypothesisSearchResult out;

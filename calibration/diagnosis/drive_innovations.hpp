@@ -59,6 +59,11 @@ InnovationStats innovation_stats(const std::vector<InnovationSample>& x, const D
 // epochs with a finite NIS, the gated ones included, so that two filter runs over the same fixes are
 // compared over the same epochs (a run that gates an epoch pays for it).
 double innovation_deviance(const std::vector<InnovationSample>& x);
+// The same for two runs over the epochs both have (matched by time to 1 µs; each in time order):
+// runs whose filters started at different times (a heading chosen later) or took different fixes
+// are compared on what they share. shared: the number of such epochs.
+std::pair<double, double> paired_deviance(const std::vector<InnovationSample>& a, const std::vector<InnovationSample>& b,
+                                          long* shared = nullptr);
 
 // The evidence of a drive without a reference INS (GNSS-only, docs/diagnosis.md "GNSS-only
 // drives"): no predicted MEMS output exists without a reference attitude, so each candidate effect

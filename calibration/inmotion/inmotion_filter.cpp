@@ -260,6 +260,8 @@ void InMotionFilter::imu(double t, const Vec3& dth_raw, const Vec3& dv_raw, doub
   nav_.update(dth, dv, dt);
   w_last_ = dth / dt;
   a_last_ = (nav_.state().v - v0) / dt;
+  motion_yaw_ += (C0 * dth)(2);  // for the epoch's mean turn rate (reporting only)
+  motion_T_ += dt;
   if (cfg_.gnss_vel_latency_s != 0) vel_hist_.push(t, nav_.state().v - v0);
   acc_.add(layout_, C0, corr_, w_last_, dv / dt, dt);  // each block's part of the transition (BlockSpec::accumulate)
   nav_.state().t = t;
@@ -502,9 +504,19 @@ bool InMotionFilter::reference(const RefObs& r_in) {
   }
 
   const ObsContext c = obs_context();
+  // The motion since the previous epoch (reporting only: where innovations grow): mean turn rate
+  // about the vertical and mean horizontal acceleration over the interval, not one IMU step's (a
+  // handheld unit's step would sort by its vibration), and the speed now.
   const Vec3& v_nav = nav_.state().v;
-  const double speed = std::hypot(v_nav(0), v_nav(1)), turn = (nav_.state().C_nb() * w_last_)(2),
-               accel_h = std::hypot(a_last_(0), a_last_(1));
+  const double speed = std::hypot(v_nav(0), v_nav(1));
+  double turn = (nav_.state().C_nb() * w_last_)(2), accel_h = std::hypot(a_last_(0), a_last_(1));
+  if (motion_T_ > 0 && motion_have_v0_) {
+    turn = motion_yaw_ / motion_T_;
+    accel_h = std::hypot(v_nav(0) - motion_v0_(0), v_nav(1) - motion_v0_(1)) / motion_T_;
+  }
+  motion_yaw_ = motion_T_ = 0;
+  motion_v0_ = v_nav;
+  motion_have_v0_ = true;
 
   Vec dx = Vec::Zero(N_);
   const bool use[3] = {cfg_.obs_pos, cfg_.obs_vel, cfg_.obs_att};

@@ -211,7 +211,8 @@ struct InnovationRecord {
   double nis = 0;
   Status status = used;
   // The motion at the epoch (for locating where innovations grow; issue 53 item 5): horizontal speed
-  // (m/s), turn rate about the vertical (rad/s), horizontal acceleration magnitude (m/s²).
+  // (m/s) now; turn rate about the vertical (rad/s) and horizontal acceleration magnitude (m/s²), each
+  // the mean over the interval since the previous reference epoch.
   double speed = 0, turn_rate = 0, accel = 0;
 };
 
@@ -428,6 +429,10 @@ class InMotionFilter {
   FAccumulator acc_;
   Vec3 w_last_ = Vec3::Zero();
   Vec3 a_last_ = Vec3::Zero();  // NED acceleration of the MEMS over the last IMU interval
+  // Motion since the last reference epoch, for InnovationRecord/AdaptiveSample (reporting only).
+  double motion_yaw_ = 0, motion_T_ = 0;
+  Vec3 motion_v0_ = Vec3::Zero();
+  bool motion_have_v0_ = false;
   VelocityHistory vel_hist_;    // the INS's velocity changes, for a lagging GNSS velocity
   double last_obs_t_ = -1e300;
   ConsistencyStats stats_[3];
