@@ -13,6 +13,7 @@
 #include "bench/cli/registry.hpp"
 #include "bench/drive/drive_units.hpp"
 #include "bench/drive/fit_drive.hpp"
+#include "bench/drive/recording_scan.hpp"
 #include "bench/io/imu_class_toml.hpp"
 #include "calibration/effects/effect_registry.hpp"
 #include "calibration/inmotion/priors.hpp"
@@ -193,7 +194,7 @@ void print_summary(const DriveResult& r, const std::string& out) {
               << " repeated reads); stamp scatter sigma " << std::setprecision(3) << st["sigma_ms"].get<double>()
               << " ms about the sensor's clock; the filter takes " << st["used_ms"].get<double>() << " ms ("
               << st["source"].get<std::string>() << ")";
-    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false))
+    if (applied_logger_correction(st).drop_repeats)
       std::cout << "; " << st["applied"].value("rows_dropped", 0L) << " repeated reads dropped";
     std::cout << std::setprecision(6) << "\n";
   }

@@ -16,6 +16,10 @@
 
 namespace calbench {
 
+InnovationSample innovation_sample(const inmotion::InnovationRecord& r) {
+  return {r.t, r.nu, r.S, r.nis, static_cast<int>(r.status), r.speed, r.turn_rate, r.accel};
+}
+
 DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun& run) {
   DriveInnovations out;
   const std::clock_t c0 = std::clock();
@@ -28,7 +32,7 @@ DriveInnovations drive_innovations(const DriveDiagInput& in, const DriveDiagRun&
     a.qc = false;
     a.write_out = false;
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
-      x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status), r.speed, r.turn_rate, r.accel});
+      x[type].push_back(innovation_sample(r));
     };
     const DriveResult r = fit_drive(a);
     if (r.effects) applied.insert(applied.end(), r.effects->applied.begin(), r.effects->applied.end());  // the terms applied

@@ -13,6 +13,7 @@
 #include "bench/io/recording.hpp"
 #include "calibration/diagnosis/drive_diagnose.hpp"
 #include "calibration/diagnosis/drive_innovations.hpp"
+#include "calibration/inmotion/inmotion_filter.hpp"
 
 namespace calbench {
 
@@ -25,6 +26,9 @@ struct DriveCoeffs {
   std::string file;
 };
 DriveCoeffs read_drive_coeffs(const std::string& file);
+
+// One innovation of the in-motion filter (its on_innovation record) as the diagnosis's sample.
+InnovationSample innovation_sample(const inmotion::InnovationRecord& r);
 
 struct DriveDiagInput {
   std::filesystem::path dir;  // the recording (empty: simulated in memory)

@@ -8,12 +8,14 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <tuple>
 
 #include "bench/diagnose/diagnose_text.hpp"
 #include "calibration/diagnosis/innovation_conditions.hpp"
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/diagnose/finding_text.hpp"
 #include "bench/drive/fit_drive.hpp"
+#include "bench/drive/recording_scan.hpp"
 #include "bench/io/json_util.hpp"
 #include "bench/io/hdf5_recording.hpp"
 #include "bench/io/recording.hpp"
@@ -121,14 +123,17 @@ struct LoggerOff {
 };
 
 double deviance_of(const FilterRun& fr) { return innovation_deviance(fr.x[0]) + innovation_deviance(fr.x[1]); }
+// A run's overdispersion: the worse of its position and velocity innovations'.
+double phi_of(const FilterRun& fr) {
+  return std::max(innovation_overdispersion(innovation_stats(fr.x[0], nullptr)), innovation_overdispersion(innovation_stats(fr.x[1], nullptr)));
+}
 
 // The logger's measured terms (issue 53 item 1) as candidates tested by the innovations: the base
 // filter against the same filter with the term off (Δχ², divided by the base run's overdispersion),
 // and where the innovations grow without any of them.
 void logger_tests(GnssDiagRun& run, const FilterRun& base, const std::function<const FilterRun&(const LoggerOff&)>& without) {
   const nlohmann::json& ex = base.result.extra;
-  double phi = 1;
-  for (int k = 0; k < 2; ++k) phi = std::max(phi, innovation_overdispersion(innovation_stats(base.x[k], nullptr)));
+  const double phi = phi_of(base);  // ≥ 1
   run.conditions.phi_base = phi;
   LoggerOff all;
   auto test = [&](const char* name, const std::string& value, double value_ms, LoggerOff off) {
@@ -153,7 +158,7 @@ void logger_tests(GnssDiagRun& run, const FilterRun& base, const std::function<c
     const nlohmann::json& st = ex["sample_timing"];
     const double sigma_ms = st["used_ms"].get<double>();
     std::string v = "(stamp scatter σ " + fmt(sigma_ms, 3) + " ms";
-    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false)) v += "; with it the second reads dropped";
+    if (applied_logger_correction(st).drop_repeats) v += "; with it the second reads dropped";
     test("sample timing", v + ")", sigma_ms, LoggerOff{true, false});
   }
   if (ex.contains("gnss_velocity_latency") && ex["gnss_velocity_latency"].value("used_s", 0.0) != 0) {
@@ -203,19 +208,13 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
   int profiled = -1;  // hypothesis index of the profiled candidate
   for (std::size_t h = 0; h < idx.size(); ++h)
     if (rows[idx[h]].profiled) profiled = static_cast<int>(h);
-  std::map<std::pair<std::vector<int>, std::vector<double>>, FilterRun> runs;
+  // Every filter run, by model, profiled θ and the logger terms left out (LoggerOff::key, 0: none).
+  std::map<std::tuple<std::vector<int>, std::vector<double>, int>, FilterRun> runs;
   std::map<std::vector<int>, ProfileFit> profiles;  // per model with the profiled candidate
-  std::map<int, FilterRun> ablations;              // base model, logger terms off (LoggerOff::key)
-  // A filter run with the logger terms as measured (logger_off: none of the terms named off).
   auto run_filter = [&](const std::vector<int>& model, const std::vector<double>& theta, const LoggerOff& logger_off = {}) -> const FilterRun& {
-    const auto key = std::make_pair(model, theta);
-    if (!logger_off.any()) {
-      const auto it = runs.find(key);
-      if (it != runs.end()) return it->second;
-    } else {
-      const auto it = ablations.find(logger_off.key());
-      if (it != ablations.end()) return it->second;
-    }
+    const auto key = std::make_tuple(model, theta, logger_off.key());
+    const auto it = runs.find(key);
+    if (it != runs.end()) return it->second;
     FitDriveArgs a;
     a.dir = dir;
     a.aiding = "gnss";
@@ -243,10 +242,9 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     }
     FilterRun fr;
     a.on_innovation = [&](int type, const inmotion::InnovationRecord& r) {
-      if (type < 2) fr.x[type].push_back({r.t, r.nu, r.S, r.nis, static_cast<int>(r.status), r.speed, r.turn_rate, r.accel});
+      if (type < 2) fr.x[type].push_back(innovation_sample(r));
     };
     fr.result = fit_drive(a);
-    if (logger_off.any()) return ablations[logger_off.key()] = std::move(fr);
     return runs[key] = std::move(fr);
   };
   // A model's run: with the profiled candidate at its profile's θ̂ when the model holds it.
@@ -287,8 +285,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
     std::sort(final_model.begin(), final_model.end());
     if (final_model.empty()) break;
     const FilterRun& f = filter(final_model);
-    run.phi = std::max(innovation_overdispersion(innovation_stats(f.x[0], nullptr)),
-                       innovation_overdispersion(innovation_stats(f.x[1], nullptr)));
+    run.phi = phi_of(f);
     std::size_t weakest = 0;
     for (std::size_t k = 1; k < run.search.steps.size(); ++k)
       if (run.search.steps[k].dchi2_final < run.search.steps[weakest].dchi2_final) weakest = k;
@@ -301,8 +298,7 @@ GnssDiagRun run_gnss_diagnosis(const std::string& dir, const DriveCoeffs* coeffs
   const FilterRun& fin = filter(final_model);
   // φ of the final model: when every candidate was withdrawn, that is the base filter's (not the φ of
   // the last model the withdrawal was judged in).
-  run.phi = std::max(innovation_overdispersion(innovation_stats(fin.x[0], nullptr)),
-                     innovation_overdispersion(innovation_stats(fin.x[1], nullptr)));
+  run.phi = phi_of(fin);
 
   // Findings: the final model's estimates, with the Δχ² that accepted each.
   run.improved = run.current;
@@ -476,7 +472,7 @@ std::string logger_sentence(const nlohmann::json& l) {
     o << "logger (measured, modelled in every run): IMU stamp scatter σ " << fmt(st["sigma_ms"].get<double>(), 3)
       << " ms about the sensor's clock (" << st["repeated_rows"].get<long>() << " of " << st["rows"].get<long>()
       << " rows repeated reads";
-    if (st.contains("applied") && st["applied"].value("dropped_repeated_rows", false)) o << ", dropped";
+    if (applied_logger_correction(st).drop_repeats) o << ", dropped";
     o << ")";
     if (l.contains("gnss_velocity_latency")) {
       const auto& g = l["gnss_velocity_latency"];

@@ -144,9 +144,10 @@ bool DriveStream::next(Event& e) {
       e.dv = ca_->increment(e.dv, r.dt);
     }
   }
-  // Time stamps moved by a time offset, or intervals merged over second reads, no longer fall on the reference epochs (which they
-  // typically do in a recording): split the interval that straddles the next epoch there,
-  // increments in proportion, so that the epoch is compared at its own time as before.
+  // Time stamps moved by a time offset, or intervals merged over second reads, no longer fall on
+  // the reference epochs (which they typically do in a recording): split the interval that
+  // straddles the next epoch there, increments in proportion, so that the epoch is compared at its
+  // own time as before.
   if (((comp_ && comp_->time_offset_s() != 0) || drop_repeats_) && have_ref_ && e.dt > 0 && pending_.t > e.t - e.dt + 1e-9 &&
       pending_.t < e.t - 1e-9) {
     const double a = (pending_.t - (e.t - e.dt)) / e.dt;

@@ -172,18 +172,8 @@ ProfileFit profile_quadratic(int p, double h, const std::function<double(const E
   return out;
 }
 
-double innovation_deviance(const std::vector<InnovationSample>& x) {
-  double d = 0;
-  for (const InnovationSample& e : x) {
-    if (!std::isfinite(e.nis)) continue;
-    const double det = e.S.determinant();
-    if (!(det > 0)) continue;
-    d += e.nis + std::log(det);
-  }
-  return d;
-}
-
 namespace {
+// One epoch's νᵀS⁻¹ν + ln det S; false where the NIS is not finite or S not positive definite.
 bool deviance_term(const InnovationSample& e, double& term) {
   if (!std::isfinite(e.nis)) return false;
   const double det = e.S.determinant();
@@ -192,6 +182,13 @@ bool deviance_term(const InnovationSample& e, double& term) {
   return true;
 }
 }  // namespace
+
+double innovation_deviance(const std::vector<InnovationSample>& x) {
+  double d = 0, term = 0;
+  for (const InnovationSample& e : x)
+    if (deviance_term(e, term)) d += term;
+  return d;
+}
 
 std::pair<double, double> paired_deviance(const std::vector<InnovationSample>& a, const std::vector<InnovationSample>& b,
                                           long* shared) {

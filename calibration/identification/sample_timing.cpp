@@ -63,24 +63,20 @@ void SampleTimingEstimator::close_run() {
     dev.resize(n);
     for (std::size_t k = 0; k < n; ++k) dev[k] = std::abs(r[k] - med);
     const double cut = 5 * 1.4826 * median_in_place(dev);
+    std::vector<double>& kept = scratch_m_;  // in the run's order (never empty: the median is kept)
+    kept.clear();
+    for (double x : r)
+      if (std::abs(x - med) <= cut) kept.push_back(x);
+    const std::size_t m = kept.size();
     double ss = 0, mean = 0;
-    std::size_t m = 0;
-    for (double x : r)
-      if (std::abs(x - med) <= cut) {
-        mean += x;
-        ++m;
-      }
-    mean /= static_cast<double>(std::max<std::size_t>(m, 1));
-    for (double x : r)
-      if (std::abs(x - med) <= cut) ss += (x - mean) * (x - mean);
+    for (double x : kept) mean += x;
+    mean /= static_cast<double>(m);
+    for (double x : kept) ss += (x - mean) * (x - mean);
     run_sigma_.push_back(m > 2 ? std::sqrt(ss / static_cast<double>(m - 2)) : 0.0);
     // The earliest kept stamps: the 1st percentile of the kept residuals (at least the 2nd smallest).
-    scratch_m_.clear();
-    for (double x : r)
-      if (std::abs(x - med) <= cut) scratch_m_.push_back(x);
-    const std::size_t q = std::min(scratch_m_.size() - 1, std::max<std::size_t>(1, scratch_m_.size() / 100));
-    std::nth_element(scratch_m_.begin(), scratch_m_.begin() + static_cast<std::ptrdiff_t>(q), scratch_m_.end());
-    run_late_.push_back(mean - scratch_m_[q]);
+    const std::size_t q = std::min(m - 1, std::max<std::size_t>(1, m / 100));
+    std::nth_element(kept.begin(), kept.begin() + static_cast<std::ptrdiff_t>(q), kept.end());
+    run_late_.push_back(mean - kept[q]);
   }
   run_.clear();
 }
