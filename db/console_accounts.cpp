@@ -80,7 +80,7 @@ std::string add_console_account(Store& store, const std::string& login, const st
 std::vector<ConsoleAccount> console_accounts(Store& store) {
   std::vector<ConsoleAccount> out;
   auto st = store.connection().prepare("SELECT login, name, role, added_at, added_by FROM console_accounts ORDER BY login");
-  while (st.step()) out.push_back(ConsoleAccount{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4)});
+  while (st.step()) out.push_back(ConsoleAccount{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4), {}});
   return out;
 }
 
@@ -99,9 +99,17 @@ std::optional<ConsoleAccount> check_console_password(Store& store, const std::st
     verify_password(decoy, password);
     return std::nullopt;
   }
-  ConsoleAccount a{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4)};
-  if (!verify_password(st.text(5), password)) return std::nullopt;
+  ConsoleAccount a{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4), st.text(5)};
+  if (!verify_password(a.credential, password)) return std::nullopt;
   return a;
+}
+
+std::optional<ConsoleAccount> find_console_account(Store& store, const std::string& login) {
+  auto st = store.connection().prepare(
+      "SELECT login, name, role, added_at, added_by, password_hash FROM console_accounts WHERE login = ?");
+  st.bind(1, login);
+  if (!st.step()) return std::nullopt;
+  return ConsoleAccount{st.text(0), st.text(1), st.text(2), st.text(3), st.text(4), st.text(5)};
 }
 
 }  // namespace calbench::db

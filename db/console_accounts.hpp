@@ -14,6 +14,9 @@ namespace calbench::db {
 
 struct ConsoleAccount {
   std::string login, name, role, added_at, added_by;
+  // The account's stored password hash (never shown): a session remembers the one it logged in
+  // with, and ends when it changed (a new password) — see find_console_account.
+  std::string credential;
 };
 
 // What is wrong with a password (8 to 1024 bytes, no control characters), or "".
@@ -27,5 +30,9 @@ std::vector<ConsoleAccount> console_accounts(Store& store);
 // The account if `password` is its password, else nothing. An unknown login costs the same hash
 // check as a known one (no timing difference tells which logins exist).
 std::optional<ConsoleAccount> check_console_password(Store& store, const std::string& login, const std::string& password);
+
+// The account as it is now (name, role, credential), or nothing when it is gone: the console checks
+// every request against it, so a role or password change takes effect at once.
+std::optional<ConsoleAccount> find_console_account(Store& store, const std::string& login);
 
 }  // namespace calbench::db

@@ -80,6 +80,13 @@ BEGIN SELECT RAISE(ABORT, 'operator prompts are never deleted'); END;
 )SQL";
 }
 
+// Schema 9 (issue 54): see docs/database.md "Threat model".
+const char* schema9_insider() {
+  return R"SQL(
+SELECT 1;
+)SQL";
+}
+
 const std::vector<const char*>& migrations() {
   static const std::vector<const char*> m = {
       // ---- 1: initial schema ----
@@ -267,6 +274,8 @@ ALTER TABLE bench_runs ADD COLUMN recording_digest TEXT NOT NULL DEFAULT '';
       schema7_console_accounts,
       // ---- 8: the station's live state and its operator prompts (issue 38) ----
       schema8_station_progress(),
+      // ---- 9: signatures that hold against an insider (issue 54) ----
+      schema9_insider(),
   };
   return m;
 }

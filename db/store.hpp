@@ -25,7 +25,7 @@
 
 namespace calbench::db {
 
-inline constexpr int kSchemaVersion = 8;
+inline constexpr int kSchemaVersion = 9;
 
 enum class SetSource { bench, in_motion, combined };
 enum class SetStatus { draft, approved, provisioned, revoked };
@@ -263,6 +263,11 @@ class Store {
   void record_provisioning(std::int64_t set_id, const std::string& kind, const std::string& target, bool ok,
                            const std::string& readback_json, const std::string& message);
   void audit(const std::string& entity, std::int64_t entity_id, const std::string& action, const std::string& detail);
+  // A security event that changed nothing: a failed log-in ("login-failed"), a lock-out ("lockout"),
+  // a request refused for the account's role ("refused"). Audited as entity "security" naming the
+  // login tried, never a password; on PostgreSQL through calbench_audit_security(), the only way a
+  // login writes such a row (it cannot write a signature's).
+  void audit_security(const std::string& action, const std::string& login, const std::string& detail);
   // A bench run that produced no set (outcome "aborted" or "fail"), with why, so that `db history`
   // shows it. Returns the run id.
   // *existed (if given): the run's uid was already stored (the id is that run's).

@@ -1,6 +1,7 @@
 // Store writes of devices, stations, coefficient sets, bench runs and their QC results, each in one
 // transaction with its audit entries; everything is checked before the transaction starts.
 #include <cmath>
+#include <stdexcept>
 
 #include "common/input_error.hpp"
 #include "db/input_errors.hpp"
@@ -33,6 +34,21 @@ void Store::audit_locked(const std::string& entity, std::int64_t entity_id, cons
 
 void Store::audit(const std::string& entity, std::int64_t entity_id, const std::string& action, const std::string& detail) {
   conn_->write_transaction([&] { audit_locked(entity, entity_id, action, detail); });
+}
+
+void Store::audit_security(const std::string& action, const std::string& login, const std::string& detail) {
+  if (action != "login-failed" && action != "lockout" && action != "refused")
+    throw std::logic_error("audit_security: unknown action " + action);
+  check_text(login, "login", false);
+  check_text(detail, "detail", false);
+  conn_->write_transaction([&] {
+    if (conn_->dialect() == Dialect::postgres) {
+      auto st = conn_->prepare("SELECT calbench_audit_security(?, ?, ?, ?)");
+      st.bind(1, action).bind(2, login).bind(3, detail).bind(4, actor_.station).step();
+      return;
+    }
+    audit_locked("security", 0, action, login + (detail.empty() ? "" : ": " + detail));
+  });
 }
 
 std::int64_t Store::ensure_device_locked(const DeviceInfo& d) {

@@ -130,6 +130,37 @@ INSERT INTO schema_version(version) VALUES (8);
 )SQL";
 }
 
+// Schema 9 (issue 54): signatures that hold against an insider. Audit rows are written only by the
+// server's functions and triggers; see docs/database.md "Threat model".
+const char* pg_schema9_insider() {
+  return R"SQL(
+-- A security event that changed nothing (failed log-in, lock-out, a refusal): the one kind of row a
+-- login may ask to be written, always as itself (db_role and "user" are the server's).
+CREATE FUNCTION calbench_audit_security(action text, login text, detail text, station text) RETURNS void
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+BEGIN
+  IF action NOT IN ('login-failed', 'lockout', 'refused') THEN
+    RAISE EXCEPTION 'calbench_audit_security: % is not a security event', action USING ERRCODE = 'check_violation';
+  END IF;
+  INSERT INTO audit_log("user", station, entity, entity_id, action, detail)
+  VALUES (coalesce((SELECT u.name FROM calbench_users u WHERE u.login = session_user), session_user::text),
+          left(coalesce(station, ''), 200), 'security', 0, action,
+          left(coalesce(login, '') || CASE WHEN coalesce(detail, '') = '' THEN '' ELSE ': ' || detail END, 4000));
+END $f$;
+REVOKE ALL ON FUNCTION calbench_audit_security(text, text, text, text) FROM PUBLIC;
+DO $$
+DECLARE r text;
+BEGIN
+  FOREACH r IN ARRAY ARRAY['calbench_station', 'calbench_qc', 'calbench_provisioning', 'calbench_reader'] LOOP
+    IF EXISTS (SELECT 1 FROM pg_roles WHERE rolname = r) THEN
+      EXECUTE format('GRANT EXECUTE ON FUNCTION calbench_audit_security(text, text, text, text) TO %I', r);
+    END IF;
+  END LOOP;
+END $$;
+INSERT INTO schema_version(version) VALUES (9);
+)SQL";
+}
+
 const std::vector<const char*>& pg_migrations() {
   static const std::vector<const char*> m = {
       // ---- 4: a stable id per run and set (forwarding from a station's journal is idempotent) ----
@@ -206,6 +237,8 @@ INSERT INTO schema_version(version) VALUES (6);
       pg_schema7_console_accounts,
       // ---- 8: the station's live state and its operator prompts (issue 38) ----
       pg_schema8_station_progress(),
+      // ---- 9: signatures that hold against an insider (issue 54) ----
+      pg_schema9_insider(),
   };
   return m;
 }

@@ -18,7 +18,7 @@ source "$SRC/tests/support/pg_test.sh"
 cd "$T"
 admin -d postgres -c "CREATE DATABASE calbench"
 ADMIN="postgresql:///calbench?host=$T/pg&port=$port&user=calbench_admin"
-"$CALBENCH" db init --db "$ADMIN" --roles --operator admin | grep -q "schema version 8" || fail "init"
+"$CALBENCH" db init --db "$ADMIN" --roles --operator admin | grep -q "schema version 9" || fail "init"
 export PGPASSFILE="$T/pgpass"
 : > "$PGPASSFILE"; chmod 600 "$PGPASSFILE"
 # Logins without a group: `db user add` grants it. tess is a QC login that may also store (both groups).
@@ -175,9 +175,9 @@ admin -d old -1 -f "$SRC/db/postgres/schema.sql" > /dev/null
 admin -d old -c "INSERT INTO devices(model, serial) VALUES ('ADIS16488A', 'OLD1');
   INSERT INTO coefficient_sets(device_id, version, source, payload_json, created_by) VALUES (1, 1, 'bench', '{}', 'old@x');
   INSERT INTO audit_log(\"user\", station, entity, entity_id, device_id, action) VALUES ('old', 'x', 'coefficient_set', 1, 1, 'create')"
-"$CALBENCH" db init --db "postgresql:///old?host=$T/pg&port=$port&user=calbench_admin" --roles --operator admin | grep -q "schema version 8" \
+"$CALBENCH" db init --db "postgresql:///old?host=$T/pg&port=$port&user=calbench_admin" --roles --operator admin | grep -q "schema version 9" \
   || fail "migration 3 -> 6"
-[ "$(admin -d old -c "SELECT string_agg(version::text, ',' ORDER BY version) FROM schema_version")" = "3,4,5,6,7,8" ] || fail "versions"
+[ "$(admin -d old -c "SELECT string_agg(version::text, ',' ORDER BY version) FROM schema_version")" = "3,4,5,6,7,8,9" ] || fail "versions"
 [ "$(admin -d old -c "SELECT count(*) FROM audit_log WHERE action = 'create'")" = 1 ] || fail "old rows lost"
 admin -d old -c "update coefficient_sets set status='approved' where id=1" 2> err.txt && fail "migrated store: approved by psql"
 grep -q "without its audit row" err.txt || { cat err.txt; fail "migrated store refused for another reason"; }

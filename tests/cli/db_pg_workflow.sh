@@ -21,7 +21,7 @@ ADMIN="postgresql:///calbench?host=$T/pg&port=$port&user=calbench_admin"
 p1=$!
 "$CALBENCH" db init --db "$ADMIN" --roles --operator admin > i2.txt 2>&1 || { cat i2.txt; fail "second init"; }
 wait $p1 || { cat i1.txt; fail "first init"; }
-grep -q "schema version 8" i1.txt && grep -q "schema version 8" i2.txt || fail "init output"
+grep -q "schema version 9" i1.txt && grep -q "schema version 9" i2.txt || fail "init output"
 [ "$(admin -d calbench -c "SELECT count(*) FROM schema_version WHERE version = 5")" = 1 ] || fail "migrated twice"
 [ "$(admin -d calbench -c "SELECT count(*) FROM audit_log WHERE entity = 'schema' AND action = 'migrate'")" = 1 ] || fail "migration audited twice"
 

@@ -10,7 +10,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 coeffs() { python3 "$SRC/tests/support/make_coeffs.py" "$@"; }  # coeffs SERIAL SEED [sigma_gyro_bias] > file
 count() { sqlite3 "$1" "SELECT COUNT(*) FROM $2"; }
 
-"$CALBENCH" db init --db w.db | grep -q "schema version 8" || fail "init"
+"$CALBENCH" db init --db w.db | grep -q "schema version 9" || fail "init"
 coeffs A100 1 > a1.json
 "$CALBENCH" db store-bench --db w.db --coeffs a1.json --plan factory --sha256 "$(printf 'a%.0s' {1..64})" \
   --qc gyro_resid_rms=1e-5:1e-4:rad/s --firmware 1.10 | grep -q "set 1 (A100 v1, draft)" || fail "store-bench"

@@ -142,7 +142,7 @@ TEST(DbStationLive, MigratesFromSchema6AndFromSchema1) {
       sqlite3_close(raw);
     }
     Store s(t.db(), {}, test::test_actor());
-    EXPECT_EQ(s.schema_version(), 8) << "from " << from;
+    EXPECT_EQ(s.schema_version(), kSchemaVersion) << "from " << from;
     EXPECT_TRUE(s.find_device("OLD1").has_value());
     put_progress(s, slot("r", "1"));
     EXPECT_EQ(progress_rows(s).size(), 1u);
