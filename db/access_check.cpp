@@ -41,8 +41,7 @@ StationAccess check_station_access(const std::string& uri) {
   // What a station run inserts (Store::store_bench, store_bench_run): the row kinds, and the one column
   // it may update.
   std::string missing;
-  for (const char* t : {"devices", "stations", "bench_runs", "qc_results", "coefficient_sets", "coefficient_values",
-                        "audit_log"}) {
+  for (const char* t : {"devices", "stations", "bench_runs", "qc_results", "coefficient_sets", "coefficient_values"}) {
     auto p = c->prepare("SELECT has_table_privilege(?, 'INSERT'), has_table_privilege(?, 'SELECT')");
     p.bind(1, t).bind(2, t);
     p.step();
@@ -52,6 +51,10 @@ StationAccess check_station_access(const std::string& uri) {
   auto f = c->prepare("SELECT has_column_privilege('devices', 'firmware', 'UPDATE')");
   f.step();
   if (!f.int64(0)) missing += std::string(missing.empty() ? "" : ", ") + "UPDATE of devices.firmware";
+  // Its audit rows: through calbench_audit (schema 9; nobody inserts into audit_log directly).
+  auto au = c->prepare("SELECT has_function_privilege('calbench_audit(text, bigint, text, text, text, text)', 'EXECUTE')");
+  au.step();
+  if (!au.int64(0)) missing += std::string(missing.empty() ? "" : ", ") + "EXECUTE on calbench_audit";
   if (!missing.empty()) {
     a.reason = c->path() + ": role '" + a.role + "' may not store a station run (missing " + missing +
                "): a station logs in as a member of calbench_station (the owner: `calbench db init --roles`, then "

@@ -11,6 +11,7 @@
 #include "common/number_parse.hpp"
 #include "common/units.hpp"
 #include "db/inmotion_import.hpp"
+#include "db/schema.hpp"
 #include "db/signer.hpp"
 
 namespace calbench::db {
@@ -233,44 +234,77 @@ std::string signature_suffix(const Store& store) {
 }
 }  // namespace
 
+namespace {
+// A PostgreSQL array literal of texts ({"a","b"}), quotes and backslashes escaped.
+std::string pg_text_array(const std::vector<std::string>& v) {
+  std::string out = "{";
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    out += i ? ",\"" : "\"";
+    for (char ch : v[i]) {
+      if (ch == '"' || ch == '\\') out += '\\';
+      out += ch;
+    }
+    out += '"';
+  }
+  return out + "}";
+}
+
+// The client's part of the verdict (the thresholds file, the named operator, four-eyes as the
+// client sees it, the parent rule): every reason it refuses for.
+void client_reasons(Store& store, const CoefficientSetRecord& set, bool four_eyes, ApprovalCheck& r) {
+  const Actor& who = store.actor();
+  if (!who.named()) {
+    r.reasons.push_back("approval needs a named operator: --operator NAME or CALBENCH_OPERATOR (the OS user '" +
+                        who.user + "' records who ran a command but does not sign)");
+  } else if (four_eyes && stored_by_signer(store, set)) {
+    const std::string maker = person_of_login(store, set.created_by_login);
+    r.reasons.push_back("four-eyes: set " + std::to_string(set.id) + " was stored by '" + creator_name(set) + "'" +
+                        (store.authenticated() ? " with login '" + set.created_by_login + "'" +
+                                                     (maker.empty() ? "" : " (" + maker + ")") + ", and " + who.user +
+                                                     " (login " + store.login() + ") is the same person"
+                                               : "") +
+                        "; another person must approve it (a one-person lab: calbench db settings four_eyes off)");
+  }
+  if (const std::string why = parent_reason(store, set); !why.empty()) r.reasons.push_back(why);
+  r.ok = r.reasons.empty();
+}
+}  // namespace
+
 ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t) {
   store.check_signer();  // an --operator that is not the login's person is refused before anything
   ApprovalCheck r;
+  const bool server_checks = store.authenticated() && store.schema_version() >= kChainSchemaVersion;
   store.connection().write_transaction([&] {
+    r = ApprovalCheck{};
     const CoefficientSetRecord set = store.get_set(set_id);
     if (set.status == SetStatus::approved || set.status == SetStatus::provisioned) {
       r.already = true;  // approving again changes nothing, and is not a refusal
       return;
     }
     r = check_approval(set, store.qc_of_set(set), t, fit_evidence(store, set));
-    // The signature: a named operator, by default another than the one who stored the set
-    // (db/signer.hpp: on PostgreSQL the login's person, four-eyes by login).
-    const Actor& who = store.actor();
-    const std::string creator = creator_name(set);
     const bool four_eyes = store.setting(kFourEyes) == "on";
-    if (!who.named()) {
-      r.reasons.push_back("approval needs a named operator: --operator NAME or CALBENCH_OPERATOR (the OS user '" +
-                          who.user + "' records who ran a command but does not sign)");
-      r.ok = false;
-    } else if (four_eyes && stored_by_signer(store, set)) {
-      r.reasons.push_back("four-eyes: set " + std::to_string(set_id) + " was stored by '" + creator + "'" +
-                          (store.authenticated() ? " with login '" + set.created_by_login + "', the login signing now"
-                                                 : "") +
-                          "; another operator must approve it (a one-person lab: calbench db settings four_eyes off)");
-      r.ok = false;
-    }
-    if (const std::string why = parent_reason(store, set); !why.empty()) {
-      r.reasons.push_back(why);
-      r.ok = false;
+    client_reasons(store, set, four_eyes, r);
+    const std::string creator = creator_name(set);
+    if (server_checks) {
+      // PostgreSQL: the database runs its part of the verdict and four-eyes by person, and writes
+      // the signed row or the refusal with every reason (the client's included).
+      auto f = store.connection().prepare("SELECT array_to_json(calbench_approve(?, ?, ?, ?))::text");
+      f.bind(1, set_id).bind(2, store.actor().station).bind(3, pg_text_array(r.reasons)).bind(4, "thresholds: " + t.source);
+      f.step();
+      r.reasons.clear();
+      for (const auto& x : nlohmann::json::parse(f.text(0))) r.reasons.push_back(x.get<std::string>());
+      r.ok = r.reasons.empty();
+      return;
     }
     if (r.ok) {
+      const Actor& who = store.actor();
       store.set_status(set_id, SetStatus::approved,
                        "signed by " + who.user + " (" + who.source + signature_suffix(store) + "), stored by " + creator +
                            (set.created_by_login.empty() ? "" : " (" + signature_note(set.created_by_login, store.authenticated()) + ")") +
                            (four_eyes ? "" : ", four-eyes off") + "; thresholds: " + t.source);
     } else {
       std::string why;
-      for (const auto& s : r.reasons) why += (why.empty() ? "" : "; ") + s;
+      for (const auto& x : r.reasons) why += (why.empty() ? "" : "; ") + x;
       store.audit_locked("coefficient_set", set_id, "approve-refused", why);
     }
   });

@@ -21,11 +21,31 @@ struct ConsoleAccount {
 
 // What is wrong with a password (8 to 1024 bytes, no control characters), or "".
 std::string console_password_problem(const std::string& password);
+// Who authorizes a change of the accounts (issue 54 item 3): an admin account's login and
+// password, or the changed account's own current password.
+struct AccountAuthority {
+  std::string admin_login, admin_password;  // --admin LOGIN, $CALBENCH_ADMIN_PASSWORD
+  std::string current_password;             // $CALBENCH_CURRENT_PASSWORD: an account changing its own password
+};
 // Adds the account, or changes the name, role and password of an existing one (audited as entity
-// "account", never with the password or its hash). Returns "added" or "changed: …". Bad login,
-// name, role or password: InputError naming it. A PostgreSQL store is refused (it has logins).
+// "account" with a fingerprint of the stored row, never with the password or its hash). Returns
+// "added" or "changed: …". Who may:
+//  - an existing account changes with its own current password (the password only) or an admin's;
+//  - a new account needs an admin's password once the store has an admin account ("admin" role:
+//    manages accounts, signs nothing); before that anyone with the file may add one, except an
+//    admin, which then needs a qc account's password (or the store has no account yet).
+// Refusals are PermissionError; bad login, name, role or password: InputError naming it. A
+// PostgreSQL store is refused (it has logins).
 std::string add_console_account(Store& store, const std::string& login, const std::string& name,
-                                const std::string& role, const std::string& password);
+                                const std::string& role, const std::string& password, const AccountAuthority& by = {});
+// The fingerprint of an account row as stored (name, role, password hash), recorded in its audit
+// row: `db verify` compares it with the row now, so an edit outside calbench shows.
+std::string account_fingerprint(const std::string& name, const std::string& role, const std::string& hash);
+struct AccountCheck {
+  std::string login, why;  // why the row is not the one its last audit entry vouches for
+};
+std::vector<AccountCheck> check_console_accounts(Store& store);
+bool has_admin_account(Store& store);
 std::vector<ConsoleAccount> console_accounts(Store& store);
 // The account if `password` is its password, else nothing. An unknown login costs the same hash
 // check as a known one (no timing difference tells which logins exist).

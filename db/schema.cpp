@@ -80,10 +80,45 @@ BEGIN SELECT RAISE(ABORT, 'operator prompts are never deleted'); END;
 )SQL";
 }
 
-// Schema 9 (issue 54): see docs/database.md "Threat model".
+// Schema 9 (issue 54, docs/database.md "Threat model"): the creator person in its own column
+// (never parsed out of created_by), console accounts that an admin manages, and the audit log's
+// hash chain (db/audit_chain.hpp). The chain of the rows already there is written by
+// Store::migrate between this and schema9_after_seal(), with the append-only trigger lifted.
 const char* schema9_insider() {
   return R"SQL(
-SELECT 1;
+ALTER TABLE coefficient_sets ADD COLUMN creator TEXT NOT NULL DEFAULT '';
+-- Older sets: the name before the first '@' (an operator name never holds one).
+UPDATE coefficient_sets SET creator = CASE WHEN instr(created_by, '@') > 0
+  THEN substr(created_by, 1, instr(created_by, '@') - 1) ELSE created_by END;
+CREATE TRIGGER coefficient_sets_creator_immutable BEFORE UPDATE OF creator ON coefficient_sets
+WHEN NEW.creator IS NOT OLD.creator
+BEGIN SELECT RAISE(ABORT, 'coefficient sets are immutable'); END;
+CREATE TABLE console_accounts_9 (
+  login         TEXT PRIMARY KEY CHECK (login <> ''),
+  name          TEXT NOT NULL CHECK (name <> ''),
+  role          TEXT NOT NULL CHECK (role IN ('qc', 'station', 'provisioning', 'admin')),
+  password_hash TEXT NOT NULL CHECK (password_hash LIKE '$argon2id$%'),
+  added_at      TEXT NOT NULL,
+  added_by      TEXT NOT NULL
+);
+INSERT INTO console_accounts_9 SELECT login, name, role, password_hash, added_at, added_by FROM console_accounts;
+DROP TABLE console_accounts;
+ALTER TABLE console_accounts_9 RENAME TO console_accounts;
+DROP TRIGGER audit_log_no_update;
+ALTER TABLE audit_log ADD COLUMN chain TEXT;
+)SQL";
+}
+const char* schema9_after_seal() {
+  return R"SQL(
+CREATE TRIGGER audit_log_no_update BEFORE UPDATE ON audit_log
+BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
+-- An approval is made with its signed audit row, written just before in the same transaction
+-- (db approve): `UPDATE coefficient_sets SET status = 'approved'` alone is refused.
+CREATE TRIGGER coefficient_sets_approval_signed BEFORE UPDATE OF status ON coefficient_sets
+WHEN NEW.status = 'approved' AND OLD.status IS NOT 'approved' AND NOT EXISTS (
+  SELECT 1 FROM audit_log a WHERE a.id = (SELECT max(id) FROM audit_log) AND a.entity = 'coefficient_set'
+    AND a.entity_id = NEW.id AND a.action = 'status' AND a.detail LIKE 'draft -> approved%' AND a.chain IS NOT NULL)
+BEGIN SELECT RAISE(ABORT, 'an approval is made with its signed audit row (calbench db approve)'); END;
 )SQL";
 }
 

@@ -7,4 +7,7 @@ namespace calbench::db {
 const std::vector<const char*>& migrations();
 // Schema 7's station block (issue 38 item 3): station_progress and station_prompts (SQLite DDL).
 const char* schema8_station_progress();
+// Schema 9's last part, run after the audit rows already there are chained (Store::migrate).
+inline constexpr int kChainSchemaVersion = 9;
+const char* schema9_after_seal();
 }  // namespace calbench::db

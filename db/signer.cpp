@@ -29,17 +29,34 @@ std::string normalized_name(const std::string& name) {
 
 bool same_person(const std::string& a, const std::string& b) { return normalized_name(a) == normalized_name(b); }
 
-std::string creator_name(const CoefficientSetRecord& set) { return set.created_by.substr(0, set.created_by.rfind('@')); }
+std::string creator_name(const CoefficientSetRecord& set) {
+  if (!set.creator.empty()) return set.creator;
+  // A set read from a store before schema 9 (or a journal row): the name before the FIRST '@' —
+  // an operator name never holds one, a station name may.
+  return set.created_by.substr(0, set.created_by.find('@'));
+}
 
-bool stored_by_signer(const Store& store, const CoefficientSetRecord& set) {
-  if (store.authenticated()) return set.created_by_login == store.login();
-  // SQLite: the typed names. A console account is its person under two names, the account's login
-  // and the person's name: a set stored as either was stored by the one signing now.
+std::string person_of_login(Store& store, const std::string& login) {
+  if (!store.authenticated() || login.empty()) return {};
+  auto st = store.connection().prepare("SELECT name FROM calbench_users WHERE login = ?");
+  st.bind(1, login);
+  return st.step() ? st.text(0) : std::string();
+}
+
+bool stored_by_signer(Store& store, const CoefficientSetRecord& set) {
+  const std::string signer = store.actor().user;
+  if (same_person(creator_name(set), signer)) return true;  // the typed (or signed-in) person
+  if (store.authenticated()) {
+    // PostgreSQL: the same login, or two logins of one person (anna_st stores, anna approves).
+    if (set.created_by_login == store.login()) return true;
+    const std::string maker = person_of_login(store, set.created_by_login);
+    return !maker.empty() && same_person(maker, signer);
+  }
+  // SQLite: a console account is its person under two names, the account's login and the person's
+  // name: a set stored as either was stored by the one signing now.
   const std::string login = store.login();
-  if (login.rfind(kConsoleLoginPrefix, 0) == 0 &&
-      same_person(creator_name(set), login.substr(std::string(kConsoleLoginPrefix).size())))
-    return true;
-  return same_person(creator_name(set), store.actor().user);
+  return login.rfind(kConsoleLoginPrefix, 0) == 0 &&
+         same_person(creator_name(set), login.substr(std::string(kConsoleLoginPrefix).size()));
 }
 
 std::string signature_note(const std::string& login, bool authenticated) {
@@ -64,7 +81,10 @@ void Store::check_signer(const char* role) {
   st.bind(1, who);
   if (!st.step()) {
     // A login that may not sign at all (a station's) is told so by the database's rules first.
-    auto pr = conn_->prepare("SELECT has_column_privilege('coefficient_sets', 'status', 'UPDATE')");
+    // (Schema 9: nobody updates a status directly; the group that signs is what the server checks.)
+    auto pr = conn_->prepare("SELECT CASE WHEN EXISTS (SELECT 1 FROM pg_roles WHERE rolname = ?) "
+                             "THEN pg_has_role(session_user, ?::name, 'MEMBER') ELSE false END");
+    pr.bind(1, std::string("calbench_") + role).bind(2, std::string("calbench_") + role);
     pr.step();
     if (pr.int64(0) == 0)
       throw PermissionError(0, conn_->path() + ": the database refused this to role '" + who +

@@ -16,12 +16,17 @@ namespace calbench::db {
 std::string normalized_name(const std::string& name);
 bool same_person(const std::string& a, const std::string& b);
 
-// Whether `set` was stored by the one who signs on `store` now (four-eyes): on PostgreSQL the same
-// login, on SQLite the same name as the store's actor's (normalized_name). The check that the
-// signer is the login's person is Store::check_signer (db/signer.cpp).
-bool stored_by_signer(const Store& store, const CoefficientSetRecord& set);
-// The creator's name of a set ("NAME" of created_by "NAME@STATION").
+// Whether `set` was stored by the person who signs on `store` now (four-eyes is between persons,
+// not logins): the set's creator (its own field) is the signer's person, or (PostgreSQL) the same
+// login stored it, or the login that stored it is mapped to the signer's person; on SQLite a
+// console account's login counts as its person's name. PostgreSQL checks the same again in
+// calbench_approve. The check that the signer is the login's person is Store::check_signer.
+bool stored_by_signer(Store& store, const CoefficientSetRecord& set);
+// The person who stored a set: its creator field (schema 9), else (older rows) the name before
+// the first '@' of created_by "NAME@STATION".
 std::string creator_name(const CoefficientSetRecord& set);
+// PostgreSQL: the person a login is mapped to (calbench_users), "" when none; "" on SQLite.
+std::string person_of_login(Store& store, const std::string& login);
 
 // How a signature was made, for history and reports: "login anna" (PostgreSQL) or
 // "OS user tess, not authenticated (SQLite)"; "" when the login was not recorded (before schema 6).

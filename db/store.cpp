@@ -16,6 +16,7 @@
 #include "common/input_error.hpp"
 #include "common/utf8.hpp"
 #include "db/input_errors.hpp"
+#include "db/audit_chain.hpp"
 #include "db/signer.hpp"
 #include "db/postgres/pg_connection.hpp"
 #include "db/postgres/pg_schema.hpp"
@@ -207,11 +208,8 @@ int Store::schema_version() {
 }
 
 void Store::audit_migration(int from) {
-  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, action, detail, "
-                                       "db_role) VALUES (") + conn_->now_sql() + ", ?, ?, 'schema', ?, 'migrate', ?, ?)");
-  st.bind(1, actor_.user).bind(2, actor_.station).bind(3, kSchemaVersion)
-      .bind(4, "from version " + std::to_string(from) + " to " + std::to_string(kSchemaVersion)).bind(5, login());
-  st.run();
+  insert_audit_locked("schema", kSchemaVersion, std::nullopt, "migrate",
+                      "from version " + std::to_string(from) + " to " + std::to_string(kSchemaVersion));
 }
 
 void Store::migrate() {
@@ -225,7 +223,13 @@ void Store::migrate() {
     if (v > kSchemaVersion)
       throw DbError(1, conn_->path() + ": database schema version " + std::to_string(v) +
                            " is newer than this calbench (" + std::to_string(kSchemaVersion) + ")");
-    for (int i = v; i < kSchemaVersion; ++i) conn_->exec(m[static_cast<std::size_t>(i)]);
+    for (int i = v; i < kSchemaVersion; ++i) {
+      conn_->exec(m[static_cast<std::size_t>(i)]);
+      if (i + 1 == kChainSchemaVersion) {  // the audit rows already there are chained, then sealed
+        seal_audit_chain_locked(*conn_);
+        conn_->exec(schema9_after_seal());
+      }
+    }
     // user_version cannot take a bound parameter; the value is a compile-time integer.
     conn_->exec(("PRAGMA user_version = " + std::to_string(kSchemaVersion)).c_str());
     if (v < kSchemaVersion) audit_migration(v);
@@ -271,8 +275,12 @@ std::string Store::login() const {
 
 std::string Store::may_record_provisioning() {
   if (conn_->dialect() != Dialect::postgres) return {};
-  auto st = conn_->prepare("SELECT has_table_privilege('provisioning_events', 'INSERT') AND "
-                           "has_column_privilege('coefficient_sets', 'status', 'UPDATE'), session_user");
+  // Schema 9: provisioning goes through calbench_record_provisioning, for members of the group.
+  auto st = conn_->prepare(schema_version() >= kChainSchemaVersion
+                               ? "SELECT CASE WHEN EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'calbench_provisioning') "
+                                 "THEN pg_has_role(session_user, 'calbench_provisioning', 'MEMBER') ELSE false END, session_user"
+                               : "SELECT has_table_privilege('provisioning_events', 'INSERT') AND "
+                                 "has_column_privilege('coefficient_sets', 'status', 'UPDATE'), session_user");
   st.step();
   if (st.int64(0)) return {};
   return conn_->path() + ": the database refused this to role '" + st.text(1) +

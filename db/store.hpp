@@ -136,6 +136,9 @@ struct CoefficientSetRecord {
   std::optional<std::int64_t> parent_id, bench_run_id, inmotion_run_id;
   std::string payload_json;  // coefficients.json text
   std::string created_at, created_by;
+  // The person who stored it (the operator name typed or signed in), in its own field (schema 9;
+  // never parsed out of created_by "NAME@STATION").
+  std::string creator;
   // The login that stored it: PostgreSQL's session_user (authenticated), SQLite's OS user (not);
   // "" for a set stored before schema version 6 on SQLite.
   std::string created_by_login;
@@ -332,6 +335,10 @@ class Store {
   std::int64_t ensure_device_locked(const DeviceInfo& d);
   void audit_locked(const std::string& entity, std::int64_t entity_id, const std::string& action,
                     const std::string& detail);
+  // The audit row itself (SQLite: with its hash-chain link; PostgreSQL: through the server's
+  // functions where a login may write it), inside the caller's transaction.
+  void insert_audit_locked(const std::string& entity, std::int64_t entity_id, std::optional<std::int64_t> device,
+                           const std::string& action, const std::string& detail);
 
  private:
   CoefficientSetRecord read_set_row(Statement& st);

@@ -40,7 +40,7 @@ std::vector<DeviceSummary> Store::device_summaries() {
 
 static const char* kSetColumns =
     "SELECT s.id, s.device_id, d.serial, d.model, s.version, s.source, s.status, s.parent_id, s.bench_run_id, "
-    "s.inmotion_run_id, s.payload_json, s.created_at, s.created_by, s.created_by_role FROM coefficient_sets s "
+    "s.inmotion_run_id, s.payload_json, s.created_at, s.created_by, s.created_by_role, s.creator FROM coefficient_sets s "
     "JOIN devices d ON d.id = s.device_id ";
 
 CoefficientSetRecord Store::read_set_row(Statement& st) {
@@ -59,6 +59,7 @@ CoefficientSetRecord Store::read_set_row(Statement& st) {
   r.created_at = st.text(11);
   r.created_by = st.text(12);
   r.created_by_login = st.text(13);
+  r.creator = st.text(14);
   return r;
 }
 

@@ -4,7 +4,11 @@
 #include <stdexcept>
 
 #include "common/input_error.hpp"
+#include <set>
+
+#include "db/audit_chain.hpp"
 #include "db/input_errors.hpp"
+#include "db/schema.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -24,11 +28,52 @@ void Store::audit_locked(const std::string& entity, std::int64_t entity_id, cons
     st.bind(1, entity_id);
     if (st.step()) device = st.int64(0);
   }
-  // db_role: the login (on PostgreSQL the server stamps session_user, whatever is sent).
-  auto st = conn_->prepare(std::string("INSERT INTO audit_log(at, \"user\", station, entity, entity_id, device_id, action, "
-                                       "detail, db_role) VALUES (") + conn_->now_sql() + ", ?, ?, ?, ?, ?, ?, ?, ?)");
-  st.bind(1, actor_.user).bind(2, actor_.station).bind(3, entity).bind(4, entity_id).bind(5, device)
-      .bind(6, action).bind(7, detail).bind(8, login());
+  insert_audit_locked(entity, entity_id, device, action, detail);
+}
+
+// PostgreSQL (schema 9): a login records only what its own transaction created or answered, through
+// calbench_audit, which stamps who it is; signatures are written by the functions that make them
+// (calbench_approve, …). Schema changes, roles and the mapping of logins (the owner's) go directly.
+// SQLite: the row with its link of the hash chain (db/audit_chain.hpp), under the write lock.
+void Store::insert_audit_locked(const std::string& entity, std::int64_t entity_id, std::optional<std::int64_t> device,
+                                const std::string& action, const std::string& detail) {
+  if (conn_->dialect() == Dialect::postgres) {
+    static const std::set<std::string> own = {"create", "firmware", "ask", "answer", "timeout"};
+    if (own.count(action) && schema_version() >= kChainSchemaVersion) {
+      auto st = conn_->prepare("SELECT calbench_audit(?, ?, ?, ?, ?, ?)");
+      st.bind(1, entity).bind(2, entity_id).bind(3, action).bind(4, detail).bind(5, actor_.user).bind(6, actor_.station);
+      st.step();
+      return;
+    }
+    auto st = conn_->prepare("INSERT INTO audit_log(\"user\", station, entity, entity_id, device_id, action, detail) "
+                             "VALUES (?, ?, ?, ?, ?, ?, ?)");
+    st.bind(1, actor_.user).bind(2, actor_.station).bind(3, entity).bind(4, entity_id).bind(5, device)
+        .bind(6, action).bind(7, detail);
+    st.run();
+    return;
+  }
+  AuditRowFields r;
+  {
+    auto q = conn_->prepare(std::string("SELECT COALESCE(MAX(id), 0) + 1, ") + conn_->now_sql() + " FROM audit_log");
+    q.step();
+    r.id = q.int64(0);
+    r.at = q.text(1);
+  }
+  r.user = actor_.user, r.station = actor_.station, r.db_role = login(), r.entity = entity;
+  r.entity_id = entity_id, r.device_id = device, r.action = action, r.detail = detail;
+  std::string prev;
+  {
+    auto q = conn_->prepare("SELECT chain FROM audit_log WHERE id = ?");
+    q.bind(1, r.id - 1);
+    if (q.step() && !q.is_null(0)) prev = q.text(0);
+  }
+  const bool chained = schema_version() >= kChainSchemaVersion;
+  auto st = conn_->prepare(std::string("INSERT INTO audit_log(id, at, \"user\", station, entity, entity_id, device_id, "
+                                       "action, detail, db_role") + (chained ? ", chain" : "") +
+                           ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?" + (chained ? ", ?" : "") + ")");
+  st.bind(1, r.id).bind(2, r.at).bind(3, r.user).bind(4, r.station).bind(5, entity).bind(6, entity_id).bind(7, device)
+      .bind(8, action).bind(9, detail).bind(10, r.db_role);
+  if (chained) st.bind(11, audit_chain_link(prev, r));
   st.run();
 }
 
@@ -128,11 +173,11 @@ std::int64_t Store::insert_set_locked(std::int64_t device_id, SetSource source, 
   const int version = static_cast<int>(v.int64(0));
   auto ins = conn_->prepare(std::string(
       "INSERT INTO coefficient_sets(device_id, version, source, parent_id, bench_run_id, inmotion_run_id, "
-      "payload_json, status, created_at, created_by, uid, created_by_role) VALUES (?, ?, ?, ?, ?, ?, ?, 'draft', ") +
-      conn_->now_sql() + ", ?, ?, ?) RETURNING id");
+      "payload_json, status, created_at, created_by, uid, created_by_role, creator) VALUES (?, ?, ?, ?, ?, ?, ?, 'draft', ") +
+      conn_->now_sql() + ", ?, ?, ?, ?) RETURNING id");
   ins.bind(1, device_id).bind(2, version).bind(3, to_string(source)).bind(4, parent).bind(5, bench_run)
       .bind(6, inmotion_run).bind(7, canonical_json).bind(8, actor_.user + "@" + actor_.station)
-      .bind(9, uid.empty() ? new_uid() : uid).bind(10, login());
+      .bind(9, uid.empty() ? new_uid() : uid).bind(10, login()).bind(11, actor_.user);
   ins.step();
   const std::int64_t id = ins.int64(0);
   if (hook_) hook_("set-row");

@@ -2,7 +2,10 @@
 // events: the changes made to what is already stored, each audited.
 #include <algorithm>
 
+#include <stdexcept>
+
 #include "db/input_errors.hpp"
+#include "db/schema.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -38,6 +41,13 @@ void Store::set_setting(const std::string& key, const std::string& value) {
   if (!actor_.named())
     throw DbError(1, "changing a setting needs a named operator (--operator NAME or CALBENCH_OPERATOR); the OS "
                      "user '" + actor_.user + "' is not a signature");
+  if (conn_->dialect() == Dialect::postgres && schema_version() >= kChainSchemaVersion) {
+    conn_->write_transaction([&] {  // the server checks the group and writes the audit row
+      auto st = conn_->prepare("SELECT calbench_set_setting(?, ?, ?)");
+      st.bind(1, key).bind(2, value).bind(3, actor_.station).step();
+    });
+    return;
+  }
   conn_->write_transaction([&] {
     const std::string before = setting(key);
     auto st = conn_->prepare(std::string("INSERT INTO settings(key, value, changed_at, changed_by) VALUES (?, ?, ") +
@@ -81,10 +91,21 @@ void Store::set_status(std::int64_t set_id, SetStatus to, const std::string& rea
     if (!ok)
       throw arg_error("status", "set " + std::to_string(set_id) + " is " + to_string(from) +
                                             "; it cannot become " + to_string(to));
-    auto up = conn_->prepare("UPDATE coefficient_sets SET status = ? WHERE id = ?");
-    up.bind(1, to_string(to)).bind(2, set_id).run();
+    if (conn_->dialect() == Dialect::postgres && schema_version() >= kChainSchemaVersion) {
+      // Schema 9: a revocation through the server (group, person, audit row); an approval only
+      // through approve_checked (calbench_approve runs the database's verdict and four-eyes).
+      if (to != SetStatus::revoked)
+        throw std::logic_error("Store::set_status on PostgreSQL: only revocations (approve_checked, record_provisioning)");
+      auto f = conn_->prepare("SELECT calbench_revoke(?, ?, ?)");
+      f.bind(1, set_id).bind(2, reason).bind(3, actor_.station).step();
+      return;
+    }
+    // The audit row first: an approval's signed row must precede the change (SQLite schema 9's
+    // trigger coefficient_sets_approval_signed).
     audit_locked("coefficient_set", set_id, "status",
                  to_string(from) + " -> " + to_string(to) + (reason.empty() ? "" : ": " + reason));
+    auto up = conn_->prepare("UPDATE coefficient_sets SET status = ? WHERE id = ?");
+    up.bind(1, to_string(to)).bind(2, set_id).run();
   });
 }
 
@@ -93,6 +114,16 @@ void Store::record_provisioning(std::int64_t set_id, const std::string& kind, co
   if (kind != "device" && kind != "export") throw arg_error("kind", "expected device or export");
   check_text(target, "target", true);
   check_signer("provisioning");
+  if (conn_->dialect() == Dialect::postgres && schema_version() >= kChainSchemaVersion) {
+    // The server checks the group, the signed approval row and its verdict, and writes the event,
+    // the audit rows and the status together.
+    conn_->write_transaction([&] {
+      auto f = conn_->prepare("SELECT calbench_record_provisioning(?, ?, ?, ?, ?, ?, ?)");
+      f.bind(1, set_id).bind(2, kind).bind(3, target).bind(4, ok).bind(5, readback_json).bind(6, message)
+          .bind(7, actor_.station).step();
+    });
+    return;
+  }
   conn_->write_transaction([&] {
     auto st = conn_->prepare("SELECT device_id, status FROM coefficient_sets WHERE id = ?");
     st.bind(1, set_id);

@@ -48,6 +48,17 @@ std::string add_user(Store& store, const std::string& login, const std::string& 
       q.step();
       c.exec(q.text(0).c_str());
     }
+    // A role change takes the old role's group away: the login's rights are the new role's, at once,
+    // for its open sessions too (the server checks membership on every statement). Groups granted
+    // by hand beside the mapping stay (a QC login that may also store, say).
+    auto old_role = c.prepare("SELECT role FROM calbench_users WHERE login = ? AND role <> ?");
+    old_role.bind(1, login).bind(2, role);
+    if (old_role.step()) {
+      auto q = c.prepare("SELECT format('REVOKE %I FROM %I', ?::text, ?::text)");
+      q.bind(1, group_of_role(old_role.text(0))).bind(2, login);
+      q.step();
+      c.exec(q.text(0).c_str());
+    }
     auto before = c.prepare("SELECT name, role FROM calbench_users WHERE login = ?");
     before.bind(1, login);
     if (before.step()) {

@@ -428,6 +428,7 @@ const bool registered = add_command(70, [](CLI::App& app) {
   imp->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(imp, *a);
   add_user_commands(db, a);
+  add_verify_command(db, a);
   auto* sync = leaf(db, "sync", "forward a station's journal to the central PostgreSQL store (exactly once)", a, cmd_sync);
   sync->add_option("--journal", a->journal, "the station's journal (default: $CALBENCH_JOURNAL, else ./calbench-journal.db)");
   sync->add_flag("--status", a->status, "only list what is pending (nothing is forwarded; exit 0 either way)");

@@ -12,6 +12,8 @@
 #include "db/input_errors.hpp"
 #include "bench/io/json_util.hpp"
 #include "common/noise_spec.hpp"
+#include "bench/approval_thresholds.hpp"
+#include "db/signed_approval.hpp"
 #include "db/store.hpp"
 #include "devices/adis16488a.hpp"
 #include "devices/imu_open.hpp"
@@ -23,7 +25,7 @@ using namespace calbench::db;
 using namespace calbench::devices;
 
 struct ProvisionArgs {
-  std::string db, serial, uri, out, op;
+  std::string db, serial, uri, out, op, thresholds;
   std::int64_t set = 0;
   bool json = false;
 };
@@ -110,7 +112,15 @@ void run(const ProvisionArgs& a) {
   // A central store's role must be allowed to record the event before anything reaches a device
   // or a file: a device written without its record would be a unit nobody can trace.
   if (const std::string why = s.may_record_provisioning(); !why.empty()) throw PermissionError(0, why);
-  s.check_signer();  // PostgreSQL: --operator must be the login's person (db/signer.hpp)
+  s.check_signer("provisioning");  // PostgreSQL: --operator must be the login's person (db/signer.hpp)
+  // The signed approval, the device's audit rows intact and the verdict in force now, before
+  // anything reaches a unit or a file (PostgreSQL checks its part again in the server).
+  if (const auto why = provisioning_refusals(s, set, approval_thresholds(a.thresholds, a.thresholds.empty() ? set.model : ""));
+      !why.empty()) {
+    std::string all;
+    for (const auto& w : why) all += "\n  - " + w;
+    throw std::runtime_error("set " + std::to_string(set.id) + " is not provisioned; nothing was written:" + all);
+  }
 
   if (!a.out.empty()) {
     write_text_atomic(a.out, set.payload_json + "\n");
@@ -184,6 +194,7 @@ const bool registered = add_command(80, [](CLI::App& app) {
   to->excludes(ex);
   ex->excludes(to);
   sub->add_option("--db", a->db, "database: a SQLite file or a postgresql:// URI (default: $CALBENCH_DB, else ./calbench.db)");
+  sub->add_option("--thresholds", a->thresholds, "QC thresholds the set must still meet (default: its device class's, as db approve)");
   sub->add_flag("--json", a->json, "machine-readable output");
   add_operator_option(sub, a->op, "who provisions, recorded with the event (default: $CALBENCH_OPERATOR, else the OS user)");
   sub->callback([a] {

@@ -30,6 +30,7 @@ struct DbArgs {
   std::string journal;  // a station's journal (with a PostgreSQL --db)
   bool status = false;  // db sync --status
   std::string login, name, role;  // db user add
+  std::string admin;               // db user add --admin LOGIN (SQLite console accounts)
 };
 
 inline std::string db_path(const DbArgs& a) { return a.db.empty() ? db::Store::default_path() : a.db; }
@@ -49,5 +50,7 @@ void cmd_store_bench(const DbArgs& a);
 void cmd_sync(const DbArgs& a);
 // db user add|list: the people behind PostgreSQL logins (bench/cli/cmd_db_user.cpp), under `db`.
 void add_user_commands(CLI::App* db, const std::shared_ptr<DbArgs>& a);
+// db verify: the record against the audit hash chain and the signed approvals (cmd_db_verify.cpp).
+void add_verify_command(CLI::App* db, const std::shared_ptr<DbArgs>& a);
 
 }  // namespace calbench::cli::dbcmd

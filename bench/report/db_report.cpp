@@ -18,6 +18,8 @@
 #include "bench/report/inmotion_section.hpp"
 #include "db/fleet.hpp"
 #include "db/input_errors.hpp"
+#include "db/audit_chain.hpp"
+#include "db/signed_approval.hpp"
 #include "db/signer.hpp"
 #include "db/station_live.hpp"
 
@@ -185,23 +187,30 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     reasons = chk.reasons;
     const std::string set = "Set " + std::to_string(current->id);
     // A status changed behind calbench's back (e.g. by hand in a SQLite file) has no signed
-    // approval in the audit log: not a pass.
-    const bool signed_approval = !approved || std::any_of(audit.begin(), audit.end(), approval_row);
-    if (!signed_approval)
-      reasons.push_back("set " + std::to_string(current->id) + " is " + to_string(current->status) +
-                        " but the audit log holds no signed approval of it: its status was changed outside calbench");
+    // approval in the audit log, or one that fails the log's hash chain or four-eyes: not a pass.
+    bool signed_approval = true;
+    if (approved) {
+      const db::SignedApproval sa = db::signed_approval(store, *current);
+      signed_approval = sa.ok;
+      if (!sa.ok) reasons.push_back("set " + std::to_string(current->id) + " is " + to_string(current->status) + " but " + sa.why);
+    }
+    for (const auto& br : db::check_audit_chain(store, dev.id).breaks) {
+      signed_approval = false;  // a device whose audit rows were edited outside calbench is not a pass
+      reasons.push_back("audit row " + std::to_string(br.id) + " of this device: " + br.why);
+    }
     if (chk.ok && approved && signed_approval) {
       word = "PASS";
       cls = "pass";
       said = set + " is " + to_string(current->status) + " and meets every threshold in force.";
-    } else if (chk.ok && !approved) {
+    } else if (chk.ok && !approved && signed_approval) {
       word = "NOT APPROVED";
       cls = "draft";
       said = set + " is a draft: it meets every threshold in force but has not been approved (calbench db approve " +
              std::to_string(current->id) + ").";
     } else {
-      said = !approved ? set + " is a draft and would be refused approval:"
-             : chk.ok  ? set + " is " + to_string(current->status) + " without a signed approval:"
+      said = !approved && chk.ok ? set + " is a draft; the audit log of the device was changed outside calbench:"
+             : !approved ? set + " is a draft and would be refused approval:"
+             : chk.ok  ? set + " is " + to_string(current->status) + " without a valid signed approval:"
                        : set + " is " + to_string(current->status) + " but does not meet the thresholds in force:";
     }
   }

@@ -2,6 +2,8 @@
 // append. Each records its version in schema_version.
 #include "db/postgres/pg_schema.hpp"
 
+#include <string>
+
 #include "db/postgres/pg_schema_sql.hpp"
 
 namespace calbench::db {
@@ -132,8 +134,7 @@ INSERT INTO schema_version(version) VALUES (8);
 
 // Schema 9 (issue 54): signatures that hold against an insider. Audit rows are written only by the
 // server's functions and triggers; see docs/database.md "Threat model".
-const char* pg_schema9_insider() {
-  return R"SQL(
+static const char* const pg_schema9_functions = R"SQL(
 -- A security event that changed nothing (failed log-in, lock-out, a refusal): the one kind of row a
 -- login may ask to be written, always as itself (db_role and "user" are the server's).
 CREATE FUNCTION calbench_audit_security(action text, login text, detail text, station text) RETURNS void
@@ -147,20 +148,277 @@ BEGIN
           left(coalesce(station, ''), 200), 'security', 0, action,
           left(coalesce(login, '') || CASE WHEN coalesce(detail, '') = '' THEN '' ELSE ': ' || detail END, 4000));
 END $f$;
-REVOKE ALL ON FUNCTION calbench_audit_security(text, text, text, text) FROM PUBLIC;
-DO $$
-DECLARE r text;
+-- Who a login is, and a person's name as compared (case, surrounding and repeated spaces, Unicode
+-- spaces ignored: the SQLite store's normalized_name, db/signer.cpp).
+CREATE FUNCTION calbench_person(p_login text) RETURNS text LANGUAGE sql STABLE SECURITY DEFINER
+  SET search_path = public, pg_temp AS $f$ SELECT u.name FROM calbench_users u WHERE u.login = p_login $f$;
+CREATE FUNCTION calbench_person_key(p_name text) RETURNS text LANGUAGE sql IMMUTABLE AS $f$
+  SELECT lower(btrim(regexp_replace(translate(coalesce(p_name, ''),
+    chr(160) || chr(5760) || chr(8192) || chr(8193) || chr(8194) || chr(8195) || chr(8196) || chr(8197) || chr(8198) ||
+    chr(8199) || chr(8200) || chr(8201) || chr(8202) || chr(8239) || chr(8287) || chr(12288), repeat(' ', 16)),
+    '\s+', ' ', 'g')))
+$f$;
+-- The person who typed the set's operator name is kept in its own column (never parsed out of
+-- created_by): immutable with the other columns (calbench_set_update compares them all).
+ALTER TABLE coefficient_sets ADD COLUMN creator text NOT NULL DEFAULT '';
+-- Older sets: the name before the first '@' (an operator name never holds one), written once here
+-- with the immutability rule lifted for this one statement.
+ALTER TABLE coefficient_sets DISABLE TRIGGER coefficient_sets_update;
+UPDATE coefficient_sets SET creator = split_part(created_by, '@', 1);
+ALTER TABLE coefficient_sets ENABLE TRIGGER coefficient_sets_update;
+
+-- A status changes only inside the functions below (SECURITY DEFINER, owned by the tables' owner),
+-- for every role, the owner included: a direct UPDATE of status is refused.
+CREATE OR REPLACE FUNCTION calbench_set_update() RETURNS trigger LANGUAGE plpgsql AS $f$
 BEGIN
-  FOREACH r IN ARRAY ARRAY['calbench_station', 'calbench_qc', 'calbench_provisioning', 'calbench_reader'] LOOP
-    IF EXISTS (SELECT 1 FROM pg_roles WHERE rolname = r) THEN
-      EXECUTE format('GRANT EXECUTE ON FUNCTION calbench_audit_security(text, text, text, text) TO %I', r);
+  IF to_jsonb(NEW) - 'status' IS DISTINCT FROM to_jsonb(OLD) - 'status' THEN
+    RAISE EXCEPTION 'coefficient sets are immutable' USING ERRCODE = 'integrity_constraint_violation';
+  END IF;
+  IF NEW.status IS DISTINCT FROM OLD.status AND (current_user = session_user OR current_user::text <>
+      (SELECT c.relowner::regrole::text FROM pg_class c WHERE c.oid = 'coefficient_sets'::regclass)) THEN
+    RAISE EXCEPTION 'a status changes only through calbench_approve, calbench_revoke or calbench_record_provisioning '
+                    '(calbench db approve, db revoke, provision): they check the verdict and write the signed audit row'
+      USING ERRCODE = 'insufficient_privilege';
+  END IF;
+  IF NOT ((OLD.status = 'draft' AND NEW.status IN ('approved', 'revoked'))
+       OR (OLD.status = 'approved' AND NEW.status IN ('provisioned', 'revoked'))
+       OR (OLD.status = 'provisioned' AND NEW.status IN ('provisioned', 'revoked'))) THEN
+    RAISE EXCEPTION 'status change not allowed: % -> %', OLD.status, NEW.status
+      USING ERRCODE = 'integrity_constraint_violation';
+  END IF;
+  RETURN NEW;
+END $f$;
+
+CREATE FUNCTION calbench_need_group(p_group text, p_what text) RETURNS text LANGUAGE plpgsql STABLE
+  SET search_path = public, pg_temp AS $f$
+DECLARE who text := calbench_person(session_user);
+BEGIN
+  IF NOT pg_has_role(session_user, p_group, 'MEMBER') THEN
+    RAISE EXCEPTION 'permission denied: only a login in % may %', p_group, p_what USING ERRCODE = 'insufficient_privilege';
+  END IF;
+  IF who IS NULL THEN
+    RAISE EXCEPTION 'login % is not mapped to a person, and a signature names one (calbench db user add)', session_user
+      USING ERRCODE = 'insufficient_privilege';
+  END IF;
+  RETURN who;
+END $f$;
+
+-- What every role may record itself: that it created (or, for a device, updated; for a prompt,
+-- asked or answered) a row in this very transaction. Who it is, is the server's: the login's
+-- person when mapped (else the typed name), db_role = session_user. Signatures (status, approve-
+-- refused, provision, export, settings) are written only by the functions that make the change.
+CREATE FUNCTION calbench_audit(p_entity text, p_entity_id bigint, p_action text, p_detail text, p_user text,
+                               p_station text) RETURNS void
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+DECLARE dev bigint; fresh boolean; me xid := pg_current_xact_id()::xid;
+BEGIN
+  IF p_action NOT IN ('create', 'firmware', 'ask', 'answer', 'timeout') THEN
+    RAISE EXCEPTION 'an audit row "%" is written only by the function that makes the change', p_action
+      USING ERRCODE = 'insufficient_privilege';
+  END IF;
+  CASE p_entity
+    WHEN 'device' THEN SELECT t.id, t.xmin = me INTO dev, fresh FROM devices t WHERE t.id = p_entity_id;
+    WHEN 'station' THEN SELECT NULL, t.xmin = me INTO dev, fresh FROM stations t WHERE t.id = p_entity_id;
+    WHEN 'coefficient_set' THEN SELECT t.device_id, t.xmin = me INTO dev, fresh FROM coefficient_sets t WHERE t.id = p_entity_id;
+    WHEN 'bench_run' THEN SELECT t.device_id, t.xmin = me INTO dev, fresh FROM bench_runs t WHERE t.id = p_entity_id;
+    WHEN 'inmotion_run' THEN SELECT t.device_id, t.xmin = me INTO dev, fresh FROM inmotion_runs t WHERE t.id = p_entity_id;
+    WHEN 'station_prompt' THEN SELECT NULL, t.xmin = me INTO dev, fresh FROM station_prompts t WHERE t.id = p_entity_id;
+    ELSE RAISE EXCEPTION 'no audit row for a %', p_entity USING ERRCODE = 'insufficient_privilege';
+  END CASE;
+  IF fresh IS NOT TRUE THEN
+    RAISE EXCEPTION 'an audit row names a row its own transaction wrote (% % was not)', p_entity, p_entity_id
+      USING ERRCODE = 'insufficient_privilege';
+  END IF;
+  INSERT INTO audit_log("user", station, entity, entity_id, device_id, action, detail)
+  VALUES (coalesce(calbench_person(session_user), p_user), p_station, p_entity, p_entity_id, dev, p_action, p_detail);
+END $f$;
+
+-- The parts of the verdict the database holds (every recorded QC result passes; an in-motion fit
+-- whose adaptive noise failed is refused), shared by approval and provisioning. The coefficient,
+-- sigma and fit-quality limits of the thresholds file are the client's (docs/database.md).
+CREATE FUNCTION calbench_db_verdict(p_set bigint) RETURNS text[] LANGUAGE plpgsql STABLE
+  SET search_path = public, pg_temp AS $f$
+DECLARE s record; why text[] := '{}'; q record;
+BEGIN
+  SELECT * INTO s FROM coefficient_sets WHERE id = p_set;
+  FOR q IN SELECT metric, value, threshold FROM qc_results
+           WHERE NOT pass AND ((s.bench_run_id IS NOT NULL AND bench_run_id = s.bench_run_id)
+                            OR (s.inmotion_run_id IS NOT NULL AND inmotion_run_id = s.inmotion_run_id)) LOOP
+    why := why || format('QC %s = %s failed%s (the database''s check)', q.metric, q.value,
+                         CASE WHEN q.threshold IS NULL THEN '' ELSE format(' (threshold %s)', q.threshold) END);
+  END LOOP;
+  IF s.inmotion_run_id IS NOT NULL AND EXISTS (SELECT 1 FROM inmotion_runs r WHERE r.id = s.inmotion_run_id
+      AND (r.result_json::jsonb #>> '{adaptive_noise,failed}') = 'true') THEN
+    why := why || 'in-motion filter: the adaptive noise scale failed (the database''s check)'::text;
+  END IF;
+  IF s.parent_id IS NOT NULL AND EXISTS (SELECT 1 FROM coefficient_sets p WHERE p.id = s.parent_id
+      AND p.status IN ('draft', 'revoked')) THEN
+    why := why || format('parent set %s is draft or revoked (the database''s check)', s.parent_id);
+  END IF;
+  RETURN why;
+END $f$;
+
+-- Approval: the client's verdict (its thresholds file) comes in p_client_reasons; the database adds
+-- its own checks and four-eyes by person, and either approves (the signed status row) or records
+-- the refusal with every reason (approve-refused) and returns the reasons.
+CREATE FUNCTION calbench_approve(p_set bigint, p_station text, p_client_reasons text[], p_note text) RETURNS text[]
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+DECLARE who text := calbench_need_group('calbench_qc', 'approve'); s record; why text[] := coalesce(p_client_reasons, '{}');
+        maker text; four_eyes boolean;
+BEGIN
+  SELECT * INTO s FROM coefficient_sets WHERE id = p_set FOR UPDATE;
+  IF NOT FOUND THEN RAISE EXCEPTION 'no coefficient set %', p_set USING ERRCODE = 'no_data_found'; END IF;
+  maker := calbench_person(s.created_by_role);
+  four_eyes := coalesce((SELECT value FROM settings WHERE key = 'four_eyes'), 'on') = 'on';
+  -- The database's own checks decide only where the client found nothing: a refusal stands anyway.
+  IF cardinality(why) = 0 AND s.status <> 'draft' THEN
+    why := why || format('set %s is %s, only draft sets can be approved', p_set, s.status);
+  END IF;
+  IF cardinality(why) = 0 THEN why := why || calbench_db_verdict(p_set); END IF;
+  IF cardinality(why) = 0 AND four_eyes AND (s.created_by_role = session_user OR calbench_person_key(who) = calbench_person_key(s.creator)
+                    OR calbench_person_key(who) = calbench_person_key(maker)) THEN
+    why := why || format('four-eyes: set %s was stored by %s (login %s%s); %s (login %s) is the same person: another '
+                         'person must approve it', p_set, s.creator, s.created_by_role,
+                         CASE WHEN maker IS NULL THEN '' ELSE ', ' || maker END, who, session_user);
+  END IF;
+  IF cardinality(why) > 0 THEN
+    INSERT INTO audit_log("user", station, entity, entity_id, device_id, action, detail)
+    VALUES (who, p_station, 'coefficient_set', p_set, s.device_id, 'approve-refused', array_to_string(why, '; '));
+    RETURN why;
+  END IF;
+  INSERT INTO audit_log("user", station, entity, entity_id, device_id, action, detail)
+  VALUES (who, p_station, 'coefficient_set', p_set, s.device_id, 'status',
+          format('draft -> approved: signed by %s (login %s), stored by %s (login %s%s)%s%s', who, session_user, s.creator,
+                 s.created_by_role, CASE WHEN maker IS NULL THEN '' ELSE ', ' || maker END,
+                 CASE WHEN four_eyes THEN '' ELSE ', four-eyes off' END,
+                 CASE WHEN coalesce(p_note, '') = '' THEN '' ELSE '; ' || p_note END));
+  UPDATE coefficient_sets SET status = 'approved' WHERE id = p_set;
+  RETURN '{}';
+END $f$;
+
+CREATE FUNCTION calbench_revoke(p_set bigint, p_reason text, p_station text) RETURNS void
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+DECLARE who text := calbench_need_group('calbench_qc', 'revoke'); s record;
+BEGIN
+  SELECT * INTO s FROM coefficient_sets WHERE id = p_set FOR UPDATE;
+  IF NOT FOUND THEN RAISE EXCEPTION 'no coefficient set %', p_set USING ERRCODE = 'no_data_found'; END IF;
+  INSERT INTO audit_log("user", station, entity, entity_id, device_id, action, detail)
+  VALUES (who, p_station, 'coefficient_set', p_set, s.device_id, 'status',
+          s.status || ' -> revoked' || CASE WHEN coalesce(p_reason, '') = '' THEN '' ELSE ': ' || p_reason END);
+  UPDATE coefficient_sets SET status = 'revoked' WHERE id = p_set;
+END $f$;
+
+-- Provisioning: only a set with its signed approval row (another person than its creator, unless
+-- four-eyes was off), whose database verdict still holds. Asked before anything is written to a
+-- unit or a file, and again when the event is recorded.
+CREATE FUNCTION calbench_provisioning_refusals(p_set bigint) RETURNS text[] LANGUAGE plpgsql STABLE SECURITY DEFINER
+  SET search_path = public, pg_temp AS $f$
+DECLARE s record; a record; why text[] := '{}';
+BEGIN
+  SELECT * INTO s FROM coefficient_sets WHERE id = p_set;
+  IF NOT FOUND OR s.status NOT IN ('approved', 'provisioned') THEN
+    RETURN ARRAY[format('set %s is not approved: only approved sets are provisioned', p_set)];
+  END IF;
+  SELECT * INTO a FROM audit_log l WHERE l.entity = 'coefficient_set' AND l.entity_id = p_set AND l.action = 'status'
+    AND l.detail LIKE 'draft -> approved%' ORDER BY l.id DESC LIMIT 1;
+  IF NOT FOUND THEN
+    why := why || format('set %s has no signed approval row in the audit log', p_set);
+  ELSIF a.detail NOT LIKE '%, four-eyes off%' AND (a.db_role = s.created_by_role
+        OR calbench_person_key(a."user") = calbench_person_key(s.creator)
+        OR calbench_person_key(calbench_person(a.db_role)) = calbench_person_key(calbench_person(s.created_by_role))) THEN
+    why := why || format('set %s was approved by %s (login %s), the person who stored it, with four-eyes on', p_set,
+                         a."user", a.db_role);
+  END IF;
+  RETURN why || calbench_db_verdict(p_set);
+END $f$;
+
+CREATE FUNCTION calbench_record_provisioning(p_set bigint, p_kind text, p_target text, p_ok boolean, p_readback text,
+                                             p_message text, p_station text) RETURNS bigint
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+DECLARE who text := calbench_need_group('calbench_provisioning', 'provision'); s record; ev bigint; why text[];
+BEGIN
+  SELECT * INTO s FROM coefficient_sets WHERE id = p_set FOR UPDATE;
+  IF NOT FOUND OR s.status NOT IN ('approved', 'provisioned') THEN
+    RAISE EXCEPTION 'set % is not approved: only approved sets are provisioned', p_set USING ERRCODE = 'check_violation';
+  END IF;
+  why := calbench_provisioning_refusals(p_set);
+  IF cardinality(why) > 0 THEN
+    RAISE EXCEPTION 'set % is not provisioned: %', p_set, array_to_string(why, '; ') USING ERRCODE = 'check_violation';
+  END IF;
+  INSERT INTO provisioning_events(set_id, device_id, kind, target, ok, readback_json, message, actor)
+  VALUES (p_set, s.device_id, p_kind, p_target, p_ok, coalesce(nullif(p_readback, ''), '{}'), coalesce(p_message, ''),
+          who || '@' || coalesce(p_station, '')) RETURNING id INTO ev;
+  INSERT INTO audit_log("user", station, entity, entity_id, device_id, action, detail)
+  VALUES (who, p_station, 'coefficient_set', p_set, s.device_id, CASE WHEN p_kind = 'device' THEN 'provision' ELSE 'export' END,
+          format('%s to %s (event %s)%s', CASE WHEN p_ok THEN 'ok' ELSE 'FAILED' END, p_target, ev,
+                 CASE WHEN coalesce(p_message, '') = '' THEN '' ELSE ': ' || p_message END));
+  IF p_kind = 'device' AND p_ok THEN
+    IF s.status <> 'provisioned' THEN
+      INSERT INTO audit_log("user", station, entity, entity_id, device_id, action, detail)
+      VALUES (who, p_station, 'coefficient_set', p_set, s.device_id, 'status', 'approved -> provisioned');
     END IF;
+    UPDATE coefficient_sets SET status = 'provisioned' WHERE id = p_set;
+  END IF;
+  RETURN ev;
+END $f$;
+
+CREATE FUNCTION calbench_set_setting(p_key text, p_value text, p_station text) RETURNS void
+  LANGUAGE plpgsql SECURITY DEFINER SET search_path = public, pg_temp AS $f$
+DECLARE who text := calbench_need_group('calbench_qc', 'change a setting'); before text;
+BEGIN
+  IF NOT (p_key = 'four_eyes' AND p_value IN ('on', 'off')) THEN
+    RAISE EXCEPTION 'unknown setting %=%', p_key, p_value USING ERRCODE = 'check_violation';
+  END IF;
+  before := coalesce((SELECT value FROM settings WHERE key = p_key), 'on');
+  INSERT INTO settings(key, value, changed_at, changed_by) VALUES (p_key, p_value, now(), who || '@' || coalesce(p_station, ''))
+  ON CONFLICT (key) DO UPDATE SET value = excluded.value, changed_at = excluded.changed_at, changed_by = excluded.changed_by;
+  INSERT INTO audit_log("user", station, entity, entity_id, action, detail)
+  VALUES (who, p_station, 'setting', 0, 'set', p_key || ': ' || before || ' -> ' || p_value);
+END $f$;
+
+DO $$
+DECLARE f text;
+BEGIN
+  FOREACH f IN ARRAY ARRAY['calbench_audit(text, bigint, text, text, text, text)', 'calbench_approve(bigint, text, text[], text)',
+                           'calbench_revoke(bigint, text, text)',
+                           'calbench_record_provisioning(bigint, text, text, boolean, text, text, text)',
+                           'calbench_set_setting(text, text, text)', 'calbench_audit_security(text, text, text, text)',
+                           'calbench_provisioning_refusals(bigint)'] LOOP
+    EXECUTE format('REVOKE ALL ON FUNCTION %s FROM PUBLIC', f);
   END LOOP;
 END $$;
-INSERT INTO schema_version(version) VALUES (9);
 )SQL";
-}
 
+// Schema 9's grants (also called by roles.sql): nobody writes audit rows, statuses, provisioning
+// events or settings directly; each role executes the functions that make its changes.
+static const char* const pg_schema9_grants = R"SQL(
+CREATE FUNCTION calbench_grant_insider() RETURNS void LANGUAGE plpgsql AS $f$
+BEGIN
+  IF NOT EXISTS (SELECT 1 FROM pg_roles WHERE rolname = 'calbench_station') THEN
+    RETURN;  -- roles.sql, run later, calls this again
+  END IF;
+  REVOKE INSERT ON audit_log FROM calbench_station, calbench_qc, calbench_provisioning, calbench_reader;
+  REVOKE UPDATE ON coefficient_sets FROM calbench_qc, calbench_provisioning;
+  REVOKE INSERT, UPDATE ON settings FROM calbench_qc;
+  REVOKE INSERT ON provisioning_events FROM calbench_provisioning;
+  GRANT EXECUTE ON FUNCTION calbench_audit(text, bigint, text, text, text, text) TO calbench_station, calbench_qc;
+  GRANT EXECUTE ON FUNCTION calbench_approve(bigint, text, text[], text) TO calbench_qc;
+  GRANT EXECUTE ON FUNCTION calbench_revoke(bigint, text, text) TO calbench_qc;
+  GRANT EXECUTE ON FUNCTION calbench_set_setting(text, text, text) TO calbench_qc;
+  GRANT EXECUTE ON FUNCTION calbench_record_provisioning(bigint, text, text, boolean, text, text, text)
+    TO calbench_provisioning;
+  GRANT EXECUTE ON FUNCTION calbench_provisioning_refusals(bigint)
+    TO calbench_station, calbench_qc, calbench_provisioning, calbench_reader;
+  GRANT EXECUTE ON FUNCTION calbench_audit_security(text, text, text, text)
+    TO calbench_station, calbench_qc, calbench_provisioning, calbench_reader;
+END $f$;
+)SQL";
+
+const char* pg_schema9_insider() {
+  static const std::string m = std::string(pg_schema9_functions) + pg_schema9_grants +
+                               "SELECT calbench_grant_insider();\nINSERT INTO schema_version(version) VALUES (9);\n";
+  return m.c_str();
+}
 const std::vector<const char*>& pg_migrations() {
   static const std::vector<const char*> m = {
       // ---- 4: a stable id per run and set (forwarding from a station's journal is idempotent) ----

@@ -15,8 +15,13 @@
 -- |                        | provisioned; record provisioning events                                  |
 -- | calbench_reader        | read everything; write nothing                                            |
 --
--- Every role appends to the audit log (its own actions); nobody updates or deletes it
--- (schema.sql), and each row carries the database role that wrote it.
+-- Schema 9 (issue 54, calbench_grant_insider() in db/postgres/pg_schema.cpp) takes the direct
+-- writes of signatures away from every role: a status changes, a provisioning event or a setting is
+-- written, and an audit row is appended, only by the server's functions (calbench_approve,
+-- calbench_revoke, calbench_record_provisioning, calbench_set_setting, calbench_audit), which check
+-- the group, four-eyes by person and the database's part of the verdict. The grants below are the
+-- older schemas'; on schema 9 the call at the end revokes the direct ones. Nobody updates or
+-- deletes the audit log (schema.sql), and each row carries the database role that wrote it.
 
 BEGIN;
 SET LOCAL client_min_messages = warning;
@@ -96,6 +101,14 @@ DO $$
 BEGIN
   IF to_regprocedure('calbench_grant_station_live()') IS NOT NULL THEN
     PERFORM calbench_grant_station_live();
+  END IF;
+END $$;
+
+-- Schema 9: signatures only through the server's functions (revokes the direct writes above).
+DO $$
+BEGIN
+  IF to_regprocedure('calbench_grant_insider()') IS NOT NULL THEN
+    PERFORM calbench_grant_insider();
   END IF;
 END $$;
 

@@ -138,7 +138,7 @@ admin -d old -1 -f "$SRC/db/postgres/schema.sql" > /dev/null
 admin -d old -f "$SRC/db/postgres/roles.sql" > /dev/null
 echo "127.0.0.1:$port:old:station3:${PW[station3]}" >> "$PGPASSFILE"
 set +e; "$CALBENCH" db devices --db "postgresql://station3@127.0.0.1:$port/old" 2> err.txt; rc=$?; set -e
-[ "$rc" = 1 ] && grep -q "schema version 3, this calbench needs 8" err.txt && grep -q "db init" err.txt || { cat err.txt; fail "older schema: exit $rc"; }
+[ "$rc" = 1 ] && grep -q "schema version 3, this calbench needs 9" err.txt && grep -q "db init" err.txt || { cat err.txt; fail "older schema: exit $rc"; }
 # Two units in one table cycle (a fixture): both reach the centre with their slots and one table run.
 "$CALBENCH" station run --plan "$SRC/tests/data/short_plan.toml" --emulated --units 2 --seed 40 --db "$ST" --out fx \
   --json > fx.json 2> fx.txt || { cat fx.txt; fail "fixture station run"; }

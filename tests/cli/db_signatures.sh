@@ -123,9 +123,13 @@ grep -q "Quinn QC@line-7" r.html && grep -q "Pat Provisioning@line-7" r.html && 
   || fail "report without the operators' names"
 grep -q "Quinn QC@line-7 (OS user $me, not authenticated (SQLite))" r.html || fail "report does not say the signature is unauthenticated"
 # A status changed by hand in the file (no signed approval in the audit log) is not a PASS (issue 35).
-sqlite3 s.db "UPDATE coefficient_sets SET status = 'approved' WHERE id = 3"
+# Issue 54: the store refuses it (an approval is made with its signed audit row) ...
+if sqlite3 s.db "UPDATE coefficient_sets SET status = 'approved' WHERE id = 3" 2> upd.txt; then fail "a status changed by hand"; fi
+grep -q "an approval is made with its signed audit row" upd.txt || { cat upd.txt; fail "hand approval refused for another reason"; }
+# ... and one who writes the file and drops that rule still gets no PASS.
+sqlite3 s.db "DROP TRIGGER coefficient_sets_approval_signed; UPDATE coefficient_sets SET status = 'approved' WHERE id = 3"
 "$CALBENCH" report 1001 --html r2.html > /dev/null
-grep -q 'data-verdict="FAIL"' r2.html && grep -q "set 3 is approved but the audit log holds no signed approval of it" r2.html \
+grep -q 'data-verdict="FAIL"' r2.html && grep -q "set 3 is approved but the audit log holds no signed approval of set 3" r2.html \
   || fail "a hand-made approval passed the report"
 # The IMU digest names the file it is of (issue 35 sign-off: an HDF5 recording's was called "SHA-256
 # of imu.csv" although it is of recording.h5): history text and --json, and the device report.
