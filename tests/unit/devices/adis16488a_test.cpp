@@ -410,4 +410,45 @@ TEST(Adis16488a, ProvisionedUnitOutputsTheTruthUpToTheRegisterLimit) {
   EXPECT_EQ(r.emu.flash_count(), 0u);
 }
 
+// A unit that holds something else than it was sent (here: bit 8 of X_ACCL_SCALE flipped on its way
+// in). The provisioning fails and names the coefficients the unit would apply differently.
+struct CorruptingBus : SpiBus {
+  Adis16488aEmulator& emu;
+  int page = -1;
+  explicit CorruptingBus(Adis16488aEmulator& e) : emu(e) {}
+  std::vector<std::uint16_t> transfer(const std::vector<std::uint16_t>& words) override {
+    std::vector<std::uint16_t> w = words;
+    for (auto& x : w) {
+      if ((x & 0xFF00) == 0x8000) page = x & 0xFF;                                        // PAGE_ID write
+      else if (page == 2 && (x & 0xFF00) == (0x8000 | 0x0B << 8)) x = static_cast<std::uint16_t>(x ^ 0x01);  // X_ACCL_SCALE high byte
+    }
+    return emu.transfer(w);
+  }
+  bool wait_data_ready(double t) override { return emu.wait_data_ready(t); }
+  double now() const override { return emu.now(); }
+  void delay(double s) override { emu.delay(s); }
+  std::string describe() const override { return "corrupting bus"; }
+};
+
+TEST(Adis16488a, ProvisioningFailsWhenTheUnitWouldApplySomethingElse) {
+  const SensorErrors e = draw_random_unit(2);
+  Rig r(e);
+  CorruptingBus bus(r.emu);
+  Adis16488a imu(bus);
+  imu.connect();
+  const ProvisionResult p = imu.provision(e);
+  EXPECT_FALSE(p.ok);
+  EXPECT_TRUE(p.wrote);
+  EXPECT_EQ(p.read_back.accel_scale[0], static_cast<std::int16_t>(p.written.accel_scale[0] ^ 0x100));
+  std::set<std::string> bad;
+  for (const auto& k : p.checks)
+    if (!k.ok) bad.insert(k.coefficient);
+  // The scale, and the bias it carries (B was computed for the intended gain).
+  EXPECT_EQ(bad, (std::set<std::string>{"accel M[0][0]", "accel bias[0]"}));
+  EXPECT_NE(p.message.find("the unit would apply something other than the approved set: accel M[0][0]: the unit's "
+                           "X_ACCL_SCALE cancels"),
+            std::string::npos)
+      << p.message;
+}
+
 }  // namespace
