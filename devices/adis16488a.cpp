@@ -1,7 +1,9 @@
 #include "devices/adis16488a.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace calbench::devices {
 namespace {
@@ -12,19 +14,57 @@ std::int32_t to_i32(std::uint16_t hi, std::uint16_t lo) {
 constexpr double kScaleLsb = 1.0 / 32768.0;
 const double kGyroLsb = adis::reg("XG_BIAS").scale;
 const double kAccelLsb = adis::reg("XA_BIAS").scale;
+// Register values that can cancel an error. SCALE = −32768 is a gain of 0: it would cancel no
+// scale error, only silence the axis, so the usable range stops at −32767.
+constexpr std::int64_t kScaleMin = -32767, kScaleMax = 32767;
+constexpr std::int64_t kBiasMin = -2147483648LL, kBiasMax = 2147483647LL;
+// Float rounding allowed on top of half an LSB in check_user_cal(), in LSBs and relative.
+constexpr double kLsbSlack = 1e-6, kRelSlack = 4 * std::numeric_limits<double>::epsilon();
 
-std::int16_t quant16(double v) { return static_cast<std::int16_t>(std::clamp(std::lround(v), -32768L, 32767L)); }
-std::int32_t quant32(double v) {
-  return static_cast<std::int32_t>(std::clamp<double>(std::round(v), -2147483648.0, 2147483647.0));
+// std::lround(v) lies in [lo, hi] (lo < 0 < hi; halves round away from zero).
+bool rounds_into(double v, std::int64_t lo, std::int64_t hi) {
+  return std::isfinite(v) && v > static_cast<double>(lo) - 0.5 && v < static_cast<double>(hi) + 0.5;
+}
+// The SCALE register value, unrounded, that cancels scale error m: (1 + s)(1 + m) = 1.
+double scale_lsb(double m) { return (1.0 / (1.0 + m) - 1.0) / kScaleLsb; }
+// The BIAS register value, unrounded, that cancels b behind gain 1 + s: B = −(1 + s)·b.
+double bias_lsb(double s, double b, double lsb) { return -(1.0 + s) * b / lsb; }
+
+std::string scale_reg(bool gyro, int i) { return std::string(1, "XYZ"[i]) + (gyro ? "_GYRO_SCALE" : "_ACCL_SCALE"); }
+std::string bias_reg(bool gyro, int i) { return std::string(1, "XYZ"[i]) + (gyro ? "G_BIAS" : "A_BIAS"); }
+std::string m_name(bool gyro, int i, int j) {
+  return std::string(gyro ? "gyro" : "accel") + " M[" + std::to_string(i) + "][" + std::to_string(j) + "]";
+}
+std::string b_name(bool gyro, int i) { return std::string(gyro ? "gyro" : "accel") + " bias[" + std::to_string(i) + "]"; }
+
+std::int16_t quant16(double v) { return static_cast<std::int16_t>(std::lround(v)); }
+std::int32_t quant32(double v) { return static_cast<std::int32_t>(std::llround(v)); }
+
+void triad_misfits(const TriadErrors& t, bool gyro, double lsb, std::vector<RegisterMisfit>& out) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < 3; ++i) {
+    const double m = t.M(i, i);
+    const double v = std::isfinite(m) && 1.0 + m > 0 ? scale_lsb(m) : nan;
+    // Open interval of M_ii whose register rounds into kScaleMin..kScaleMax.
+    const double m_lo = 1.0 / (1.0 + (kScaleMax + 0.5) * kScaleLsb) - 1.0;
+    const double m_hi = 1.0 / (1.0 + (kScaleMin - 0.5) * kScaleLsb) - 1.0;
+    if (!rounds_into(v, kScaleMin, kScaleMax))
+      out.push_back({m_name(gyro, i, i), scale_reg(gyro, i), m, v, kScaleMin, kScaleMax, m_lo, m_hi});
+    if (!std::isfinite(v)) continue;  // no gain cancels it: the bias has no register value either
+    const double s = rounds_into(v, kScaleMin, kScaleMax) ? std::lround(v) * kScaleLsb : v * kScaleLsb;
+    const double vb = bias_lsb(s, t.bias[i], lsb);
+    if (!rounds_into(vb, kBiasMin, kBiasMax))
+      out.push_back({b_name(gyro, i), bias_reg(gyro, i), t.bias[i], std::isfinite(vb) ? vb : nan, kBiasMin, kBiasMax,
+                     -(kBiasMax + 0.5) * lsb / (1.0 + s), -(kBiasMin - 0.5) * lsb / (1.0 + s)});
+  }
 }
 
 void triad_to_regs(const TriadErrors& t, double lsb, std::array<std::int16_t, 3>& scale,
                    std::array<std::int32_t, 3>& bias) {
   for (int i = 0; i < 3; ++i) {
-    // (1 + s)(1 + m) = 1 cancels the scale error; B = −(1 + s)·b cancels the bias.
-    scale[i] = quant16((1.0 / (1.0 + t.M(i, i)) - 1.0) / kScaleLsb);
-    const double s = scale[i] * kScaleLsb;
-    bias[i] = quant32(-(1.0 + s) * t.bias[i] / lsb);
+    // (1 + s)(1 + m) = 1 cancels the scale error; B = −(1 + s)·b cancels the bias. In range: checked.
+    scale[i] = quant16(scale_lsb(t.M(i, i)));
+    bias[i] = quant32(bias_lsb(scale[i] * kScaleLsb, t.bias[i], lsb));
   }
 }
 TriadErrors regs_to_triad(const std::array<std::int16_t, 3>& scale, const std::array<std::int32_t, 3>& bias, double lsb) {
@@ -49,9 +89,90 @@ TriadErrors residual(const TriadErrors& e, const std::array<std::int16_t, 3>& sc
   r.bias = D * e.bias + B;
   return r;
 }
+
+void triad_checks(const TriadErrors& e, bool gyro, const std::array<std::int16_t, 3>& scale,
+                  const std::array<std::int32_t, 3>& bias, double lsb, std::vector<CoefficientCheck>& out) {
+  const TriadErrors unit = regs_to_triad(scale, bias, lsb);
+  const TriadErrors res = residual(e, scale, bias, lsb);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      CoefficientCheck c;
+      c.coefficient = m_name(gyro, i, j);
+      c.approved = e.M(i, j);
+      c.residual = res.M(i, j);
+      if (i == j) {
+        // Residual (1 + s)(1 + m) − 1 = δs·(1 + m): half an LSB of s, times 1 + m.
+        c.reg = scale_reg(gyro, i);
+        c.unit = unit.M(i, i);
+        c.tolerance = (0.5 + kLsbSlack) * kScaleLsb * std::abs(1.0 + c.approved) + kRelSlack * (1.0 + std::abs(c.residual));
+        c.ok = std::abs(c.residual) <= c.tolerance;
+      } else {
+        c.host_applied = true;  // the part holds no skews
+        c.ok = true;
+      }
+      out.push_back(c);
+    }
+  for (int i = 0; i < 3; ++i) {
+    CoefficientCheck c;
+    c.coefficient = b_name(gyro, i);
+    c.reg = bias_reg(gyro, i);
+    c.approved = e.bias[i];
+    c.unit = unit.bias[i];
+    c.residual = res.bias[i];  // (1 + s)·b + B: half an LSB of B
+    c.tolerance = (0.5 + kLsbSlack) * lsb + kRelSlack * std::abs((1.0 + scale[i] * kScaleLsb) * c.approved);
+    c.ok = std::abs(c.residual) <= c.tolerance;
+    out.push_back(c);
+  }
+}
+
+std::string g6(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
 }  // namespace
 
+std::string RegisterMisfit::text() const {
+  const bool bias = coefficient.find("bias") != std::string::npos;
+  const std::string unit = !bias ? "" : coefficient.rfind("gyro", 0) == 0 ? " rad/s" : " m/s²";
+  std::string t = coefficient + " = " + g6(value) + unit + ": ";
+  if (std::isnan(needed_lsb))
+    t += "no " + reg + " value cancels it" + (bias ? "" : " (1 + " + coefficient.substr(coefficient.find('M')) + " must be finite and positive)");
+  else
+    t += reg + " would need " + g6(std::round(needed_lsb)) + " LSB, outside " + std::to_string(reg_min) + ".." + std::to_string(reg_max);
+  return t + "; it holds " + g6(min) + " < " + coefficient + " < " + g6(max) + unit;
+}
+
+UserCalRangeError::UserCalRangeError(std::vector<RegisterMisfit> m)
+    : std::invalid_argument([&] {
+        std::string t = "the set does not fit the ADIS16488A's user calibration registers: ";
+        for (std::size_t k = 0; k < m.size(); ++k) t += (k ? "; " : "") + m[k].text();
+        return t;
+      }()),
+      misfits(std::move(m)) {}
+
+std::vector<RegisterMisfit> user_cal_misfits(const SensorErrors& e) {
+  std::vector<RegisterMisfit> out;
+  triad_misfits(e.gyro, true, kGyroLsb, out);
+  triad_misfits(e.accel, false, kAccelLsb, out);
+  return out;
+}
+
+std::string CoefficientCheck::text() const {
+  if (host_applied) return coefficient + ": applied by the host (" + g6(residual) + ")";
+  return coefficient + ": the unit's " + reg + " cancels " + g6(unit) + ", the set's is " + g6(approved) + " (residual " +
+         g6(residual) + ", allowed ±" + g6(tolerance) + ")";
+}
+
+std::vector<CoefficientCheck> check_user_cal(const SensorErrors& approved, const UserCal& r) {
+  std::vector<CoefficientCheck> out;
+  triad_checks(approved.gyro, true, r.gyro_scale, r.gyro_bias, kGyroLsb, out);
+  triad_checks(approved.accel, false, r.accel_scale, r.accel_bias, kAccelLsb, out);
+  return out;
+}
+
 UserCal user_cal_from_errors(const SensorErrors& e) {
+  if (auto m = user_cal_misfits(e); !m.empty()) throw UserCalRangeError(std::move(m));
   UserCal c;
   triad_to_regs(e.gyro, kGyroLsb, c.gyro_scale, c.gyro_bias);
   triad_to_regs(e.accel, kAccelLsb, c.accel_scale, c.accel_bias);
@@ -288,6 +409,7 @@ ProvisionResult Adis16488a::provision(const UserCal& c) {
   ProvisionResult r;
   r.written = c;
   r.flash_count_before = read32(adis::reg("FLSHCNT"));
+  r.wrote = true;
   write_user_cal(c);
   flash_update();
   r.flash_count_after = read32(adis::reg("FLSHCNT"));
@@ -298,6 +420,27 @@ ProvisionResult Adis16488a::provision(const UserCal& c) {
     r.message = "FLSHCNT did not increase: the flash update did not happen";
   } else {
     r.ok = true;
+  }
+  return r;
+}
+
+ProvisionResult Adis16488a::provision(const SensorErrors& approved) {
+  if (auto misfits = user_cal_misfits(approved); !misfits.empty()) {
+    ProvisionResult r;  // nothing sent to the unit
+    r.message = UserCalRangeError(misfits).what();
+    r.misfits = std::move(misfits);
+    return r;
+  }
+  ProvisionResult r = provision(user_cal_from_errors(approved));
+  // What the unit will apply, from the registers as read back, against the approved set.
+  r.checks = check_user_cal(approved, r.read_back);
+  std::string wrong;
+  for (const auto& c : r.checks)
+    if (!c.ok) wrong += (wrong.empty() ? "" : "; ") + c.text();
+  if (!wrong.empty()) {
+    r.message = "the unit would apply something other than the approved set: " + wrong +
+                (r.message.empty() ? "" : " (and " + r.message + ")");
+    r.ok = false;
   }
   return r;
 }

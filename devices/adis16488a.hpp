@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -59,8 +60,30 @@ struct UserCal {
   bool operator==(const UserCal&) const = default;
 };
 
+// A coefficient of a set that the user calibration registers cannot hold: its scale register would
+// need a value outside −32767..32767 (−32768 is a gain of 0, which cancels nothing), or its bias
+// register one outside the 32-bit range. Provisioning refuses such a set before writing anything.
+struct RegisterMisfit {
+  std::string coefficient;  // "accel M[0][0]", "gyro bias[2]"
+  std::string reg;          // "X_ACCL_SCALE", "ZG_BIAS"
+  double value = 0;         // the set's coefficient (dimensionless; rad/s; m/s²)
+  double needed_lsb = 0;    // the register value it would need (NaN: none, 1 + M_ii ≤ 0 or not finite)
+  std::int64_t reg_min = 0, reg_max = 0;  // the register's range, LSB
+  double min = 0, max = 0;  // the coefficient's range the register holds (open interval)
+  std::string text() const;  // "accel M[0][0] = -0.6: X_ACCL_SCALE would need 49152 LSB, …"
+};
+// Every coefficient of `e` its registers cannot hold (empty: the set fits).
+std::vector<RegisterMisfit> user_cal_misfits(const SensorErrors& e);
+
+class UserCalRangeError : public std::invalid_argument {
+ public:
+  explicit UserCalRangeError(std::vector<RegisterMisfit> m);
+  std::vector<RegisterMisfit> misfits;
+};
+
 // Registers that cancel the per-axis part of `e` (diag(M) and b) as closely as quantisation allows.
 // The skews (off-diagonal M) cannot be held by the device: see residual_after_user_cal().
+// Throws UserCalRangeError (never clamps) when user_cal_misfits(e) is not empty.
 UserCal user_cal_from_errors(const SensorErrors& e);
 // The diagonal errors those registers cancel exactly (σ = 0). user_cal_from_errors() of the result
 // gives back the same registers.
@@ -69,10 +92,29 @@ SensorErrors errors_from_user_cal(const UserCal& r);
 // errors are `e`: M' = D(I+M) − I, b' = D·b + B (D = diag(1 + s)), σ carried over.
 SensorErrors residual_after_user_cal(const SensorErrors& e, const UserCal& r);
 
+// One coefficient of an approved set against what a unit holding registers `r` applies.
+struct CoefficientCheck {
+  std::string coefficient;    // "gyro M[0][0]", "gyro M[0][1]", "accel bias[2]"
+  std::string reg;            // the register that holds it; "" for a skew (the host's)
+  double approved = 0;        // the set's value (dimensionless; rad/s; m/s²)
+  double unit = 0;            // the error the unit's registers cancel, decoded to SI (skews: 0)
+  double residual = 0;        // what is left after the unit's correction: residual_after_user_cal(set, r)
+  double tolerance = 0;       // half an LSB of the register (plus float rounding); skews: 0
+  bool host_applied = false;  // a skew: the part cannot hold it, the host applies `residual`
+  bool ok = false;            // |residual| ≤ tolerance; skews: true (not a mismatch)
+  std::string text() const;   // why it is not ok
+};
+// Every coefficient (diagonal, skews, biases of both triads, 24 in all) of `approved` against the
+// correction registers `r` (as read back from the unit) apply.
+std::vector<CoefficientCheck> check_user_cal(const SensorErrors& approved, const UserCal& r);
+
 struct ProvisionResult {
   bool ok = false;
+  bool wrote = false;  // anything was sent to the user calibration registers
   UserCal written, read_back;
   std::uint32_t flash_count_before = 0, flash_count_after = 0;
+  std::vector<RegisterMisfit> misfits;   // provision(SensorErrors): why the set was refused
+  std::vector<CoefficientCheck> checks;  // provision(SensorErrors): the read-back registers vs the set
   std::string message;
 };
 
@@ -116,6 +158,10 @@ class Adis16488a {
   void write_user_cal(const UserCal& c);
   // Write, flash update, read back and compare; also checks FLSHCNT went up.
   ProvisionResult provision(const UserCal& c);
+  // An approved set: refused with nothing written when user_cal_misfits() names anything; else
+  // provision(user_cal_from_errors(set)), and ok only when, moreover, check_user_cal(set, read-back)
+  // finds every coefficient the unit applies equal to the set's within quantisation.
+  ProvisionResult provision(const SensorErrors& approved);
 
   SpiBus& bus() { return bus_; }
 

@@ -143,6 +143,7 @@ std::uint16_t Adis16488aEmulator::frame(std::uint16_t w) {
     return 0;
   }
   if (w & 0x8000) {
+    if ((w >> 8 & 0x7F) != 0x00) ++write_frames_;
     write_byte(static_cast<std::uint8_t>(w >> 8 & 0x7F), static_cast<std::uint8_t>(w & 0xFF));
     pending_ = 0;
     return reply;

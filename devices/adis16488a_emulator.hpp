@@ -65,6 +65,7 @@ class Adis16488aEmulator : public SpiBus {
   std::uint64_t samples_overwritten() const { return overwritten_; }  // latched but never read
   std::uint64_t busy_violations() const { return busy_violations_; }   // frames sent while busy
   std::uint64_t frames() const { return frames_; }
+  std::uint64_t write_frames() const { return write_frames_; }  // register writes taken (PAGE_ID excluded)
   std::uint32_t flash_count() const { return flash_count_; }
   std::uint16_t peek(std::uint8_t page, std::uint8_t offset) const { return ram_[index(page, offset)]; }
   const ImuErrorSimulator& simulator() const { return sim_; }
@@ -95,7 +96,7 @@ class Adis16488aEmulator : public SpiBus {
   bool unread_ = false;
   double last_dr_ = -1;            // time of the last data-ready edge
   double consumed_dr_ = -1;        // last edge a waiter has been given
-  std::uint64_t produced_ = 0, overwritten_ = 0, busy_violations_ = 0, frames_ = 0;
+  std::uint64_t produced_ = 0, overwritten_ = 0, busy_violations_ = 0, frames_ = 0, write_frames_ = 0;
   std::uint32_t flash_count_ = 0;
   std::uint16_t sticky_flags_ = 0;  // SYS_E_FLAG bits latched by self-test / flash failures
   bool self_tested_ = false;        // a self-test has run (EmuFaults::after_self_test)

@@ -54,6 +54,99 @@ json regs_json(const UserCal& c) {
           {"accel_bias", c.accel_bias}};
 }
 
+json unit_state(Adis16488a& drv) {  // reads only
+  return {{"registers", regs_json(drv.read_user_cal())}, {"flash_count", drv.read32(adis::reg("FLSHCNT"))}};
+}
+
+json misfits_json(const std::vector<RegisterMisfit>& ms) {
+  json out = json::array();
+  for (const auto& m : ms)
+    out.push_back({{"coefficient", m.coefficient}, {"register", m.reg}, {"value", m.value},
+                   {"needed_lsb", std::isfinite(m.needed_lsb) ? json(std::round(m.needed_lsb)) : json(nullptr)},
+                   {"register_range", {m.reg_min, m.reg_max}}, {"holds", {m.min, m.max}}, {"text", m.text()}});
+  return out;
+}
+
+json checks_json(const std::vector<CoefficientCheck>& cs) {
+  json out = json::array();
+  for (const auto& c : cs)
+    out.push_back({{"coefficient", c.coefficient}, {"register", c.reg.empty() ? json(nullptr) : json(c.reg)},
+                   {"approved", c.approved}, {"unit", c.unit}, {"residual", c.residual}, {"tolerance", c.tolerance},
+                   {"host_applied", c.host_applied}, {"ok", c.ok}});
+  return out;
+}
+
+// Why the unit may not receive the set ("" when it may): its identity, then whether every
+// coefficient fits the registers (checked before anything is written; the unit's registers and
+// FLSHCNT are read before and after, into the report, to show that nothing was).
+std::string refusal(Adis16488a& drv, const ImuIdentity& id, const CoefficientSetRecord& set, json& report) {
+  if (id.prod_id != adis::kProdId) {
+    char b[64];
+    std::snprintf(b, sizeof b, "PROD_ID 0x%04X is not an ADIS16488A (0x%04X)", id.prod_id, adis::kProdId);
+    return b;
+  }
+  if (!serial_matches(set.serial, id.serial)) return "the unit's SERIAL_NUM is " + id.serial_string() + ", not " + set.serial;
+  report["unit_before"] = unit_state(drv);
+  const auto misfits = user_cal_misfits(set.errors);
+  if (misfits.empty()) return "";
+  report["misfits"] = misfits_json(misfits);
+  report["unit_after"] = unit_state(drv);
+  return UserCalRangeError(misfits).what();
+}
+
+// The device half of `provision`: identity and fit (a refusal writes nothing and is recorded),
+// then write, flash update, read back, and compare what the unit will apply with the approved set.
+void provision_to_device(Store& s, const ProvisionArgs& a, const CoefficientSetRecord& set, SpiBus& bus) {
+  Adis16488aOptions opt;
+  opt.check_prod_id = false;  // checked below, so that a refusal is recorded
+  Adis16488a drv(bus, opt);
+  const ImuIdentity id = drv.connect();
+  json report = {{"set", set.id}, {"target", a.uri}, {"prod_id", id.prod_id}, {"serial_num", id.serial},
+                 {"firmware", id.firmware()}};
+  if (const std::string refuse = refusal(drv, id, set, report); !refuse.empty()) {
+    report["ok"] = false;
+    report["message"] = "refused: " + refuse;
+    s.record_provisioning(set.id, "device", a.uri, false, report.dump(), "refused: " + refuse);
+    if (a.json) print_json(report.dump(2));
+    std::cerr << "calbench: provision refused: " << refuse << "; nothing written to the device\n";
+    throw Exit{1};
+  }
+  ProvisionResult r;
+  try {
+    r = drv.provision(set.errors);
+  } catch (const std::exception& e) {
+    r.ok = false;
+    r.wrote = true;
+    r.written = user_cal_from_errors(set.errors);
+    r.message = e.what();
+  }
+  // From the registers read back: what the host still applies (the skews, and sub-LSB residue).
+  const SensorErrors residual = residual_after_user_cal(set.errors, r.read_back);
+  const auto skew = [](const Mat3& m) { return (m - Mat3(m.diagonal().asDiagonal())).cwiseAbs().maxCoeff(); };
+  report["ok"] = r.ok;
+  report["written"] = regs_json(r.written);
+  report["read_back"] = regs_json(r.read_back);
+  report["flash_count_before"] = r.flash_count_before;
+  report["flash_count_after"] = r.flash_count_after;
+  report["coefficients"] = checks_json(r.checks);
+  report["message"] = r.message;
+  // The part holds per-axis scale and bias only; the skews stay for the host to apply.
+  report["host_residual_max_skew"] = std::max(skew(residual.gyro.M), skew(residual.accel.M));
+  s.record_provisioning(set.id, "device", a.uri, r.ok, report.dump(),
+                        r.ok ? "written, flash updated, read back equal, every coefficient applied as approved" : r.message);
+  if (a.json) print_json(report.dump(2));
+  if (!r.ok) {
+    std::cerr << "calbench: provisioning FAILED: " << r.message << "\n";
+    throw Exit{1};
+  }
+  if (!a.json)
+    std::cout << "set " << set.id << " (" << set.serial << " v" << set.version << ") provisioned to " << a.uri
+              << ": scale and bias registers written, flash updated (count " << r.flash_count_before << " -> "
+              << r.flash_count_after << "), every register read back equal, and the correction they apply equals "
+              << "the set's scale and bias within half a register LSB. Skews are not held by the device; "
+              << "apply them on the host.\n";
+}
+
 CoefficientSetRecord choose_set(Store& s, const Device& d, std::int64_t set_id) {
   if (set_id) {
     CoefficientSetRecord r = s.get_set(set_id);
@@ -131,57 +224,7 @@ void run(const ProvisionArgs& a) {
   }
 
   const std::unique_ptr<SpiBus> bus = open_imu(imu_uri(a.uri));
-  Adis16488aOptions opt;
-  opt.check_prod_id = false;  // checked below, so that a refusal is recorded
-  Adis16488a drv(*bus, opt);
-  const ImuIdentity id = drv.connect();
-  json report = {{"set", set.id}, {"target", a.uri}, {"prod_id", id.prod_id}, {"serial_num", id.serial},
-                 {"firmware", id.firmware()}};
-  std::string refuse;
-  if (id.prod_id != adis::kProdId) {
-    char b[64];
-    std::snprintf(b, sizeof b, "PROD_ID 0x%04X is not an ADIS16488A (0x%04X)", id.prod_id, adis::kProdId);
-    refuse = b;
-  } else if (!serial_matches(set.serial, id.serial)) {
-    refuse = "the unit's SERIAL_NUM is " + id.serial_string() + ", not " + set.serial;
-  }
-  if (!refuse.empty()) {
-    report["ok"] = false;
-    report["message"] = "refused: " + refuse;
-    s.record_provisioning(set.id, "device", a.uri, false, report.dump(), "refused: " + refuse);
-    if (a.json) print_json(report.dump(2));
-    std::cerr << "calbench: provision refused: " << refuse << "; nothing written to the device\n";
-    throw Exit{1};
-  }
-  const UserCal cal = user_cal_from_errors(set.errors);
-  ProvisionResult r;
-  try {
-    r = drv.provision(cal);
-  } catch (const std::exception& e) {
-    r.ok = false;
-    r.written = cal;
-    r.message = e.what();
-  }
-  const SensorErrors residual = residual_after_user_cal(set.errors, cal);
-  report["ok"] = r.ok;
-  report["written"] = regs_json(r.written);
-  report["read_back"] = regs_json(r.read_back);
-  report["flash_count_before"] = r.flash_count_before;
-  report["flash_count_after"] = r.flash_count_after;
-  report["message"] = r.message;
-  // The part holds per-axis scale and bias only; the skews stay for the host to apply.
-  report["host_residual_max_skew"] = (residual.gyro.M - Mat3(residual.gyro.M.diagonal().asDiagonal())).cwiseAbs().maxCoeff();
-  s.record_provisioning(set.id, "device", a.uri, r.ok, report.dump(), r.ok ? "written, flash updated, read back equal" : r.message);
-  if (a.json) print_json(report.dump(2));
-  if (!r.ok) {
-    std::cerr << "calbench: provisioning FAILED: " << r.message << "\n";
-    throw Exit{1};
-  }
-  if (!a.json)
-    std::cout << "set " << set.id << " (" << set.serial << " v" << set.version << ") provisioned to " << a.uri
-              << ": scale and bias registers written, flash updated (count " << r.flash_count_before << " -> "
-              << r.flash_count_after << "), every register read back equal. Skews are not held by the device; "
-              << "apply them on the host.\n";
+  provision_to_device(s, a, set, *bus);
 }
 
 const bool registered = add_command(80, [](CLI::App& app) {

@@ -1,8 +1,13 @@
 // The ADIS16488A driver against the emulator: pipelining, paging, 32-bit reads, scaling, identity,
-// PROD_ID mismatch, error flags, sample loss, self-test, DEC_RATE, provisioning.
+// PROD_ID mismatch, error flags, sample loss, self-test, DEC_RATE, provisioning (a set the registers
+// cannot hold refused with nothing written; the read-back registers checked against the set, every
+// coefficient; the provisioned unit's outputs equal to the truth, scale errors up to the limit).
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
+#include <set>
 
 #include "common/units.hpp"
 #include "devices/adis16488a.hpp"
@@ -256,6 +261,194 @@ TEST(Adis16488a, FlashFailureIsReported) {
   c.gyro_bias = {1, 2, 3};
   r.imu.write_user_cal(c);
   EXPECT_THROW(r.imu.flash_update(), DeviceError);
+}
+
+// An approved set with accel M[0][0] = −0.6 needs X_ACCL_SCALE = (1/0.4 − 1)·2¹⁵ = 49152: beyond the
+// register. It used to be clamped to 32767, read back "equal" and reported ok while the unit kept a
+// −20 % scale error. Now it is refused, each coefficient named, and nothing reaches the unit.
+TEST(Adis16488a, ASetTheRegistersCannotHoldIsRefusedBeforeAnythingIsWritten) {
+  SensorErrors e;
+  e.accel.M(0, 0) = -0.6;
+  e.gyro.M(2, 2) = -1.5;     // 1 + M ≤ 0: no gain cancels it
+  e.accel.bias[1] = 3.0e5;   // m/s²: beyond the 32-bit XA_BIAS (±2³¹ · 0.8 mg/2¹⁶ ≈ 2.57e5 m/s²)
+  e.gyro.M(0, 0) = -0.4999;  // fits (X_GYRO_SCALE 32755)
+  const auto m = user_cal_misfits(e);
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m[0].coefficient, "gyro M[2][2]");
+  EXPECT_EQ(m[0].reg, "Z_GYRO_SCALE");
+  EXPECT_TRUE(std::isnan(m[0].needed_lsb));
+  EXPECT_EQ(m[1].coefficient, "accel M[0][0]");
+  EXPECT_EQ(m[1].reg, "X_ACCL_SCALE");
+  EXPECT_DOUBLE_EQ(m[1].value, -0.6);
+  EXPECT_NEAR(m[1].needed_lsb, 49152, 1e-6);
+  EXPECT_EQ(m[1].reg_min, -32767);
+  EXPECT_EQ(m[1].reg_max, 32767);
+  EXPECT_NEAR(m[1].min, 1.0 / (1.0 + 32767.5 / 32768) - 1.0, 1e-15);
+  EXPECT_EQ(m[1].text(),
+            "accel M[0][0] = -0.6: X_ACCL_SCALE would need 49152 LSB, outside -32767..32767; "
+            "it holds -0.499996 < accel M[0][0] < 65535");
+  EXPECT_EQ(m[2].coefficient, "accel bias[1]");
+  EXPECT_EQ(m[2].reg, "YA_BIAS");
+  EXPECT_THROW(user_cal_from_errors(e), UserCalRangeError);
+
+  Rig r(e);
+  r.imu.connect();
+  const auto frames = r.emu.write_frames();
+  const ProvisionResult p = r.imu.provision(e);
+  EXPECT_FALSE(p.ok);
+  EXPECT_FALSE(p.wrote);
+  EXPECT_EQ(p.misfits.size(), 3u);
+  EXPECT_NE(p.message.find("accel M[0][0] = -0.6: X_ACCL_SCALE would need 49152 LSB"), std::string::npos) << p.message;
+  EXPECT_EQ(r.emu.write_frames(), frames);  // not one register write, no flash update
+  EXPECT_EQ(r.emu.flash_count(), 0u);
+  for (std::uint8_t o = 0x04; o < 0x28; o += 2) EXPECT_EQ(r.emu.peek(2, o), 0) << "page 2 offset " << int(o);
+}
+
+TEST(Adis16488a, ScaleRegisterLimitsAreTheRoundedRange) {
+  const auto fits = [](double m) {
+    SensorErrors e;
+    e.gyro.M(1, 1) = m;
+    return user_cal_misfits(e).empty();
+  };
+  EXPECT_TRUE(fits(-0.499995));  // 32767.3 → 32767
+  EXPECT_EQ(user_cal_from_errors([] { SensorErrors e; e.gyro.M(1, 1) = -0.499995; return e; }()).gyro_scale[1], 32767);
+  EXPECT_FALSE(fits(-0.499997));  // 32767.6 → 32768
+  EXPECT_FALSE(fits(-0.5));
+  EXPECT_TRUE(fits(65534.0));    // −32767.49999 → −32767
+  EXPECT_FALSE(fits(65536.0));   // −32768: a gain of 0
+  EXPECT_FALSE(fits(std::numeric_limits<double>::quiet_NaN()));
+}
+
+TEST(Adis16488a, ReadBackIsCheckedAgainstTheSetEveryCoefficient) {
+  SensorErrors e = draw_random_unit(5);
+  e.accel.M(0, 0) = -0.45;
+  e.gyro.M(1, 1) = 0.8;
+  const UserCal c = user_cal_from_errors(e);
+  auto checks = check_user_cal(e, c);
+  ASSERT_EQ(checks.size(), 24u);  // 9 M + 3 bias, two triads
+  int host = 0;
+  for (const auto& k : checks) {
+    EXPECT_TRUE(k.ok) << k.text();
+    host += k.host_applied;
+    if (!k.host_applied) EXPECT_LE(std::abs(k.residual), k.tolerance);
+  }
+  EXPECT_EQ(host, 12);  // the skews: the host's, not a mismatch
+  EXPECT_EQ(checks[12 + 0].coefficient, "accel M[0][0]");
+  EXPECT_EQ(checks[12 + 0].reg, "X_ACCL_SCALE");
+  EXPECT_NEAR(checks[12 + 0].unit, -0.45, 0.5 / 32768);
+  EXPECT_EQ(checks[9].coefficient, "gyro bias[0]");
+  EXPECT_EQ(checks[9].reg, "XG_BIAS");
+
+  // The clamped register of the −0.6 set: the unit's correction leaves a −20 % scale error.
+  SensorErrors big = e;
+  big.accel.M(0, 0) = -0.6;
+  UserCal clamped = c;
+  clamped.accel_scale[0] = 32767;
+  checks = check_user_cal(big, clamped);
+  EXPECT_FALSE(checks[12].ok);
+  EXPECT_NEAR(checks[12].residual, (1 + 32767.0 / 32768) * 0.4 - 1, 1e-12);
+  EXPECT_NEAR(checks[12].unit, 1 / (1 + 32767.0 / 32768) - 1, 1e-12);
+  // One LSB off, in any register, is more than the half LSB quantisation allows. (A scale one LSB
+  // off may also move the bias the unit applies by more than half an LSB: b·2⁻¹⁵.)
+  const std::array<std::pair<int, const char*>, 4> cases = {
+      {{0, "gyro M[2][2]"}, {1, "accel M[1][1]"}, {2, "gyro bias[0]"}, {3, "accel bias[2]"}}};
+  for (const auto& [which, name] : cases) {
+    UserCal off = c;
+    if (which == 0) ++off.gyro_scale[2];
+    if (which == 1) --off.accel_scale[1];
+    if (which == 2) ++off.gyro_bias[0];
+    if (which == 3) --off.accel_bias[2];
+    std::set<std::string> bad;
+    for (const auto& k : check_user_cal(e, off))
+      if (!k.ok) bad.insert(k.coefficient);
+    EXPECT_TRUE(bad.count(name)) << name;
+    EXPECT_LE(bad.size(), which < 2 ? 2u : 1u) << name;
+  }
+}
+
+// End to end: a unit with known errors (large scale errors, to the register limit), the inverse
+// provisioned, samples read: the unit's outputs are the truth up to quantisation, and with skews the
+// host's residual (from the registers read back) recovers the truth. Beyond the limit: refused.
+TEST(Adis16488a, ProvisionedUnitOutputsTheTruthUpToTheRegisterLimit) {
+  const double g_lsb = adis::reg("X_GYRO").scale, a_lsb = adis::reg("X_ACCL").scale;
+  for (double big : {-0.4999, -0.3, 0.9, 3.0}) {
+    SensorErrors e;
+    e.gyro.M.diagonal() = Vec3(big, 2e-3, -0.49);
+    e.accel.M.diagonal() = Vec3(-0.2, big, 0.45);
+    e.gyro.bias = Vec3(2e-3, -1e-3, 5e-4);
+    e.accel.bias = Vec3(0.05, -0.1, 0.2);
+    for (bool skews : {false, true}) {
+      if (skews) e.gyro.M(0, 1) = e.accel.M(2, 0) = 1e-3;
+      Rig r(e);
+      r.imu.connect();
+      const ProvisionResult p = r.imu.provision(e);
+      ASSERT_TRUE(p.ok) << big << ": " << p.message;
+      EXPECT_EQ(p.read_back, p.written);
+      const SensorErrors host = residual_after_user_cal(e, p.read_back);
+      r.imu.read_sample();
+      const auto s = r.imu.read_sample();
+      ASSERT_TRUE(s);
+      const Vec3 g = skews ? host.gyro.correct(s->gyro) : s->gyro;
+      const Vec3 a = skews ? host.accel.correct(s->accel) : s->accel;
+      for (int i = 0; i < 3; ++i) {
+        // Half a SCALE LSB times 1 + M, plus the output and bias quantisation.
+        EXPECT_NEAR(g[i], kW[i], 0.5 / 32768 * (1 + std::abs(e.gyro.M(i, i))) * kW.norm() + 4 * g_lsb) << big << " " << i;
+        EXPECT_NEAR(a[i], kF[i], 0.5 / 32768 * (1 + std::abs(e.accel.M(i, i))) * kF.norm() + 4 * a_lsb) << big << " " << i;
+      }
+    }
+  }
+  // Beyond the register: refused, the unit untouched, its output still carries the error.
+  SensorErrors e;
+  e.accel.M(0, 0) = -0.6;
+  Rig r(e);
+  r.imu.connect();
+  EXPECT_FALSE(r.imu.provision(e).ok);
+  r.imu.read_sample();
+  const auto s = r.imu.read_sample();
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->accel[0], 0.4 * kF[0], 2 * a_lsb);
+  EXPECT_EQ(r.emu.flash_count(), 0u);
+}
+
+// A unit that holds something else than it was sent (here: bit 8 of X_ACCL_SCALE flipped on its way
+// in). The provisioning fails and names the coefficients the unit would apply differently.
+struct CorruptingBus : SpiBus {
+  Adis16488aEmulator& emu;
+  int page = -1;
+  explicit CorruptingBus(Adis16488aEmulator& e) : emu(e) {}
+  std::vector<std::uint16_t> transfer(const std::vector<std::uint16_t>& words) override {
+    std::vector<std::uint16_t> w = words;
+    for (auto& x : w) {
+      if ((x & 0xFF00) == 0x8000) page = x & 0xFF;                                        // PAGE_ID write
+      else if (page == 2 && (x & 0xFF00) == (0x8000 | 0x0B << 8)) x = static_cast<std::uint16_t>(x ^ 0x01);  // X_ACCL_SCALE high byte
+    }
+    return emu.transfer(w);
+  }
+  bool wait_data_ready(double t) override { return emu.wait_data_ready(t); }
+  double now() const override { return emu.now(); }
+  void delay(double s) override { emu.delay(s); }
+  std::string describe() const override { return "corrupting bus"; }
+};
+
+TEST(Adis16488a, ProvisioningFailsWhenTheUnitWouldApplySomethingElse) {
+  const SensorErrors e = draw_random_unit(2);
+  Rig r(e);
+  CorruptingBus bus(r.emu);
+  Adis16488a imu(bus);
+  imu.connect();
+  const ProvisionResult p = imu.provision(e);
+  EXPECT_FALSE(p.ok);
+  EXPECT_TRUE(p.wrote);
+  EXPECT_EQ(p.read_back.accel_scale[0], static_cast<std::int16_t>(p.written.accel_scale[0] ^ 0x100));
+  std::set<std::string> bad;
+  for (const auto& k : p.checks)
+    if (!k.ok) bad.insert(k.coefficient);
+  // The scale, and the bias it carries (B was computed for the intended gain).
+  EXPECT_EQ(bad, (std::set<std::string>{"accel M[0][0]", "accel bias[0]"}));
+  EXPECT_NE(p.message.find("the unit would apply something other than the approved set: accel M[0][0]: the unit's "
+                           "X_ACCL_SCALE cancels"),
+            std::string::npos)
+      << p.message;
 }
 
 }  // namespace
