@@ -59,16 +59,9 @@ std::vector<std::string> provisioning_refusals(Store& store, const CoefficientSe
   if (set.status != SetStatus::approved && set.status != SetStatus::provisioned)
     why.push_back("set " + std::to_string(set.id) + " is " + to_string(set.status) + ": only approved sets are provisioned");
   if (const SignedApproval a = signed_approval(store, set); !a.ok) why.push_back(a.why);
-  const ChainCheck chain = check_audit_chain(store, set.device_id);
-  for (const auto& b : chain.breaks)
-    why.push_back("audit row " + std::to_string(b.id) + " of device " + set.serial + ": " + b.why);
   const ApprovalCheck v = check_standing(store, set, t);
   for (const auto& r : v.reasons) why.push_back("verdict now: " + r);
-  // One reason once (the approval row's chain break is also the device's).
-  std::vector<std::string> out;
-  for (auto& r : why)
-    if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(std::move(r));
-  return out;
+  return why;
 }
 
 }  // namespace calbench::db

@@ -19,8 +19,9 @@ struct SignedApproval {
 SignedApproval signed_approval(Store& store, const CoefficientSetRecord& set);
 
 // Everything that must hold before `set` goes into a unit or a file: approved (or provisioned), its
-// signed approval (signed_approval), the audit rows of its device intact (SQLite's hash chain), and
-// the verdict in force now (check_standing with `t`). Empty: it may be provisioned.
+// signed approval (signed_approval: intact in the hash chain, four-eyes held) and the verdict in
+// force now (check_standing with `t`). Empty: it may be provisioned. (A row forged elsewhere in the
+// device's log does not block a set approved properly since; the device report and db verify show it.)
 std::vector<std::string> provisioning_refusals(Store& store, const CoefficientSetRecord& set, const Thresholds& t);
 
 }  // namespace calbench::db

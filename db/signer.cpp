@@ -53,10 +53,16 @@ bool stored_by_signer(Store& store, const CoefficientSetRecord& set) {
     return !maker.empty() && same_person(maker, signer);
   }
   // SQLite: a console account is its person under two names, the account's login and the person's
-  // name: a set stored as either was stored by the one signing now.
+  // name: a set stored as either was stored by the one signing now (typed or signed in).
   const std::string login = store.login();
-  return login.rfind(kConsoleLoginPrefix, 0) == 0 &&
-         same_person(creator_name(set), login.substr(std::string(kConsoleLoginPrefix).size()));
+  if (login.rfind(kConsoleLoginPrefix, 0) == 0 &&
+      same_person(creator_name(set), login.substr(std::string(kConsoleLoginPrefix).size())))
+    return true;
+  auto acct = store.connection().prepare("SELECT name FROM console_accounts WHERE login = ? OR login = ?");
+  acct.bind(1, creator_name(set)).bind(2, signer);
+  while (acct.step())
+    if (same_person(acct.text(0), signer) || same_person(acct.text(0), creator_name(set))) return true;
+  return false;
 }
 
 std::string signature_note(const std::string& login, bool authenticated) {

@@ -80,7 +80,7 @@ PY
 "$CALBENCH" db store-bench --coeffs big.json --sha256 "$(printf 'b%.0s' {1..64})" --qc r=1:2 >/dev/null
 big=$(sqlite3 "$CALBENCH_DB" "SELECT max(id) FROM coefficient_sets")
 "$CALBENCH" db approve "$big" --thresholds wide.json --operator qc-anna >/dev/null || fail "approving the -0.6 set"
-set +e; "$CALBENCH" provision 4662 --set "$big" --to-device emu://4662 --json > big_out.json 2> err.txt; rc=$?; set -e
+set +e; "$CALBENCH" provision 4662 --set "$big" --thresholds wide.json --to-device emu://4662 --json > big_out.json 2> err.txt; rc=$?; set -e
 [ "$rc" = 1 ] || { cat err.txt; fail "a set beyond X_ACCL_SCALE provisioned (rc $rc)"; }
 grep -q "provision refused: the set does not fit the ADIS16488A's user calibration registers: accel M\[0\]\[0\] = -0.6: X_ACCL_SCALE would need 49152 LSB, outside -32767..32767; it holds -0.499996 < accel M\[0\]\[0\] < 65535; nothing written to the device" err.txt ||
   { cat err.txt; fail "refusal message"; }
@@ -106,7 +106,7 @@ PY
 "$CALBENCH" db store-bench --coeffs edge.json --sha256 "$(printf 'c%.0s' {1..64})" --qc r=1:2 >/dev/null
 edge=$(sqlite3 "$CALBENCH_DB" "SELECT max(id) FROM coefficient_sets")
 "$CALBENCH" db approve "$edge" --thresholds wide.json --operator qc-anna >/dev/null || fail "approving the edge set"
-"$CALBENCH" provision 4662 --set "$edge" --to-device emu://4662 --json > edge_out.json 2> err.txt || { cat err.txt; fail "the set just inside the range"; }
+"$CALBENCH" provision 4662 --set "$edge" --thresholds wide.json --to-device emu://4662 --json > edge_out.json 2> err.txt || { cat err.txt; fail "the set just inside the range"; }
 python3 - <<'PY' || fail "edge set read-back"
 import json
 c = json.load(open("edge.json")); p = json.load(open("edge_out.json"))
