@@ -28,7 +28,7 @@ struct LoginLimits {
   std::chrono::seconds lockout{15 * 60};
   int parallel_per_login = 2;
   int parallel_per_address = 4;
-  std::chrono::milliseconds address_wait{10000};
+  std::chrono::milliseconds address_wait{30000};
   int failures_per_address = 30;
   std::size_t max_entries = 100000;
 };
