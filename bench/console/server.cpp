@@ -104,7 +104,7 @@ void Console::install(httplib::Server& srv, bool tls) {
 }
 
 void Console::dispatch(const httplib::Request& req, httplib::Response& res) {
-  Ctx c{req, res, {}, nullptr, {}, {}, {}, {}};
+  Ctx c{req, res, {}, nullptr, {}, {}, {}, {}, nullptr, {}};
   t_log_login.clear();
   Page p;
   try {
