@@ -387,6 +387,27 @@ def backlog_and_burst(srv):
     assert not errors and statuses.count(200) == 150, (errors[:3], statuses)
 
 
+def connection_cap(work, db):
+    """Item 10: --max-connections 8 (at most 4 from one address): a fifth connection from this
+    address is answered 503 at once; once the idle ones are closed, pages are served again."""
+    srv = Server(work, db, "--max-connections", "8")
+    idle = []
+    try:
+        idle = [socket.create_connection(("127.0.0.1", srv.port)) for _ in range(4)]
+        time.sleep(0.5)
+        st, body, _ = srv.req("GET", "/login", timeout=5)
+        assert st == 503 and "too many connections" in body, (st, body[:200])
+        for s in idle:
+            s.close()
+        idle = []
+        time.sleep(0.5)
+        assert srv.req("GET", "/login", timeout=5)[0] == 200
+    finally:
+        for s in idle:
+            s.close()
+        srv.stop()
+
+
 def address_limit(work, db):
     """Item 7: guesses across many logins from one address: after 30 failures within 15 min the
     address is refused (429), without a lock on any login."""
@@ -447,6 +468,7 @@ def main():
                  ("streams", lambda: live_streams(srv)), ("cap", lambda: stream_cap(work, db)),
                  ("token", lambda: login_token(srv)), ("parallel", lambda: parallel_guesses(srv, db)),
                  ("role", lambda: role_change(srv, db, work)), ("tls", lambda: tls(work, db)),
+                 ("conncap", lambda: connection_cap(work, db)),
                  ("address", lambda: address_limit(work, db))]
         for name, case in cases:
             if not only or name in only:
