@@ -116,15 +116,30 @@ const char* live_js() {
 (function () {
   var el = document.getElementById('live'), st = document.getElementById('live-status');
   if (!el || !window.EventSource) return;
-  var es = new EventSource('/live/events');
-  es.addEventListener('live', function (e) {
-    // Keep what the person is typing into a reject reason.
-    var typing = document.activeElement && document.activeElement.classList.contains('reason');
-    if (!typing) el.innerHTML = e.data;
-    if (st) st.textContent = 'live: updated ' + new Date().toLocaleTimeString();
-  });
-  es.addEventListener('end', function () { es.close(); if (st) st.textContent = 'session ended: reload the page'; });
-  es.onerror = function () { if (st) st.textContent = 'live: reconnecting…'; };
+  function say(t) { if (st) st.textContent = t; }
+  function connect() {
+    var es = new EventSource('/live/events');
+    es.addEventListener('live', function (e) {
+      // Keep what the person is typing into a reject reason.
+      var typing = document.activeElement && document.activeElement.classList.contains('reason');
+      if (!typing) el.innerHTML = e.data;
+      say('live: updated ' + new Date().toLocaleTimeString());
+    });
+    es.addEventListener('end', function () { es.close(); say('session ended: reload the page'); });
+    es.addEventListener('replaced', function () {
+      es.close();
+      say('live updates paused: a newer page of this session follows the stations; reload to follow here');
+    });
+    es.onerror = function () {
+      if (es.readyState === EventSource.CLOSED) {  // refused (the server's limit of live streams): later
+        say('live: the console is busy; trying again shortly');
+        setTimeout(connect, 10000 + Math.random() * 10000);
+      } else {
+        say('live: reconnecting…');
+      }
+    };
+  }
+  connect();
 })();
 )JS";
 }

@@ -2,6 +2,7 @@
 
 #include <sodium.h>
 
+#include <cstring>
 #include <stdexcept>
 
 namespace calbench::console {
@@ -47,29 +48,30 @@ void Sessions::remove(const std::string& token) {
   by_token_.erase(token);
 }
 
-std::string Sessions::locked(const std::string& login) {
+int Sessions::remove_login(const std::string& login) {
   const std::lock_guard<std::mutex> l(m_);
-  const auto it = failures_.find(login);
-  if (it == failures_.end() || it->second.count < kMaxFailures) return {};
-  const auto left = std::chrono::duration_cast<std::chrono::seconds>(it->second.until - Clock::now()).count();
-  if (left <= 0) {
-    failures_.erase(it);
-    return {};
+  int n = 0;
+  for (auto it = by_token_.begin(); it != by_token_.end();) {
+    if (it->second->login == login) {
+      it = by_token_.erase(it);
+      ++n;
+    } else {
+      ++it;
+    }
   }
-  return "login '" + login + "' is locked after " + std::to_string(kMaxFailures) +
-         " wrong passwords in a row; try again in " + std::to_string((left + 59) / 60) + " min";
+  return n;
 }
 
-void Sessions::failed(const std::string& login) {
-  const std::lock_guard<std::mutex> l(m_);
-  if (failures_.size() > 100000) failures_.clear();  // bounded memory under a flood of invented logins
-  Failures& f = failures_[login];
-  if (++f.count >= kMaxFailures) f.until = Clock::now() + kLockout;
+Secret::Secret(std::string_view s) : n_(s.size()) {
+  if (sodium_init() < 0) throw std::runtime_error("libsodium could not be initialised");
+  p_ = static_cast<char*>(sodium_malloc(n_ ? n_ : 1));
+  if (!p_) throw std::runtime_error("no locked memory for a session's password (sodium_malloc)");
+  if (n_) std::memcpy(p_, s.data(), n_);
+  sodium_mprotect_readonly(p_);
 }
 
-void Sessions::succeeded(const std::string& login) {
-  const std::lock_guard<std::mutex> l(m_);
-  failures_.erase(login);
+Secret::~Secret() {
+  if (p_) sodium_free(p_);
 }
 
 }  // namespace calbench::console

@@ -1,32 +1,61 @@
-// The web console's sessions and lock-out (issue 38), in server memory only: a session is a random
-// 256-bit token (the cookie) with its own random CSRF token (every form carries it, every POST is
-// checked against it), the signed-in person and that person's open store (PostgreSQL: a connection
-// as the login; the credentials live only in that connection). A session ends at logout, after
-// kIdle without a request or kLifetime after login. Lock-out: kMaxFailures wrong passwords in a row
-// for one login lock that login for kLockout (a right password is refused meanwhile); a restart of
-// the server clears it.
+// The web console's sessions (issue 38, 54), in server memory only: a session is a random 256-bit
+// token (the cookie) with its own random CSRF token (every form carries it, every POST is checked
+// against it) and the signed-in person. SQLite: the session's own store and the account's password
+// hash at login (every request is checked against the account as it is now). PostgreSQL: the login's
+// password in locked memory (libsodium), to open a connection from the bounded pool when a request
+// needs one (bench/console/pg_pool.hpp). A session ends at logout, after the idle time without a
+// request, kLifetime after login, or when its account's role or password changed (all of the
+// account's sessions). Lock-outs: bench/console/login_guard.hpp.
 #pragma once
+#include <atomic>
 #include <chrono>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "db/store.hpp"
 
 namespace calbench::console {
 
 using Clock = std::chrono::steady_clock;
-inline constexpr int kMaxFailures = 5;
-inline constexpr std::chrono::minutes kLockout{15};
 inline constexpr std::chrono::hours kLifetime{12};
 
+// A password kept in guarded, locked memory (sodium_malloc: not swapped, zeroed when freed).
+class Secret {
+ public:
+  explicit Secret(std::string_view s);
+  ~Secret();
+  Secret(const Secret&) = delete;
+  Secret& operator=(const Secret&) = delete;
+  std::string_view view() const { return {p_, n_}; }
+
+ private:
+  char* p_ = nullptr;
+  std::size_t n_ = 0;
+};
+
+// One open live-page event stream: `stop` asks it to end (a newer stream of the same session took
+// its place); its destructor gives back the server-wide slot.
+struct StreamTicket {
+  std::atomic<bool> stop{false};
+  std::atomic<int>* open = nullptr;
+  ~StreamTicket() {
+    if (open) --*open;
+  }
+};
+
 struct Session {
-  std::string login, name, role;  // role: qc | station | provisioning ("" on PostgreSQL: the database decides)
+  std::string login, name, role;  // role: qc | station | provisioning (PostgreSQL: calbench_users' role, "" unmapped)
   std::string csrf;
+  std::string credential;          // SQLite: the account's password hash at login
+  std::unique_ptr<Secret> password;  // PostgreSQL: to open pooled connections as the login
   Clock::time_point created, last;
-  std::mutex m;                  // one request at a time uses the store
-  std::unique_ptr<db::Store> store;
+  std::mutex m;                    // one request at a time uses the session's store
+  std::unique_ptr<db::Store> store;  // SQLite: the session's own store
+  std::vector<std::weak_ptr<StreamTicket>> streams;  // its open live streams (guarded by the console's stream mutex)
 };
 
 // 32 random bytes as 64 hex digits (libsodium randombytes).
@@ -42,20 +71,13 @@ class Sessions {
   // stream does not keep a session alive); null when unknown or expired.
   std::shared_ptr<Session> find(const std::string& token, bool touch = true);
   void remove(const std::string& token);
-  // Lock-out: "" if `login` may try, else why not (until when).
-  std::string locked(const std::string& login);
-  void failed(const std::string& login);
-  void succeeded(const std::string& login);
+  // Ends every session of `login` (its role or password changed, or the account is gone).
+  int remove_login(const std::string& login);
 
  private:
   std::chrono::seconds idle_;
   std::mutex m_;
   std::map<std::string, std::shared_ptr<Session>> by_token_;
-  struct Failures {
-    int count = 0;
-    Clock::time_point until{};
-  };
-  std::map<std::string, Failures> failures_;
 };
 
 }  // namespace calbench::console

@@ -64,7 +64,7 @@ class Http:
         st, body, setc = self.req("GET", "/login")
         assert st == 200, st
         pre = re.search(r"calbench_login=([0-9a-f]+)", setc).group(1)
-        csrf = re.search(r'name="csrf" value="([0-9a-f]+)"', body).group(1)
+        csrf = re.search(r'name="csrf" value="([0-9a-f.]+)"', body).group(1)
         return self.req("POST", "/login", {"csrf": csrf, "login": user, "password": pw}, f"calbench_login={pre}")
 
     def wait_listening(self):

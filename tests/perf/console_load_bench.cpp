@@ -297,7 +297,12 @@ void user(int u, int port, double think_ms, StartBarrier& start, UserResult& out
     if (pre.empty()) {
       out.error = "GET /login: no login cookie";
     } else {
-      httplib::Params p{{"csrf", pre}, {"login", qc_login(u)}, {"password", kPassword}};
+      // The form's token (bound to its cookie by the server) as a browser posts it back.
+      const std::string& html = form->body;
+      const std::string key = "name=\"csrf\" value=\"";
+      const auto at = html.find(key);
+      const std::string csrf = at == std::string::npos ? "" : html.substr(at + key.size(), html.find('"', at + key.size()) - at - key.size());
+      httplib::Params p{{"csrf", csrf}, {"login", qc_login(u)}, {"password", kPassword}};
       auto r = cli.Post("/login", {{"Cookie", "calbench_login=" + pre}}, p);
       session = r && r->status == 303 ? set_cookie(r, "calbench_session") : "";
       if (session.empty()) out.error = "POST /login as " + qc_login(u) + ": " + (r ? std::to_string(r->status) : "no answer");
