@@ -60,11 +60,7 @@ class Pg:
         self.admin("postgres", "CREATE DATABASE calbench")
         admin_uri = f"postgresql:///calbench?host={self.dir}&port={self.port}&user=calbench_admin"
         run("db", "init", "--db", admin_uri, "--roles", "--operator", "admin")
-        # At e62469a schema 9 grants calbench_audit_security only to groups that exist when it runs,
-        # and `db init --roles` makes them afterwards (roles.sql does not grant it): granted here
-        # until db/postgres does (reported to the lead; idempotent once it does).
-        self.admin("calbench", "GRANT EXECUTE ON FUNCTION calbench_audit_security(text, text, text, text) TO "
-                               "calbench_station, calbench_qc, calbench_provisioning, calbench_reader")
+        self.admin_uri = admin_uri
         self.pw = {login: f"pw-{login}-{secrets.token_hex(8)}" for login in ("st1", "qc1", "qc2")}
         for login, secret in self.pw.items():
             self.admin("calbench", f"CREATE ROLE {login} LOGIN PASSWORD '{secret}'")
@@ -141,7 +137,8 @@ def role_change(pg, srv, older):
     approval is refused by the database and audited through its session's connection."""
     a, st1 = srv.session("qc2"), srv.session("st1")
     assert srv.req("GET", "/queue", cookie=a)[0] == 200
-    pg.admin("calbench", "UPDATE calbench_users SET role = 'station' WHERE login = 'qc2'")  # as db user add does
+    run("db", "user", "add", "qc2", "--db", pg.admin_uri, "--name", "Rita Review", "--role", "station", "--operator", "admin")
+    assert pg.admin("calbench", "SELECT pg_has_role('qc2', 'calbench_qc', 'MEMBER')") == "f"
     st, body, _ = srv.req("GET", "/queue", cookie=a)
     assert st == 401 and "session has ended" in body and "role" in body, (st, body[:400])
     assert srv.req("GET", "/queue", cookie=older)[0] in (303, 401)

@@ -185,13 +185,12 @@ def role_change(srv, db, work):
     st1 = srv.session("st1")
     st, body, _ = srv.req("POST", "/set/1/approve", {"csrf": srv.csrf(st1)}, st1)
     assert st == 403 and set_status(db) == "draft", (st, body[:300])
-    # The account made a station account with another password, in the store itself (as `db user add`
-    # by an admin does; the CLI's rules for who may change an account are not this test's subject).
-    con = sqlite3.connect(db)
-    with con:
-        con.execute("UPDATE console_accounts SET role = 'station', password_hash = "
-                    "(SELECT password_hash FROM console_accounts WHERE login = 'st1') WHERE login = 'qc2'")
-    con.close()
+    # The account made a station account with another password (st1's) by an admin, appointed first
+    # with a qc account's password (docs/database.md "Threat model").
+    run("db", "user", "add", "boss", "--db", db, "--name", "Ada Admin", "--role", "admin", "--admin", "qc1",
+        env={**os.environ, "CALBENCH_PASSWORD": "boss-pass-1", "CALBENCH_ADMIN_PASSWORD": PW["qc1"]})
+    run("db", "user", "add", "qc2", "--db", db, "--name", "Rita Review", "--role", "station", "--admin", "boss",
+        env={**os.environ, "CALBENCH_PASSWORD": PW["st1"], "CALBENCH_ADMIN_PASSWORD": "boss-pass-1"})
     st, body, _ = srv.req("POST", "/set/1/approve", {"csrf": csrf}, a)
     assert st == 401 and "session has ended" in body and "role" in body, (st, body[:400])
     assert set_status(db) == "draft"
