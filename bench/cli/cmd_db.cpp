@@ -18,7 +18,10 @@
 #include "common/input_error.hpp"
 #include "db/input_errors.hpp"
 #include "bench/io/json_util.hpp"
+#include "bench/io/imu_class_toml.hpp"
+#include "calibration/imu_class.hpp"
 #include "db/approval.hpp"
+#include "db/approval_limits.hpp"
 #include "db/fleet.hpp"
 #include "db/signer.hpp"
 #include "db/store.hpp"
@@ -99,6 +102,14 @@ void cmd_init(const DbArgs& a) {
     if (s->connection().dialect() != Dialect::postgres)
       throw arg_error("--roles", "roles are PostgreSQL's (a SQLite file has no users): give --db postgresql://OWNER@HOST/DB");
     s->apply_roles();
+  }
+  if (s->authenticated()) {  // the device classes' coefficient limits, held by the database itself
+    publish_approval_limits(*s, "*", db::default_thresholds(), "built-in ADIS16488A defaults");
+    for (const auto& c : builtin_imu_classes()) {
+      const db::Thresholds t = approval_thresholds("", c.name);
+      for (const auto& m : c.aliases) db::publish_approval_limits(*s, normalized_model_name(m), t, "class " + c.name);
+      publish_approval_limits(*s, normalized_model_name(c.name), t, "class " + c.name);
+    }
   }
   std::cout << "database " << s->connection().path() << " ready (schema version " << s->schema_version() << ")"
             << (a.roles ? "; roles calbench_station, calbench_qc, calbench_provisioning, calbench_reader in place" : "")

@@ -233,12 +233,42 @@ BEGIN
   VALUES (coalesce(calbench_person(session_user), p_user), p_station, p_entity, p_entity_id, dev, p_action, p_detail);
 END $f$;
 
--- The parts of the verdict the database holds (every recorded QC result passes; an in-motion fit
--- whose adaptive noise failed is refused), shared by approval and provisioning. The coefficient,
--- sigma and fit-quality limits of the thresholds file are the client's (docs/database.md).
+-- The device classes' coefficient limits (|bias|, |scale|, |skew| per triad, SI), written by the
+-- owner (`calbench db init`: the class defaults of bench/imu_classes, model '*' the built-in ones):
+-- the floor the database holds every approval to, whatever thresholds file the client used.
+CREATE TABLE approval_limits (
+  model  text PRIMARY KEY,  -- normalized model name (lower case, no white space), or '*'
+  limits jsonb NOT NULL,    -- {"gyro": {"bias": B, "scale": S, "skew": K}, "accel": {...}}
+  source text NOT NULL DEFAULT '',
+  set_at timestamptz NOT NULL DEFAULT now(),
+  set_by text NOT NULL DEFAULT session_user
+);
+CREATE FUNCTION calbench_limit_reasons(p_set bigint) RETURNS text[] LANGUAGE plpgsql STABLE
+  SET search_path = public, pg_temp AS $f$
+DECLARE lim jsonb; src text; why text[] := '{}'; v record; kind text; bound double precision;
+BEGIN
+  SELECT l.limits, l.source INTO lim, src FROM coefficient_sets s JOIN devices d ON d.id = s.device_id
+    JOIN approval_limits l ON l.model = lower(regexp_replace(d.model, '\s', '', 'g')) WHERE s.id = p_set;
+  IF lim IS NULL THEN SELECT limits, source INTO lim, src FROM approval_limits WHERE model = '*'; END IF;
+  IF lim IS NULL THEN RETURN why; END IF;
+  FOR v IN SELECT name, value FROM coefficient_values WHERE set_id = p_set ORDER BY name LOOP
+    kind := CASE WHEN split_part(v.name, '.', 2) = 'bias' THEN 'bias'
+                 WHEN substr(split_part(v.name, '.', 3), 1, 1) = substr(split_part(v.name, '.', 3), 2, 1) THEN 'scale'
+                 ELSE 'skew' END;
+    bound := (lim -> split_part(v.name, '.', 1) ->> kind)::double precision;
+    IF bound IS NOT NULL AND abs(v.value) > bound THEN
+      why := why || format('%s = %s exceeds the database''s %s limit %s (%s)', v.name, v.value, kind, bound, src);
+    END IF;
+  END LOOP;
+  RETURN why;
+END $f$;
+
+-- The parts of the verdict the database holds (the coefficient limits above; every recorded QC
+-- result passes; an in-motion fit whose adaptive noise failed is refused), shared by approval and
+-- provisioning. The σ and fit-quality limits of the thresholds file are the client's.
 CREATE FUNCTION calbench_db_verdict(p_set bigint) RETURNS text[] LANGUAGE plpgsql STABLE
   SET search_path = public, pg_temp AS $f$
-DECLARE s record; why text[] := '{}'; q record;
+DECLARE s record; why text[] := calbench_limit_reasons(p_set); q record;
 BEGIN
   SELECT * INTO s FROM coefficient_sets WHERE id = p_set;
   FOR q IN SELECT metric, value, threshold FROM qc_results
@@ -409,6 +439,7 @@ BEGIN
     TO calbench_provisioning;
   GRANT EXECUTE ON FUNCTION calbench_provisioning_refusals(bigint)
     TO calbench_station, calbench_qc, calbench_provisioning, calbench_reader;
+  GRANT SELECT ON approval_limits TO calbench_station, calbench_qc, calbench_provisioning, calbench_reader;
   GRANT EXECUTE ON FUNCTION calbench_audit_security(text, text, text, text)
     TO calbench_station, calbench_qc, calbench_provisioning, calbench_reader;
 END $f$;

@@ -61,6 +61,17 @@ grep -q "a status changes only through calbench_approve" e.txt || { cat e.txt; f
 [ "$(as bob "SELECT array_to_string(calbench_approve(2, 'psql', '{}', 'by hand'), '|')")" = \
   "QC residual = 5 failed (threshold 1) (the database's check)" ] || fail "calbench_approve approved a failed set"
 [ "$(status 2)" = draft ] || fail "the failed set was approved"
+# The database holds the device classes' coefficient limits (db init): a set with accel M.xx = -0.6
+# passes no calbench_approve, whatever the caller says of thresholds.
+[ "$(admin -d calbench -c "SELECT source FROM approval_limits WHERE model = 'adis16488a'")" = "class ADIS16488A" ] \
+  || fail "db init did not write the class limits"
+python3 -c 'import json; c = json.load(open("st/COEFFS.json")); c["device"]["serial"] = "4004"; c["accel"]["M"][0][0] = -0.6; json.dump(c, open("c4.json", "w"))'
+"$CALBENCH" db store-bench --db "$(uri anna_st)" --coeffs c4.json --sha256 "$(printf '%064x' 4)" --qc residual=0.1:1 \
+  --operator "Anna Berg" > /dev/null
+big=$(admin -d calbench -c "SELECT s.id FROM coefficient_sets s JOIN devices d ON d.id = s.device_id WHERE d.serial = '4004'")
+as bob "SELECT array_to_string(calbench_approve($big, 'psql', '{}', 'thresholds: lax.json'), '|')" > r.txt
+grep -q "accel.M.xx = -0.6 exceeds the database's scale limit 0.025 (class ADIS16488A)" r.txt || { cat r.txt; fail "calbench_approve passed a -0.6 scale"; }
+[ "$(status "$big")" = draft ] || fail "the -0.6 set was approved"
 # Provisioning re-checks: nothing approved without its signed row reaches a file.
 run "$CALBENCH" provision 2002 --set 2 --export x.json --db "$(uri prov1)"
 [ "$rc" != 0 ] && [ ! -e x.json ] || { cat err.txt; fail "the failed draft was provisioned"; }
@@ -94,8 +105,9 @@ python3 -c 'import json; c = json.load(open("st/COEFFS.json")); c["device"]["ser
   --operator "Anna Berg" > /dev/null
 "$CALBENCH" db user add carl --name "Carl Check" --role station --db "$ADMIN" --operator admin | grep -q "changed" || fail "role change"
 [ "$(admin -d calbench -c "SELECT pg_has_role('carl', 'calbench_qc', 'MEMBER')")" = f ] || fail "carl still in calbench_qc"
-run "$CALBENCH" db approve 3 --db "$(uri carl)"
+s3=$(admin -d calbench -c "SELECT s.id FROM coefficient_sets s JOIN devices d ON d.id = s.device_id WHERE d.serial = '3003'")
+run "$CALBENCH" db approve "$s3" --db "$(uri carl)"
 [ "$rc" = 1 ] && grep -q "refused this to role 'carl'" err.txt || { cat err.txt; fail "carl approved as station: exit $rc"; }
-refused carl "permission denied" "SELECT calbench_approve(3, 'psql', '{}', '')"
-[ "$(status 3)" = draft ] || fail "set 3 approved by a former QC login"
+refused carl "permission denied" "SELECT calbench_approve($s3, 'psql', '{}', '')"
+[ "$(status "$s3")" = draft ] || fail "set $s3 approved by a former QC login"
 echo "db_pg_insider: ok"
