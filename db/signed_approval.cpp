@@ -4,7 +4,6 @@
 #include <nlohmann/json.hpp>
 
 #include "db/audit_chain.hpp"
-#include "db/schema.hpp"
 #include "db/signer.hpp"
 
 namespace calbench::db {
@@ -46,7 +45,7 @@ SignedApproval signed_approval(Store& store, const CoefficientSetRecord& set) {
 
 std::vector<std::string> provisioning_refusals(Store& store, const CoefficientSetRecord& set, const Thresholds& t) {
   std::vector<std::string> why;
-  if (store.authenticated() && store.schema_version() >= kChainSchemaVersion) {
+  if (store.authenticated()) {
     // PostgreSQL: the server's own check (a provisioning login reads neither the audit log nor
     // the QC results: calbench_provisioning_refusals does, and calbench_record_provisioning again).
     auto st = store.connection().prepare("SELECT array_to_json(calbench_provisioning_refusals(?))::text");

@@ -8,7 +8,6 @@
 
 #include "db/audit_chain.hpp"
 #include "db/input_errors.hpp"
-#include "db/schema.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -39,7 +38,7 @@ void Store::insert_audit_locked(const std::string& entity, std::int64_t entity_i
                                 const std::string& action, const std::string& detail) {
   if (conn_->dialect() == Dialect::postgres) {
     static const std::set<std::string> own = {"create", "firmware", "ask", "answer", "timeout"};
-    if (own.count(action) && schema_version() >= kChainSchemaVersion) {
+    if (own.count(action)) {
       auto st = conn_->prepare("SELECT calbench_audit(?, ?, ?, ?, ?, ?)");
       st.bind(1, entity).bind(2, entity_id).bind(3, action).bind(4, detail).bind(5, actor_.user).bind(6, actor_.station);
       st.step();
@@ -67,13 +66,11 @@ void Store::insert_audit_locked(const std::string& entity, std::int64_t entity_i
     q.bind(1, r.id - 1);
     if (q.step() && !q.is_null(0)) prev = q.text(0);
   }
-  const bool chained = schema_version() >= kChainSchemaVersion;
-  auto st = conn_->prepare(std::string("INSERT INTO audit_log(id, at, \"user\", station, entity, entity_id, device_id, "
-                                       "action, detail, db_role") + (chained ? ", chain" : "") +
-                           ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?" + (chained ? ", ?" : "") + ")");
+  // (Every store is at schema 9 once opened, and migration 9 adds the chain before its own row.)
+  auto st = conn_->prepare("INSERT INTO audit_log(id, at, \"user\", station, entity, entity_id, device_id, action, "
+                           "detail, db_role, chain) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   st.bind(1, r.id).bind(2, r.at).bind(3, r.user).bind(4, r.station).bind(5, entity).bind(6, entity_id).bind(7, device)
-      .bind(8, action).bind(9, detail).bind(10, r.db_role);
-  if (chained) st.bind(11, audit_chain_link(prev, r));
+      .bind(8, action).bind(9, detail).bind(10, r.db_role).bind(11, audit_chain_link(prev, r));
   st.run();
 }
 

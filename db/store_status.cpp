@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include "db/input_errors.hpp"
-#include "db/schema.hpp"
 #include "db/store.hpp"
 
 namespace calbench::db {
@@ -41,7 +40,7 @@ void Store::set_setting(const std::string& key, const std::string& value) {
   if (!actor_.named())
     throw DbError(1, "changing a setting needs a named operator (--operator NAME or CALBENCH_OPERATOR); the OS "
                      "user '" + actor_.user + "' is not a signature");
-  if (conn_->dialect() == Dialect::postgres && schema_version() >= kChainSchemaVersion) {
+  if (conn_->dialect() == Dialect::postgres) {
     conn_->write_transaction([&] {  // the server checks the group and writes the audit row
       auto st = conn_->prepare("SELECT calbench_set_setting(?, ?, ?)");
       st.bind(1, key).bind(2, value).bind(3, actor_.station).step();
@@ -91,7 +90,7 @@ void Store::set_status(std::int64_t set_id, SetStatus to, const std::string& rea
     if (!ok)
       throw arg_error("status", "set " + std::to_string(set_id) + " is " + to_string(from) +
                                             "; it cannot become " + to_string(to));
-    if (conn_->dialect() == Dialect::postgres && schema_version() >= kChainSchemaVersion) {
+    if (conn_->dialect() == Dialect::postgres) {
       // Schema 9: a revocation through the server (group, person, audit row); an approval only
       // through approve_checked (calbench_approve runs the database's verdict and four-eyes).
       if (to != SetStatus::revoked)
@@ -114,7 +113,7 @@ void Store::record_provisioning(std::int64_t set_id, const std::string& kind, co
   if (kind != "device" && kind != "export") throw arg_error("kind", "expected device or export");
   check_text(target, "target", true);
   check_signer("provisioning");
-  if (conn_->dialect() == Dialect::postgres && schema_version() >= kChainSchemaVersion) {
+  if (conn_->dialect() == Dialect::postgres) {
     // The server checks the group, the signed approval row and its verdict, and writes the event,
     // the audit rows and the status together.
     conn_->write_transaction([&] {
