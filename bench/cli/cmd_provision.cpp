@@ -198,6 +198,7 @@ ImuUri imu_uri(const std::string& uri) {
 
 void run(const ProvisionArgs& a) {
   if (!a.uri.empty()) (void)imu_uri(a.uri);  // bad input before the database is opened
+  if (!a.out.empty()) check_output_path(a.out);  // an export that cannot be written: bad input, before any check
   Store s(a.db.empty() ? Store::default_path() : a.db, OpenOptions{}, Actor::from_environment(a.op));
   const auto dev = s.find_device(a.serial);
   if (!dev) throw arg_error("SERIAL", "unknown device '" + a.serial + "' in " + s.connection().path());
