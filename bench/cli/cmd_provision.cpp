@@ -1,5 +1,6 @@
 // calbench provision SERIAL [--set ID] (--to-device IMU-URI | --export FILE): put an approved
 // coefficient set where it is used, and record the event (docs/database.md "Provisioning").
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -213,6 +214,13 @@ void run(const ProvisionArgs& a) {
       !why.empty()) {
     std::string all;
     for (const auto& w : why) all += "\n  - " + w;
+    // Approved with another thresholds file: say which, so that the provisioner can give it too.
+    const SignedApproval sa = signed_approval(s, set);
+    const auto t = sa.row.detail.find("thresholds: ");
+    if (a.thresholds.empty() && sa.found && t != std::string::npos &&
+        std::any_of(why.begin(), why.end(), [](const std::string& w) { return w.rfind("verdict now:", 0) == 0; }))
+      all += "\n(the set was approved with " + sa.row.detail.substr(t) + "; give the same with --thresholds FILE if it "
+             "still holds)";
     throw std::runtime_error("set " + std::to_string(set.id) + " is not provisioned; nothing was written:" + all);
   }
 

@@ -170,7 +170,7 @@ import json; r = json.load(open("r.json")); c = r["determined_by"]["coefficients
 c["stage"] = "drive" if c["drive_share"] < 0.8 else "bench"; json.dump(r, open("tampered.json", "w"))'
 set +e; "$CALBENCH" db import-inmotion tampered.json > /dev/null 2> taerr.txt; rc=$?; set -e
 [ "$rc" = 2 ] && grep -q "gyro.M.xy.stage" taerr.txt || { cat taerr.txt; fail "tampered determined_by imported"; }
-"$CALBENCH" provision 4242 --set 2 --to-device emu://4242 --json > prov.json
+"$CALBENCH" provision 4242 --set 2 --thresholds accept.json --to-device emu://4242 --json > prov.json
 python3 -c '
 import json; p = json.load(open("prov.json"))
 assert p["ok"] and p["set"] == 2 and p["written"] == p["read_back"], p' || fail "provisioning"
