@@ -2,6 +2,8 @@
 // Never edit a released migration: append a new one.
 #include "db/schema.hpp"
 
+#include <string>
+
 namespace calbench::db {
 
 // ---- 7 (console part, issue 38): the web console's local accounts on a SQLite store (`calbench db
@@ -108,10 +110,8 @@ DROP TRIGGER audit_log_no_update;
 ALTER TABLE audit_log ADD COLUMN chain TEXT;
 )SQL";
 }
-const char* schema9_after_seal() {
+const char* schema9_approval_signed_trigger() {
   return R"SQL(
-CREATE TRIGGER audit_log_no_update BEFORE UPDATE ON audit_log
-BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
 -- An approval is made with its signed audit row, written just before in the same transaction
 -- (db approve): `UPDATE coefficient_sets SET status = 'approved'` alone is refused.
 CREATE TRIGGER coefficient_sets_approval_signed BEFORE UPDATE OF status ON coefficient_sets
@@ -120,6 +120,13 @@ WHEN NEW.status = 'approved' AND OLD.status IS NOT 'approved' AND NOT EXISTS (
     AND a.entity_id = NEW.id AND a.action = 'status' AND a.detail LIKE 'draft -> approved%' AND a.chain IS NOT NULL)
 BEGIN SELECT RAISE(ABORT, 'an approval is made with its signed audit row (calbench db approve)'); END;
 )SQL";
+}
+const char* schema9_after_seal() {
+  static const std::string sql = std::string(R"SQL(
+CREATE TRIGGER audit_log_no_update BEFORE UPDATE ON audit_log
+BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
+)SQL") + schema9_approval_signed_trigger();
+  return sql.c_str();
 }
 
 const std::vector<const char*>& migrations() {

@@ -10,4 +10,7 @@ const char* schema8_station_progress();
 // Schema 9's last part, run after the audit rows already there are chained (Store::migrate).
 inline constexpr int kChainSchemaVersion = 9;
 const char* schema9_after_seal();
+// Its trigger that refuses an approval without its signed audit row just before it (a bulk fixture
+// that approves by SQL drops it and creates it again with this).
+const char* schema9_approval_signed_trigger();
 }  // namespace calbench::db
