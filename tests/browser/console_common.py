@@ -5,8 +5,6 @@ import http.client
 import os
 import re
 import shutil
-import socket
-import subprocess
 import time
 import urllib.parse
 
@@ -17,25 +15,9 @@ from selenium.webdriver.common.by import By
 from selenium.webdriver.support import expected_conditions as EC
 from selenium.webdriver.support.ui import WebDriverWait
 
-CB = os.environ["CALBENCH"]
-SRC = os.environ["SRC"]
+from calbench_cli import CB, SRC, free_port, run  # noqa: F401 (re-exported to the browser tests)
 # The live run's plan: an operator prompt (slot 1) before a 6-s rate step.
 PROMPT_PLAN = os.path.join(SRC, "tests/data/prompt_plan.toml")
-
-
-def run(*args, env=None, check=True):
-    p = subprocess.run([CB, *args], capture_output=True, text=True, env=env)
-    if check and p.returncode != 0:
-        raise SystemExit(f"calbench {' '.join(args)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
-    return p
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 class Http:

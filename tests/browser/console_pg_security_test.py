@@ -27,20 +27,12 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from console_security_test import Server  # noqa: E402
 
-CB = os.environ["CALBENCH"]
-SRC = os.environ["SRC"]
+from calbench_cli import SRC, run  # noqa: E402
 PG_BIN = os.environ.get("PG_BIN") or (sorted(glob.glob("/usr/lib/postgresql/*/bin")) or [""])[-1]
 if not (os.access(os.path.join(PG_BIN, "initdb"), os.X_OK) and shutil.which("psql")):
     print("PostgreSQL server binaries or psql not installed: skipped")
     sys.exit(77)
 PG_SERVER = os.path.join(SRC, "tests/support/pg_server.sh")
-
-
-def run(*args, env=None):
-    p = subprocess.run([CB, *args], capture_output=True, text=True, env=env)
-    if p.returncode != 0:
-        raise SystemExit(f"calbench {' '.join(args)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
-    return p
 
 
 class Pg:

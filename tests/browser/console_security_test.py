@@ -22,24 +22,8 @@ import tempfile
 import threading
 import time
 
-CB = os.environ["CALBENCH"]
-SRC = os.environ["SRC"]
+from calbench_cli import CB, SRC, free_port, run  # noqa: E402
 PW = {"qc1": "pw-quinn-1234", "qc2": "pw-rita-12345", "st1": "pw-sam-123456"}
-
-
-def run(*args, env=None):
-    p = subprocess.run([CB, *args], capture_output=True, text=True, env=env)
-    if p.returncode != 0:
-        raise SystemExit(f"calbench {' '.join(args)}: exit {p.returncode}\n{p.stdout}\n{p.stderr}")
-    return p
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 class Server:
