@@ -272,7 +272,6 @@ void client_reasons(Store& store, const CoefficientSetRecord& set, bool four_eye
 ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Thresholds& t) {
   store.check_signer();  // an --operator that is not the login's person is refused before anything
   ApprovalCheck r;
-  const bool server_checks = store.authenticated();
   store.connection().write_transaction([&] {
     r = ApprovalCheck{};
     const CoefficientSetRecord set = store.get_set(set_id);
@@ -283,8 +282,7 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
     r = check_approval(set, store.qc_of_set(set), t, fit_evidence(store, set));
     const bool four_eyes = store.setting(kFourEyes) == "on";
     client_reasons(store, set, four_eyes, r);
-    const std::string creator = creator_name(set);
-    if (server_checks) {
+    if (store.authenticated()) {
       // PostgreSQL: the database runs its part of the verdict and four-eyes by person, and writes
       // the signed row or the refusal with every reason (the client's included).
       auto f = store.connection().prepare("SELECT array_to_json(calbench_approve(?, ?, ?, ?))::text");
@@ -298,7 +296,7 @@ ApprovalCheck approve_checked(Store& store, std::int64_t set_id, const Threshold
     if (r.ok) {
       const Actor& who = store.actor();
       store.set_status(set_id, SetStatus::approved,
-                       "signed by " + who.user + " (" + who.source + signature_suffix(store) + "), stored by " + creator +
+                       "signed by " + who.user + " (" + who.source + signature_suffix(store) + "), stored by " + creator_name(set) +
                            (set.created_by_login.empty() ? "" : " (" + signature_note(set.created_by_login, store.authenticated()) + ")") +
                            (four_eyes ? "" : ", four-eyes off") + "; thresholds: " + t.source);
     } else {

@@ -38,6 +38,29 @@ std::string audit_chain_link(const std::string& prev, const AuditRowFields& row)
   return hex;
 }
 
+namespace {
+// Checks the row `st` is on against `prev` (the chain value of the row before it); returns its own.
+std::string check_link(const std::string& prev, Statement& st, ChainCheck& out) {
+  ++out.rows;
+  const AuditRowFields r = read_row(st);
+  if (st.is_null(10)) out.breaks.push_back({r.id, "no chain value (written outside calbench)"});
+  else if (st.text(10) != audit_chain_link(prev, r))
+    out.breaks.push_back({r.id, "its chain value does not match its contents and the row before it (edited, "
+                                "inserted or a row before it removed outside calbench)"});
+  return st.is_null(10) ? std::string() : st.text(10);
+}
+
+// The rows `st` selects (in id order), each against the row just before it in the whole log.
+void check_selected(Connection& c, Statement& st, ChainCheck& out) {
+  auto before = c.prepare("SELECT chain FROM audit_log WHERE id < ? ORDER BY id DESC LIMIT 1");
+  while (st.step()) {
+    before.reset();
+    before.bind(1, st.int64(0));
+    check_link(before.step() && !before.is_null(0) ? before.text(0) : std::string(), st, out);
+  }
+}
+}  // namespace
+
 ChainCheck check_audit_chain(Store& store, std::optional<std::int64_t> device) {
   ChainCheck out;
   Connection& c = store.connection();
@@ -45,32 +68,29 @@ ChainCheck check_audit_chain(Store& store, std::optional<std::int64_t> device) {
     out.applies = false;
     return out;
   }
-  const auto check = [&](const std::string& prev, Statement& st) {
-    ++out.rows;
-    const AuditRowFields r = read_row(st);
-    if (st.is_null(10)) out.breaks.push_back({r.id, "no chain value (written outside calbench)"});
-    else if (st.text(10) != audit_chain_link(prev, r))
-      out.breaks.push_back({r.id, "its chain value does not match its contents and the row before it (edited, "
-                                  "inserted or a row before it removed outside calbench)"});
-    return st.is_null(10) ? std::string() : st.text(10);
-  };
   if (!device) {
     auto st = c.prepare(std::string(kRowColumns) + "ORDER BY id");
-    std::string prev;
-    while (st.step()) prev = check(prev, st), out.head = prev;
+    while (st.step()) out.head = check_link(out.head, st, out);
     return out;
   }
   auto st = c.prepare(std::string(kRowColumns) +
                       "WHERE device_id = ? OR (entity = 'coefficient_set' AND entity_id IN "
                       "(SELECT id FROM coefficient_sets WHERE device_id = ?)) ORDER BY id");
   st.bind(1, *device).bind(2, *device);
-  auto before = c.prepare("SELECT chain FROM audit_log WHERE id < ? ORDER BY id DESC LIMIT 1");
-  while (st.step()) {
-    before.reset();
-    before.bind(1, st.int64(0));
-    const std::string prev = before.step() && !before.is_null(0) ? before.text(0) : std::string();
-    check(prev, st);
+  check_selected(c, st, out);
+  return out;
+}
+
+ChainCheck check_audit_row(Store& store, std::int64_t id) {
+  ChainCheck out;
+  Connection& c = store.connection();
+  if (c.dialect() == Dialect::postgres) {
+    out.applies = false;
+    return out;
   }
+  auto st = c.prepare(std::string(kRowColumns) + "WHERE id = ?");
+  st.bind(1, id);
+  check_selected(c, st, out);
   return out;
 }
 

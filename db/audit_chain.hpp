@@ -41,6 +41,8 @@ struct ChainCheck {
 // The whole log, or (device given) the rows of that device and the row before each: enough to
 // show a row of the device forged, edited, or a row before it removed.
 ChainCheck check_audit_chain(Store& store, std::optional<std::int64_t> device = std::nullopt);
+// One row against the row before it (a signed approval's, say).
+ChainCheck check_audit_row(Store& store, std::int64_t id);
 // Writes the chain of every row that has none, in id order (schema 9's migration of an older store;
 // those rows are vouched for as they were at the migration). Inside the caller's transaction.
 void seal_audit_chain_locked(Connection& c);

@@ -1,6 +1,5 @@
 #include "db/signed_approval.hpp"
 
-#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "db/audit_chain.hpp"
@@ -22,12 +21,9 @@ SignedApproval signed_approval(Store& store, const CoefficientSetRecord& set) {
               ": its status was changed outside calbench";
     return out;
   }
-  const ChainCheck chain = check_audit_chain(store, set.device_id);
-  const auto broken = std::find_if(chain.breaks.begin(), chain.breaks.end(),
-                                   [&](const ChainBreak& b) { return b.id == out.row.id; });
-  if (broken != chain.breaks.end()) {
+  if (const ChainCheck link = check_audit_row(store, out.row.id); !link.ok()) {
     out.why = "the approval row of set " + std::to_string(set.id) + " (audit row " + std::to_string(out.row.id) +
-              ") fails the audit log's hash chain: " + broken->why;
+              ") fails the audit log's hash chain: " + link.breaks.front().why;
     return out;
   }
   // Four-eyes at the time: the signer is another person than the creator, unless it was off.

@@ -52,20 +52,17 @@ void Store::insert_audit_locked(const std::string& entity, std::int64_t entity_i
     return;
   }
   AuditRowFields r;
+  std::string prev;  // the last row's chain value
   {
-    auto q = conn_->prepare(std::string("SELECT COALESCE(MAX(id), 0) + 1, ") + conn_->now_sql() + " FROM audit_log");
+    auto q = conn_->prepare(std::string("SELECT COALESCE(MAX(id), 0) + 1, ") + conn_->now_sql() +
+                            ", (SELECT chain FROM audit_log ORDER BY id DESC LIMIT 1) FROM audit_log");
     q.step();
     r.id = q.int64(0);
     r.at = q.text(1);
+    if (!q.is_null(2)) prev = q.text(2);
   }
   r.user = actor_.user, r.station = actor_.station, r.db_role = login(), r.entity = entity;
   r.entity_id = entity_id, r.device_id = device, r.action = action, r.detail = detail;
-  std::string prev;
-  {
-    auto q = conn_->prepare("SELECT chain FROM audit_log WHERE id = ?");
-    q.bind(1, r.id - 1);
-    if (q.step() && !q.is_null(0)) prev = q.text(0);
-  }
   // (Every store is at schema 9 once opened, and migration 9 adds the chain before its own row.)
   auto st = conn_->prepare("INSERT INTO audit_log(id, at, \"user\", station, entity, entity_id, device_id, action, "
                            "detail, db_role, chain) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");

@@ -188,21 +188,21 @@ std::string verdict_block(Store& store, const Device& dev, const std::vector<Coe
     const std::string set = "Set " + std::to_string(current->id);
     // A status changed behind calbench's back (e.g. by hand in a SQLite file) has no signed
     // approval in the audit log, or one that fails the log's hash chain or four-eyes: not a pass.
-    bool signed_approval = true;
+    bool record_intact = true;  // a signed approval if approved, and no audit row of the device edited outside calbench
     if (approved) {
       const db::SignedApproval sa = db::signed_approval(store, *current);
-      signed_approval = sa.ok;
+      record_intact = sa.ok;
       if (!sa.ok) reasons.push_back("set " + std::to_string(current->id) + " is " + to_string(current->status) + " but " + sa.why);
     }
     for (const auto& br : db::check_audit_chain(store, dev.id).breaks) {
-      signed_approval = false;  // a device whose audit rows were edited outside calbench is not a pass
+      record_intact = false;  // a device whose audit rows were edited outside calbench is not a pass
       reasons.push_back("audit row " + std::to_string(br.id) + " of this device: " + br.why);
     }
-    if (chk.ok && approved && signed_approval) {
+    if (chk.ok && approved && record_intact) {
       word = "PASS";
       cls = "pass";
       said = set + " is " + to_string(current->status) + " and meets every threshold in force.";
-    } else if (chk.ok && !approved && signed_approval) {
+    } else if (chk.ok && !approved && record_intact) {
       word = "NOT APPROVED";
       cls = "draft";
       said = set + " is a draft: it meets every threshold in force but has not been approved (calbench db approve " +
