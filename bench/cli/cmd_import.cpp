@@ -23,14 +23,14 @@ struct TargetOptions {
     a->add_option("--out", t.out, "recording folder to write")->required()
       ->check(non_empty());
     a->add_option("--rate", t.rate_hz, "sample rate, Hz (default: from the median interval)")->check(finite_positive());
-    // Required: fit multipos takes the noise of the class named here, and the serial keys the unit's
-    // coefficient sets in the database ("unknown" would merge every unit's).
+    // The serial is required: it keys the unit's coefficient sets in the database ("unknown" would
+    // merge every unit's). The model may be left out: a unit of no known class is normal (issue 55).
     const CLI::Validator non_empty(
         [](std::string& v) { return v.find_first_not_of(" \t") == std::string::npos ? std::string("must not be empty") : std::string(); },
         "TEXT");
-    a->add_option("--model", t.model, "device model for meta.json: a device class name or alias (docs/in-motion.md, "
-                                      "'Device classes'); another name needs fit multipos --device-class FILE")
-        ->required()
+    a->add_option("--model", t.model, "device model for meta.json (default 'unknown'): a device class name or alias gives "
+                                      "fit multipos the class's drift priors and a noise cross-check (docs/in-motion.md, "
+                                      "'Device classes'); any other name is fitted without a class, its noise measured")
         ->check(non_empty);
     a->add_option("--serial", t.serial, "device serial for meta.json (keys the unit's coefficient sets in the database)")
         ->required()
@@ -42,12 +42,13 @@ struct TargetOptions {
     a->add_option("--site-h", h, "site height, m (with --site-lat)")->check(finite_number(-1e4, 1e5));
     a->add_flag("--force", t.force, "overwrite an existing recording in --out");
   }
-  // After the import: a model no built-in class knows is fine, but fit multipos will ask for the class.
+  // After the import: a model no built-in class knows is fine; say what fit multipos will do with it.
   static void note_model(const MultiposTarget& t) {
     for (const ImuClass& c : builtin_imu_classes())
       if (imu_class_matches(c, t.model)) return;
-    std::cerr << "calbench: note: no built-in device class is named '" << t.model << "'; give fit multipos --device-class FILE "
-              << "(bench/imu_classes/*.toml shows the format; known: " << known_imu_classes_text() << ")" << std::endl;
+    std::cerr << "calbench: note: no built-in device class is named '" << t.model << "': fit multipos measures the noise on "
+              << "the recording and takes wide drift priors; --device-class NAME|FILE gives a class (known: "
+              << known_imu_classes_text() << ")" << std::endl;
   }
   void finish(MultiposTarget& t) const {
     if (app->count("--gravity")) t.gravity_m_s2 = gravity;

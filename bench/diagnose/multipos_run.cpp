@@ -99,7 +99,7 @@ nlohmann::json multipos_diagnosis_json(const MultiposDiagRun& run) {
           {"withdrawn", withdrawn_json(r.withdrawn)},
           {"axes", axes},
           {"coefficients_tested", run.fitted_first ? "fit multipos of this recording" : "given"},
-          {"noise_check", {{"class", run.fitted.rec.device_class.value("name", std::string())},
+          {"noise_check", {{"class", class_name(run.fitted.rec)},
                            {"largest_chi2_per_dof_after", largest},
                            {"far_above_the_residual", largest < kLooseNoiseChi2}}},
           {"multipos",
@@ -121,7 +121,7 @@ std::string multipos_diagnosis_text(const MultiposDiagRun& run) {
     o << (r.unexplained.empty() ? "no finding: the pose residuals are consistent with the model and the sensor's noise\n"
                                 : "no catalogue finding, but the residual is NOT consistent: see unexplained below\n");
   if (const double m = largest_chi2_after(r); m < kLooseNoiseChi2)
-    o << "! the residuals are far below the noise the class " << run.fitted.rec.device_class.value("name", std::string("?"))
+    o << "! the residuals are far below the noise the class " << class_name(run.fitted.rec)
       << " assumes (χ²/dof at most " << fmt(m, 2) << " on every axis): this unit is quieter than its class, and an effect "
          "smaller than the class's noise is not tested here; a class file with this unit's noise (--device-class FILE) "
          "makes the test sharper\n";

@@ -1,5 +1,6 @@
 #include "bench/multipos/fit_multipos_run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -45,6 +46,16 @@ std::string plot_svg(const multipos::MultiposInput& in, const multipos::Multipos
   return report::svg_line_plot({gyro, acc, stat}, spec);
 }
 
+// Which figures came from the recording and which from a class (issue 55 item 3).
+nlohmann::json figures_from(const MultiposRecording& rec, const multipos::MultiposFit& fit) {
+  const std::string cls = "class " + class_name(rec);
+  return {{"white_noise", "the recording: gyro from the " + fit.gyro_noise.source + ", accelerometer from the " +
+                              fit.accel_noise.source + (rec.class_known ? " (" + cls + ": cross-check)" : std::string())},
+          {"static_test", "the recording's white noise"},
+          {"bias_stability", rec.class_known ? cls : std::string("wide prior (no device class)")},
+          {"gravity", rec.gravity_source}};
+}
+
 nlohmann::json fit_json(const MultiposRecording& rec, const multipos::MultiposFit& fit) {
   nlohmann::json j;
   j["method"] = "gravity magnitude (accelerometer) and gravity direction after each rotation (gyro); docs/multipos.md";
@@ -54,11 +65,17 @@ nlohmann::json fit_json(const MultiposRecording& rec, const multipos::MultiposFi
   j["gravity_source"] = rec.gravity_source;
   j["device_class"] = rec.device_class;
   auto noise = [](const multipos::NoiseLevel& n, double k) {
-    return nlohmann::json{{"class_per_sample", n.class_sigma * k}, {"measured_per_sample", n.measured_sigma * k},
-                          {"used_per_sample", n.used_sigma * k}, {"differs_2x", n.differs}};
+    return nlohmann::json{{"class_per_sample", n.class_sigma > 0 ? nlohmann::json(n.class_sigma * k) : nlohmann::json(nullptr)},
+                          {"measured_per_sample", n.measured_sigma * k}, {"used_per_sample", n.used_sigma * k},
+                          {"source", n.source}, {"quietest_windows_per_sample", n.quiet_sigma * k},
+                          {"differs_from_class_2x", n.differs}};
   };
   j["noise"] = {{"gyro_deg_s", noise(fit.gyro_noise, 1 / kDeg)}, {"accel_m_s2", noise(fit.accel_noise, 1)}};
-  j["static_test"] = {{"window_samples", fit.window_samples}, {"chi2_factor", fit.threshold_factor}, {"alpha", 1e-4}};
+  const multipos::MultiposOptions defaults;
+  j["static_test"] = {{"window_samples", fit.window_samples}, {"variance_limit_factor", fit.threshold_factor},
+                      {"margin", defaults.margin}, {"alpha", defaults.alpha}, {"min_pose_s", defaults.min_static_s}};
+  j["distinct_directions"] = fit.distinct_directions;
+  j["figures_from"] = figures_from(rec, fit);
   nlohmann::json st = nlohmann::json::array();
   for (std::size_t k = 0; k < fit.statics.size(); ++k) {
     const auto& s = fit.statics[k];
@@ -134,7 +151,41 @@ std::string coeff_text(const SensorErrors& e) {
   return os.str();
 }
 
+// The class of the recording (--device-class, else meta.json device.model), or none for a model no
+// class knows: a unit of no known class is normal (issue 55) — its noise is measured on the recording
+// (filled in after the fit, fit_multipos_set) and its drift priors are wide.
+void choose_multipos_class(const std::string& option, const std::string& model, const std::string& mf, MultiposRecording& r) {
+  auto& in = r.input;
+  const bool known = std::any_of(builtin_imu_classes().begin(), builtin_imu_classes().end(),
+                                 [&](const ImuClass& c) { return imu_class_matches(c, model); });
+  if (option.empty() && !known) {
+    r.class_known = false;
+    r.device_class = {{"name", nullptr},
+                      {"chosen_by", "none: meta.json device.model '" + model +
+                                        "' names no device class (--device-class NAME|FILE gives one)"},
+                      {"priors", "wide: gyro bias stability " + number_text(multipos::kWideGyroBiasStability / kDegPerHour) +
+                                     " °/h, accelerometer " + number_text(multipos::kWideAccelBiasStability / kMilliG) +
+                                     " mg, " + number_text(multipos::kWideBiasTau) + " s"}};
+    r.noise = NoiseSpec{};
+    r.noise.gyro.drift_sigma = multipos::kWideGyroBiasStability;
+    r.noise.accel.drift_sigma = multipos::kWideAccelBiasStability;
+    r.noise.gyro.drift_tau_s = r.noise.accel.drift_tau_s = multipos::kWideBiasTau;
+    return;
+  }
+  const ImuClassChoice cls = choose_imu_class(option, model, mf);
+  r.device_class = imu_class_json(cls);
+  r.noise = cls.cls.noise;
+  in.gyro_density = cls.cls.noise.gyro.white_density;
+  in.accel_density = cls.cls.noise.accel.white_density;
+  in.gyro_bias_stability = cls.cls.noise.gyro.drift_sigma;
+  in.accel_bias_stability = cls.cls.noise.accel.drift_sigma;
+}
+
 }  // namespace
+
+std::string class_name(const MultiposRecording& r) {
+  return r.class_known ? r.device_class.value("name", std::string("?")) : std::string("none (noise measured on the recording)");
+}
 
 MultiposRecording read_multipos_recording(const std::string& dir, const std::string& device_class_option) {
   MultiposRecording r;
@@ -145,15 +196,9 @@ MultiposRecording read_multipos_recording(const std::string& dir, const std::str
     throw InputError(mf, 0, "kind", std::string("expected a multipos recording, got \"") + kind_name(meta.kind) +
                                         "\" (fit bench / fit drive read those)");
   r.device = meta.device;
-  const ImuClassChoice cls = choose_imu_class(device_class_option, meta.device.model, mf);
-  r.device_class = imu_class_json(cls);
-  r.noise = cls.cls.noise;
+  choose_multipos_class(device_class_option, meta.device.model, mf, r);
   auto& in = r.input;
   in.rate_hz = meta.imu_rate_hz;
-  in.gyro_density = cls.cls.noise.gyro.white_density;
-  in.accel_density = cls.cls.noise.accel.white_density;
-  in.gyro_bias_stability = cls.cls.noise.gyro.drift_sigma;
-  in.accel_bias_stability = cls.cls.noise.accel.drift_sigma;
   if (meta.extra.contains("gravity_m_s2")) {
     const auto& g = meta.extra["gravity_m_s2"];
     if (!g.is_number() || !(g.get<double>() >= 9.7 && g.get<double>() <= 9.9))
@@ -199,6 +244,11 @@ MultiposSetResult fit_multipos_set(const FitMultiposArgs& a) {
   } catch (const std::invalid_argument& e) {
     throw InputError(a.dir, 0, "", e.what());
   }
+  if (!r.rec.class_known) {  // the white noise the recording showed (the wide drift priors stay)
+    r.rec.noise.gyro.white_density = r.fit.gyro_noise.used_sigma / std::sqrt(r.rec.input.rate_hz);
+    r.rec.noise.accel.white_density = r.fit.accel_noise.used_sigma / std::sqrt(r.rec.input.rate_hz);
+    r.rec.noise.output_rate_hz = r.rec.input.rate_hz;
+  }
   r.set.device = r.rec.device;
   r.set.errors = r.fit.coeffs;
   r.set.extra["source"] = {{"kind", "multipos"},
@@ -223,19 +273,25 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
     return;
   }
   const auto& m = c.extra["multipos"];
-  out << "multi-position fit of " << a.dir << " (" << rec.input.t.size() << " samples, " << rec.input.rate_hz
-      << " Hz; class " << rec.device_class.value("name", std::string("?")) << ")\n";
+  out << "multi-position fit of " << a.dir << " (" << rec.input.t.size() << " samples, " << rec.input.rate_hz << " Hz; "
+      << (rec.class_known ? "class " + class_name(rec) : std::string("no device class: noise measured, drift priors wide"))
+      << ")\n";
   out << "gravity " << rec.input.gravity << " m/s² from " << rec.gravity_source << "\n";
-  out << std::fixed << std::setprecision(4);
-  out << "static test: " << fit.window_samples << "-sample windows, variance below σ²·" << std::setprecision(3)
-      << fit.threshold_factor << " (α = 1e-4 per window and axis); noise per sample: gyro "
-      << fit.gyro_noise.used_sigma / kDeg << " °/s (measured " << fit.gyro_noise.measured_sigma / kDeg << "), accel "
-      << fit.accel_noise.used_sigma << " m/s² (measured " << fit.accel_noise.measured_sigma << ")\n";
-  out << fit.statics.size() << " static poses:";
+  out << std::setprecision(4) << "noise per sample, from the recording: gyro " << fit.gyro_noise.used_sigma / kDeg << " °/s ("
+      << fit.gyro_noise.source << "), accel " << fit.accel_noise.used_sigma << " m/s² (" << fit.accel_noise.source << ")";
+  if (rec.class_known && fit.gyro_noise.class_sigma > 0)
+    out << "; the class says " << fit.gyro_noise.class_sigma / kDeg << " °/s and " << fit.accel_noise.class_sigma
+        << " m/s² (" << std::setprecision(2) << fit.gyro_noise.measured_sigma / fit.gyro_noise.class_sigma << "× and "
+        << fit.accel_noise.measured_sigma / fit.accel_noise.class_sigma << "×: a cross-check, not the test)";
+  out << "\n" << std::setprecision(3) << "static test: " << fit.window_samples << "-sample windows, variance below σ²·"
+      << fit.threshold_factor << " (" << m["static_test"].value("margin", 0.0) << "× the χ² bound at α = 1e-4 per window "
+      << "and axis); poses of " << m["static_test"].value("min_pose_s", 0.0) << " s or more\n";
+  out << std::fixed << fit.statics.size() << " static poses:";
   for (std::size_t k = 0; k < fit.statics.size(); ++k)
     out << (k % 6 == 0 ? "\n " : "") << " #" << k << " " << std::setprecision(1) << fit.statics[k].t0 << "–"
         << fit.statics[k].t1 << " s" << (fit.statics[k].used ? "" : " (left out)");
-  out << "\n" << fit.rotations.size() << " rotations between consecutive poses\n";
+  out << "\n" << fit.distinct_directions << " distinct gravity directions among the used poses (within 10° counted once); "
+      << fit.rotations.size() << " rotations between consecutive poses\n";
   out << std::setprecision(2) << "gravity magnitude over the poses (RMS of |f| − g): raw " << fit.g_spread_raw * 1e3
       << " mm/s² → calibrated " << fit.g_spread * 1e3 << " mm/s²; χ²/dof " << fit.accel_chi2_dof << " ("
       << fit.accel_dof << " dof, white noise only); under the class's noise and drift between poses "

@@ -22,15 +22,18 @@ struct FitMultiposArgs {
 
 // The recording read into the estimator's input (SI rates; increments divided by their interval),
 // with the gravity and the class noise it is fitted with. InputError on a recording of another
-// kind, an unknown device model without --device-class, or malformed tables.
+// kind or malformed tables. A model no class knows is fitted without a class (noise measured).
 struct MultiposRecording {
   multipos::MultiposInput input;
   std::string gravity_source;   // "meta.json gravity_m_s2", "site (WGS-84 normal gravity)", "standard gravity …"
-  nlohmann::json device_class;  // what the report records of the class
-  NoiseSpec noise;              // the class noise (diagnose: the drift prior)
+  nlohmann::json device_class;  // what the report records of the class ("name" null: none)
+  bool class_known = true;      // false: the model names no class and no --device-class was given
+  NoiseSpec noise;              // the class noise (diagnose: the drift prior); no class: measured + wide
   DeviceId device;
 };
 MultiposRecording read_multipos_recording(const std::string& dir, const std::string& device_class_option);
+// The class's name, or "none (noise measured on the recording)".
+std::string class_name(const MultiposRecording& r);
 
 // The fit of a multipos recording as a coefficient set (the spec's coefficients.json with a
 // "multipos" key): what `fit multipos` writes and the station stores for a positions plan.

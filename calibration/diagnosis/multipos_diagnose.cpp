@@ -103,7 +103,7 @@ PoseDesign build_design(const multipos::MultiposInput& in, const multipos::Multi
       // Horizontal Earth rate of an unknown heading: E[h_a²] = (1 − û_a²)/2 of its square; Ω²/3
       // when the latitude (and so the vertical part) is unknown.
       const double earth = in.lat_rad ? w_h2 * (1 - u(a) * u(a)) / 2 : W * W / 3;
-      D.white[a][k] = sg2 / std::max(n, 1) + earth;
+      D.white[a][k] = sg2 / std::max(static_cast<int>(s.c1 - s.c0), 1) + earth;  // the rate's mean: the still centres
     }
     for (int i = 0; i < 3; ++i) D.Xp[kMag](k, 3 + i) = v(i);
     for (int c = 0; c < 6; ++c) D.Xp[kMag](k, 6 + c) = v(kLower[c][0]) * f(kLower[c][1]);

@@ -22,6 +22,15 @@ double two_sided_z(double level) {
   return 0.5 * (lo + hi);
 }
 
+double normal_quantile(double p) {
+  double lo = -40, hi = 40;  // Φ(z) = erfc(−z/√2)/2 increases with z
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 NisTest nis_test(long epochs, int dof, double mean_nis, double fraction_within_95, double level) {
   NisTest t;
   t.level = level;

@@ -15,6 +15,9 @@ namespace calbench::qc {
 // tail of small ν (16 % low at ν = 3, p = 0.025). The NIS test uses ν = 3·epochs.
 double chi2_quantile(double nu, double z);
 
+// Standard normal quantile: Φ(z) = p, 0 < p < 1 (bisection on erfc, |error| < 1e-12).
+double normal_quantile(double p);
+
 // Standard normal quantile of the upper α/2 point: 1.959964 for level 0.95, 2.575829 for 0.99.
 double two_sided_z(double level);
 

@@ -9,7 +9,7 @@
 #   accelerometer K2·f_y²  → an even scale term on accel y (scale_k2, or scale_asymmetry not told
 #                            apart from scale_k2: ±1 g poses cannot separate x² from |x|), the
 #                            gravity-magnitude χ²/dof back near 1;
-# IMU-TK's real xsens recording runs (41 poses); options for other kinds are refused (exit 2).
+# IMU-TK's real xsens recording runs (40 or more poses); options for other kinds are refused (exit 2).
 set -euo pipefail
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 SIM="$SRC/bench/multipos/sim_effects.py"
@@ -105,13 +105,14 @@ set +e; "$CALBENCH" diagnose "$tmp/clean302" --coeffs "$tmp/c-bigbias.json" > /d
 python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['findings'] == [], j['findings']" "$tmp/scaley.json"
 set +e; "$CALBENCH" diagnose "$tmp/clean302" --coeffs "$tmp/c-sing.json" > /dev/null 2> "$tmp/err"; rc=$?; set -e
 [ $rc -eq 2 ] && grep -q "c-sing.json: 'gyro.M': I + M has determinant" "$tmp/err" || { cat "$tmp/err"; exit 1; }
-# IMU-TK's real recording: runs, 41 poses, the class (Xsens MTi, raw) prior.
+# IMU-TK's real recording: runs, 40 or more poses (40 by bench/multipos/xsens_variants.py's own count;
+# the fit splits a few at a disturbance), the class (Xsens MTi, raw) prior.
 D="$SHARED/data/imu_tk-xsens-multipos"
 if [ -f "$D/xsens_acc.mat" ]; then
   "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" --acc-offset 32768 --acc-scale 0.0026808 \
     --gyro-offset 32768 --gyro-scale 1.5979e-4 --gravity 9.81744 --model "Xsens MTi" --serial XS1 > /dev/null
   "$CALBENCH" diagnose "$tmp/xs" --json > "$tmp/xs.json"
-  python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['multipos']['poses_used'] == 41, j['multipos']['poses_used']" "$tmp/xs.json"
+  python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert 40 <= j['multipos']['poses_used'] <= 46, j['multipos']['poses_used']" "$tmp/xs.json"
   # Its residuals are far below the class's noise (χ²/dof ≤ 0.19): said, never a bare "consistent".
   python3 -c "import json,sys; n=json.load(open(sys.argv[1]))['noise_check']; assert n['far_above_the_residual'] and n['class'] == 'Xsens MTi' and n['largest_chi2_per_dof_after'] < 0.25, n" "$tmp/xs.json"
   "$CALBENCH" diagnose "$tmp/xs" | grep -q "far below the noise the class Xsens MTi assumes"

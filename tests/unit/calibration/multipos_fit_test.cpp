@@ -20,11 +20,14 @@ struct Sim {
   MultiposInput in;
   SensorErrors truth;  // in the unit's body frame
   int poses = 0;
+  std::vector<Vec3> ups;  // each pose's true gravity direction (up) in the body frame
 };
 
 // `axes`: the body axes the unit is turned about, in order; `angles_deg` likewise.
+// `noise_factor`: the white noise made is that × the densities the input states (the class's);
+// `opening_s`: the opening still interval (0: none).
 Sim simulate(unsigned seed, const std::vector<Vec3>& axes, const std::vector<double>& angles_deg, double still_s = 3.0,
-             double turn_s = 2.0) {
+             double turn_s = 2.0, double noise_factor = 1.0, double opening_s = 20.0) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   Sim s;
@@ -42,7 +45,8 @@ Sim simulate(unsigned seed, const std::vector<Vec3>& axes, const std::vector<dou
   };
   draw(0.5 * kDeg, 0.01, 0.005, s.truth.gyro);
   draw(0.3, 0.01, 0.005, s.truth.accel);
-  const double sg = in.gyro_density * std::sqrt(in.rate_hz), sa = in.accel_density * std::sqrt(in.rate_hz);
+  const double sg = noise_factor * in.gyro_density * std::sqrt(in.rate_hz),
+               sa = noise_factor * in.accel_density * std::sqrt(in.rate_hz);
   Eigen::Matrix3d C = Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()).toRotationMatrix();  // body → level
   const Vec3 up_level(0, 0, 1);
   double t = 0;
@@ -55,10 +59,12 @@ Sim simulate(unsigned seed, const std::vector<Vec3>& axes, const std::vector<dou
     t += dt;
   };
   auto still = [&](double dur) {
+    if (dur <= 0) return;
     for (int k = 0; k < static_cast<int>(dur * in.rate_hz); ++k) emit(Vec3::Zero());
     ++s.poses;
+    s.ups.push_back(C.transpose() * up_level);
   };
-  still(20.0);  // the opening static
+  still(opening_s);  // the opening static
   for (std::size_t r = 0; r < axes.size(); ++r) {
     const double theta = angles_deg[r] * kDeg;
     const int m = static_cast<int>(turn_s * in.rate_hz);
@@ -133,6 +139,43 @@ TEST(MultiposFit, FindsEveryStaticPose) {
   EXPECT_EQ(static_cast<int>(st.size()), s.poses);
 }
 
+// The truth's count of distinct gravity directions: the poses' true up vectors, within 10° counted
+// once (greedy in time order), made here from the simulation, not from the fit.
+std::size_t true_directions(const Sim& s) {
+  std::vector<Vec3> d;
+  for (const Vec3& u : s.ups) {
+    bool seen = false;
+    for (const Vec3& v : d) seen = seen || u.dot(v) > std::cos(10 * kDeg);
+    if (!seen) d.push_back(u);
+  }
+  return d.size();
+}
+
+// Issue 55: the static test learns the noise from the recording, so a unit 3× noisier or quieter
+// than its class, with 1-s poses and with or without an opening still interval, loses no pose.
+TEST(MultiposFit, NoiseFromTheRecordingNotTheClass) {
+  struct Case {
+    double factor, still_s, opening_s;
+  };
+  for (const Case c : {Case{1.0, 1.0, 0.0}, Case{3.0, 1.0, 0.0}, Case{0.3, 1.0, 20.0}, Case{3.0, 1.5, 20.0}, Case{0.3, 1.2, 0.0}}) {
+    const Vec3 X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
+    const Vec3 D = Vec3(1, 1, 0).normalized(), E = Vec3(0, 1, 1).normalized();
+    const Sim s = simulate(71, {X, X, X, X, Y, Y, Y, Y, Z, D, E, X, Y, Z, E, D, Y, X, Z, E, Y, X},
+                           {90, 90, 90, 90, 90, 90, 90, 90, 120, 70, 100, 45, 135, -90, -60, 110, 80, -120, 60, 90, -45, 75},
+                           c.still_s, 2.0, c.factor, c.opening_s);
+    const MultiposFit fit = fit_multipos(s.in, MultiposOptions{});
+    const std::string what = "noise ×" + std::to_string(c.factor) + ", poses " + std::to_string(c.still_s) + " s, opening " +
+                             std::to_string(c.opening_s) + " s";
+    EXPECT_EQ(static_cast<int>(fit.statics.size()), s.poses) << what;
+    EXPECT_EQ(fit.distinct_directions, true_directions(s)) << what;
+    const double true_sa = c.factor * s.in.accel_density * std::sqrt(s.in.rate_hz);
+    EXPECT_NEAR(fit.accel_noise.used_sigma / true_sa, 1.0, 0.15) << what << " (" << fit.accel_noise.source << ")";
+    EXPECT_EQ(fit.accel_noise.source.rfind("opening still interval", 0) == 0, c.opening_s > 0) << what;
+    EXPECT_EQ(fit.accel_noise.differs, c.factor != 1.0) << what;  // reported, not gated on
+    EXPECT_LT(fit.g_spread, 3 * true_sa / std::sqrt(c.still_s * s.in.rate_hz)) << what;
+  }
+}
+
 TEST(MultiposFit, CoefficientsWithinThreeSigmaOverSeeds) {
   Score sa, sg;
   double spread_raw = 0, spread = 0;
@@ -168,7 +211,8 @@ TEST(MultiposFit, RefusesPosesThatLeaveAnAxisUnexcited) {
   } catch (const MultiposRefusal& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("x axis's share of gravity spans only"), std::string::npos) << m;
-    EXPECT_NE(m.find("add static poses"), std::string::npos) << m;
+    EXPECT_NE(m.find("over the 13 poses"), std::string::npos) << m;  // counts of what the recording holds
+    EXPECT_NE(m.find("no pose has the z axis pointing down"), std::string::npos) << m;
   }
 }
 
