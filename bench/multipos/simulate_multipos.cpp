@@ -1,5 +1,6 @@
 #include "bench/multipos/simulate_multipos.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -38,10 +39,33 @@ nlohmann::json triad_noise_json(const TriadNoise& n, double rate_hz, const char*
           {"drift_tau_s", n.drift_tau_s}};
 }
 
+// The bias wander over the static poses' samples: its mean (the poses see b + this) and its RMS about it.
+struct WanderStats {
+  Vec3 sum_g = Vec3::Zero(), sum2_g = Vec3::Zero(), sum_a = Vec3::Zero(), sum2_a = Vec3::Zero();
+  std::size_t n = 0;
+  void add(const multipos::MultiposSimSample& s) {
+    sum_g += s.gyro_wander;
+    sum2_g += s.gyro_wander.cwiseAbs2();
+    sum_a += s.accel_wander;
+    sum2_a += s.accel_wander.cwiseAbs2();
+    ++n;
+  }
+  nlohmann::json json() const {
+    const double k = 1.0 / static_cast<double>(std::max<std::size_t>(n, 1));
+    auto rms = [&](const Vec3& s1, const Vec3& s2) -> Vec3 { return (s2 * k - (s1 * k).cwiseAbs2()).cwiseMax(0.0).cwiseSqrt(); };
+    return {{"samples", n},
+            {"gyro_mean_rad_s", to_json(Vec3(sum_g * k))},
+            {"gyro_rms_about_mean_rad_s", to_json(rms(sum_g, sum2_g))},
+            {"accel_mean_m_s2", to_json(Vec3(sum_a * k))},
+            {"accel_rms_about_mean_m_s2", to_json(rms(sum_a, sum2_a))},
+            {"note", "the bias wander over the static poses' samples: they see the bias b + this mean"}};
+  }
+};
+
 // truth.json: a coefficients file (the unit's b and M, SI, spec convention) with what else the
 // simulation knows: the noise used, and every pose and turn (docs/multipos.md "Simulated recordings").
 CoefficientSet truth_set(const SimulateMultiposArgs& a, const ImuClassChoice& cls, const multipos::MultiposSimConfig& c,
-                         const multipos::HandTurnPlan& p, const DeviceId& dev) {
+                         const multipos::HandTurnPlan& p, const WanderStats& wander, const DeviceId& dev) {
   CoefficientSet t;
   t.device = dev;
   t.errors = c.truth;
@@ -52,7 +76,8 @@ CoefficientSet truth_set(const SimulateMultiposArgs& a, const ImuClassChoice& cl
                                 "no output quantisation"},
                       {"factor", a.noise_factor},
                       {"gyro", triad_noise_json(c.noise.gyro, c.rate_hz, "rad_s")},
-                      {"accel", triad_noise_json(c.noise.accel, c.rate_hz, "m_s2")}};
+                      {"accel", triad_noise_json(c.noise.accel, c.rate_hz, "m_s2")},
+                      {"wander_over_poses", wander.json()}};
   nlohmann::json poses = nlohmann::json::array(), turns = nlohmann::json::array();
   for (std::size_t k = 0; k < p.poses.size(); ++k)
     poses.push_back({{"pose", k}, {"t0_s", p.poses[k].t0}, {"t1_s", p.poses[k].t1}, {"up_body", to_json(p.poses[k].up_body)}});
@@ -109,6 +134,7 @@ SimulateMultiposSummary simulate_multipos_recording(const SimulateMultiposArgs& 
 
   SimulateMultiposSummary sum;
   multipos::HandTurnPlan plan;
+  WanderStats wander;
   write_multipos(
       out, meta, ImuForm::rates,
       [&](RecordingWriter& w) {
@@ -119,9 +145,10 @@ SimulateMultiposSummary simulate_multipos_recording(const SimulateMultiposArgs& 
           r.accel = s.accel;
           w.imu(r);
           ++sum.samples;
+          if (s.pose >= 0) wander.add(s);
         });
       },
-      [&](const std::filesystem::path& file) { write_coefficients(file, truth_set(a, cls, c, plan, meta.device)); });
+      [&](const std::filesystem::path& file) { write_coefficients(file, truth_set(a, cls, c, plan, wander, meta.device)); });
   sum.poses = static_cast<int>(plan.poses.size());
   sum.duration_s = plan.duration_s();
   sum.rate_hz = a.rate_hz;

@@ -124,6 +124,8 @@ HandTurnPlan simulate_multipos(const MultiposSimConfig& c, const std::function<v
     const ImuErrorSimulator::Output o = imu.sample(s.t, s.w_true, s.f_true);
     s.gyro = o.gyro;
     s.accel = o.accel;
+    s.gyro_wander = imu.gyro_drift();
+    s.accel_wander = imu.accel_drift();
     sink(s);
   };
   for (std::size_t k = 0; k < p.poses.size(); ++k) {

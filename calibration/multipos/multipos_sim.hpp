@@ -87,6 +87,7 @@ struct MultiposSimSample {
   double t = 0;
   Vec3 gyro, accel;    // the unit's output (rad/s, m/s²)
   Vec3 w_true, f_true; // what it really experienced
+  Vec3 gyro_wander, accel_wander;  // the bias wander in the output (truth side: b + wander is the bias now)
   int pose = -1;       // the static pose the sample belongs to, −1 while turning
 };
 

@@ -133,6 +133,23 @@ TEST(MultiposSim, ErrorsInTheSpecsConventionAndTrueUpVectors) {
   }
 }
 
+TEST(MultiposSim, TheWanderIsWhatTheOutputCarriesBeyondTheErrors) {
+  MultiposSimConfig c;
+  c.seed = 4;
+  c.noise = hand_turn_noise(icm_noise(), 0.0, c.rate_hz);  // no white noise: the wander alone
+  c.truth = draw_random_unit(6, UnitSpread{0.5 * kDeg, 20 * units::kMilliG, 5e-3, 1.25e-2, 5e-3, 1e-2});
+  double moved = 0;
+  Vec3 first = Vec3::Constant(std::nan(""));
+  simulate_multipos(c, [&](const MultiposSimSample& s) {
+    EXPECT_LT((s.gyro - c.truth.gyro.measure(s.w_true) - s.gyro_wander).norm(), 1e-15);
+    EXPECT_LT((s.accel - c.truth.accel.measure(s.f_true) - s.accel_wander).norm(), 1e-13);
+    if (std::isnan(first(0))) first = s.accel_wander;
+    moved = std::max(moved, (s.accel_wander - first).norm());
+  });
+  EXPECT_GT(moved, 1e-6);  // it wanders (0.1 mg over τ = 100 s)
+  EXPECT_LT(moved, 10 * units::kMilliG);
+}
+
 TEST(MultiposSim, WhiteNoiseOnAPoseIsTheFactorTimesTheClassDensity) {
   for (const double K : {1.0, 2.5}) {
     MultiposSimConfig c;
