@@ -5,7 +5,6 @@
 #include "bench/cli/number_options.hpp"
 #include "bench/cli/registry.hpp"
 #include "bench/drive/import_kfgins.hpp"
-#include "bench/io/imu_class_toml.hpp"
 #include "bench/multipos/import_csv.hpp"
 #include "bench/multipos/import_imutk.hpp"
 #include "common/input_error.hpp"
@@ -44,11 +43,7 @@ struct TargetOptions {
   }
   // After the import: a model no built-in class knows is fine; say what fit multipos will do with it.
   static void note_model(const MultiposTarget& t) {
-    for (const ImuClass& c : builtin_imu_classes())
-      if (imu_class_matches(c, t.model)) return;
-    std::cerr << "calbench: note: no built-in device class is named '" << t.model << "': fit multipos measures the noise on "
-              << "the recording and takes wide drift priors; --device-class NAME|FILE gives a class (known: "
-              << known_imu_classes_text() << ")" << std::endl;
+    if (const std::string n = unknown_model_note(t.model); !n.empty()) std::cerr << "calbench: note: " << n << std::endl;
   }
   void finish(MultiposTarget& t) const {
     if (app->count("--gravity")) t.gravity_m_s2 = gravity;

@@ -68,7 +68,7 @@ void run_simulate_bench(const SimBenchArgs& a) {
 }
 
 const bool registered = add_command(10, [](CLI::App& app) {
-  auto* sim = app.add_subcommand("simulate", "Simulate recordings with known truth (bench; drive)");
+  auto* sim = app.add_subcommand("simulate", "Simulate recordings with known truth (bench; drive; multipos)");
   sim->require_subcommand(1);
   auto a = std::make_shared<SimBenchArgs>();
   auto* b = sim->add_subcommand("bench", "Simulate a bench run: the two-axis table executing PLAN with an ADIS16488A on it");

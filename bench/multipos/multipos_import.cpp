@@ -4,6 +4,7 @@
 #include <initializer_list>
 #include <utility>
 
+#include "bench/io/imu_class_toml.hpp"
 #include "bench/io/message_text.hpp"
 #include "bench/io/staging_folder.hpp"
 #include "common/input_error.hpp"
@@ -67,15 +68,29 @@ RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz) {
   return meta;
 }
 
+std::string unknown_model_note(const std::string& model) {
+  for (const ImuClass& c : builtin_imu_classes())
+    if (imu_class_matches(c, model)) return {};
+  return "no built-in device class is named '" + model + "': fit multipos measures the noise on the recording and takes "
+         "wide drift priors; --device-class NAME|FILE gives a class (bench/imu_classes/*.toml shows the format; known: " +
+         known_imu_classes_text() + ")";
+}
+
 void write_multipos(const std::filesystem::path& out, const RecordingMeta& meta, ImuForm form,
-                    const std::function<void(RecordingWriter&)>& rows) {
+                    const std::function<void(RecordingWriter&)>& rows,
+                    const std::function<void(const std::filesystem::path&)>& truth) {
   StagingFolder staging(out, "importing");
   {
     RecordingWriter wr(staging.path(), meta, form, false, false, false);
     rows(wr);
     wr.finish();  // read back against what was written before "complete"
   }
-  place_staged_recording(staging, out, {"imu.csv", "meta.json"});
+  if (!truth) {
+    place_staged_recording(staging, out, {"imu.csv", "meta.json"});
+    return;
+  }
+  truth(staging.path() / "truth.json");
+  place_staged_recording(staging, out, {"imu.csv", "truth.json", "meta.json"});
 }
 
 }  // namespace calbench

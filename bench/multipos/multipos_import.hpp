@@ -49,6 +49,10 @@ double multipos_rate(const MultiposTarget& t, std::vector<double>& dts);
 
 RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz);
 
+// "" when a built-in device class has the name or alias `model`; else the note the writers of a
+// multipos recording print: the model is fine, but fit multipos will need --device-class.
+std::string unknown_model_note(const std::string& model);
+
 // SI per unit of the importers' unit options (--gyro-unit rad/s|deg/s|mdeg/s, --accel-unit
 // m/s2|g|mg, --time-unit s|ms|us|ns); an InputError naming the option for anything else.
 double gyro_unit_si(const std::string& unit);
@@ -56,8 +60,11 @@ double accel_unit_si(const std::string& unit);
 double time_unit_si(const std::string& unit);
 
 // Writes the recording into a staging folder with `rows`, reads it back (RecordingWriter::finish),
-// then places it at `out` (place_staged_recording).
+// then places it at `out` (place_staged_recording). `truth`, when given, writes a simulated
+// recording's truth.json (the convention of every simulate command: beside meta.json) at the path
+// it is handed, in the staging folder, after `rows`: it is placed with the recording, or not at all.
 void write_multipos(const std::filesystem::path& out, const RecordingMeta& meta, ImuForm form,
-                    const std::function<void(RecordingWriter&)>& rows);
+                    const std::function<void(RecordingWriter&)>& rows,
+                    const std::function<void(const std::filesystem::path&)>& truth = {});
 
 }  // namespace calbench

@@ -64,6 +64,7 @@ ok() { "$@" > "$T/setup.out" 2> "$T/setup.err" || { cat "$T/setup.err" >&2; echo
 # ---------------------------------------------------------------------------------- valid inputs
 ok "$CALBENCH" simulate bench --plan "$SRC/tests/data/short_plan.toml" --truth random --seed 3 --out bench
 ok "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --seed 2 --until 30 --out rec
+ok "$CALBENCH" simulate multipos --seed 1 --out mp
 SHA=$(printf 'a%.0s' {1..64})
 ok "$CALBENCH" db init --db d.db
 ok "$CALBENCH" db store-bench --db d.db --coeffs bench/truth.json --sha256 "$SHA"  # set 1: draft
@@ -97,7 +98,7 @@ t sub-unknown-option 2 "unknown option '--db' for 'calbench db': a command comes
 t top-unknown-command-far 2 "unknown command 'xyzzy' for 'calbench' \(commands: simulate" "$CALBENCH" xyzzy
 
 # ---------------------------------------------------------------------------------- simulate bench
-t sim-sub-missing 2 "'calbench simulate' needs a command \(commands: bench, drive; calbench simulate --help\)" "$CALBENCH" simulate
+t sim-sub-missing 2 "'calbench simulate' needs a command \(commands: bench, drive, multipos; calbench simulate --help\)" "$CALBENCH" simulate
 t sim-sub-typo 2 "unknown command 'bnech' for 'calbench simulate'; did you mean 'bench'\?" "$CALBENCH" simulate bnech
 LEFT="s1" t sim-bench-plan-missing 2 "--plan: .*nope\.toml" "$CALBENCH" simulate bench --plan nope.toml --truth random --out s1
 LEFT="s1" t sim-bench-plan-folder 2 "--plan: .*folder" "$CALBENCH" simulate bench --plan folder --truth random --out s1
@@ -128,6 +129,24 @@ echo '{"gyro": {"drift_sigma_deg_h": "lots"}}' > noise.json
 LEFT="s2" t sim-drive-noise-field 2 "noise\.json: 'gyro\.drift_sigma_deg_h'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --noise noise.json --until 1 --out s2
 echo '{"gyro": {"drift_sigma_deg_h": -3}}' > noise-neg.json
 LEFT="s2" t sim-drive-noise-negative 2 "noise-neg\.json: 'gyro\.drift_sigma_deg_h'" "$CALBENCH" simulate drive --route "$SRC/bench/routes/short.toml" --truth random --noise noise-neg.json --until 1 --out s2
+
+# ---------------------------------------------------------------------------------- simulate multipos
+LEFT="s3" t sim-mp-poses-negative 2 "--poses: .*'-3'" "$CALBENCH" simulate multipos --poses -3 --out s3
+LEFT="s3" t sim-mp-still-reversed 2 "--still: MIN 3 s is above MAX 1 s" "$CALBENCH" simulate multipos --still 3,1 --out s3
+LEFT="s3" t sim-mp-still-one 2 "--still: expected MIN,MAX in seconds \(e\.g\. 1,3\), got '3'" "$CALBENCH" simulate multipos --still 3 --out s3
+LEFT="s3" t sim-mp-still-nan 2 "--still: expected MIN,MAX" "$CALBENCH" simulate multipos --still 1,nan --out s3
+LEFT="s3" t sim-mp-still-plus-minus 2 "--still: expected MIN,MAX" "$CALBENCH" simulate multipos --still +-1,3 --out s3
+LEFT="s3" t sim-mp-class-unknown 2 "--device-class: 'nope' is neither a class file nor a known class" "$CALBENCH" simulate multipos --device-class nope --out s3
+LEFT="s3" t sim-mp-class-file-missing 2 "nope\.toml: '--device-class': no such class file" "$CALBENCH" simulate multipos --device-class nope.toml --out s3
+LEFT="s3" t sim-mp-class-file-binary 2 "garbage\.bin" "$CALBENCH" simulate multipos --device-class garbage.bin --out s3
+LEFT="s3" t sim-mp-noise-negative 2 "--noise-factor: .*'-1'" "$CALBENCH" simulate multipos --noise-factor -1 --out s3
+LEFT="s3" t sim-mp-rate-1e999 2 "--rate: .*'1e999'" "$CALBENCH" simulate multipos --rate 1e999 --out s3
+LEFT="s3" t sim-mp-site-lat-range 2 "--site-lat: .*'91'" "$CALBENCH" simulate multipos --site-lat 91 --out s3
+LEFT="s3" t sim-mp-opening-nan 2 "--opening-still: .*'nan'" "$CALBENCH" simulate multipos --opening-still nan --out s3
+LEFT="s3" t sim-mp-model-empty 2 "--model" "$CALBENCH" simulate multipos --model "" --out s3
+LEFT="s3" t sim-mp-unknown-option 2 "'--sede' is not an option of 'calbench simulate multipos'; did you mean '--seed'\?" "$CALBENCH" simulate multipos --sede 3 --out s3
+t sim-mp-out-exists 2 "mp: already holds a recording.*--force" "$CALBENCH" simulate multipos --out mp
+t sim-mp-out-is-file 2 "empty\.txt: is a file, not a folder" "$CALBENCH" simulate multipos --out empty.txt
 
 # ---------------------------------------------------------------------------------- station run
 t station-sub-typo 2 "unknown command 'rnu' for 'calbench station'; did you mean 'run'\?" "$CALBENCH" station rnu

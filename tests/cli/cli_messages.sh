@@ -26,6 +26,7 @@ expect 2 "nowhere/r.json: cannot write: the folder nowhere does not exist" "$CAL
 expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" fit drive rec --device-class "" --out e.json
 expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" diagnose rec --device-class ""
 expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" simulate drive --out e --device-class " "
+expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" simulate multipos --out e --device-class " "
 expect 2 "device-class: expected a value, got an empty one" "$CALBENCH" fit multipos rec --device-class ""
 [ ! -e e.json ] && [ ! -e e ] || fail "an output written on an empty --device-class"
 # An empty output path is bad input, not "no output" (every --out, --report, --plot, --html).
