@@ -135,7 +135,8 @@ const bool registered = add_command(30, [](CLI::App& app) {
   auto* mp = fit->add_subcommand("multipos",
                                  "Calibration without a rate table, from a multipos recording (a unit turned by hand or on "
                                  "a fixture through static poses): accelerometer bias, scale, skews from the gravity "
-                                 "magnitude; gyro bias, scale, skews from the rotations between poses; each with its 1σ");
+                                 "magnitude; gyro bias, scale, skews from the rotations between poses; each with its 1σ. Static poses "
+                                 "(0.75 s or more) by a test whose noise is learned from the recording");
   mp->add_option("dir", m->dir, "multipos recording folder (meta.json kind \"multipos\", imu.csv)")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -144,7 +145,8 @@ const bool registered = add_command(30, [](CLI::App& app) {
   mp->add_option("--plot", m->plot, "write an SVG plot of the static poses found and the motion between them")
       ->check(non_empty());
   mp->add_option("--device-class", m->device_class,
-                 "device class file (or built-in class name) when meta.json device.model is not a known class")
+                 "device class file or built-in class name (default: the class meta.json device.model names, else none): its "
+                 "drift priors and a cross-check of the noise; the static test always takes the noise measured on the recording")
       ->check(non_empty());
   mp->add_option("--exclude-pose", m->exclude_poses, "leave static pose K (0-based, as listed) out of the accelerometer fit; repeatable")
       ->check(whole_number(0, 1000000));
