@@ -19,6 +19,7 @@
 // No I/O.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "calibration/multipos/multipos_fit.hpp"
@@ -108,11 +109,31 @@ std::string fixed1(double v) {
   return os.str();
 }
 
-// The noise of both triads: the quietest windows', then the opening still interval's when there is one.
+// The output's quantisation step of each triad (its coarsest axis): the smallest non-zero change
+// between consecutive samples; below it a still unit's noise is the rounding's, step/√12.
+void quantisation_floor(const MultiposInput& in, double floor[2]) {
+  for (int t = 0; t < 2; ++t) {
+    const std::vector<Vec3>& v = t ? in.accel : in.gyro;
+    double coarsest = 0;
+    for (int ax = 0; ax < 3; ++ax) {
+      double step = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 1; i < v.size(); ++i)
+        if (const double d = std::abs(v[i](ax) - v[i - 1](ax)); d > 0 && d < step) step = d;
+      if (std::isfinite(step)) coarsest = std::max(coarsest, step);
+    }
+    floor[t] = coarsest / std::sqrt(12.0);
+  }
+}
+
+// The noise of both triads: the quietest windows', then the opening still interval's when there is
+// one; never below the output's quantisation.
 void learn_noise(const MultiposInput& in, const MultiposOptions& opt, const Windows& W, double factor, NoiseLevel lv[2]) {
   const std::vector<std::size_t> tiles = W.tiles();
-  double quiet[2];
+  double quiet[2], floor[2];
   triad_sigmas(W, tiles, opt.quiet_fraction, quiet);
+  quantisation_floor(in, floor);
+  for (int t = 0; t < 2; ++t)
+    if (quiet[t] > 0) quiet[t] = std::max(quiet[t], floor[t]);
   std::ostringstream qs;
   qs << "quietest " << std::lround(100 * opt.quiet_fraction) << " % of the " << opt.window_s << "-s windows";
   for (int t = 0; t < 2; ++t) {
@@ -134,7 +155,7 @@ void learn_noise(const MultiposInput& in, const MultiposOptions& opt, const Wind
   triad_sigmas(W, opening, 0.5, open);
   for (int t = 0; t < 2; ++t) {
     if (!(open[t] > 0)) return;
-    lv[t].measured_sigma = open[t];
+    lv[t].measured_sigma = std::max(open[t], floor[t]);
     lv[t].source = "opening still interval " + fixed1(t0) + "–" + fixed1(t1) + " s";
   }
 }

@@ -25,9 +25,10 @@ struct Sim {
 
 // `axes`: the body axes the unit is turned about, in order; `angles_deg` likewise.
 // `noise_factor`: the white noise made is that × the densities the input states (the class's);
-// `opening_s`: the opening still interval (0: none).
+// `opening_s`: the opening still interval (0: none); `lsb_factor`: the output rounded to that × the
+// white noise per sample (0: not rounded).
 Sim simulate(unsigned seed, const std::vector<Vec3>& axes, const std::vector<double>& angles_deg, double still_s = 3.0,
-             double turn_s = 2.0, double noise_factor = 1.0, double opening_s = 20.0) {
+             double turn_s = 2.0, double noise_factor = 1.0, double opening_s = 20.0, double lsb_factor = 0.0) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   Sim s;
@@ -54,8 +55,14 @@ Sim simulate(unsigned seed, const std::vector<Vec3>& axes, const std::vector<dou
   auto emit = [&](const Vec3& w_true) {
     const Vec3 f_true = C.transpose() * (in.gravity * up_level);
     in.t.push_back(t);
-    in.gyro.push_back(s.truth.gyro.measure(w_true) + sg * Vec3(n01(rng), n01(rng), n01(rng)));
-    in.accel.push_back(s.truth.accel.measure(f_true) + sa * Vec3(n01(rng), n01(rng), n01(rng)));
+    Vec3 g = s.truth.gyro.measure(w_true) + sg * Vec3(n01(rng), n01(rng), n01(rng));
+    Vec3 a = s.truth.accel.measure(f_true) + sa * Vec3(n01(rng), n01(rng), n01(rng));
+    if (lsb_factor > 0) {
+      g = (g / (lsb_factor * sg)).array().round() * (lsb_factor * sg);
+      a = (a / (lsb_factor * sa)).array().round() * (lsb_factor * sa);
+    }
+    in.gyro.push_back(g);
+    in.accel.push_back(a);
     t += dt;
   };
   auto still = [&](double dur) {
@@ -174,6 +181,20 @@ TEST(MultiposFit, NoiseFromTheRecordingNotTheClass) {
     EXPECT_EQ(fit.accel_noise.differs, c.factor != 1.0) << what;  // reported, not gated on
     EXPECT_LT(fit.g_spread, 3 * true_sa / std::sqrt(c.still_s * s.in.rate_hz)) << what;
   }
+}
+
+// An output rounded far coarser than its noise (8×; a 16-bit consumer gyro at ±2000 °/s is 2×:
+// 0.061 °/s against 0.028 °/s): most still windows hold one value — variance 0 — and the test's
+// noise is the rounding's, step/√12 (without that floor the recording is refused as constant).
+TEST(MultiposFit, QuantisedOutputCoarserThanTheNoise) {
+  const Vec3 X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
+  const Vec3 D = Vec3(1, 1, 0).normalized(), E = Vec3(0, 1, 1).normalized();
+  const Sim s = simulate(72, {X, X, X, X, Y, Y, Y, Y, Z, D, E, X, Y, Z, E, D, Y, X, Z, E, Y, X},
+                         {90, 90, 90, 90, 90, 90, 90, 90, 120, 70, 100, 45, 135, -90, -60, 110, 80, -120, 60, 90, -45, 75},
+                         1.5, 2.0, 1.0, 0.0, 8.0);
+  const MultiposFit fit = fit_multipos(s.in, MultiposOptions{});
+  EXPECT_EQ(static_cast<int>(fit.statics.size()), s.poses);
+  EXPECT_EQ(fit.distinct_directions, true_directions(s));
 }
 
 TEST(MultiposFit, CoefficientsWithinThreeSigmaOverSeeds) {
