@@ -27,7 +27,7 @@ const bool registered = add_command(12, [](CLI::App& app) {
       ->check(non_empty());
   m->add_option("--model", a->model,
                 "device model written to meta.json (default: the class's name; any text, e.g. 'unknown' for a unit of no "
-                "known class: fit multipos then needs --device-class)")
+                "known class: fit multipos then measures its noise and takes wide drift priors)")
       ->check(non_empty());
   m->add_option("--serial", a->serial, "device serial written to meta.json (default SIM-<seed>)")->check(non_empty());
   m->add_option("--poses", a->poses, "static poses, the opening one included (default 24)")->check(whole_number(2, 1000));

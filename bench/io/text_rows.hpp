@@ -25,6 +25,8 @@ class TextRows {
       : path_(std::move(path)), in_(path_), min_(min_cols), max_(max_cols) {
     if (!in_) throw InputError(path_, 0, "", "cannot open file");
   }
+  // True once a last line without its line end was dropped.
+  bool truncated() const { return truncated_; }
   bool next(std::vector<double>& v) {
     std::string s;
     while (std::getline(in_, s)) {
@@ -37,6 +39,7 @@ class TextRows {
         input_warning(path_, line_, "last line has no line end: treated as truncated and not used ('" +
                                         field_text(std::string_view(s).substr(p), 40) +
                                         "'); the rows before it are used: if the file was cut short by a copy, copy it again");
+        truncated_ = true;
         return false;
       }
       v.clear();
@@ -72,6 +75,7 @@ class TextRows {
   std::ifstream in_;
   std::size_t min_, max_;
   std::size_t line_ = 0;
+  bool truncated_ = false;
 };
 
 // Range checks before a value reaches the recording (a latitude of 1e308 is a number, not a place).

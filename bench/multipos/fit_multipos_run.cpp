@@ -286,6 +286,7 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
   out << "\n" << std::setprecision(3) << "static test: " << fit.window_samples << "-sample windows, variance below σ²·"
       << fit.threshold_factor << " (" << m["static_test"].value("margin", 0.0) << "× the χ² bound at α = 1e-4 per window "
       << "and axis); poses of " << m["static_test"].value("min_pose_s", 0.0) << " s or more\n";
+  const std::string judged = rec.class_known ? "the class's noise and drift" : "the measured noise and wide drift priors (no class)";
   out << std::fixed << fit.statics.size() << " static poses:";
   for (std::size_t k = 0; k < fit.statics.size(); ++k)
     out << (k % 6 == 0 ? "\n " : "") << " #" << k << " " << std::setprecision(1) << fit.statics[k].t0 << "–"
@@ -294,14 +295,14 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
       << fit.rotations.size() << " rotations between consecutive poses\n";
   out << std::setprecision(2) << "gravity magnitude over the poses (RMS of |f| − g): raw " << fit.g_spread_raw * 1e3
       << " mm/s² → calibrated " << fit.g_spread * 1e3 << " mm/s²; χ²/dof " << fit.accel_chi2_dof << " ("
-      << fit.accel_dof << " dof, white noise only); under the class's noise and drift between poses "
+      << fit.accel_dof << " dof, white noise only); under " << judged << " between poses "
       << m.value("accel_chi2_dof_class", 0.0) << " (what the approval judges)\n";
   out << "held out (each pose left out of the fit that judges it): |f| − g RMS " << std::setprecision(2)
       << fit.g_loo_rms * 1e3 << " mm/s²; 3× a sound pose of this class: " << m.value("qc_g_loo_limit_m_s2", 0.0) * 1e3
       << " mm/s²\n";
   out << "gravity direction after each rotation: RMS error " << std::setprecision(3) << fit.rotation_rms_rad / kDeg
       << "°; χ²/dof " << std::setprecision(2) << fit.gyro_chi2_dof << " (" << fit.gyro_dof
-      << " dof, white noise only); under the class's noise and drift " << fit.gyro_chi2_dof_class
+      << " dof, white noise only); under " << judged << " " << fit.gyro_chi2_dof_class
       << " (what the approval judges)\n";
   out << coeff_text(fit.coeffs);
   out << "frame: " << m["frame"].get<std::string>() << " (accel M[0][1], M[0][2], M[1][2] are 0 by that definition)\n";

@@ -29,6 +29,13 @@ struct PairReader {
     const bool ha = acc.next(va), hg = gyro.next(vg);
     if (ha != hg) {
       const TextRows& shorter = ha ? gyro : acc;
+      TextRows& longer = ha ? acc : gyro;
+      // The shorter file's last line was cut (dropped with a warning): its pair in the other file goes
+      // too, when it is that file's last row.
+      if (std::vector<double> extra; shorter.truncated() && !longer.next(extra)) {
+        input_warning(longer.path(), longer.line(), "last row left out with the truncated last line of " + shorter.path());
+        return false;
+      }
       if (rows_ == 0) throw InputError(shorter.path(), shorter.line(), "", "no data rows (t x y z)");
       throw InputError(shorter.path(), shorter.line(), "",
                        "ends before " + (ha ? acc : gyro).path() + " (line " + std::to_string((ha ? acc : gyro).line()) +

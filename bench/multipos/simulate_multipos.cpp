@@ -108,7 +108,9 @@ SimulateMultiposSummary simulate_multipos_recording(const SimulateMultiposArgs& 
   // Every option first: nothing is written on bad input.
   if (a.poses < 2 || a.poses > 1000) throw InputError("--poses", 0, "", "2 to 1000 poses, not " + std::to_string(a.poses));
   const auto [still_lo, still_hi] = still_range(a.still);
-  const ImuClassChoice cls = choose_imu_class(a.device_class, "", "--device-class");
+  const ImuClassChoice cls = a.device_class.empty()
+                                 ? ImuClassChoice{builtin_imu_class("ICM-42688-P"), "the default (a consumer MEMS part)"}
+                                 : choose_imu_class(a.device_class, "", "--device-class");
   multipos::MultiposSimConfig c;
   c.hand.poses = a.poses;
   c.hand.still_min_s = still_lo;

@@ -12,7 +12,7 @@ namespace calbench {
 struct SimulateMultiposArgs {
   std::string out;
   std::uint64_t seed = 1;
-  std::string device_class = "ICM-42688-P";  // a class file or the name or alias of a built-in class
+  std::string device_class;  // a class file or the name or alias of a built-in class; empty: ICM-42688-P
   std::string model;                         // meta.json device.model; "" = the class's name
   std::string serial;                        // "" = SIM-<seed>
   int poses = 24;

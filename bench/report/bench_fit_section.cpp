@@ -61,13 +61,17 @@ std::string multipos_fit_part(const db::CoefficientSetRecord& set, const nlohman
   };
   const auto& L = t.quality;
   const double ca = num_of("accel_chi2_dof_class"), cg = num_of("gyro_chi2_dof_class");
+  // A unit of no known class (device_class.name null) is judged under its measured noise and wide priors.
+  const bool no_class = m.contains("device_class") && m["device_class"].is_object() && m["device_class"].contains("name") &&
+                        m["device_class"]["name"].is_null();
+  const char* model = no_class ? "measured noise, wide drift priors: no device class" : "class noise and drift";
   h << "<table class=\"multipos\" id=\"multipos-" << set.id << "\"><tr><th class=\"l\">multi-position fit (no rate table)</th>"
        "<th>value</th><th>limit</th></tr>\n"
     << "<tr><td class=\"l\">static poses used</td><td>" << count_used("statics") << "</td><td>–</td></tr>\n"
     << "<tr><td class=\"l\">rotations used</td><td>" << count_used("rotations") << "</td><td>–</td></tr>\n"
-    << "<tr><td class=\"l\">accelerometer χ²/dof (gravity magnitude, class noise and drift)</td><td class=\"" << (ca <= L.max_chi2_dof_accel ? "pass" : "fail")
+    << "<tr><td class=\"l\">accelerometer χ²/dof (gravity magnitude, " << model << ")</td><td class=\"" << (ca <= L.max_chi2_dof_accel ? "pass" : "fail")
     << "\">" << num(ca, 3) << "</td><td>" << num(L.max_chi2_dof_accel) << "</td></tr>\n"
-    << "<tr><td class=\"l\">gyro χ²/dof (gravity direction after rotations, class noise and drift)</td><td class=\""
+    << "<tr><td class=\"l\">gyro χ²/dof (gravity direction after rotations, " << model << ")</td><td class=\""
     << (cg <= L.max_chi2_dof_gyro ? "pass" : "fail") << "\">" << num(cg, 3) << "</td><td>" << num(L.max_chi2_dof_gyro)
     << "</td></tr>\n"
     << "<tr><td class=\"l\">|f| − g RMS over the poses, before → after</td><td>" << num(num_of("g_spread_raw_m_s2") / kMilliG, 3)

@@ -382,7 +382,8 @@ void rotation_scores(const MultiposInput& in, const std::vector<Vec3>& up, const
 
 MultiposFit fit_multipos(const MultiposInput& in, const MultiposOptions& opt) {
   MultiposFit fit;
-  fit.statics = detect_statics(in, opt, &fit.gyro_noise, &fit.accel_noise, &fit.threshold_factor, &fit.window_samples);
+  fit.statics = detect_statics(in, opt, &fit.gyro_noise, &fit.accel_noise, &fit.threshold_factor, &fit.window_samples,
+                               &fit.too_short_s);
   const std::vector<int> used = used_poses(fit.statics, opt.exclude_poses);
   if (fit.statics.empty()) refuse_no_poses(fit, opt);
   check_gravity_units(fit.statics, in.gravity);

@@ -99,6 +99,7 @@ struct MultiposFit {
   NoiseLevel gyro_noise, accel_noise;
   double threshold_factor = 0;           // margin·χ²_{n−1}(1−α)/(n−1) of the static test
   std::size_t distinct_directions = 0;   // gravity directions of the used poses, within 10° counted once
+  std::vector<double> too_short_s;       // still intervals shorter than a pose (their lengths, s)
   std::size_t window_samples = 0;
   double accel_chi2_dof = 0, gyro_chi2_dof = 0;
   double gyro_chi2_dof_class = 0;         // the rotations under white noise and the class's bias wander
@@ -118,7 +119,8 @@ struct MultiposRefusal : std::runtime_error {
 // Static detection alone (step 1), for reports and tests.
 std::vector<StaticInterval> detect_statics(const MultiposInput& in, const MultiposOptions& opt,
                                            NoiseLevel* gyro_noise = nullptr, NoiseLevel* accel_noise = nullptr,
-                                           double* threshold_factor = nullptr, std::size_t* window = nullptr);
+                                           double* threshold_factor = nullptr, std::size_t* window = nullptr,
+                                           std::vector<double>* too_short_s = nullptr);
 
 // The whole fit. Throws MultiposRefusal when the poses or rotations do not determine the
 // coefficients, std::invalid_argument on malformed input.

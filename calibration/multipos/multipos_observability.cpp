@@ -14,6 +14,17 @@ namespace {
 
 const char* axis_name(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
 
+// "; 12 more still intervals were shorter than a pose's 0.75 s, the longest 0.52 s", or nothing.
+std::string too_short_text(const MultiposFit& fit, const MultiposOptions& opt) {
+  if (fit.too_short_s.empty()) return {};
+  std::ostringstream os;
+  os.precision(2);
+  os << "; " << fit.too_short_s.size() << (fit.statics.empty() ? "" : " more") << " still interval" << (fit.too_short_s.size() == 1 ? " was" : "s were")
+     << " shorter than a pose's " << opt.min_static_s << " s, the longest "
+     << *std::max_element(fit.too_short_s.begin(), fit.too_short_s.end()) << " s";
+  return os.str();
+}
+
 void noise_text(std::ostream& os, const NoiseLevel& n, bool gyro) {
   os << (gyro ? "gyro " : "accelerometer ") << (gyro ? n.used_sigma / units::kDeg : n.used_sigma) << (gyro ? " °/s" : " m/s²")
      << " per sample, from the " << n.source;
@@ -23,7 +34,8 @@ void noise_text(std::ostream& os, const NoiseLevel& n, bool gyro) {
 
 void refuse_no_poses(const MultiposFit& fit, const MultiposOptions& opt) {
   std::ostringstream os;
-  os << "no static pose found: no interval of " << opt.min_static_s << " s or more is still by the static test ("
+  os << "no static pose found: no interval of " << opt.min_static_s << " s or more is still by the static test"
+     << too_short_text(fit, opt) << " ("
      << opt.window_s << "-s windows whose variance stays within " << opt.margin
      << "× the χ² bound of the recording's own white noise: ";
   noise_text(os, fit.gyro_noise, true);
@@ -45,7 +57,7 @@ void check_gravity_units(const std::vector<StaticInterval>& st, double gravity) 
                           std::to_string(gravity) +
                           " m/s²): the accelerometer values are not in m/s² — check the conversion to SI "
                           "(import imu-tk --acc-offset / --acc-scale, import csv --accel-unit), that the accelerometer "
-                          "columns are the right ones and that the accelerometer and gyro files are not swapped)");
+                          "columns are the right ones, and that the accelerometer and gyro files are not swapped");
 }
 
 std::size_t count_distinct_directions(const std::vector<StaticInterval>& st, const std::vector<int>& used) {
@@ -62,9 +74,10 @@ void check_accel_observability(const MultiposFit& fit, const std::vector<int>& u
   const auto& st = fit.statics;
   std::vector<std::string> missing;
   if (used.size() < opt.min_poses)
-    missing.push_back(std::to_string(used.size()) + " static poses used (" + std::to_string(st.size()) + " found" +
+    missing.push_back(std::to_string(used.size()) + (used.size() == 1 ? " static pose" : " static poses") + " used (" +
+                      std::to_string(st.size()) + " found" +
                       (used.size() < st.size() ? ", " + std::to_string(st.size() - used.size()) + " left out" : std::string()) +
-                      "), at least " + std::to_string(opt.min_poses) +
+                      too_short_text(fit, opt) + "), at least " + std::to_string(opt.min_poses) +
                       " needed (9 accelerometer parameters; 12 or more recommended)");
   Vec3 up_max = Vec3::Constant(-2), up_min = Vec3::Constant(2);
   for (int k : used) {
@@ -78,18 +91,21 @@ void check_accel_observability(const MultiposFit& fit, const std::vector<int>& u
     if (up_max(i) - up_min(i) < 1.0) {
       std::ostringstream os;
       const bool lacks_up = 1 - up_min(i) >= up_max(i) + 1;
+      const long most = std::lround(100 * (lacks_up ? up_max(i) : -up_min(i)));  // its share the missing way
       os << "the " << axis_name(i) << " axis's share of gravity spans only " << std::lround(100 * up_min(i)) << "…"
-         << std::lround(100 * up_max(i)) << " % over the " << used.size() << " poses (at least 100 % apart needed): no pose has the "
-         << axis_name(i) << " axis pointing " << (lacks_up ? "up" : "down") << " by more than "
-         << std::lround(100 * (lacks_up ? std::max(up_max(i), 0.0) : std::max(-up_min(i), 0.0))) << " %";
+         << std::lround(100 * up_max(i)) << " % over the " << used.size() << (used.size() == 1 ? " pose" : " poses")
+         << " (at least 100 % apart needed): no pose has the " << axis_name(i) << " axis pointing "
+         << (lacks_up ? "up" : "down");
+      if (most > 0) os << " by more than " << most << " %";
       missing.push_back(os.str());
     }
   // The skews need tilted poses: the six faces give 6 distinct equations for 9 unknowns however often
   // they are repeated.
   const std::size_t dirs = count_distinct_directions(st, used);
   if (dirs < 9)
-    missing.push_back("only " + std::to_string(dirs) + " distinct gravity directions among the " + std::to_string(used.size()) +
-                      " poses (directions within 10° count once), at least 9 needed for the 9 accelerometer parameters: "
+    missing.push_back("only " + std::to_string(dirs) + (dirs == 1 ? " distinct gravity direction" : " distinct gravity directions") +
+                      " among the " + std::to_string(used.size()) + (used.size() == 1 ? " pose" : " poses") +
+                      " (directions within 10° count once), at least 9 needed for the 9 accelerometer parameters: "
                       "the skews need poses tilted between the faces (on an edge or a corner of the unit)");
   if (missing.empty()) return;
   std::ostringstream os;

@@ -215,7 +215,8 @@ StaticInterval interval_of(const MultiposInput& in, std::size_t a, std::size_t b
 }
 
 // Runs of still centres → the samples their windows cover; covers that touch are split half-way.
-std::vector<StaticInterval> poses_of(const MultiposInput& in, const std::vector<char>& still, std::size_t h, std::size_t min_len) {
+std::vector<StaticInterval> poses_of(const MultiposInput& in, const std::vector<char>& still, std::size_t h, std::size_t min_len,
+                                     std::vector<double>& too_short_s) {
   const std::size_t n = still.size();
   std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last] still centre
   for (std::size_t i = 0; i < n;) {
@@ -231,6 +232,7 @@ std::vector<StaticInterval> poses_of(const MultiposInput& in, const std::vector<
     if (r > 0 && runs[r - 1].second + 2 * h + 1 > runs[r].first) a = (runs[r - 1].second + runs[r].first + 1) / 2;
     if (r + 1 < runs.size() && runs[r].second + 2 * h + 1 > runs[r + 1].first) b = (runs[r].second + runs[r + 1].first + 1) / 2;
     if (b > a && b - a >= min_len) out.push_back(interval_of(in, a, b, runs[r].first, runs[r].second + 1));
+    else if (b > a) too_short_s.push_back(double(b - a) / in.rate_hz);
   }
   return out;
 }
@@ -238,7 +240,8 @@ std::vector<StaticInterval> poses_of(const MultiposInput& in, const std::vector<
 }  // namespace
 
 std::vector<StaticInterval> detect_statics(const MultiposInput& in, const MultiposOptions& opt, NoiseLevel* gyro_noise,
-                                           NoiseLevel* accel_noise, double* threshold_factor, std::size_t* window) {
+                                           NoiseLevel* accel_noise, double* threshold_factor, std::size_t* window,
+                                           std::vector<double>* too_short_s) {
   const std::size_t n = in.t.size();
   if (in.gyro.size() != n || in.accel.size() != n) throw std::invalid_argument("multipos: series of unequal length");
   if (!(in.rate_hz > 0)) throw std::invalid_argument("multipos: the sample rate must be positive");
@@ -262,7 +265,9 @@ std::vector<StaticInterval> detect_statics(const MultiposInput& in, const Multip
   const double used[2] = {lv[0].used_sigma, lv[1].used_sigma};
   const std::vector<char> still = still_centres(in, W, limit_of(used, factor), used[0]);
   const std::size_t min_len = std::max<std::size_t>(W.w(), static_cast<std::size_t>(std::lround(opt.min_static_s * in.rate_hz)));
-  std::vector<StaticInterval> out = poses_of(in, still, h, min_len);
+  std::vector<double> short_s;
+  std::vector<StaticInterval> out = poses_of(in, still, h, min_len, short_s);
+  if (too_short_s) *too_short_s = short_s;
   for (auto& s : out) s.g_residual_raw = s.f_mean.norm() - in.gravity;
   if (gyro_noise) *gyro_noise = lv[0];
   if (accel_noise) *accel_noise = lv[1];

@@ -64,6 +64,11 @@ head -1000 "$D/xsens_acc.mat" > "$tmp/ta.txt"; head -1000 "$D/xsens_gyro.mat" > 
 head -c 20 <(sed -n 1001p "$D/xsens_acc.mat") >> "$tmp/ta.txt"; head -c 20 <(sed -n 1001p "$D/xsens_gyro.mat") >> "$tmp/tg.txt"
 "$CALBENCH" import imu-tk "$tmp/ta.txt" "$tmp/tg.txt" --out "$tmp/trunc" "${conv[@]}" "${dev[@]}" > "$tmp/trunc.txt" 2> "$tmp/trunc.err"
 grep -q "imported 1000 rows" "$tmp/trunc.txt" && grep -q "ta.txt:1001: last line has no line end" "$tmp/trunc.err" || { cat "$tmp/trunc.txt" "$tmp/trunc.err"; exit 1; }
+# Only one file cut short: its pair's last row goes too, with a warning naming both (issue 55 tryout).
+head -1001 "$D/xsens_acc.mat" > "$tmp/ta1.txt"
+"$CALBENCH" import imu-tk "$tmp/ta1.txt" "$tmp/tg.txt" --out "$tmp/trunc1" "${conv[@]}" "${dev[@]}" > "$tmp/trunc1.txt" 2> "$tmp/trunc1.err"
+grep -q "imported 1000 rows" "$tmp/trunc1.txt" && grep -q "ta1.txt:1001: last row left out with the truncated last line of .*tg.txt" "$tmp/trunc1.err" \
+  || { cat "$tmp/trunc1.txt" "$tmp/trunc1.err"; exit 1; }
 # A hand-turned ADIS16488A (bench/multipos/sim_effects.py) through the whole path: fit, store with the
 # QC line fit multipos prints, approve (another person), provision to the emulated IMU, read back.
 python3 "$SRC/bench/multipos/sim_effects.py" "$tmp/adis.sim" --seed 321 --poses 24
@@ -96,6 +101,9 @@ head -6000 "$D/xsens_acc.mat" > "$tmp/a6.txt"; head -6000 "$D/xsens_gyro.mat" > 
 "$CALBENCH" import imu-tk "$tmp/a6.txt" "$tmp/g6.txt" --out "$tmp/few" "${conv[@]}" --model "Xsens MTi" --serial XS1 > /dev/null
 expect_fail "2 static poses used (2 found), at least 9 needed" "$CALBENCH" fit multipos "$tmp/few" --out "$tmp/few.json"
 grep -q "only 2 distinct gravity directions among the 2 poses" "$tmp/err"
+# Poses held only half a second: the refusal says how many still intervals were too short, and how long.
+"$CALBENCH" simulate multipos --out "$tmp/half" --seed 5 --still 0.5,0.6 --poses 20 > /dev/null
+expect_fail "more still intervals were shorter than a pose's 0.75 s, the longest 0.7" "$CALBENCH" fit multipos "$tmp/half"
 [ ! -e "$tmp/few.json" ]
 # IMU-TK's format is t x y z exactly: a leading row index (5 numbers) would shift every column.
 awk '{ print NR, $0 }' "$tmp/a6.txt" > "$tmp/a6i.txt"
