@@ -313,6 +313,9 @@ class Case:
                 c = None
             init = self.init_static if fit_on == "A" else (ts1 - ts0)
             i = self.imutk(fa, fg, "half" + fit_on, init_static=init)
+            if i is None:  # calibrateAcc fails only when no threshold multiplier gives its 12 static intervals
+                res.setdefault("refused", []).append(f"IMU-TK found no calibration on half {fit_on} (fewer than its "
+                                                     "minimum of 12 static intervals at every threshold multiplier)")
             for tool, cal in (("calbench", c), ("IMU-TK", i)):
                 if cal is None:
                     res[tool]["halves"] += [float("nan")] * len(score_on)
