@@ -3,8 +3,11 @@
 // the misalignment matrix T, scale matrix K and bias b of each triad, in IMU-TK's own convention
 // (calibrated = T·K·(raw − b), raw in the files' units), and the static intervals it used.
 //   imu_tk_driver ACC GYRO OUT.json [--acc-only] [--init-static S] [--gravity G]
-//                 [--acc-bias-init B] [--gyro-scale-init K]
+//                 [--acc-bias-init B] [--gyro-scale-init K] [--verbose]
 // The settings default to IMU-TK's own example for its xsens recording (apps/test_imu_calib.cpp).
+// --verbose turns on IMU-TK's own verbose output on stdout (the static intervals it extracted per
+// threshold multiplier and the one it kept; its plots are stubbed out by viewer_off.cpp); it changes
+// no result.
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -32,15 +35,16 @@ static nlohmann::json triad(const CalibratedTriad& c) {
 int main(int argc, char** argv) {
   if (argc < 4) {
     std::cerr << "usage: imu_tk_driver ACC GYRO OUT.json [--acc-only] [--init-static S] [--gravity G] "
-                 "[--acc-bias-init B] [--gyro-scale-init K]\n";
+                 "[--acc-bias-init B] [--gyro-scale-init K] [--verbose]\n";
     return 2;
   }
-  bool acc_only = false;
+  bool acc_only = false, verbose = false;
   double init_static = 50.0, g = 9.81744, acc_bias = 32768, gyro_scale = 1.0 / 6258.0;
   for (int i = 4; i < argc; ++i) {
     const std::string a = argv[i];
     auto val = [&] { return std::atof(argv[++i]); };
     if (a == "--acc-only") acc_only = true;
+    else if (a == "--verbose") verbose = true;
     else if (a == "--init-static") init_static = val();
     else if (a == "--gravity") g = val();
     else if (a == "--acc-bias-init") acc_bias = val();
@@ -58,7 +62,7 @@ int main(int argc, char** argv) {
   mp.setInitAccCalibration(init_acc);
   mp.setInitGyroCalibration(init_gyro);
   mp.setGravityMagnitude(g);
-  mp.enableVerboseOutput(false);
+  mp.enableVerboseOutput(verbose);
   mp.enableAccUseMeans(false);
   const bool ok = acc_only ? mp.calibrateAcc(acc) : mp.calibrateAccGyro(acc, gyro);
   nlohmann::json out;

@@ -1,6 +1,6 @@
 // IMU-TK's viewer hooks (declared in its imu_tk/visualization.h) without its Qt4/OpenGL viewer,
-// which Debian 12 cannot build: the plots are skipped. The driver never enables verbose output, the
-// only path that reaches them.
+// which Debian 12 cannot build: the plots are skipped (they are reached only with verbose output,
+// the driver's --verbose; waitForKey returns at once).
 #include "imu_tk/visualization.h"
 
 namespace imu_tk {
