@@ -240,7 +240,7 @@ void print_summary(const DriveResult& r, const std::string& out) {
     for (const auto& s : qc["sets"])
       std::cout << "  QC " << qc["sample"].get<std::string>() << " from " << qc["from_s"].get<double>() << " s over "
                 << qc["horizon_s"].get<double>() << " s, set '" << s["name"].get<std::string>() << "': final ΔS "
-                << std::setprecision(4) << s["final_cpe_m"].get<double>() << std::setprecision(6) << " m\n";
+                << std::setprecision(4) << metres_or_no_data(s["final_cpe_m"]) << std::setprecision(6) << "\n";
   if (qc.contains("outages")) print_outage_summary(qc["outages"], std::cout);
   if (j.contains("approval_preview")) std::cout << approval_preview_text(j["approval_preview"], out);
   std::cout << std::flush;

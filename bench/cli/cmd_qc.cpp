@@ -109,8 +109,8 @@ void run(const QcArgs& a) {
             << sample << "\n";
   for (const auto& s : j["sets"]) {
     // ΔS to four significant digits (the JSON keeps them all).
-    std::cout << std::setprecision(4) << "  " << s["name"].get<std::string>() << ": final ΔS " << s["final_cpe_m"].get<double>() << " m, max "
-              << s["max_cpe_m"].get<double>() << " m";
+    std::cout << std::setprecision(4) << "  " << s["name"].get<std::string>() << ": final ΔS " << metres_or_no_data(s["final_cpe_m"])
+              << ", max " << metres_or_no_data(s["max_cpe_m"]);
     for (const auto& [k, v] : s["cpe_m_at"].items()) std::cout << ", @" << k << " s " << v.get<double>() << " m";
     if (s.contains("effects")) {
       std::cout << "; catalogue terms applied:";

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 
 #include "bench/diagnose/effects_json.hpp"
 #include "bench/drive/drive_stream.hpp"
@@ -121,6 +122,15 @@ void run_qc_group(const fs::path& dir, const std::vector<QcSet>& sets, const std
                      "no reference epoch at or after the QC's start (" + (from_s ? number_text(*from_s) + " s" : std::string("the first epoch")) +
                          "): the reference or imu.csv ends before it; give an earlier start or check that the "
                          "recording's files are complete");
+  // Started, but not one epoch after T0 with IMU data: nothing was navigated. Never a ΔS of 0 m
+  // (issue 56: "final ΔS 0 m" read as perfect).
+  if (q.curves[idx[0]].t.empty())
+    throw InputError(dir.string(), 0, "",
+                     "no data after the QC's start T0 = " + number_text(t0) +
+                         " s: the reference or imu.csv ends there, so nothing was navigated and there is no ΔS to "
+                         "report" + (from_s ? " (the start is the end of the sets' fit window: they were fitted up to the end "
+                                              "of the recording; give --from T for an in-sample QC from an earlier T)"
+                                            : std::string()));
   if (st.rows_with_temperature() > 0) q.has_temperature = true;
 }
 }  // namespace
@@ -163,10 +173,11 @@ nlohmann::json qc_json(const QcOutcome& q) {
   for (const QcCurve& c : q.curves) {
     nlohmann::json s;
     s["name"] = c.name;
-    s["final_cpe_m"] = c.cpe.empty() ? 0.0 : c.cpe.back();
+    // No epoch navigated: no figure (null), never 0 m.
     double mx = 0;
     for (double v : c.cpe) mx = std::max(mx, v);
-    s["max_cpe_m"] = mx;
+    s["final_cpe_m"] = c.cpe.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.cpe.back());
+    s["max_cpe_m"] = c.cpe.empty() ? nlohmann::json(nullptr) : nlohmann::json(mx);
     nlohmann::json at = nlohmann::json::object();
     for (double mark : {10.0, 30.0, 60.0, 120.0, 300.0, 600.0, 1200.0, 1800.0, 3600.0}) {
       if (c.t.empty() || mark > c.t.back() + 1e-6) continue;
@@ -184,6 +195,14 @@ nlohmann::json qc_json(const QcOutcome& q) {
     j["sets"].push_back(s);
   }
   return j;
+}
+
+std::string metres_or_no_data(const nlohmann::json& v) {
+  if (!v.is_number()) return "no data";
+  std::ostringstream os;
+  os.precision(4);
+  os << v.get<double>() << " m";
+  return os.str();
 }
 
 void qc_plot(const QcOutcome& q, const fs::path& png, const std::string& title) {

@@ -54,6 +54,9 @@ QcOutcome run_qc(const std::filesystem::path& dir, const std::vector<QcSet>& set
 // "cpe_series": {"t_s": [...], "cpe_m": [...]}}]}; cpe_series is ΔS(t) over the whole horizon at 1 s
 // spacing (wider beyond a 1 h horizon: at most 3600 points plus the last epoch).
 nlohmann::json qc_json(const QcOutcome& q);
+// "12.34 m", or "no data" for a figure qc_json left null (nothing navigated): the one way printers
+// show a ΔS, so that no data never reads as 0 m.
+std::string metres_or_no_data(const nlohmann::json& v);
 // gnuplot PNG with one curve per set.
 void qc_plot(const QcOutcome& q, const std::filesystem::path& png, const std::string& title);
 

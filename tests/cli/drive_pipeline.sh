@@ -58,6 +58,18 @@ assert "60" in s["result"]["cpe_m_at"]
 assert len(s["result"]["cpe_series"]["t_s"]) > 50, s["result"]["cpe_series"]
 assert s["result"]["final_cpe_m"] * 5 < s["none"]["final_cpe_m"], s
 PY
+# A set fitted up to the drive's last epoch leaves nothing after its window: qc says there is no data
+# (exit 2), never "final ΔS 0 m" (issue 56 item 1). The window's end is set to the last reference epoch.
+python3 - "$T/result.json" "$T/rec/reference.csv" "$T/result_all.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+last = [l for l in open(sys.argv[2]) if l[:1].isdigit()][-1]
+r["window_s"] = [0, float(last.split(",")[0])]
+json.dump(r, open(sys.argv[3], "w"))
+PY
+rc=0; "$CALBENCH" qc "$T/rec" --coeffs none --coeffs "$T/result_all.json" > "$T/qc_all.txt" 2> "$T/qc_all.err" || rc=$?
+[ "$rc" = 2 ] && grep -q "no data after the QC's start" "$T/qc_all.err" && ! grep -q "ΔS 0 m" "$T/qc_all.txt" \
+  || { echo "qc after the whole drive: rc $rc"; cat "$T/qc_all.txt" "$T/qc_all.err"; exit 1; }
 
 # RTS smoother: the constant parameters at the first epoch equal the final estimate.
 "$CALBENCH" fit drive "$T/rec" --out "$T/rs.json" --window 0:150 --smooth --series "$T/smooth.csv" >/dev/null
