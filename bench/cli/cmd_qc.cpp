@@ -1,5 +1,6 @@
 // calbench qc DIR --coeffs A.json [--coeffs B.json ...|none] [--from T0] [--horizon S] [--json] [--plot OUT.png]
 //              [--outages 15,30,60 --outage-count N --outage-gap S]   (GNSS-only recordings: outage QC)
+#include <algorithm>
 #include <iomanip>
 #include <iostream>
 
@@ -111,7 +112,11 @@ void run(const QcArgs& a) {
     // ΔS to four significant digits (the JSON keeps them all).
     std::cout << std::setprecision(4) << "  " << s["name"].get<std::string>() << ": final ΔS " << metres_or_no_data(s["final_cpe_m"])
               << ", max " << metres_or_no_data(s["max_cpe_m"]);
-    for (const auto& [k, v] : s["cpe_m_at"].items()) std::cout << ", @" << k << " s " << v.get<double>() << " m";
+    // The marks in time order (a JSON object's keys come sorted as text: "10", "120", "30", …).
+    std::vector<std::pair<double, std::string>> marks;
+    for (const auto& [k, v] : s["cpe_m_at"].items()) marks.emplace_back(std::stod(k), k);
+    std::sort(marks.begin(), marks.end());
+    for (const auto& [t, k] : marks) std::cout << ", @" << k << " s " << s["cpe_m_at"][k].get<double>() << " m";
     if (s.contains("effects")) {
       std::cout << "; catalogue terms applied:";
       for (const auto& k : s["effects"]["applied"]) std::cout << ' ' << k.get<std::string>();

@@ -58,6 +58,9 @@ assert "60" in s["result"]["cpe_m_at"]
 assert len(s["result"]["cpe_series"]["t_s"]) > 50, s["result"]["cpe_series"]
 assert s["result"]["final_cpe_m"] * 5 < s["none"]["final_cpe_m"], s
 PY
+# The text gives the time marks in time order (issue 56 item 14: they came as "10, 120, 30, 60").
+"$CALBENCH" qc "$T/rec" --coeffs none --coeffs "$T/result.json" --horizon 130 > "$T/qc130.txt"
+grep -q "@10 s [^@]*, @30 s [^@]*, @60 s [^@]*, @120 s" "$T/qc130.txt" || { cat "$T/qc130.txt"; exit 1; }
 # A set fitted up to the drive's last epoch leaves nothing after its window: qc says there is no data
 # (exit 2), never "final ΔS 0 m" (issue 56 item 1). The window's end is set to the last reference epoch.
 python3 - "$T/result.json" "$T/rec/reference.csv" "$T/result_all.json" <<'PY'
