@@ -54,8 +54,13 @@ struct PairReader {
       w(i) = (vg[1 + i] - a.gyro_counts.offset(i)) * a.gyro_counts.scale(i);
     }
     for (int i = 0; i < 3; ++i) {
-      check_range(acc, 1 + i, f(i), -1e4, 1e4, "specific force (m/s², after the conversion)");
-      check_range(gyro, 1 + i, w(i), -1e3, 1e3, "angular rate (rad/s, after the conversion)");
+      // Raw counts read as SI land here: say which options convert them (issue 56 item 14).
+      check_range(acc, 1 + i, f(i), -1e4, 1e4,
+                  a.acc_counts.given ? "specific force (m/s², after --acc-offset/--acc-scale)"
+                                     : "specific force (m/s²; raw counts need --acc-offset and --acc-scale)");
+      check_range(gyro, 1 + i, w(i), -1e3, 1e3,
+                  a.gyro_counts.given ? "angular rate (rad/s, after --gyro-offset/--gyro-scale)"
+                                      : "angular rate (rad/s; raw counts need --gyro-offset and --gyro-scale)");
     }
     return true;
   }

@@ -93,7 +93,10 @@ expect_fail "g2.txt:500.*not a number" "$CALBENCH" import imu-tk "$tmp/a.txt" "$
 head -1000 "$D/xsens_gyro.mat" | awk 'NR==300{$1=$1+0.5}1' > "$tmp/g3.txt"
 expect_fail "g3.txt:300.*share their time stamps" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/g3.txt" --out "$tmp/bad3" "${conv[@]}" "${dev[@]}"
 expect_fail "one value or three" "$CALBENCH" import imu-tk "$tmp/a.txt" "$tmp/a.txt" --acc-offset 1,2 --out "$tmp/bad4" "${dev[@]}"
-for b in bad1 bad2 bad3 bad4; do [ ! -e "$tmp/$b" ] || { echo "$b written"; exit 1; }; done
+# Raw counts read as SI: the error names the options that convert them (issue 56 item 14).
+expect_fail "xsens_acc.mat:1: 'column 2': specific force (m/s²; raw counts need --acc-offset and --acc-scale)" \
+  "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/bad5" "${dev[@]}"
+for b in bad1 bad2 bad3 bad4 bad5; do [ ! -e "$tmp/$b" ] || { echo "$b written"; exit 1; }; done
 [ -z "$(ls -A "$tmp" | grep importing || true)" ]
 expect_fail "already holds a recording" "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" "${dev[@]}"
 # Fit: too few poses (the first 60 s: the opening static and two poses) is refused saying what to add.
