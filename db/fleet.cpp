@@ -39,6 +39,7 @@ std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values)
   for (const auto& name : coefficient_names()) {
     CoefficientStats s = by[name];
     s.n = s.points.size();
+    s.judged = s.n >= kOutlierMinUnits;
     if (s.n) {
       std::vector<double> x;
       for (const auto& p : s.points) x.push_back(p.value);
@@ -57,7 +58,7 @@ std::vector<CoefficientStats> fleet_stats(const std::vector<FleetValue>& values)
         // MAD = 0 (more than half identical): any value off the median is an outlier.
         const double d = p.value - s.median;
         p.z = s.mad > 0 ? 0.6745 * d / s.mad : (d == 0 ? 0 : std::copysign(INFINITY, d));
-        p.outlier = std::abs(p.z) > kOutlierZ;
+        p.outlier = s.n >= kOutlierMinUnits && std::abs(p.z) > kOutlierZ;
       }
     }
     out.push_back(std::move(s));

@@ -11,12 +11,16 @@
 namespace calbench::db {
 
 inline constexpr double kOutlierZ = 3.5;
+// Fewer units than this are no distribution to be an outlier of (a MAD of 4 values flags the ends):
+// the coefficient is listed, and not judged (CoefficientStats::judged false; issue 56 item 14).
+inline constexpr std::size_t kOutlierMinUnits = 8;
 
 struct CoefficientStats {
   std::string name;     // e.g. "gyro.bias.x"
   std::string unit;     // display unit: "deg/h", "mg" or "ppm"
   double to_display = 1;  // multiply SI by this for the display unit
   std::size_t n = 0;
+  bool judged = false;  // n ≥ kOutlierMinUnits: outliers flagged; else none (too few units)
   double median = 0, mad = 0, min = 0, max = 0, mean = 0, stddev = 0;  // SI
   struct Point {
     std::string serial;

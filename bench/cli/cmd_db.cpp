@@ -326,7 +326,7 @@ void cmd_fleet(const DbArgs& a) {
       for (const auto& p : c.points)
         if (p.outlier) outl.push_back({{"serial", p.serial}, {"set", p.set_id}, {"value", p.value}, {"z", sigma_or_null(p.z)}});
       arr.push_back({{"name", c.name}, {"n", c.n}, {"median", c.median}, {"mad", c.mad}, {"mean", c.mean},
-                     {"stddev", c.stddev}, {"min", c.min}, {"max", c.max}, {"outliers", outl}});
+                     {"stddev", c.stddev}, {"min", c.min}, {"max", c.max}, {"outliers", outl}, {"outliers_judged", c.judged}});
     }
     json sts = json::array();
     for (const auto& st : stations) {
@@ -339,7 +339,7 @@ void cmd_fleet(const DbArgs& a) {
       sts.push_back({{"station", st.station}, {"devices", st.devices}, {"serials", st.serials}, {"compared", st.tested},
                      {"flagged", st.flagged}, {"coefficients", flagged}});
     }
-    print_json(json{{"units", "SI (rad/s, m/s², dimensionless)"}, {"outlier_rule", "|0.6745 (x - median) / MAD| > 3.5"},
+    print_json(json{{"units", "SI (rad/s, m/s², dimensionless)"}, {"outlier_rule", "|0.6745 (x - median) / MAD| > 3.5, judged from " + std::to_string(kOutlierMinUnits) + " devices"},
                     {"station_rule", "|median here - median elsewhere| / (1.2533 sqrt(s_here^2/n_here + s_else^2/n_else)) > 3.5, "
                                      "s = 1.4826 MAD; or MAD here / MAD elsewhere > 3 with >= 5 units"},
                     {"coefficients", arr}, {"stations", sts}}
@@ -348,6 +348,9 @@ void cmd_fleet(const DbArgs& a) {
   }
   std::size_t devices = stats.empty() ? 0 : stats.front().n;
   std::cout << "fleet: " << devices << " device(s), newest non-revoked set of each\n";
+  if (devices > 0 && devices < kOutlierMinUnits)
+    std::cout << "outliers not judged: " << devices << " device(s) are too few for a distribution (" << kOutlierMinUnits
+              << " needed)\n";
   std::cout << std::left << std::setw(14) << "COEFFICIENT" << std::setw(7) << "UNIT" << std::right << std::setw(12)
             << "MEDIAN" << std::setw(12) << "MAD" << std::setw(12) << "MIN" << std::setw(12) << "MAX" << "  OUTLIERS\n";
   for (const auto& c : stats) {
@@ -357,7 +360,7 @@ void cmd_fleet(const DbArgs& a) {
     std::cout << std::left << std::setw(14) << c.name << std::setw(7) << c.unit << std::right << std::setw(12)
               << fmt(c.median * c.to_display) << std::setw(12) << fmt(c.mad * c.to_display) << std::setw(12)
               << fmt(c.min * c.to_display) << std::setw(12) << fmt(c.max * c.to_display) << "  "
-              << (outl.empty() ? "-" : outl) << "\n";
+              << (!c.judged ? "not judged" : outl.empty() ? "-" : outl) << "\n";
   }
   // Which station calibrated what; a station whose units drift apart from the others' is flagged.
   std::cout << "\nstations: each against the others (offset |z| > " << kStationZ << ", spread ratio > " << kStationSpread

@@ -488,7 +488,9 @@ std::string fleet_report_body(Store& store) {
     b << "<tr><td class=\"l\">" << c.name << "</td><td class=\"l\">" << c.unit << "</td><td>" << c.n << "</td><td>"
       << num(c.median * c.to_display) << "</td><td>" << num(c.mad * c.to_display) << "</td><td>" << num(c.mean * c.to_display)
       << "</td><td>" << num(c.stddev * c.to_display) << "</td><td>" << num(c.min * c.to_display) << "</td><td>"
-      << num(c.max * c.to_display) << "</td><td class=\"l " << (outl.empty() ? "" : "fail") << "\">" << html_escape(outl.empty() ? "–" : outl)
+      << num(c.max * c.to_display) << "</td><td class=\"l " << (outl.empty() ? "" : "fail") << "\">"
+      << html_escape(!c.judged ? "not judged: " + std::to_string(c.n) + " units, " + std::to_string(kOutlierMinUnits) + " needed"
+                               : outl.empty() ? "–" : outl)
       << "</td></tr>\n";
   }
   b << "</table>\n";

@@ -46,7 +46,11 @@ grep -q "approve-refused" hist.txt || fail "refusal not in history"
 import json,sys; d=json.load(sys.stdin)["devices"]; assert len(d)==1 and d[0]["sets"]==2 and d[0]["firmware"]=="1.10", d'
 for i in 1 2 3 4 5; do coeffs "F$i" "$((10+i))" > f.json; "$CALBENCH" db store-bench --db w.db --coeffs f.json --sha256 "$(printf 'c%.0s' {1..64})" >/dev/null; done
 "$CALBENCH" db fleet --db w.db --json | python3 -c '
-import json,sys; c=json.load(sys.stdin)["coefficients"]; assert len(c)==24 and all(x["n"]==6 for x in c), c[0]'
+import json,sys; c=json.load(sys.stdin)["coefficients"]; assert len(c)==24 and all(x["n"]==6 for x in c), c[0]
+# 6 devices are too few for a distribution: nothing is called an outlier (issue 56 item 14).
+assert all(x["outliers_judged"] is False and x["outliers"] == [] for x in c), c[0]'
+"$CALBENCH" db fleet --db w.db > fleet.txt
+grep -q "outliers not judged: 6 device(s) are too few for a distribution (8 needed)" fleet.txt || { cat fleet.txt; fail "fleet of 6"; }
 
 # Malformed inputs: exit 2, clear message, nothing written.
 before=$(count w.db coefficient_sets)/$(count w.db audit_log)/$(count w.db devices)

@@ -30,6 +30,18 @@ TEST(DbFleet, RobustZFlagsTheOutlierOnly) {
   EXPECT_EQ(stats[0].n, 0u);
 }
 
+// Four units are no distribution: the wild one is listed, not called an outlier (issue 56 item 14).
+TEST(DbFleet, TooFewUnitsAreNotJudged) {
+  std::vector<FleetValue> v;
+  const double xs[] = {1.0, 1.1, 0.9, 5.0};
+  int i = 0;
+  for (double x : xs) v.push_back({std::string("S").append(std::to_string(i++)), i, 1, "approved", "gyro.M.xx", x * 1e-3, 1e-5});
+  const auto& c = fleet_stats(v)[3];
+  EXPECT_EQ(c.n, 4u);
+  EXPECT_FALSE(c.judged);
+  for (const auto& p : c.points) EXPECT_FALSE(p.outlier) << p.serial;
+}
+
 // Four stations of 16 units each, every coefficient N(0, 100 ppm) per unit. Station line-2's table is
 // tilted: accel.M.xy of its units is 250 ppm off (2.5 σ: no unit of it is a fleet outlier); line-4's
 // fixture is loose: gyro.M.zz spreads 4× wider there. Each is flagged for that and only that.
