@@ -10,14 +10,20 @@
 
 namespace calbench {
 
+// Removes the staging folders `parent`/PREFIX<pid> whose process is gone (killed by Ctrl-C or a
+// power cut: no destructor ran), so that an interrupted writer's hidden copy does not stay.
+void remove_stale_staging(const std::filesystem::path& parent, const std::string& prefix);
+
 class StagingFolder {
  public:
-  // out: the final folder; its parent must exist. Any stale staging folder of this process goes.
+  // out: the final folder; its parent must exist. Any stale staging folder of this process, or of a
+  // process that no longer runs, goes.
   StagingFolder(const std::filesystem::path& out, const char* tag) {
     const std::filesystem::path parent = out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
     std::string name(".");  // built with append(): GCC 12 warns falsely (-Wrestrict) on chained operator+
     name.append(out.filename().string()).append(".").append(tag).append("-").append(std::to_string(::getpid()));
     path_ = parent / name;
+    remove_stale_staging(parent, name.substr(0, name.size() - std::to_string(::getpid()).size()));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directory(path_);
   }

@@ -11,6 +11,13 @@ D="$SHARED/data/imu_tk-xsens-multipos"
 conv=(--acc-offset 32768 --acc-scale 0.0026808 --gyro-offset 32768 --gyro-scale 1.5979e-4 --gravity 9.81744)
 "$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs" "${conv[@]}" --model "Xsens MTi" --serial XS1 > /dev/null
 "$CALBENCH" fit multipos "$tmp/xs" --json > "$tmp/ref.json"
+# An import killed by Ctrl-C leaves its hidden staging copy (.NAME.importing-PID): the next import of
+# NAME removes it when that process is gone, and leaves a live process's alone (issue 56 item 11).
+mkdir -p "$tmp/.xs2.importing-999999" "$tmp/.xs2.importing-$$"
+head -c 100000 "$tmp/xs/imu.csv" > "$tmp/.xs2.importing-999999/imu.csv"
+"$CALBENCH" import imu-tk "$D/xsens_acc.mat" "$D/xsens_gyro.mat" --out "$tmp/xs2" "${conv[@]}" --serial XS1 > /dev/null 2>&1
+[ ! -e "$tmp/.xs2.importing-999999" ] || { echo "stale staging folder left"; exit 1; }
+[ -d "$tmp/.xs2.importing-$$" ] || { echo "a live process's staging folder removed"; exit 1; }
 # The same rows as a logger writes them: ms, deg/s, g; semicolons; extra columns; columns in another order.
 python3 - "$tmp/xs/imu.csv" "$tmp" <<'PY'
 import csv, math, sys
