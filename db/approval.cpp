@@ -262,7 +262,7 @@ void client_reasons(Store& store, const CoefficientSetRecord& set, bool four_eye
                                                      (maker.empty() ? "" : " (" + maker + ")") + ", and " + who.user +
                                                      " (login " + store.login() + ") is the same person"
                                                : "") +
-                        "; another person must approve it (a one-person lab: calbench db settings four_eyes off)");
+                        "; another person must approve it");
   }
   if (const std::string why = parent_reason(store, set); !why.empty()) r.reasons.push_back(why);
   r.ok = r.reasons.empty();

@@ -264,10 +264,16 @@ Page Console::set_page(Ctx& c, const std::string& message, bool ok, int status) 
   b << "<h1>Set " << set.id << " of " << html_escape(set.serial) << " (v" << set.version << ", " << db::source_label(set)
     << ", <span id=\"status\">" << db::to_string(set.status) << "</span>)</h1>\n";
   const std::string hidden = "<input type=\"hidden\" name=\"csrf\" value=\"" + c.s->csrf + "\">";
-  if (set.status == db::SetStatus::draft)
+  // Only a QC account signs: the others see no button to be refused after (issue 56 item 13); the
+  // store refuses a forged request all the same.
+  const bool signer = c.s->role == "qc";
+  if (!signer && set.status != db::SetStatus::revoked)
+    b << "<p class=\"note\" id=\"no-sign\">approving and revoking are a QC account's: you are signed in as "
+      << html_escape(c.s->role.empty() ? std::string("an account without a role") : "a " + c.s->role + " account") << "</p>\n";
+  if (signer && set.status == db::SetStatus::draft)
     b << "<form class=\"act\" method=\"post\" action=\"/set/" << set.id << "/approve\">" << hidden
       << "<button id=\"approve\" type=\"submit\">approve set " << set.id << "</button> as " << html_escape(c.s->name) << "</form>\n";
-  if (set.status != db::SetStatus::revoked)
+  if (signer && set.status != db::SetStatus::revoked)
     b << "<form class=\"act\" method=\"post\" action=\"/set/" << set.id << "/revoke\">" << hidden
       << "<label>reason <input id=\"reason\" name=\"reason\" maxlength=\"4096\" size=\"40\" required></label> "
          "<button id=\"revoke\" type=\"submit\">revoke</button></form>\n";

@@ -162,12 +162,13 @@ def main():
         assert "wrong login or password" in text("error"), text("error")
         assert not d.find_elements(By.ID, "queue")
 
-        # Station login: sees the queue, may not approve (the store's own refusal, as on the CLI).
+        # Station login: sees the queue and the set, no approve or revoke button but a note why (issue 56
+        # item 13); the store refuses a forged request all the same (console_security_test.py).
         login("st1", "pw-sam-123456")
         assert "Sam Station" in text("who"), text("who")
         d.find_element(By.CSS_SELECTOR, "#queue tr[data-set='1'] a.open").click()
-        submit("approve")
-        assert d.find_elements(By.ID, "error"), "a station login approved a set: " + d.find_element(By.TAG_NAME, "main").text[:600]
+        assert not d.find_elements(By.ID, "approve") and not d.find_elements(By.ID, "revoke"), "a station login is offered approve/revoke"
+        assert "QC account's" in text("no-sign") and "station account" in text("no-sign"), text("no-sign")
         assert set_status(db) == "draft"
         live_run(d, base, http, db, work, text, submit)
         logout()
@@ -179,6 +180,7 @@ def main():
         assert d.find_elements(By.ID, "error"), "the creator approved: " + d.find_element(By.TAG_NAME, "main").text[:600]
         err = text("error")
         assert "four-eyes" in err or "another" in err, err
+        assert "four_eyes off" not in err, err  # never told to its own creator (issue 56 item 13)
         assert set_status(db) == "draft"
         logout()
 
