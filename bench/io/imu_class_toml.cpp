@@ -133,9 +133,14 @@ const std::vector<ImuClass>& builtin_imu_classes() {
   return all;
 }
 
-const ImuClass& builtin_imu_class(const std::string& model) {
+const ImuClass* find_builtin_imu_class(const std::string& model) {
   for (const ImuClass& c : builtin_imu_classes())
-    if (imu_class_matches(c, model)) return c;
+    if (imu_class_matches(c, model)) return &c;
+  return nullptr;
+}
+
+const ImuClass& builtin_imu_class(const std::string& model) {
+  if (const ImuClass* c = find_builtin_imu_class(model)) return *c;
   throw std::out_of_range("no built-in IMU class '" + model + "'");
 }
 
@@ -157,8 +162,7 @@ ImuClassChoice choose_imu_class(const std::string& option, const std::string& mo
     throw InputError("--device-class", 0, "",
                      "'" + option + "' is neither a class file nor a known class; known classes: " + known_imu_classes_text());
   }
-  for (const ImuClass& c : builtin_imu_classes())
-    if (imu_class_matches(c, model)) return {c, "meta.json device.model '" + model + "'"};
+  if (const ImuClass* c = find_builtin_imu_class(model)) return {*c, "meta.json device.model '" + model + "'"};
   throw InputError(meta_file, 0, "device.model",
                    "unknown IMU model '" + model + "': no device class has this name or alias. Known classes: " +
                        known_imu_classes_text() +

@@ -20,6 +20,8 @@ ImuClass parse_imu_class(const std::string& text, const std::string& file);
 // The classes shipped in bench/imu_classes (embedded into the executable at build time), in the
 // order of their file names.
 const std::vector<ImuClass>& builtin_imu_classes();
+// The built-in class of that name or alias, or nullptr.
+const ImuClass* find_builtin_imu_class(const std::string& model);
 // The built-in class of that name or alias; std::out_of_range when there is none.
 const ImuClass& builtin_imu_class(const std::string& model);
 // "ADIS16465-1 (aliases: ...), ADIS16488A (...), ..." for messages.

@@ -66,7 +66,7 @@ nlohmann::json fit_json(const MultiposRecording& rec, const multipos::MultiposFi
   j["device_class"] = rec.device_class;
   auto noise = [](const multipos::NoiseLevel& n, double k) {
     return nlohmann::json{{"class_per_sample", n.class_sigma > 0 ? nlohmann::json(n.class_sigma * k) : nlohmann::json(nullptr)},
-                          {"measured_per_sample", n.measured_sigma * k}, {"used_per_sample", n.used_sigma * k},
+                          {"measured_per_sample", n.used_sigma * k}, {"used_per_sample", n.used_sigma * k},
                           {"source", n.source}, {"quietest_windows_per_sample", n.quiet_sigma * k},
                           {"differs_from_class_2x", n.differs}};
   };
@@ -156,9 +156,7 @@ std::string coeff_text(const SensorErrors& e) {
 // (filled in after the fit, fit_multipos_set) and its drift priors are wide.
 void choose_multipos_class(const std::string& option, const std::string& model, const std::string& mf, MultiposRecording& r) {
   auto& in = r.input;
-  const bool known = std::any_of(builtin_imu_classes().begin(), builtin_imu_classes().end(),
-                                 [&](const ImuClass& c) { return imu_class_matches(c, model); });
-  if (option.empty() && !known) {
+  if (option.empty() && !find_builtin_imu_class(model)) {
     r.class_known = false;
     r.device_class = {{"name", nullptr},
                       {"chosen_by", "none: meta.json device.model '" + model +
@@ -281,8 +279,8 @@ void run_fit_multipos(const FitMultiposArgs& a, std::ostream& out) {
       << fit.gyro_noise.source << "), accel " << fit.accel_noise.used_sigma << " m/s² (" << fit.accel_noise.source << ")";
   if (rec.class_known && fit.gyro_noise.class_sigma > 0)
     out << "; the class says " << fit.gyro_noise.class_sigma / kDeg << " °/s and " << fit.accel_noise.class_sigma
-        << " m/s² (" << std::setprecision(2) << fit.gyro_noise.measured_sigma / fit.gyro_noise.class_sigma << "× and "
-        << fit.accel_noise.measured_sigma / fit.accel_noise.class_sigma << "×: a cross-check, not the test)";
+        << " m/s² (" << std::setprecision(2) << fit.gyro_noise.used_sigma / fit.gyro_noise.class_sigma << "× and "
+        << fit.accel_noise.used_sigma / fit.accel_noise.class_sigma << "×: a cross-check, not the test)";
   out << "\n" << std::setprecision(3) << "static test: " << fit.window_samples << "-sample windows, variance below σ²·"
       << fit.threshold_factor << " (" << m["static_test"].value("margin", 0.0) << "× the χ² bound at α = 1e-4 per window "
       << "and axis); poses of " << m["static_test"].value("min_pose_s", 0.0) << " s or more\n";

@@ -69,8 +69,7 @@ RecordingMeta multipos_meta(const MultiposTarget& t, double rate_hz) {
 }
 
 std::string unknown_model_note(const std::string& model) {
-  for (const ImuClass& c : builtin_imu_classes())
-    if (imu_class_matches(c, model)) return {};
+  if (find_builtin_imu_class(model)) return {};
   return "no built-in device class is named '" + model + "': fit multipos measures the noise on the recording and takes "
          "wide drift priors; --device-class NAME|FILE gives a class (bench/imu_classes/*.toml shows the format; known: " +
          known_imu_classes_text() + ")";
