@@ -230,8 +230,8 @@ void noise_notes(MultiposFit& fit) {
   auto note = [&](const NoiseLevel& n, const char* name, const char* unit) {
     if (!n.differs) return;
     std::ostringstream os;
-    os << name << " white noise measured " << n.measured_sigma << " " << unit << " per sample (" << n.source << "), "
-       << n.measured_sigma / n.class_sigma << "× the class's " << n.class_sigma
+    os << name << " white noise measured " << n.used_sigma << " " << unit << " per sample (" << n.source << "), "
+       << n.used_sigma / n.class_sigma << "× the class's " << n.class_sigma
        << ": the measured level is used (the class is a cross-check)";
     fit.notes.push_back(os.str());
   };

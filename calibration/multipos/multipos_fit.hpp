@@ -85,8 +85,8 @@ struct RotationUse {
 
 struct NoiseLevel {
   double class_sigma = 0;     // per sample, from the class density (0 = no class)
-  double measured_sigma = 0;  // per sample, the largest axis's, learned from the recording
-  double used_sigma = 0;      // = measured_sigma: the static test's and the fit's
+  double used_sigma = 0;      // per sample, the largest axis's, learned from the recording: the
+                              // static test's and the fit's (the class's is a cross-check only)
   bool differs = false;       // measured and class differ by more than 2× (a note, not a gate)
   std::string source;         // "opening still interval 0.0–49.9 s" or "quietest 10 % of the 0.5-s windows"
   double quiet_sigma = 0;     // the quietest windows' level (the cross-check of the opening interval's)

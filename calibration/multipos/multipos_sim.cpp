@@ -109,8 +109,9 @@ double hand_turn_gravity(const std::optional<Site>& site) {
 
 HandTurnPlan simulate_multipos(const MultiposSimConfig& c, const std::function<void(const MultiposSimSample&)>& sink) {
   HandTurnPlan p = plan_hand_turns(c.hand, c.rate_hz, c.seed);
-  const Vec3 g_ned = c.site ? SiteEarth(*c.site).g_ned : Vec3(0.0, 0.0, units::kG0);
-  const Vec3 w_ie = c.site ? SiteEarth(*c.site).w_ie_ned : Vec3::Zero();
+  const std::optional<SiteEarth> earth = c.site ? std::optional<SiteEarth>(std::in_place, *c.site) : std::nullopt;
+  const Vec3 g_ned = earth ? earth->g_ned : Vec3(0.0, 0.0, units::kG0);
+  const Vec3 w_ie = earth ? earth->w_ie_ned : Vec3::Zero();
   NoiseSpec noise = c.noise;
   noise.output_rate_hz = c.rate_hz;
   ImuErrorSimulator imu(c.truth, noise, c.seed);

@@ -137,7 +137,7 @@ void learn_noise(const MultiposInput& in, const MultiposOptions& opt, const Wind
   std::ostringstream qs;
   qs << "quietest " << std::lround(100 * opt.quiet_fraction) << " % of the " << opt.window_s << "-s windows";
   for (int t = 0; t < 2; ++t) {
-    lv[t].quiet_sigma = lv[t].measured_sigma = quiet[t];
+    lv[t].quiet_sigma = lv[t].used_sigma = quiet[t];
     lv[t].source = qs.str();
   }
   if (!(quiet[0] > 0 && quiet[1] > 0)) return;  // the caller refuses a triad without noise
@@ -155,7 +155,7 @@ void learn_noise(const MultiposInput& in, const MultiposOptions& opt, const Wind
   triad_sigmas(W, opening, 0.5, open);
   for (int t = 0; t < 2; ++t) {
     if (!(open[t] > 0)) return;
-    lv[t].measured_sigma = std::max(open[t], floor[t]);
+    lv[t].used_sigma = std::max(open[t], floor[t]);
     lv[t].source = "opening still interval " + fixed1(t0) + "–" + fixed1(t1) + " s";
   }
 }
@@ -255,12 +255,11 @@ std::vector<StaticInterval> detect_statics(const MultiposInput& in, const Multip
   learn_noise(in, opt, W, factor, lv);
   const double density[2] = {in.gyro_density, in.accel_density};
   for (int t = 0; t < 2; ++t) {
-    if (!(lv[t].measured_sigma > 0))
+    if (!(lv[t].used_sigma > 0))
       throw MultiposRefusal(std::string("the ") + (t ? "accelerometer" : "gyro") + " output does not vary at all on the " +
                             lv[t].source + ": no noise to set the static threshold from (a constant or stuck output)");
-    lv[t].used_sigma = lv[t].measured_sigma;
     lv[t].class_sigma = density[t] * std::sqrt(in.rate_hz);
-    lv[t].differs = lv[t].class_sigma > 0 && (lv[t].measured_sigma > 2 * lv[t].class_sigma || lv[t].measured_sigma < 0.5 * lv[t].class_sigma);
+    lv[t].differs = lv[t].class_sigma > 0 && (lv[t].used_sigma > 2 * lv[t].class_sigma || lv[t].used_sigma < 0.5 * lv[t].class_sigma);
   }
   const double used[2] = {lv[0].used_sigma, lv[1].used_sigma};
   const std::vector<char> still = still_centres(in, W, limit_of(used, factor), used[0]);
